@@ -1,0 +1,20 @@
+//! **subdiv**: exact, fast subdivision surfaces in Rust.
+//!
+//! This facade re-exports the workspace's crates under one name. Today it holds the
+//! foundation: half-edge topology ([`mesh`]) and mesh files ([`io`]); schemes, exact stencils,
+//! evaluation, tessellation and the GPU backend arrive as their own crates and are re-exported
+//! here.
+//!
+//! ```
+//! use subdiv::mesh::{shapes, Mesh, RegularValence};
+//!
+//! let mesh = Mesh::build(shapes::default_model())?;
+//! let regular = RegularValence::for_faces_of(&mesh);
+//! assert!(mesh.extraordinary_vertices(regular).count() > 0);
+//! # Ok::<(), subdiv::mesh::MeshError>(())
+//! ```
+
+pub use subdiv_io as io;
+pub use subdiv_mesh as mesh;
+
+pub use subdiv_mesh::{DVec3, Mesh, MeshError, PolygonSoup};
