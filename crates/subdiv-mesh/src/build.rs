@@ -161,15 +161,14 @@ fn connect(positions: &[DVec3], offsets: &[u32], fv: &[VertexId], sink: &mut Sin
 
     // Per-face rules. Bad faces keep their half-edges (ids are corner positions) but take no
     // part in the connectivity, so one bad face does not hide the rest.
-    let mut face_ok = vec![true; face_count];
-    let mut any_bad_face = false;
+    // Allocated on the first bad face only: valid input never pays for it.
+    let mut face_ok: Option<Vec<bool>> = None;
     for f in 0..face_count {
         let face = FaceId::new(f as u32);
         let corners = &fv[offsets[f] as usize..offsets[f + 1] as usize];
         let error = face_rule(face, corners, vertex_count);
         if let Some(error) = error {
-            face_ok[f] = false;
-            any_bad_face = true;
+            face_ok.get_or_insert_with(|| vec![true; face_count])[f] = false;
             if sink.push(error) {
                 return None;
             }
@@ -181,7 +180,7 @@ fn connect(positions: &[DVec3], offsets: &[u32], fv: &[VertexId], sink: &mut Sin
     for f in 0..face_count {
         he_face[offsets[f] as usize..offsets[f + 1] as usize].fill(FaceId::new(f as u32));
     }
-    let usable = |h: usize| !any_bad_face || face_ok[he_face[h].index()];
+    let usable = |h: usize| face_ok.as_ref().is_none_or(|ok| ok[he_face[h].index()]);
 
     // CSR of outgoing half-edges per vertex, each entry (destination, half-edge).
     let mut out_start = vec![0u32; vertex_count + 1];
@@ -193,21 +192,24 @@ fn connect(positions: &[DVec3], offsets: &[u32], fv: &[VertexId], sink: &mut Sin
     for v in 0..vertex_count {
         out_start[v + 1] += out_start[v];
     }
-    let mut fill = out_start.clone();
+    // Filled back to front, so each vertex's list stays in half-edge order and `out_start`
+    // ends up as the list starts without a second offsets array.
     let mut out = vec![(0u32, 0u32); out_start[vertex_count] as usize];
-    for f in 0..face_count {
-        if !face_ok[f] {
+    for f in (0..face_count).rev() {
+        if !face_ok.as_ref().is_none_or(|ok| ok[f]) {
             continue;
         }
         let (start, end) = (offsets[f], offsets[f + 1]);
-        for h in start..end {
+        for h in (start..end).rev() {
             let origin = fv[h as usize].index();
             let dest = fv[if h + 1 == end { start } else { h + 1 } as usize].raw();
-            out[fill[origin] as usize] = (dest, h);
-            fill[origin] += 1;
+            out_start[origin + 1] -= 1;
+            out[out_start[origin + 1] as usize] = (dest, h);
         }
     }
-    drop(fill);
+    // Now out_start[v + 1] is the start of v's list; shift to the usual CSR form.
+    out_start.copy_within(1..vertex_count + 1, 0);
+    out_start[vertex_count] = out.len() as u32;
     let outgoing = |v: usize| &out[out_start[v] as usize..out_start[v + 1] as usize];
 
     // Twins. An undirected edge {a, b} carries the half-edges a→b and b→a; anything but at most
@@ -217,6 +219,9 @@ fn connect(positions: &[DVec3], offsets: &[u32], fv: &[VertexId], sink: &mut Sin
     let mut vertex_on_bad_edge = vec![false; 0];
     for a in 0..vertex_count {
         for &(b, h) in outgoing(a) {
+            if he_twin[h as usize] != NONE {
+                continue; // linked from its twin's side, which checked this edge already
+            }
             let mut same = 0usize;
             let mut lowest = h;
             let mut other_same = NONE;
@@ -239,7 +244,10 @@ fn connect(positions: &[DVec3], offsets: &[u32], fv: &[VertexId], sink: &mut Sin
                 }
             }
             if same == 1 && opposite <= 1 {
-                he_twin[h as usize] = twin;
+                if twin != NONE {
+                    he_twin[h as usize] = twin;
+                    he_twin[twin as usize] = h;
+                }
                 continue;
             }
             if vertex_on_bad_edge.is_empty() {
@@ -291,30 +299,33 @@ fn connect(positions: &[DVec3], offsets: &[u32], fv: &[VertexId], sink: &mut Sin
             continue;
         }
         let count = outgoing(v).len() as u32;
-        // Clockwise to the fan's start: h -> next(twin(h)).
-        let mut start = h0;
+        // Counter-clockwise from h0 (h -> twin(prev(h))): back at h0 means a closed fan.
+        let mut visited = 1u32;
+        let mut h = h0;
         let mut boundary = false;
-        for _ in 0..count {
-            let t = he_twin[start as usize];
+        loop {
+            let t = he_twin[prev_in_face(offsets, &he_face, h) as usize];
             if t == NONE {
                 boundary = true;
                 break;
             }
-            start = next_in_face(offsets, &he_face, t);
-            if start == h0 {
-                break;
-            }
-        }
-        // Counter-clockwise over the fan: h -> twin(prev(h)).
-        let mut visited = 1u32;
-        let mut h = start;
-        loop {
-            let t = he_twin[prev_in_face(offsets, &he_face, h) as usize];
-            if t == NONE || t == start || visited > count {
+            if t == h0 || visited > count {
                 break;
             }
             h = t;
             visited += 1;
+        }
+        // An open fan: clockwise from h0 (h -> next(twin(h))) to its boundary half-edge.
+        let mut start = h0;
+        if boundary {
+            loop {
+                let t = he_twin[start as usize];
+                if t == NONE || visited > count {
+                    break;
+                }
+                start = next_in_face(offsets, &he_face, t);
+                visited += 1;
+            }
         }
         if visited != count {
             let vertex = VertexId::new(v as u32);
@@ -337,7 +348,11 @@ fn face_rule(face: FaceId, corners: &[VertexId], vertex_count: usize) -> Option<
     if let Some(v) = corners.iter().find(|v| v.index() >= vertex_count) {
         return Some(MeshError::IndexOutOfRange { face, index: v.raw(), vertex_count });
     }
-    let repeated = if corners.len() <= 16 {
+    let repeated = if let [a, b, c] = *corners {
+        (a == b || a == c).then_some(a).or((b == c).then_some(b))
+    } else if let [a, b, c, d] = *corners {
+        (a == b || a == c || a == d).then_some(a).or((b == c || b == d).then_some(b)).or((c == d).then_some(c))
+    } else if corners.len() <= 16 {
         corners.iter().enumerate().find(|&(i, v)| corners[..i].contains(v)).map(|(_, &v)| v)
     } else {
         let mut sorted = corners.to_vec();
