@@ -48,10 +48,7 @@ pub fn validate(soup: &PolygonSoup) -> Vec<MeshError> {
     let mut sink = Sink { errors: Vec::new(), first_only: false };
     let (offsets, fv) = soup.raw_faces();
     if let Some(topology) = connect(soup.positions(), offsets, fv, &mut sink) {
-        let mut edge_sharpness = Vec::new();
-        let mut vertex_sharpness = Vec::new();
-        let mut holes = Vec::new();
-        apply_tags(&topology, fv, offsets, &soup.tags, &mut edge_sharpness, &mut vertex_sharpness, &mut holes, &mut sink);
+        apply_tags(&topology, fv, offsets, &soup.tags, &mut sink);
     }
     sink.errors
 }
@@ -114,15 +111,12 @@ impl Mesh {
         let (Some(topology), None) = (topology, sink.errors.first()) else {
             return Err(sink.errors.swap_remove(0));
         };
-        let mut edge_sharpness = vec![0.0; topology.edge_he.len()];
-        let mut vertex_sharpness = vec![0.0; soup.vertex_count()];
-        let mut holes = vec![false; soup.face_count()];
-        apply_tags(&topology, fv, offsets, &soup.tags, &mut edge_sharpness, &mut vertex_sharpness, &mut holes, &mut sink);
+        let resolved = apply_tags(&topology, fv, offsets, &soup.tags, &mut sink);
         if let Some(error) = sink.errors.pop() {
             return Err(error);
         }
-        let (positions, face_offsets, he_origin, tags) = soup.into_parts();
-        Ok(Mesh::from_parts(positions, face_offsets, he_origin, tags, topology, edge_sharpness, vertex_sharpness, holes))
+        let (positions, face_offsets, he_origin, tags_as_authored) = soup.into_parts();
+        Ok(Mesh::from_parts(positions, face_offsets, he_origin, tags_as_authored, topology, resolved))
     }
 }
 
@@ -395,20 +389,24 @@ fn count_fans(outgoing: &[(u32, u32)], offsets: &[u32], he_face: &[FaceId], he_t
     fans
 }
 
-/// Resolves tags into per-edge and per-vertex sharpness and per-face hole flags.
-#[allow(clippy::too_many_arguments)]
-fn apply_tags(
-    topology: &Topology,
-    fv: &[VertexId],
-    offsets: &[u32],
-    tags: &Tags,
-    edge_sharpness: &mut Vec<f64>,
-    vertex_sharpness: &mut Vec<f64>,
-    holes: &mut Vec<bool>,
-    sink: &mut Sink,
-) {
+/// Tags resolved onto the mesh: sharpness per edge and per vertex, a hole flag per face.
+pub(crate) struct ResolvedTags {
+    pub(crate) edge_sharpness: Vec<f64>,
+    pub(crate) vertex_sharpness: Vec<f64>,
+    pub(crate) holes: Vec<bool>,
+}
+
+/// Resolves tags into per-edge and per-vertex sharpness and per-face hole flags (a later tag on
+/// the same edge or vertex wins, as in OpenSubdiv).
+fn apply_tags(topology: &Topology, fv: &[VertexId], offsets: &[u32], tags: &Tags, sink: &mut Sink) -> ResolvedTags {
     let vertex_count = topology.vertex_he.len();
     let face_count = offsets.len() - 1;
+    let mut resolved = ResolvedTags {
+        edge_sharpness: vec![0.0; topology.edge_he.len()],
+        vertex_sharpness: vec![0.0; vertex_count],
+        holes: vec![false; face_count],
+    };
+    let ResolvedTags { edge_sharpness, vertex_sharpness, holes } = &mut resolved;
     let check_sharpness = |tag: &'static str, index: usize, sharpness: f64| {
         (sharpness.is_nan() || sharpness < 0.0).then_some(MeshError::InvalidSharpness { tag, index, sharpness })
     };
@@ -421,9 +419,7 @@ fn apply_tags(
         } else {
             match find_edge(topology, fv, offsets, a, b) {
                 Some(e) => {
-                    if let Some(s) = edge_sharpness.get_mut(e.index()) {
-                        *s = crease.sharpness;
-                    }
+                    edge_sharpness[e.index()] = crease.sharpness;
                     None
                 }
                 None => Some(MeshError::CreaseNotAnEdge { index, a, b }),
@@ -432,7 +428,7 @@ fn apply_tags(
         if let Some(error) = error
             && sink.push(error)
         {
-            return;
+            return resolved;
         }
     }
     for (index, corner) in tags.corners.iter().enumerate() {
@@ -445,25 +441,22 @@ fn apply_tags(
         match error {
             Some(error) => {
                 if sink.push(error) {
-                    return;
+                    return resolved;
                 }
             }
-            None => {
-                if let Some(s) = vertex_sharpness.get_mut(v.index()) {
-                    *s = corner.sharpness;
-                }
-            }
+            None => vertex_sharpness[v.index()] = corner.sharpness,
         }
     }
     for (index, face) in tags.holes.iter().enumerate() {
         if face.index() >= face_count {
             if sink.push(MeshError::HoleOutOfRange { index, face: face.raw(), face_count }) {
-                return;
+                return resolved;
             }
-        } else if let Some(hole) = holes.get_mut(face.index()) {
-            *hole = true;
+        } else {
+            holes[face.index()] = true;
         }
     }
+    resolved
 }
 
 /// The edge between `a` and `b`, walking the fan of `a`.
@@ -496,7 +489,9 @@ fn orient(soup: &mut PolygonSoup, sink: &mut Sink) {
     let (offsets, fv) = soup.raw_faces();
     // Skip faces that break per-face rules; `connect` reports them afterwards.
     let face_ok: Vec<bool> = (0..face_count)
-        .map(|f| face_rule(FaceId::new(f as u32), &fv[offsets[f] as usize..offsets[f + 1] as usize], vertex_count).is_none())
+        .map(|f| {
+            face_rule(FaceId::new(f as u32), &fv[offsets[f] as usize..offsets[f + 1] as usize], vertex_count).is_none()
+        })
         .collect();
     // Undirected edge incidences per lower vertex: (upper vertex, face, runs low→high).
     let mut start = vec![0u32; vertex_count + 1];

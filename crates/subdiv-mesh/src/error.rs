@@ -83,7 +83,9 @@ pub enum MeshError {
         b: VertexId,
     },
     /// Orientation repair was asked for, but a component is non-orientable (a Möbius strip).
-    #[error("the component of {face} is not orientable (a Möbius strip or similar); no orientation repair can make its faces consistent")]
+    #[error(
+        "the component of {face} is not orientable (a Möbius strip or similar); no orientation repair can make its faces consistent"
+    )]
     NonOrientable {
         /// A face of the non-orientable component.
         face: FaceId,

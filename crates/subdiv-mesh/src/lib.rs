@@ -34,8 +34,6 @@ pub use build::{BuildOptions, validate};
 pub use error::MeshError;
 pub use ids::{EdgeId, FaceId, HalfEdgeId, VertexId};
 pub use mesh::{BoundaryLoop, Components, Mesh, OutgoingHalfEdges, RegularValence};
-pub use soup::{
-    BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, PolygonSoup, Tags, TriangleSubdivision,
-};
+pub use soup::{BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, PolygonSoup, Tags, TriangleSubdivision};
 
 pub use glam::DVec3;

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 use smallvec::SmallVec;
 
-use crate::build::Topology;
+use crate::build::{ResolvedTags, Topology};
 use crate::{EdgeId, FaceId, HalfEdgeId, PolygonSoup, Tags, VertexId};
 
 /// "No half-edge" in the `u32` link arrays.
@@ -86,18 +86,16 @@ impl Components {
 pub type BoundaryLoop = Vec<HalfEdgeId>;
 
 impl Mesh {
-    #[allow(clippy::too_many_arguments)]
     pub(crate) fn from_parts(
         positions: Vec<DVec3>,
         face_offsets: Vec<u32>,
         he_origin: Vec<VertexId>,
         tags: Tags,
         topology: Topology,
-        edge_sharpness: Vec<f64>,
-        vertex_sharpness: Vec<f64>,
-        hole: Vec<bool>,
+        resolved: ResolvedTags,
     ) -> Self {
         let Topology { he_face, he_twin, he_edge, edge_he, vertex_he, valence } = topology;
+        let ResolvedTags { edge_sharpness, vertex_sharpness, holes: hole } = resolved;
         Self {
             positions,
             face_offsets,

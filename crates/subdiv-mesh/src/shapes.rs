@@ -47,17 +47,19 @@ pub fn cube() -> PolygonSoup {
 
 /// The regular tetrahedron inscribed in the cube `[-1, 1]³`: 4 vertices, 4 triangles.
 pub fn tetrahedron() -> PolygonSoup {
-    let positions = vec![DVec3::new(1.0, 1.0, 1.0), DVec3::new(1.0, -1.0, -1.0), DVec3::new(-1.0, 1.0, -1.0), DVec3::new(-1.0, -1.0, 1.0)];
+    let positions = vec![
+        DVec3::new(1.0, 1.0, 1.0),
+        DVec3::new(1.0, -1.0, -1.0),
+        DVec3::new(-1.0, 1.0, -1.0),
+        DVec3::new(-1.0, -1.0, 1.0),
+    ];
     convex(positions, &[&[0, 1, 2], &[0, 3, 1], &[0, 2, 3], &[1, 3, 2]])
 }
 
 /// The regular octahedron with vertices `±x, ±y, ±z`: 6 vertices of valence 4, 8 triangles.
 pub fn octahedron() -> PolygonSoup {
     let positions = vec![DVec3::X, DVec3::NEG_X, DVec3::Y, DVec3::NEG_Y, DVec3::Z, DVec3::NEG_Z];
-    convex(
-        positions,
-        &[&[0, 2, 4], &[2, 1, 4], &[1, 3, 4], &[3, 0, 4], &[2, 0, 5], &[1, 2, 5], &[3, 1, 5], &[0, 3, 5]],
-    )
+    convex(positions, &[&[0, 2, 4], &[2, 1, 4], &[1, 3, 4], &[3, 0, 4], &[2, 0, 5], &[1, 2, 5], &[3, 1, 5], &[0, 3, 5]])
 }
 
 /// The regular icosahedron on the unit sphere: 12 vertices of valence 5, 20 triangles.
@@ -110,10 +112,8 @@ pub fn dodecahedron() -> PolygonSoup {
     let ico = built(icosahedron());
     // One dodecahedron vertex per icosahedron face, one pentagon per icosahedron vertex; the
     // faces around a vertex, counter-clockwise, are the pentagon's corners counter-clockwise.
-    let positions: Vec<DVec3> = ico
-        .faces()
-        .map(|face| face.iter().map(|v| ico.position(*v)).sum::<DVec3>().normalize())
-        .collect();
+    let positions: Vec<DVec3> =
+        ico.faces().map(|face| face.iter().map(|v| ico.position(*v)).sum::<DVec3>().normalize()).collect();
     let mut soup = PolygonSoup::new();
     for p in positions {
         soup.push_vertex(p);
@@ -300,7 +300,13 @@ mod tests {
 
     fn counts(soup: PolygonSoup) -> (usize, usize, usize, i64, usize) {
         let mesh = Mesh::build(soup).unwrap();
-        (mesh.vertex_count(), mesh.edge_count(), mesh.face_count(), mesh.euler_characteristic(), mesh.boundary_loops().len())
+        (
+            mesh.vertex_count(),
+            mesh.edge_count(),
+            mesh.face_count(),
+            mesh.euler_characteristic(),
+            mesh.boundary_loops().len(),
+        )
     }
 
     #[test]
@@ -333,7 +339,8 @@ mod tests {
 
     #[test]
     fn faces_face_outward() {
-        for soup in [cube(), tetrahedron(), octahedron(), icosahedron(), dodecahedron(), ngon_prism(5), default_model()] {
+        for soup in [cube(), tetrahedron(), octahedron(), icosahedron(), dodecahedron(), ngon_prism(5), default_model()]
+        {
             for face in soup.faces() {
                 let p: Vec<DVec3> = face.iter().map(|v| soup.positions()[v.index()]).collect();
                 let centroid = p.iter().sum::<DVec3>() / p.len() as f64;

@@ -159,7 +159,10 @@ fn bow_tie_is_a_non_manifold_vertex() {
 fn three_faces_on_an_edge_are_a_non_manifold_edge() {
     let soup = PolygonSoup::from_indices(vec![Default::default(); 5], [[0u32, 1, 2], [1, 0, 3], [0, 1, 4]]);
     let error = Mesh::build(soup).unwrap_err();
-    assert!(matches!(error, MeshError::NonManifoldEdge { face_count: 3, face, .. } if face == FaceId::new(0)), "{error}");
+    assert!(
+        matches!(error, MeshError::NonManifoldEdge { face_count: 3, face, .. } if face == FaceId::new(0)),
+        "{error}"
+    );
 }
 
 #[test]
@@ -167,9 +170,8 @@ fn moebius_strip_cannot_be_oriented() {
     // A strip of 5 quads whose ends are glued with a half twist.
     let n = 5u32;
     let positions = vec![Default::default(); 2 * n as usize];
-    let faces: Vec<[u32; 4]> = (0..n)
-        .map(|i| if i + 1 < n { [i, i + 1, n + i + 1, n + i] } else { [i, n, 0, n + i] })
-        .collect();
+    let faces: Vec<[u32; 4]> =
+        (0..n).map(|i| if i + 1 < n { [i, i + 1, n + i + 1, n + i] } else { [i, n, 0, n + i] }).collect();
     let soup = PolygonSoup::from_indices(positions, faces);
     assert!(matches!(Mesh::build(soup.clone()), Err(MeshError::InconsistentOrientation { .. })));
     let error = Mesh::build_with(soup, &BuildOptions::default().with_orient(true)).unwrap_err();
