@@ -22,7 +22,7 @@ use crate::{FaceId, VertexId};
 /// assert_eq!(soup.face_count(), 1);
 /// assert_eq!(soup.face(subdiv_mesh::FaceId::new(0)).len(), 4);
 /// ```
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct PolygonSoup {
     positions: Vec<DVec3>,
     /// `face_offsets[f]..face_offsets[f + 1]` is the range of face `f` in `face_vertices`.
@@ -30,6 +30,12 @@ pub struct PolygonSoup {
     face_vertices: Vec<VertexId>,
     /// Creases, corners, holes and boundary rules authored on the soup.
     pub tags: Tags,
+}
+
+impl Default for PolygonSoup {
+    fn default() -> Self {
+        Self::new()
+    }
 }
 
 impl PolygonSoup {

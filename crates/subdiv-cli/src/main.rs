@@ -1,0 +1,58 @@
+//! `subdiv`: inspect subdivision-surface control meshes (and, as the workspace grows, refine,
+//! evaluate and tessellate them).
+//!
+//! Exit status: 0 on success, 2 on bad input (unreadable or invalid mesh, bad arguments) with
+//! one line on stderr naming the file, the place and the rule.
+
+#![allow(clippy::print_stdout, clippy::print_stderr)]
+
+mod info;
+mod input;
+
+use std::io::Write;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Exact, fast subdivision surfaces.
+#[derive(Debug, Parser)]
+#[command(name = "subdiv", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Print a mesh's topology (counts, face sizes, valences, boundaries, genus, tags) and every
+    /// rule it breaks.
+    Info(info::InfoArgs),
+}
+
+/// A failure the user can act on: printed as one line, exit status 2.
+#[derive(Debug)]
+pub(crate) struct UserError(String);
+
+impl<E: std::fmt::Display> From<E> for UserError {
+    fn from(error: E) -> Self {
+        Self(error.to_string())
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let result = match &cli.command {
+        Command::Info(args) => info::run(args, &mut out),
+    };
+    // A closed pipe (`subdiv info | head`) is not an error worth a message.
+    let _ = out.flush();
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(UserError(message)) => {
+            let _ = writeln!(std::io::stderr(), "subdiv: {message}");
+            ExitCode::from(2)
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! The `subdiv` binary end to end: reports, JSON, and exit status 2 with one line on stderr for
+//! every kind of bad input (never a panic's 101).
+
+use std::process::{Command, Output};
+
+use subdiv_testkit::shared_mesh;
+
+fn subdiv(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_subdiv")).args(args).output().expect("the binary runs")
+}
+
+fn json(args: &[&str]) -> serde_json::Value {
+    let output = subdiv(args);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    serde_json::from_slice(&output.stdout).expect("stdout is one JSON object")
+}
+
+/// Runs `subdiv info FILE` on `bytes` written to a file named `name`, and checks that it fails
+/// the way bad input must: status 2, one line on stderr naming the file and `expect`.
+fn rejects(name: &str, bytes: &[u8], expect: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join(name);
+    std::fs::write(&path, bytes).unwrap();
+    let output = subdiv(&["info", path.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{name}: stderr {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{name}: one line on stderr, got {stderr:?}");
+    assert!(stderr.contains(name), "{name}: the line names the file: {stderr}");
+    assert!(stderr.contains(expect), "{name}: expected {expect:?} in {stderr:?}");
+}
+
+#[test]
+fn built_in_model_report() {
+    let output = subdiv(&["info"]);
+    assert!(output.status.success());
+    let text = String::from_utf8(output.stdout).unwrap();
+    assert!(text.contains("vertices        62"), "{text}");
+    assert!(text.contains("problems        none"), "{text}");
+
+    let report = json(&["info", "--json"]);
+    for (key, value) in [
+        ("vertices", 62),
+        ("faces", 60),
+        ("edges", 120),
+        ("boundary_edges", 0),
+        ("boundary_loops", 0),
+        ("components", 1),
+        ("genus", 0),
+        ("valence_min", 3),
+        ("valence_max", 5),
+        ("extraordinary_vertices", 32),
+    ] {
+        assert_eq!(report[key], value, "{key}");
+    }
+}
+
+#[test]
+fn shared_meshes_report_their_counts() {
+    let Some(spot) = shared_mesh("keenan/spot_control_mesh.obj") else { return };
+    let report = json(&["info", "--json", spot.to_str().unwrap()]);
+    assert_eq!(report["vertices"], 188);
+    assert_eq!(report["faces"], 180);
+    assert_eq!(report["extraordinary_vertices"], 80);
+    assert_eq!(report["genus"], 0);
+
+    let Some(creases) = shared_mesh("opensubdiv/catmark_cube_creases1.obj") else { return };
+    let report = json(&["info", "--json", creases.to_str().unwrap()]);
+    assert_eq!(report["tags"]["creases"], 12);
+
+    // A non-manifold shared mesh: the report lists the problems, stderr has one line.
+    let Some(fan) = shared_mesh("opensubdiv/catmark_fan.obj") else { return };
+    let output = subdiv(&["info", "--json", fan.to_str().unwrap()]);
+    assert_eq!(output.status.code(), Some(2));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["valid"], false);
+    assert!(report["problems"].as_array().unwrap().iter().all(|p| p["rule"] == "non-manifold-edge"));
+    assert_eq!(String::from_utf8_lossy(&output.stderr).lines().count(), 1);
+}
+
+#[test]
+fn hostile_inputs_exit_2_with_one_line() {
+    rejects("empty.obj", b"", "no geometry");
+    rejects("garbage.obj", b"v 1 2 three\n", ":1:");
+    rejects("nan.obj", b"v 0 0 0\nv 1 0 0\nv nan 1 0\nf 1 2 3\n", ":3:");
+    rejects("inf.obj", b"v 0 0 0\nv 1 0 0\nv 0 inf 0\nf 1 2 3\n", ":3:");
+    rejects("zero.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n", ":4:");
+    rejects("range.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n", ":4:");
+    rejects("huge.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 99999999999999999999\n", ":4:");
+    rejects("two.obj", b"v 0 0 0\nv 1 0 0\nf 1 2\n", ":3:");
+    rejects("bytes.obj", b"v 0 0 0\nv 1 0 0\n\xff\xfe 1 1\nf 1 2 3\n", ":3:");
+    rejects("truncated.glb", b"glTF\x02\x00\x00\x00\x00\x01\x00\x00", "truncated.glb");
+    // Topology: a bow-tie (two triangles sharing only vertex 1) and three faces on one edge.
+    rejects("bowtie.obj", b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 2 0 0\nv 2 1 0\nf 1 2 3\nf 2 4 5\n", "non-manifold");
+    rejects(
+        "nonmanifold.obj",
+        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+        "non-manifold edge",
+    );
+    rejects(
+        "flipped.obj",
+        b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\nf 1 2 4\n",
+        "inconsistent orientation",
+    );
+}
+
+#[test]
+fn a_missing_file_is_bad_input() {
+    let output = subdiv(&["info", "/nonexistent/cage.obj"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("/nonexistent/cage.obj"));
+}
+
+#[test]
+fn orient_repairs_a_flipped_face() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("flip.obj");
+    // A quad strip of three faces with the middle one flipped.
+    std::fs::write(
+        &path,
+        "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\nv 3 1 0\nf 1 2 6 5\nf 2 6 7 3\nf 3 4 8 7\n",
+    )
+    .unwrap();
+    let path = path.to_str().unwrap();
+    let output = subdiv(&["info", path]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("inconsistent orientation"));
+    let report = json(&["info", "--json", "--orient", path]);
+    assert_eq!(report["faces"], 3);
+    assert_eq!(report["boundary_loops"], 1);
+}

@@ -1,0 +1,509 @@
+//! glTF 2.0 and GLB: [`load_gltf`] and [`parse_gltf`] read triangle meshes into a polygon soup,
+//! [`encode_glb`] and [`write_glb`] write one triangle mesh as GLB.
+//!
+//! The reader parses the JSON with `gltf::json` and reads the GLB container and every accessor
+//! itself, checking every index and byte range, so that a truncated or corrupt file is an error
+//! naming its place, never a panic. (`gltf`'s own validation indexes `accessors` with unchecked
+//! POSITION references, so it is not used.)
+
+use std::borrow::Cow;
+use std::fs;
+use std::path::Path;
+
+use ::gltf::json::{
+    self, Root,
+    accessor::{ComponentType, GenericComponentType, Type},
+    mesh::{Mode, Semantic},
+    validation::Checked,
+};
+use base64::Engine as _;
+use glam::Vec3;
+use serde_json::{Value, json};
+use subdiv_mesh::{PolygonSoup, VertexId};
+
+use crate::{IoError, atomic};
+
+const GLB_MAGIC: &[u8; 4] = b"glTF";
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
+/// Reads the glTF 2.0 file at `path`: a `.glb`, or a `.gltf` whose buffers are data URIs or
+/// files next to it. See [`parse_gltf`] for what is read.
+///
+/// # Errors
+/// As [`parse_gltf`]; reading the file or an external buffer fails as [`IoError::Io`].
+pub fn load_gltf(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
+    let path = path.as_ref();
+    let bytes = fs::read(path).map_err(|source| IoError::Io { path: path.to_owned(), source })?;
+    parse_gltf(&bytes, &path.display().to_string(), path.parent())
+}
+
+/// Reads glTF 2.0 from memory: GLB when `name` ends in `.glb` or the bytes start with the GLB
+/// magic, JSON otherwise. External buffer URIs are resolved against `base_dir`; without one,
+/// only GLB and data-URI buffers can be read.
+///
+/// Every primitive of every mesh, in file order, must be TRIANGLES with a `VEC3`/`FLOAT`
+/// POSITION and optional `u8`/`u16`/`u32` indices (none: consecutive vertex triples). The
+/// result is one soup of triangles; each primitive's vertices are appended as they are, so
+/// vertices that an exporter split along normal or UV seams stay split (those seams are then
+/// boundaries). Node transforms and instancing are ignored: each mesh appears once, in its own
+/// coordinates, which is the cage as modelled. Other attributes, materials and animation are
+/// ignored.
+///
+/// # Errors
+/// [`IoError::Gltf`] naming the place and the rule: a truncated or malformed GLB container, bad
+/// JSON, a required extension, a primitive mode other than TRIANGLES, a missing or non-float
+/// POSITION, a non-finite position, an index out of range, an accessor or buffer view outside
+/// its buffer, a sparse accessor. [`IoError::NoGeometry`] when no primitive has a vertex.
+pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<PolygonSoup, IoError> {
+    let error =
+        |location: &str, rule: String| IoError::Gltf { file: name.to_owned(), location: location.to_owned(), rule };
+    let is_glb = bytes.starts_with(GLB_MAGIC) || name.to_ascii_lowercase().ends_with(".glb");
+    let (json_bytes, bin) = if is_glb { split_glb(bytes, &error)? } else { (bytes, None) };
+    let root = Root::from_slice(json_bytes)
+        .map_err(|e| error(if is_glb { "GLB chunk 0 (JSON)" } else { "JSON" }, e.to_string()))?;
+    if let Some(extension) = root.extensions_required.first() {
+        return Err(error("extensionsRequired", format!("requires {extension}, which this reader does not support")));
+    }
+    let buffers = root
+        .buffers
+        .iter()
+        .enumerate()
+        .map(|(i, buffer)| load_buffer(i, buffer, bin, base_dir, &error))
+        .collect::<Result<Vec<_>, _>>()?;
+    let reader = Reader { root: &root, buffers, error: &error };
+
+    let mut soup = PolygonSoup::new();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            let at = format!("meshes[{m}].primitives[{p}]");
+            match primitive.mode {
+                Checked::Valid(Mode::Triangles) => {}
+                Checked::Valid(mode) => {
+                    let rule = format!("mode {} ({mode:?}) is not supported; only TRIANGLES (4)", mode.as_gl_enum());
+                    return Err(error(&format!("{at}.mode"), rule));
+                }
+                Checked::Invalid => return Err(error(&format!("{at}.mode"), "is not a glTF primitive mode".into())),
+            }
+            let Some(position) = primitive.attributes.get(&Checked::Valid(Semantic::Positions)) else {
+                return Err(error(
+                    &format!("{at}.attributes"),
+                    "has no POSITION; a mesh needs vertex positions".into(),
+                ));
+            };
+            let base = soup.vertex_count();
+            let count = reader.positions(position.value(), &format!("{at}.attributes.POSITION"), &mut soup)?;
+            let indices = match primitive.indices {
+                Some(index) => reader.indices(index.value(), &format!("{at}.indices"), count)?,
+                None => (0..count).collect(),
+            };
+            if indices.len() % 3 != 0 {
+                let rule = format!(
+                    "{} vertex indices do not make whole triangles (TRIANGLES needs a multiple of 3)",
+                    indices.len()
+                );
+                return Err(error(&at, rule));
+            }
+            for triangle in indices.chunks_exact(3) {
+                let id = |i: usize| {
+                    VertexId::from_usize(base + i)
+                        .ok_or_else(|| error(&at, "more vertices than 32-bit vertex ids can address".into()))
+                };
+                soup.push_face([id(triangle[0])?, id(triangle[1])?, id(triangle[2])?]);
+            }
+        }
+    }
+    if soup.vertex_count() == 0 {
+        return Err(IoError::NoGeometry { file: name.to_owned() });
+    }
+    Ok(soup)
+}
+
+type ErrorFn<'a> = dyn Fn(&str, String) -> IoError + 'a;
+
+/// Splits a GLB container into its JSON chunk and its BIN chunk (if any).
+fn split_glb<'b>(bytes: &'b [u8], error: &ErrorFn<'_>) -> Result<(&'b [u8], Option<&'b [u8]>), IoError> {
+    let word = |bytes: &[u8], at: usize| bytes.get(at..at + 4).and_then(|w| w.try_into().ok()).map(u32::from_le_bytes);
+    let header = "GLB header";
+    if !bytes.starts_with(GLB_MAGIC) {
+        let magic = bytes[..bytes.len().min(4)].escape_ascii();
+        return Err(error(header, format!("bad magic \"{magic}\"; a GLB file starts with \"glTF\"")));
+    }
+    let (Some(version), Some(length)) = (word(bytes, 4), word(bytes, 8)) else {
+        return Err(error(header, format!("truncated: the file has {} bytes, a GLB header needs 12", bytes.len())));
+    };
+    if version != 2 {
+        return Err(error(header, format!("version {version}; only glTF 2 is supported")));
+    }
+    let length = length as usize;
+    let Some(mut rest) = bytes.get(12..length) else {
+        return Err(error(header, format!("declares {length} bytes but the file has {} (truncated)", bytes.len())));
+    };
+    let (mut json, mut bin) = (None, None);
+    for chunk in 0.. {
+        if rest.is_empty() {
+            break;
+        }
+        let location = format!("GLB chunk {chunk}");
+        let (Some(chunk_length), Some(kind)) = (word(rest, 0), word(rest, 4)) else {
+            return Err(error(&location, format!("truncated: {} bytes left, a chunk header needs 8", rest.len())));
+        };
+        let end = 8 + chunk_length as usize;
+        let Some(data) = rest.get(8..end) else {
+            let rule = format!("declares {chunk_length} bytes but {} remain (truncated)", rest.len() - 8);
+            return Err(error(&location, rule));
+        };
+        match (chunk, kind) {
+            (0, CHUNK_JSON) => json = Some(data),
+            (0, _) => return Err(error(&location, "is not a JSON chunk; the first GLB chunk must be JSON".into())),
+            (1, CHUNK_BIN) => bin = Some(data),
+            // The spec asks readers to skip chunks of unknown types.
+            _ => {}
+        }
+        rest = &rest[end..];
+    }
+    let json = json.ok_or_else(|| error("GLB chunk 0", "missing: a GLB file needs a JSON chunk".into()))?;
+    Ok((json, bin))
+}
+
+/// The bytes of buffer `index`: the GLB BIN chunk, a base64 data URI, or a file beside the glTF.
+fn load_buffer<'b>(
+    index: usize,
+    buffer: &json::Buffer,
+    bin: Option<&'b [u8]>,
+    base_dir: Option<&Path>,
+    error: &ErrorFn<'_>,
+) -> Result<Cow<'b, [u8]>, IoError> {
+    let location = format!("buffers[{index}]");
+    let data = match (buffer.uri.as_deref(), bin) {
+        (None, Some(bin)) if index == 0 => Cow::Borrowed(bin),
+        (None, _) => {
+            return Err(error(
+                &location,
+                "has no uri, and only buffers[0] of a GLB with a BIN chunk may omit it".into(),
+            ));
+        }
+        (Some(uri), _) if uri.starts_with("data:") => {
+            let Some((_, data)) = uri.split_once(";base64,") else {
+                return Err(error(
+                    &location,
+                    "is a data URI without base64 data; only base64 data URIs are supported".into(),
+                ));
+            };
+            base64::engine::general_purpose::STANDARD
+                .decode(data)
+                .map(Cow::Owned)
+                .map_err(|e| error(&location, format!("data URI is not valid base64: {e}")))?
+        }
+        (Some(uri), _) => {
+            if uri.contains(':') || uri.starts_with('/') {
+                return Err(error(
+                    &location,
+                    format!("uri {uri:?} is not relative; only relative file URIs and data URIs are supported"),
+                ));
+            }
+            let Some(dir) = base_dir else {
+                return Err(error(
+                    &location,
+                    format!("refers to the file {uri:?}, but no directory was given to find it in"),
+                ));
+            };
+            let path = dir.join(percent_decode(uri));
+            Cow::Owned(fs::read(&path).map_err(|source| IoError::Io { path, source })?)
+        }
+    };
+    if (data.len() as u64) < buffer.byte_length.0 {
+        return Err(error(
+            &location,
+            format!("declares byteLength {} but holds {} bytes", buffer.byte_length.0, data.len()),
+        ));
+    }
+    Ok(data)
+}
+
+/// Decodes `%XX` escapes of a URI path (a space is written `%20`).
+fn percent_decode(uri: &str) -> String {
+    let bytes = uri.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        let hex = bytes
+            .get(i + 1..i + 3)
+            .and_then(|h| std::str::from_utf8(h).ok())
+            .and_then(|h| u8::from_str_radix(h, 16).ok());
+        match (bytes[i], hex) {
+            (b'%', Some(byte)) => {
+                out.push(byte);
+                i += 3;
+            }
+            (byte, _) => {
+                out.push(byte);
+                i += 1;
+            }
+        }
+    }
+    String::from_utf8_lossy(&out).into_owned()
+}
+
+/// The parsed document and its loaded buffers.
+struct Reader<'a> {
+    root: &'a Root,
+    buffers: Vec<Cow<'a, [u8]>>,
+    error: &'a ErrorFn<'a>,
+}
+
+/// The elements of an accessor: `count` elements of `size` bytes, `stride` bytes apart, all
+/// inside `data` (checked when made).
+struct Elements<'a> {
+    data: &'a [u8],
+    stride: usize,
+    size: usize,
+    count: usize,
+}
+
+impl<'a> Elements<'a> {
+    fn iter(&self) -> impl Iterator<Item = &'a [u8]> + '_ {
+        // In bounds: `data` holds (count - 1) * stride + size bytes.
+        (0..self.count).map(|i| &self.data[i * self.stride..i * self.stride + self.size])
+    }
+}
+
+impl Reader<'_> {
+    /// Checks accessor `index` (referred to from `referrer`): its type (`ok`, else the error says
+    /// `expected`) and its place in its buffer. Returns its component type and elements.
+    fn accessor(
+        &self,
+        index: usize,
+        referrer: &str,
+        expected: &str,
+        ok: impl Fn(ComponentType, Type) -> bool,
+    ) -> Result<(ComponentType, Elements<'_>), IoError> {
+        let error = self.error;
+        let root = self.root;
+        let accessor = root.accessors.get(index).ok_or_else(|| {
+            error(
+                referrer,
+                format!("refers to accessors[{index}], but the file has {} accessors", root.accessors.len()),
+            )
+        })?;
+        let at = format!("accessors[{index}]");
+        if accessor.sparse.is_some() {
+            return Err(error(&at, "is sparse; sparse accessors are not supported".into()));
+        }
+        let (Checked::Valid(GenericComponentType(component)), Checked::Valid(kind)) =
+            (accessor.component_type, accessor.type_)
+        else {
+            return Err(error(&at, "has an invalid componentType or type".into()));
+        };
+        if !ok(component, kind) {
+            return Err(error(&at, format!("{expected}; this is {kind:?} of {component:?}")));
+        }
+        let Some(view_index) = accessor.buffer_view.map(|v| v.value()) else {
+            return Err(error(&at, "has no bufferView; accessors without data are not supported".into()));
+        };
+        let view = root.buffer_views.get(view_index).ok_or_else(|| {
+            let rule = format!("refers to bufferViews[{view_index}], but the file has {}", root.buffer_views.len());
+            error(&format!("{at}.bufferView"), rule)
+        })?;
+        let view_at = format!("bufferViews[{view_index}]");
+        let buffer_index = view.buffer.value();
+        let (Some(buffer), Some(data)) = (root.buffers.get(buffer_index), self.buffers.get(buffer_index)) else {
+            let rule = format!("refers to buffers[{buffer_index}], but the file has {}", root.buffers.len());
+            return Err(error(&format!("{view_at}.buffer"), rule));
+        };
+        let view_start = view.byte_offset.map_or(0, |o| o.0);
+        let view_length = view.byte_length.0;
+        if view_start.checked_add(view_length).is_none_or(|end| end > buffer.byte_length.0) {
+            let rule = format!(
+                "bytes {view_start}..+{view_length} lie outside buffers[{buffer_index}] ({} bytes)",
+                buffer.byte_length.0
+            );
+            return Err(error(&view_at, rule));
+        }
+        let size = component.size() * kind.multiplicity();
+        let stride = view.byte_stride.map_or(size, |s| s.0);
+        if stride < size {
+            return Err(error(&view_at, format!("byteStride {stride} is less than the {size}-byte elements of {at}")));
+        }
+        let offset = accessor.byte_offset.map_or(0, |o| o.0);
+        let count = accessor.count.0;
+        // The bytes the accessor reads: the last element starts (count - 1) strides in.
+        let needed = count
+            .checked_sub(1)
+            .map_or(Some(0), |last| last.checked_mul(stride as u64)?.checked_add(size as u64))
+            .and_then(|n| n.checked_add(offset));
+        if needed.is_none_or(|n| n > view_length) {
+            let rule = format!(
+                "{count} elements of {size} bytes, {stride} apart, from byte {offset}, overrun {view_at} ({view_length} bytes)"
+            );
+            return Err(error(&at, rule));
+        }
+        // Every bound was checked above against the buffer's declared length, which is at most
+        // its actual length (see `load_buffer`), so these conversions and the slice are exact.
+        let start = (view_start + offset) as usize;
+        let end = (view_start + needed.unwrap_or(0)) as usize;
+        let elements = Elements { data: &data[start..end], stride, size, count: count as usize };
+        Ok((component, elements))
+    }
+
+    /// Appends the positions of accessor `index` to `soup`; returns how many.
+    fn positions(&self, index: usize, referrer: &str, soup: &mut PolygonSoup) -> Result<usize, IoError> {
+        let expected = "POSITION must be VEC3 of FLOAT (5126)";
+        let (_, elements) =
+            self.accessor(index, referrer, expected, |c, k| (c, k) == (ComponentType::F32, Type::Vec3))?;
+        let at = format!("accessors[{index}]");
+        for (i, bytes) in elements.iter().enumerate() {
+            let c = |k: usize| f32::from_le_bytes([bytes[4 * k], bytes[4 * k + 1], bytes[4 * k + 2], bytes[4 * k + 3]]);
+            let p = Vec3::new(c(0), c(1), c(2));
+            if !p.is_finite() {
+                return Err((self.error)(&at, format!("element {i} = {p} is not finite; positions must be finite")));
+            }
+            soup.push_vertex(p.as_dvec3());
+        }
+        Ok(elements.count)
+    }
+
+    /// The vertex indices of accessor `index`, each checked against `vertex_count`.
+    fn indices(&self, index: usize, referrer: &str, vertex_count: usize) -> Result<Vec<usize>, IoError> {
+        let expected = "indices must be SCALAR of u8, u16 or u32";
+        let (component, elements) = self.accessor(index, referrer, expected, |c, k| {
+            k == Type::Scalar && matches!(c, ComponentType::U8 | ComponentType::U16 | ComponentType::U32)
+        })?;
+        let read: fn(&[u8]) -> u32 = match component {
+            ComponentType::U8 => |b| u32::from(b[0]),
+            ComponentType::U16 => |b| u32::from(u16::from_le_bytes([b[0], b[1]])),
+            _ => |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+        };
+        elements
+            .iter()
+            .map(read)
+            .enumerate()
+            .map(|(i, v)| {
+                if (v as usize) < vertex_count {
+                    Ok(v as usize)
+                } else {
+                    let rule =
+                        format!("element {i} is {v}, but POSITION has {vertex_count} vertices (accessors[{index}])");
+                    Err((self.error)(referrer, rule))
+                }
+            })
+            .collect()
+    }
+}
+
+/// A triangle mesh to write as GLB: positions, optional normals (one per position), and three
+/// indices per triangle, counter-clockwise seen from outside.
+#[derive(Clone, Copy, Debug)]
+pub struct GlbMesh<'a> {
+    /// Vertex positions.
+    pub positions: &'a [Vec3],
+    /// Vertex normals, one per position; written normalised.
+    pub normals: Option<&'a [Vec3]>,
+    /// Triangle vertex indices, three per triangle.
+    pub indices: &'a [u32],
+}
+
+/// Encodes `mesh` as a GLB file: one scene, one node, one mesh with one TRIANGLES primitive;
+/// POSITION (with the `min`/`max` the spec requires), NORMAL when given, `u32` indices, one
+/// tightly packed buffer view per accessor with its target, 4-byte aligned and padded chunks,
+/// `asset.generator = "subdiv"`. The same mesh always gives the same bytes.
+///
+/// # Errors
+/// [`IoError::Unwritable`] for a mesh no valid GLB can hold: no triangle, an index count not a
+/// multiple of 3, an index out of range, a non-finite position, a normal count that differs from
+/// the position count, a zero or non-finite normal, more than 4 GiB.
+pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
+    let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
+    let GlbMesh { positions, normals, indices } = *mesh;
+    let n = positions.len();
+    if indices.is_empty() || indices.len() % 3 != 0 {
+        return Err(unwritable(format!("{} indices; a mesh needs whole triangles, at least one", indices.len())));
+    }
+    if let Some((i, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+        return Err(unwritable(format!("vertex {i} = {p} is not finite")));
+    }
+    if let Some((i, v)) = indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
+        return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
+    }
+    let normals = normals
+        .map(|normals| {
+            if normals.len() != n {
+                return Err(unwritable(format!("{} normals for {n} vertices", normals.len())));
+            }
+            normals
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v.try_normalize().ok_or_else(|| unwritable(format!("normal {i} = {v} has no direction"))))
+                .collect::<Result<Vec<_>, _>>()
+        })
+        .transpose()?;
+
+    let mut bin = Vec::new();
+    let mut views = Vec::new();
+    let mut accessors = Vec::new();
+    let mut attributes = serde_json::Map::new();
+    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
+        views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target }));
+        bin.extend_from_slice(bytes);
+        views.len() - 1
+    };
+    let vec3_bytes = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect::<Vec<u8>>();
+    // min/max as the exact f64 of each f32, so that they compare equal to the data in any reader.
+    let exact = |v: Vec3| v.to_array().map(f64::from);
+    let (min, max) = positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+
+    let view = push_view(&mut bin, &vec3_bytes(positions), ARRAY_BUFFER);
+    attributes.insert("POSITION".into(), accessors.len().into());
+    accessors.push(json!({
+        "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": exact(min), "max": exact(max)
+    }));
+    if let Some(normals) = &normals {
+        let view = push_view(&mut bin, &vec3_bytes(normals), ARRAY_BUFFER);
+        attributes.insert("NORMAL".into(), accessors.len().into());
+        accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3" }));
+    }
+    let index_bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+    let view = push_view(&mut bin, &index_bytes, ELEMENT_ARRAY_BUFFER);
+    let index_accessor = accessors.len();
+    accessors.push(json!({ "bufferView": view, "componentType": 5125, "count": indices.len(), "type": "SCALAR" }));
+
+    let root = json!({
+        "asset": { "version": "2.0", "generator": "subdiv" },
+        "scene": 0,
+        "scenes": [{ "nodes": [0] }],
+        "nodes": [{ "mesh": 0 }],
+        "meshes": [{ "primitives": [{ "attributes": Value::Object(attributes), "indices": index_accessor, "mode": 4 }] }],
+        "accessors": accessors,
+        "bufferViews": views,
+        "buffers": [{ "byteLength": bin.len() }],
+    });
+    let mut json = root.to_string().into_bytes();
+    json.resize(json.len().next_multiple_of(4), b' ');
+    // Every part of the BIN chunk is a whole number of 4-byte values, so it needs no padding.
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let total =
+        u32::try_from(total).map_err(|_| unwritable(format!("{total} bytes exceed the 4 GiB a GLB can hold")))?;
+
+    let mut glb = Vec::with_capacity(total as usize);
+    glb.extend_from_slice(GLB_MAGIC);
+    glb.extend_from_slice(&2u32.to_le_bytes());
+    glb.extend_from_slice(&total.to_le_bytes());
+    for (kind, data) in [(CHUNK_JSON, &json), (CHUNK_BIN, &bin)] {
+        glb.extend_from_slice(&(data.len() as u32).to_le_bytes());
+        glb.extend_from_slice(&kind.to_le_bytes());
+        glb.extend_from_slice(data);
+    }
+    Ok(glb)
+}
+
+/// Writes `mesh` as a GLB file at `path` (see [`encode_glb`]), through `<path>.tmp` and a
+/// rename, so a failure leaves `path` untouched.
+///
+/// # Errors
+/// As [`encode_glb`]; [`IoError::Io`] when writing fails.
+pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoError> {
+    let glb = encode_glb(mesh)?;
+    atomic::write_file(path.as_ref(), |w| std::io::Write::write_all(w, &glb))
+}

@@ -1,0 +1,99 @@
+//! Mesh files for `subdiv`: control cages in, tessellations out.
+//!
+//! - **OBJ** ([`read_obj`], [`load_obj`], [`ObjFile`]) reads polygons of any size with every
+//!   face index form, and OpenSubdiv's tag lines (`t crease`, `t corner`, `t hole`,
+//!   `t interpolateboundary`, …) into [`Tags`](subdiv_mesh::Tags). [`write_obj`] writes a soup
+//!   back, tags included, with exact coordinates: reading the file gives the same soup.
+//! - **glTF 2.0 / GLB** ([`load_gltf`], [`parse_gltf`]) reads every TRIANGLES primitive into one
+//!   soup. [`write_glb`] writes a triangle mesh (positions, normals, indices) as GLB.
+//! - [`load`] and [`load_mesh`] pick the format from the file extension; [`load_mesh`] also builds
+//!   the half-edge [`Mesh`] and reports a [`MeshError`](subdiv_mesh::MeshError) at the OBJ line
+//!   of the face, vertex or tag it is about.
+//!
+//! No input panics. Every error is an [`IoError`] naming the place (`file:line`, or a glTF JSON
+//! path such as `meshes[0].primitives[1].attributes.POSITION`) and the rule broken. Writers
+//! write `<path>.tmp` and rename it, so a failure never leaves a half-written file.
+//!
+//! ```
+//! use subdiv_io::read_obj;
+//! use subdiv_mesh::{FaceId, Mesh, VertexId};
+//!
+//! let text = "\
+//! v 0 0 0
+//! v 1 0 0
+//! v 1 1 0
+//! v 0 1 0
+//! f 1 2 3 4
+//! t crease 3/1/0 0 1 2 10
+//! ";
+//! let soup = read_obj(text.as_bytes(), "quad.obj")?;
+//! assert_eq!(soup.face(FaceId::new(0)), [0, 1, 2, 3].map(VertexId::new));
+//! // The crease chain 0-1-2 becomes two sharp edges.
+//! let creases = &soup.tags.creases;
+//! assert_eq!(creases.len(), 2);
+//! assert_eq!(creases[1].vertices, [VertexId::new(1), VertexId::new(2)]);
+//! assert_eq!(creases[1].sharpness, 10.0);
+//! let mesh = Mesh::build(soup).expect("a quad is a valid mesh");
+//! assert_eq!(mesh.boundary_edge_count(), 4);
+//! # Ok::<(), subdiv_io::IoError>(())
+//! ```
+
+mod atomic;
+mod error;
+mod gltf;
+mod obj;
+
+use std::path::Path;
+
+use subdiv_mesh::{BuildOptions, Mesh, PolygonSoup};
+
+pub use crate::error::IoError;
+pub use crate::gltf::{GlbMesh, encode_glb, load_gltf, parse_gltf, write_glb};
+pub use crate::obj::{ObjFile, ObjLines, load_obj, read_obj, write_obj, write_obj_to};
+
+/// The formats [`load`] reads.
+enum Format {
+    Obj,
+    Gltf,
+}
+
+impl Format {
+    /// From the extension of `path`, ignoring case.
+    fn of(path: &Path) -> Result<Self, IoError> {
+        let extension = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("obj") => Ok(Self::Obj),
+            Some("gltf" | "glb") => Ok(Self::Gltf),
+            _ => Err(IoError::UnknownFormat { path: path.to_owned() }),
+        }
+    }
+}
+
+/// Reads the mesh file at `path` into a polygon soup: `.obj`, `.gltf` or `.glb` (any case).
+///
+/// # Errors
+/// [`IoError::UnknownFormat`] for another extension; otherwise as [`load_obj`] or [`load_gltf`].
+pub fn load(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
+    let path = path.as_ref();
+    match Format::of(path)? {
+        Format::Obj => load_obj(path),
+        Format::Gltf => load_gltf(path),
+    }
+}
+
+/// Reads the mesh file at `path` (as [`load`]) and builds its half-edge mesh.
+///
+/// # Errors
+/// As [`load`]; a soup that is no valid mesh gives [`IoError::Mesh`], with the line of the face,
+/// vertex or tag at fault for OBJ files.
+pub fn load_mesh(path: impl AsRef<Path>, options: &BuildOptions) -> Result<Mesh, IoError> {
+    let path = path.as_ref();
+    match Format::of(path)? {
+        Format::Obj => ObjFile::load(path)?.build(options),
+        Format::Gltf => Mesh::build_with(load_gltf(path)?, options).map_err(|source| IoError::Mesh {
+            file: path.display().to_string(),
+            line: None,
+            source,
+        }),
+    }
+}

@@ -1,0 +1,50 @@
+//! Test support shared by the workspace's test suites (a dev-dependency only).
+//!
+//! The shared corpus (`../shared` beside the workspace) is found through the environment
+//! variable `SUBDIV_SHARED`, which `.ci/run` sets. When it is set, the data must be there: a
+//! missing folder or file fails the test instead of skipping it. When it is unset, `../shared`
+//! beside the workspace is used if it exists, and otherwise the caller skips, saying so.
+
+#![allow(clippy::print_stderr)]
+
+use std::path::{Path, PathBuf};
+
+/// The shared folder, or `None` (after saying so on stderr) when `SUBDIV_SHARED` is unset and
+/// there is no `../shared` beside the workspace.
+///
+/// # Panics
+/// When `SUBDIV_SHARED` is set but has no `testdata/meshes` folder.
+pub fn shared_dir() -> Option<PathBuf> {
+    match std::env::var_os("SUBDIV_SHARED") {
+        Some(dir) => {
+            let dir = PathBuf::from(dir);
+            assert!(dir.join("testdata/meshes").is_dir(), "SUBDIV_SHARED={} has no testdata/meshes", dir.display());
+            Some(dir)
+        }
+        None => {
+            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared");
+            if dir.join("testdata/meshes").is_dir() {
+                Some(dir)
+            } else {
+                eprintln!("SUBDIV_SHARED is unset and ../shared is missing: shared-corpus checks not run");
+                None
+            }
+        }
+    }
+}
+
+/// The shared meshes folder, `<shared>/testdata/meshes`; `None` as for [`shared_dir`].
+pub fn meshes_dir() -> Option<PathBuf> {
+    shared_dir().map(|dir| dir.join("testdata/meshes"))
+}
+
+/// A file of the shared meshes folder, e.g. `"keenan/spot_control_mesh.obj"`; `None` as for
+/// [`shared_dir`].
+///
+/// # Panics
+/// When the shared folder is there but the file is not.
+pub fn shared_mesh(relative: &str) -> Option<PathBuf> {
+    let path = meshes_dir()?.join(relative);
+    assert!(path.is_file(), "{} is missing from the shared corpus", path.display());
+    Some(path)
+}

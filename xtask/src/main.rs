@@ -1,0 +1,81 @@
+//! `cargo xtask`: the project's build system (rust-analyzer style).
+//!
+//! - `cargo xtask ci` runs what `.ci/run` runs after installing packages: `cargo fmt --check`,
+//!   clippy with warnings denied, and the README's test command.
+//! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named, e.g.
+//!   `topology`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
+
+#![allow(clippy::print_stdout, clippy::print_stderr)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, ExitCode};
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let result = match args.first().map(String::as_str) {
+        Some("ci") => ci(),
+        Some("bench") => bench(args.get(1).map(String::as_str)),
+        _ => Err("usage: cargo xtask ci | cargo xtask bench [topology]".to_string()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("xtask: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("xtask lives in the workspace root").to_path_buf()
+}
+
+fn cargo(args: &[&str]) -> Result<(), String> {
+    eprintln!("$ cargo {}", args.join(" "));
+    let status = Command::new(env!("CARGO"))
+        .args(args)
+        .current_dir(root())
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if status.success() { Ok(()) } else { Err(format!("`cargo {}` failed ({status})", args.join(" "))) }
+}
+
+fn ci() -> Result<(), String> {
+    cargo(&["fmt", "--all", "--", "--check"])?;
+    cargo(&["clippy", "--workspace", "--all-targets", "--", "-D", "warnings"])?;
+    cargo(&["test", "--workspace"])
+}
+
+/// What each bench measures, for its `key=value` line: (bench target, criterion group).
+const BENCHES: &[(&str, &str)] = &[("topology", "topology")];
+
+fn bench(only: Option<&str>) -> Result<(), String> {
+    let selected: Vec<_> = BENCHES.iter().filter(|(name, _)| only.is_none_or(|o| o == *name)).collect();
+    if selected.is_empty() {
+        return Err(format!("unknown bench {:?}; known: {:?}", only.unwrap_or_default(), BENCHES));
+    }
+    for (name, group) in selected {
+        cargo(&["bench", "-p", "subdiv-benches", "--bench", name])?;
+        report(group)?;
+    }
+    Ok(())
+}
+
+/// Prints `bench=… id=… median_s=…` for every measurement criterion saved for `group`.
+fn report(group: &str) -> Result<(), String> {
+    let dir = root().join("target/criterion").join(group);
+    let mut ids: Vec<_> = std::fs::read_dir(&dir)
+        .map_err(|e| format!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.join("new/estimates.json").is_file())
+        .collect();
+    ids.sort();
+    for id in ids {
+        let text = std::fs::read_to_string(id.join("new/estimates.json")).map_err(|e| e.to_string())?;
+        let estimates: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
+        let median_ns = estimates["median"]["point_estimate"].as_f64().ok_or("estimates.json has no median")?;
+        let name = id.file_name().unwrap_or_default().to_string_lossy();
+        println!("bench={group} id={name} median_s={:.6} threads=1", median_ns * 1e-9);
+    }
+    Ok(())
+}
