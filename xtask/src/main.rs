@@ -4,10 +4,16 @@
 //!   clippy with warnings denied, and the README's test command.
 //! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named, e.g.
 //!   `topology`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
+//! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
+//!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
 
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+mod osd;
+
 use std::path::{Path, PathBuf};
+
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -15,7 +21,14 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("bench") => bench(args.get(1).map(String::as_str)),
-        _ => Err("usage: cargo xtask ci | cargo xtask bench [topology]".to_string()),
+        Some("osd-refine") => match args.get(1) {
+            Some(osd) => {
+                let shared = std::env::var_os("SUBDIV_SHARED").map_or_else(|| root().join("../shared"), PathBuf::from);
+                osd::run(Path::new(osd), &shared.join("testdata/meshes"), &[1, 2, 3])
+            }
+            None => Err("usage: cargo xtask osd-refine PATH/TO/osd_refine".to_string()),
+        },
+        _ => Err(USAGE.to_string()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -192,6 +192,22 @@ impl Mesh {
         self.hole[face.index()]
     }
 
+    /// Sets the sharpness of `edge` (refinement uses this to carry creases to the next level;
+    /// [`tags`](Self::tags) keeps what was authored). A negative or NaN value is stored as 0.
+    pub fn set_edge_sharpness(&mut self, edge: EdgeId, sharpness: f64) {
+        self.edge_sharpness[edge.index()] = if sharpness > 0.0 { sharpness } else { 0.0 };
+    }
+
+    /// Sets the corner sharpness of `vertex`; a negative or NaN value is stored as 0.
+    pub fn set_vertex_sharpness(&mut self, vertex: VertexId, sharpness: f64) {
+        self.vertex_sharpness[vertex.index()] = if sharpness > 0.0 { sharpness } else { 0.0 };
+    }
+
+    /// Marks `face` as a hole, or not.
+    pub fn set_hole(&mut self, face: FaceId, hole: bool) {
+        self.hole[face.index()] = hole;
+    }
+
     /// The axis-aligned bounding box `(min, max)` of the vertices used by faces, or `None`
     /// when there are none.
     pub fn bounding_box(&self) -> Option<(DVec3, DVec3)> {

@@ -1,0 +1,26 @@
+//! [`SchemeError`].
+
+use subdiv_mesh::FaceId;
+
+use crate::Scheme;
+
+/// Why a scheme cannot refine a mesh.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum SchemeError {
+    /// The scheme takes only faces of one size (Loop: triangles).
+    #[error("{scheme} takes only {expected}-sided faces, but {face} has {size} sides")]
+    FaceNotSupported {
+        /// The scheme.
+        scheme: Scheme,
+        /// The first face it cannot take.
+        face: FaceId,
+        /// That face's size.
+        size: usize,
+        /// The size the scheme takes.
+        expected: usize,
+    },
+    /// The refined mesh broke a topology rule: a bug, please report it.
+    #[error("internal error, please report: the refined mesh is invalid: {0}")]
+    Internal(subdiv_mesh::MeshError),
+}
