@@ -13,7 +13,8 @@ mod osd;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str =
+    "usage: cargo xtask ci | cargo xtask bench [topology|refine] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -60,7 +61,7 @@ fn ci() -> Result<(), String> {
 }
 
 /// What each bench measures, for its `key=value` line: (bench target, criterion group).
-const BENCHES: &[(&str, &str)] = &[("topology", "topology")];
+const BENCHES: &[(&str, &str)] = &[("topology", "topology"), ("refine", "refine")];
 
 fn bench(only: Option<&str>) -> Result<(), String> {
     let selected: Vec<_> = BENCHES.iter().filter(|(name, _)| only.is_none_or(|o| o == *name)).collect();

@@ -8,6 +8,7 @@
 
 mod info;
 mod input;
+mod refine;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -27,6 +28,8 @@ enum Command {
     /// Print a mesh's topology (counts, face sizes, valences, boundaries, genus, tags) and every
     /// rule it breaks.
     Info(info::InfoArgs),
+    /// Refine a mesh uniformly (OpenSubdiv's rules) and write it as OBJ.
+    Refine(refine::RefineArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -45,6 +48,7 @@ fn main() -> ExitCode {
     let mut out = stdout.lock();
     let result = match &cli.command {
         Command::Info(args) => info::run(args, &mut out),
+        Command::Refine(args) => refine::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

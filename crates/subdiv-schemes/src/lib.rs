@@ -22,9 +22,11 @@
 mod crease;
 mod error;
 mod refine;
+mod stencil;
 
 pub use error::SchemeError;
-pub use refine::{RefineOptions, refine, refine_uniform};
+pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
+pub use stencil::Stencils;
 
 /// A subdivision scheme.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

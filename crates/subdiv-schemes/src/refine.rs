@@ -9,6 +9,7 @@ use subdiv_mesh::{
 };
 
 use crate::crease::{self, INFINITE, Rule};
+use crate::stencil::{Row, Stencils};
 use crate::{Scheme, SchemeError};
 
 /// Options of [`refine`] and [`refine_uniform`]. `None` fields take the mesh's tags, and
@@ -72,11 +73,77 @@ pub fn refine_uniform(
     levels: usize,
     options: &RefineOptions,
 ) -> Result<Mesh, SchemeError> {
-    let mut current = prepared(mesh, options);
-    for _ in 0..levels {
-        current = refine_prepared(&current, scheme, options.rules_for(mesh))?;
+    Refiner::new(mesh, scheme, levels, options).map(Refiner::into_mesh)
+}
+
+/// Uniform refinement split as OpenSubdiv's `Far` splits it: the topology of every level and
+/// its stencils are computed once by [`Refiner::new`]; [`Refiner::interpolate`] then refines new
+/// positions of the same cage (an animated one, say) by applying the stencils alone.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::{RefineOptions, Refiner, Scheme};
+///
+/// let cage = Mesh::build(shapes::quad_torus(8, 6))?;
+/// let refiner = Refiner::new(&cage, Scheme::CatmullClark, 3, &RefineOptions::DEFAULT)?;
+/// // Move the cage and refine the moved positions without redoing the topology.
+/// let moved: Vec<_> = cage.positions().iter().map(|p| *p * 2.0).collect();
+/// let (mut out, mut scratch) = (Vec::new(), Vec::new());
+/// refiner.interpolate(&moved, &mut out, &mut scratch);
+/// assert!(out.iter().zip(refiner.mesh().positions()).all(|(a, b)| (*a - *b * 2.0).length() < 1e-12));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Refiner {
+    levels: Vec<Stencils>,
+    mesh: Mesh,
+}
+
+impl Refiner {
+    /// Refines `mesh` `levels` times, keeping each level's stencils.
+    ///
+    /// # Errors
+    /// [`SchemeError::FaceNotSupported`] when the scheme cannot take a face of the mesh.
+    pub fn new(mesh: &Mesh, scheme: Scheme, levels: usize, options: &RefineOptions) -> Result<Self, SchemeError> {
+        let rules = options.rules_for(mesh);
+        let mut current = prepared(mesh, options);
+        let mut stencils = Vec::with_capacity(levels);
+        for _ in 0..levels {
+            let (child, level) = refine_prepared(&current, scheme, rules)?;
+            current = child;
+            stencils.push(level);
+        }
+        Ok(Self { levels: stencils, mesh: current })
     }
-    Ok(current)
+
+    /// The refined mesh (topology, sharpness, holes, and the positions refined from the cage's).
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The refined mesh, by value.
+    pub fn into_mesh(self) -> Mesh {
+        self.mesh
+    }
+
+    /// Each level's stencils, from the cage down.
+    pub fn levels(&self) -> &[Stencils] {
+        &self.levels
+    }
+
+    /// Refines `base` (one position per cage vertex) to the last level, into `out`; `scratch`
+    /// holds the levels in between. Both are resized as needed and may be reused across calls.
+    ///
+    /// # Panics
+    /// When `base` does not have one position per cage vertex.
+    pub fn interpolate(&self, base: &[DVec3], out: &mut Vec<DVec3>, scratch: &mut Vec<DVec3>) {
+        out.clear();
+        out.extend_from_slice(base);
+        for level in &self.levels {
+            std::mem::swap(out, scratch);
+            level.apply(scratch, out);
+        }
+    }
 }
 
 /// Refines `mesh` once; see [`refine_uniform`].
@@ -139,11 +206,6 @@ fn sharpness(s: f64) -> f32 {
     s as f32
 }
 
-fn centroid(mesh: &Mesh, positions: &[DVec3], f: FaceId) -> DVec3 {
-    let face = mesh.face_vertices(f);
-    face.iter().map(|v| positions[v.index()]).sum::<DVec3>() / face.len() as f64
-}
-
 /// Child vertex numbering: vertex points (parent order), then face points (quad schemes), then
 /// edge points — the order of OpenSubdiv's `Far` levels as the peer harness writes them.
 struct Numbering {
@@ -161,7 +223,7 @@ impl Numbering {
     }
 }
 
-fn refine_prepared(mesh: &Mesh, scheme: Scheme, rules: Rules) -> Result<Mesh, SchemeError> {
+fn refine_prepared(mesh: &Mesh, scheme: Scheme, rules: Rules) -> Result<(Mesh, Stencils), SchemeError> {
     let method = rules.crease_method;
     let quads = scheme.splits_into_quads();
     if !quads && let Some(face) = mesh.face_ids().find(|&f| mesh.face_size(f) != 3) {
@@ -172,20 +234,21 @@ fn refine_prepared(mesh: &Mesh, scheme: Scheme, rules: Rules) -> Result<Mesh, Sc
     let numbering = Numbering { face_base: nv, edge_base: nv + face_points };
     let child_count = (numbering.edge_base as usize) + mesh.edge_count();
 
-    // Geometry, in OpenSubdiv's order: face points, then edge points, then vertex points.
-    let parent = mesh.positions();
-    let mut positions = vec![DVec3::ZERO; child_count];
+    // Geometry: one stencil row per child vertex, in child order.
+    let mut stencils = Stencils::with_capacity(child_count, 8 * child_count, mesh.vertex_count());
+    for v in mesh.vertices() {
+        stencils.push(&vertex_row(mesh, scheme, method, v));
+    }
     if quads {
         for f in mesh.face_ids() {
-            positions[numbering.face(f).index()] = centroid(mesh, parent, f);
+            stencils.push(&face_point(mesh, f));
         }
     }
     for e in mesh.edges() {
-        positions[numbering.edge(e).index()] = edge_point(mesh, scheme, rules, e, &positions, &numbering);
+        stencils.push(&edge_row(mesh, scheme, rules, e));
     }
-    for v in mesh.vertices() {
-        positions[v.index()] = vertex_point(mesh, scheme, method, v, &positions, &numbering);
-    }
+    let mut positions = Vec::with_capacity(child_count);
+    stencils.apply(mesh.positions(), &mut positions);
 
     // Topology.
     let mut soup = PolygonSoup::with_capacity(child_count, 4 * mesh.face_count(), 4 * mesh.half_edge_count());
@@ -252,45 +315,47 @@ fn refine_prepared(mesh: &Mesh, scheme: Scheme, rules: Rules) -> Result<Mesh, Sc
             }
         }
     }
-    Ok(child)
+    Ok((child, stencils))
 }
 
-/// The two faces of edge `e` (one on a boundary) and the half-edge of the first.
-fn edge_point(
-    mesh: &Mesh,
-    scheme: Scheme,
-    rules: Rules,
-    e: EdgeId,
-    positions: &[DVec3],
-    numbering: &Numbering,
-) -> DVec3 {
+/// The stencil of the point of edge `e`.
+fn edge_row(mesh: &Mesh, scheme: Scheme, rules: Rules, e: EdgeId) -> Row {
     let h = mesh.edge_half_edge(e);
-    let (a, b) = (mesh.origin(h), mesh.dest(h));
-    let p = mesh.positions();
-    let midpoint = (p[a.index()] + p[b.index()]) * 0.5;
+    let (a, b) = (mesh.origin(h).raw(), mesh.dest(h).raw());
+    let mut midpoint = Row::default();
+    midpoint.add(a, 0.5);
+    midpoint.add(b, 0.5);
     let s = sharpness(mesh.edge_sharpness(e));
     let twin = mesh.twin(h);
     let smooth = match (scheme, twin) {
-        (Scheme::Bilinear, _) | (_, None) => midpoint,
+        (Scheme::Bilinear, _) | (_, None) => midpoint.clone(),
         (Scheme::CatmullClark, Some(t)) => {
             let (g0, g1) = (mesh.face(h), mesh.face(t));
-            let (f0, f1) = (positions[numbering.face(g0).index()], positions[numbering.face(g1).index()]);
             let (tri0, tri1) = (mesh.face_size(g0) == 3, mesh.face_size(g1) == 3);
-            if rules.smooth_triangles && (tri0 || tri1) {
+            let (vertex_weight, face_weight) = if rules.smooth_triangles && (tri0 || tri1) {
                 // OpenSubdiv's (and Hbr's) "smooth triangle" weights, in their order of operations.
                 const TRIANGLE_FACE_WEIGHT: f64 = 0.470;
                 let w0 = if tri0 { TRIANGLE_FACE_WEIGHT } else { 0.25 };
                 let w1 = if tri1 { TRIANGLE_FACE_WEIGHT } else { 0.25 };
                 let face_weight = 0.5 * (w0 + w1);
-                let vertex_weight = 0.5 * (1.0 - 2.0 * face_weight);
-                (p[a.index()] + p[b.index()]) * vertex_weight + (f0 + f1) * face_weight
+                (0.5 * (1.0 - 2.0 * face_weight), face_weight)
             } else {
-                (p[a.index()] + p[b.index()] + f0 + f1) * 0.25
-            }
+                (0.25, 0.25)
+            };
+            let mut row = Row::default();
+            row.add(a, vertex_weight);
+            row.add(b, vertex_weight);
+            row.add_row(&face_point(mesh, g0), face_weight);
+            row.add_row(&face_point(mesh, g1), face_weight);
+            row
         }
         (Scheme::Loop, Some(t)) => {
-            let (o0, o1) = (mesh.origin(mesh.prev(h)), mesh.origin(mesh.prev(t)));
-            (p[a.index()] + p[b.index()]) * 0.375 + (p[o0.index()] + p[o1.index()]) * 0.125
+            let mut row = Row::default();
+            row.add(a, 0.375);
+            row.add(b, 0.375);
+            row.add(mesh.origin(mesh.prev(h)).raw(), 0.125);
+            row.add(mesh.origin(mesh.prev(t)).raw(), 0.125);
+            row
         }
     };
     if !crease::is_sharp(s) || scheme == Scheme::Bilinear {
@@ -302,36 +367,43 @@ fn edge_point(
             vertex_edges(mesh, v).iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
         crease::child_edge_sharpness(rules.crease_method, s, &around)
     };
-    if crease::is_sharp(half(a)) && crease::is_sharp(half(b)) {
+    if crease::is_sharp(half(mesh.origin(h))) && crease::is_sharp(half(mesh.dest(h))) {
         return midpoint;
     }
-    let w = f64::from(s);
-    midpoint * w + smooth * (1.0 - w)
+    midpoint.blend(&smooth, f64::from(s))
 }
 
-fn vertex_point(
-    mesh: &Mesh,
-    scheme: Scheme,
-    method: CreaseMethod,
-    v: VertexId,
-    positions: &[DVec3],
-    numbering: &Numbering,
-) -> DVec3 {
-    let p = mesh.positions();
-    let here = p[v.index()];
+/// The stencil of the centroid of face `f`.
+fn face_point(mesh: &Mesh, f: FaceId) -> Row {
+    let face = mesh.face_vertices(f);
+    let mut row = Row::default();
+    for v in face {
+        row.add(v.raw(), 1.0 / face.len() as f64);
+    }
+    row
+}
+
+/// The stencil of the child of vertex `v`: OpenSubdiv's smooth, crease or corner mask, or a
+/// blend of the parent's and the child's where a semi-sharp feature fades out.
+fn vertex_row(mesh: &Mesh, scheme: Scheme, method: CreaseMethod, v: VertexId) -> Row {
     if scheme == Scheme::Bilinear || mesh.is_isolated(v) {
-        return here;
+        return Row::single(v.raw());
     }
     let edges = vertex_edges(mesh, v);
     let parent_edges: SmallVec<[f32; 8]> = edges.iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
     let parent_vertex = sharpness(mesh.vertex_sharpness(v));
-    let smooth = || -> DVec3 {
+    let smooth = || -> Row {
         let n = edges.len() as f64;
+        let mut row = Row::default();
         match scheme {
             Scheme::CatmullClark => {
-                let ends: DVec3 = edges.iter().map(|&(_, w)| p[w.index()]).sum();
-                let faces: DVec3 = mesh.vertex_faces(v).map(|f| positions[numbering.face(f).index()]).sum();
-                here * ((n - 2.0) / n) + (ends + faces) / (n * n)
+                row.add(v.raw(), (n - 2.0) / n);
+                for &(_, w) in &edges {
+                    row.add(w.raw(), 1.0 / (n * n));
+                }
+                for f in mesh.vertex_faces(v) {
+                    row.add_row(&face_point(mesh, f), 1.0 / (n * n));
+                }
             }
             _ => {
                 let beta = if edges.len() == 6 {
@@ -340,20 +412,26 @@ fn vertex_point(
                     let c = 0.375 + 0.25 * (std::f64::consts::TAU / n).cos();
                     (0.625 - c * c) / n
                 };
-                let ends: DVec3 = edges.iter().map(|&(_, w)| p[w.index()]).sum();
-                here * (1.0 - n * beta) + ends * beta
+                row.add(v.raw(), 1.0 - n * beta);
+                for &(_, w) in &edges {
+                    row.add(w.raw(), beta);
+                }
             }
         }
+        row
     };
-    let crease_along = |sharp: &[f32]| -> DVec3 {
-        let mut ends = edges.iter().zip(sharp).filter(|&(_, &s)| crease::is_sharp(s)).map(|(&(_, w), _)| p[w.index()]);
-        let (a, b) = (ends.next().unwrap_or(here), ends.next().unwrap_or(here));
-        here * 0.75 + (a + b) * 0.125
+    let crease_along = |sharp: &[f32]| -> Row {
+        let mut row = Row::default();
+        row.add(v.raw(), 0.75);
+        for (&(_, w), _) in edges.iter().zip(sharp).filter(|&(_, &s)| crease::is_sharp(s)).take(2) {
+            row.add(w.raw(), 0.125);
+        }
+        row
     };
     let mask = |rule: Rule, sharp: &[f32]| match rule {
         Rule::Smooth | Rule::Dart => smooth(),
         Rule::Crease => crease_along(sharp),
-        Rule::Corner => here,
+        Rule::Corner => Row::single(v.raw()),
     };
     let parent_rule = crease::vertex_rule(parent_vertex, &parent_edges);
     if matches!(parent_rule, Rule::Smooth | Rule::Dart) {
@@ -367,5 +445,5 @@ fn vertex_point(
         return mask(parent_rule, &parent_edges);
     }
     let w = f64::from(crease::fractional_weight(parent_vertex, child_vertex, &parent_edges, &child_edges));
-    mask(parent_rule, &parent_edges) * w + mask(child_rule, &child_edges) * (1.0 - w)
+    mask(parent_rule, &parent_edges).blend(&mask(child_rule, &child_edges), w)
 }

@@ -1,7 +1,7 @@
 //! **subdiv**: exact, fast subdivision surfaces in Rust.
 //!
-//! This facade re-exports the workspace's crates under one name. Today it holds the
-//! foundation: half-edge topology ([`mesh`]) and mesh files ([`io`]); schemes, exact stencils,
+//! This facade re-exports the workspace's crates under one name: half-edge topology ([`mesh`]),
+//! mesh files ([`io`]) and refinement with OpenSubdiv's rules ([`schemes`]). Exact stencils,
 //! evaluation, tessellation and the GPU backend arrive as their own crates and are re-exported
 //! here.
 //!
@@ -16,5 +16,6 @@
 
 pub use subdiv_io as io;
 pub use subdiv_mesh as mesh;
+pub use subdiv_schemes as schemes;
 
 pub use subdiv_mesh::{DVec3, Mesh, MeshError, PolygonSoup};
