@@ -6,6 +6,7 @@
 
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+mod analyze;
 mod info;
 mod input;
 mod refine;
@@ -30,6 +31,8 @@ enum Command {
     Info(info::InfoArgs),
     /// Refine a mesh uniformly (OpenSubdiv's rules) and write it as OBJ.
     Refine(refine::RefineArgs),
+    /// Eigenvalues of a scheme's one-ring subdivision matrix at an extraordinary vertex.
+    Analyze(analyze::AnalyzeArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -49,6 +52,7 @@ fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Info(args) => info::run(args, &mut out),
         Command::Refine(args) => refine::run(args, &mut out),
+        Command::Analyze(args) => analyze::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

@@ -26,7 +26,7 @@ pub(crate) struct RefineArgs {
     output: Option<PathBuf>,
 }
 
-fn parse_scheme(name: &str) -> Result<Scheme, String> {
+pub(crate) fn parse_scheme(name: &str) -> Result<Scheme, String> {
     Scheme::from_name(name).ok_or_else(|| {
         let known: Vec<_> = Scheme::ALL.iter().map(|s| s.name()).collect();
         format!("unknown scheme {name:?}; known: {}", known.join(", "))

@@ -128,3 +128,27 @@ fn orient_repairs_a_flipped_face() {
     assert_eq!(report["faces"], 3);
     assert_eq!(report["boundary_loops"], 1);
 }
+
+#[test]
+fn refine_writes_an_obj_that_reads_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("star2.obj");
+    let output = subdiv(&["refine", "--levels", "2", "-o", out.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report = json(&["info", "--json", out.to_str().unwrap()]);
+    assert_eq!(report["faces"], 60 * 16);
+    assert_eq!(report["genus"], 0);
+    // Loop cannot take quads: a clear error, status 2.
+    let output = subdiv(&["refine", "--scheme", "loop"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("loop takes only 3-sided faces"));
+}
+
+#[test]
+fn analyze_reports_the_subdominant_eigenvalue() {
+    let report = json(&["analyze", "--scheme", "loop", "--valence", "6", "--json"]);
+    let subdominant = report["subdominant"].as_f64().unwrap();
+    assert!((subdominant - 0.5).abs() < 1e-12, "regular Loop has λ1 = 1/2, got {subdominant}");
+    assert_eq!(report["subdominant_real_double"], true);
+    assert_eq!(subdiv(&["analyze", "--valence", "2"]).status.code(), Some(2));
+}

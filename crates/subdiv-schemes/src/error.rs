@@ -20,7 +20,18 @@ pub enum SchemeError {
         /// The size the scheme takes.
         expected: usize,
     },
+    /// The analysis needs an interior vertex of valence at least 3.
+    #[error("{scheme}: valence {valence} is not supported; analysis needs valence 3 or more")]
+    ValenceNotSupported {
+        /// The scheme.
+        scheme: Scheme,
+        /// The valence asked for.
+        valence: usize,
+    },
+    /// The eigen solver did not converge.
+    #[error("the eigen solver did not converge: {0}")]
+    Eigen(String),
     /// The refined mesh broke a topology rule: a bug, please report it.
-    #[error("internal error, please report: the refined mesh is invalid: {0}")]
-    Internal(subdiv_mesh::MeshError),
+    #[error("internal error, please report: {0}")]
+    Internal(String),
 }

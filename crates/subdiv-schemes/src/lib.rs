@@ -19,11 +19,13 @@
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 
+mod analysis;
 mod crease;
 mod error;
 mod refine;
 mod stencil;
 
+pub use analysis::{LocalMatrix, Spectrum};
 pub use error::SchemeError;
 pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
 pub use stencil::Stencils;

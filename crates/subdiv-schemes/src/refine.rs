@@ -292,7 +292,8 @@ fn refine_prepared(mesh: &Mesh, scheme: Scheme, rules: Rules) -> Result<(Mesh, S
         face_varying_interpolation: mesh.tags().face_varying_interpolation,
         ..Tags::default()
     };
-    let mut child = Mesh::build(soup).map_err(SchemeError::Internal)?;
+    let mut child =
+        Mesh::build(soup).map_err(|e| SchemeError::Internal(format!("the refined mesh is invalid: {e}")))?;
 
     // Sharpness and holes of the child level.
     for f in holes {
@@ -304,13 +305,9 @@ fn refine_prepared(mesh: &Mesh, scheme: Scheme, rules: Rules) -> Result<(Mesh, S
         let around: SmallVec<[f32; 8]> = edges.iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
         for (&(e, _), &s) in edges.iter().zip(&around) {
             if crease::is_sharp(s) {
-                let half = child.find_edge(v, numbering.edge(e)).ok_or_else(|| {
-                    SchemeError::Internal(subdiv_mesh::MeshError::CreaseNotAnEdge {
-                        index: 0,
-                        a: v,
-                        b: numbering.edge(e),
-                    })
-                })?;
+                let half = child
+                    .find_edge(v, numbering.edge(e))
+                    .ok_or_else(|| SchemeError::Internal(format!("the child of edge {e} at {v} is missing")))?;
                 child.set_edge_sharpness(half, f64::from(crease::child_edge_sharpness(method, s, &around)));
             }
         }
