@@ -1,134 +1,18 @@
-//! `cargo xtask osd-refine`: our uniform refinement against OpenSubdiv's, on the shared corpus.
-//!
-//! Runs the peer harness's `osd_refine` (built from `../shared/peers/osd` with its `build.sh`,
-//! in a copy outside the repository) and `subdiv_schemes::refine_uniform` on every OBJ of the
-//! corpus that OpenSubdiv accepts, at levels 1, 2 and 3, and compares the refined vertices as
-//! point sets (edge points are numbered differently) to 1e-12 × the bounding-box diagonal, and
-//! the faces that are not holes by count.
+//! `cargo xtask osd-refine`: our uniform refinement against OpenSubdiv's on the shared corpus
+//! (levels 1 to 3), through `subdiv_testkit::opensubdiv`.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-use subdiv_mesh::{BuildOptions, DVec3, Mesh};
-use subdiv_schemes::{RefineOptions, Scheme, refine_uniform};
+use std::path::Path;
 
 pub(crate) fn run(osd_refine: &Path, meshes: &Path, levels: &[usize]) -> Result<(), String> {
-    let mut files = Vec::new();
-    collect(meshes, &mut files);
-    let (mut same, mut differ, mut skipped) = (0, Vec::new(), Vec::new());
-    for path in &files {
-        let name = path.file_name().unwrap_or_default().to_string_lossy().to_string();
-        let soup = subdiv_io::load(path).map_err(|e| e.to_string())?;
-        let scheme = if name.starts_with("loop_")
-            || (!name.starts_with("catmark_") && !name.starts_with("bilinear_") && soup.faces().all(|f| f.len() == 3))
-        {
-            Scheme::Loop
-        } else if name.starts_with("bilinear_") {
-            Scheme::Bilinear
-        } else {
-            Scheme::CatmullClark
-        };
-        let Ok(mesh) = Mesh::build_with(soup, &BuildOptions::default()) else {
-            skipped.push(format!("{name}: not a valid mesh here (SOURCES.md marks it irregular)"));
-            continue;
-        };
-        for &level in levels {
-            let osd_name = match scheme {
-                Scheme::CatmullClark => "catmark",
-                Scheme::Loop => "loop",
-                Scheme::Bilinear => "bilinear",
-            };
-            let out = std::env::temp_dir().join(format!("osd_refine_{}_{level}.obj", std::process::id()));
-            let status = Command::new(osd_refine)
-                .arg(path)
-                .args(["--levels", &level.to_string(), "--scheme", osd_name, "-o"])
-                .arg(&out)
-                .stderr(std::process::Stdio::null())
-                .status()
-                .map_err(|e| format!("cannot run {}: {e}", osd_refine.display()))?;
-            if !status.success() {
-                skipped.push(format!("{name} level {level}: OpenSubdiv rejects it ({status})"));
-                break;
-            }
-            let theirs = subdiv_io::load(&out).map_err(|e| e.to_string())?;
-            let _ = std::fs::remove_file(&out);
-            let ours = match refine_uniform(&mesh, scheme, level, &RefineOptions::DEFAULT) {
-                Ok(mesh) => mesh,
-                Err(e) => {
-                    differ.push(format!("{name} level {level}: we refuse it: {e}"));
-                    break;
-                }
-            };
-            let our_faces = ours.face_ids().filter(|&f| !ours.is_hole(f)).count();
-            if our_faces != theirs.face_count() {
-                differ.push(format!("{name} level {level}: {our_faces} faces, OpenSubdiv has {}", theirs.face_count()));
-                continue;
-            }
-            match compare(ours.positions(), theirs.positions()) {
-                Ok(()) => same += 1,
-                Err(why) => differ.push(format!("{name} ({scheme}) level {level}: {why}")),
-            }
-        }
-    }
+    let report = subdiv_testkit::opensubdiv::compare_refinement(osd_refine, meshes, levels)?;
     println!(
-        "osd-refine: {same} mesh-levels equal to 1e-12 x bbox, {} differ, {} skipped",
-        differ.len(),
-        skipped.len()
+        "osd-refine: {} mesh-levels equal to 1e-12 x bbox, {} differ, {} skipped",
+        report.equal,
+        report.differ.len(),
+        report.skipped.len()
     );
-    for line in differ.iter().chain(&skipped) {
+    for line in report.differ.iter().chain(&report.skipped) {
         println!("  {line}");
     }
-    if differ.is_empty() { Ok(()) } else { Err(format!("{} mesh-levels differ", differ.len())) }
-}
-
-fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
-    let mut entries: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    entries.sort();
-    for path in entries {
-        if path.is_dir() {
-            collect(&path, out);
-        } else if path.extension().is_some_and(|e| e == "obj") {
-            out.push(path);
-        }
-    }
-}
-
-/// Matches every point of `ours` to a distinct point of `theirs` within 1e-12 × bbox diagonal.
-fn compare(ours: &[DVec3], theirs: &[DVec3]) -> Result<(), String> {
-    if ours.len() != theirs.len() {
-        return Err(format!("{} vertices, OpenSubdiv has {}", ours.len(), theirs.len()));
-    }
-    let (lo, hi) = theirs.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    let tolerance = 1e-12 * (hi - lo).length().max(1e-300);
-    let mut sorted: Vec<(DVec3, bool)> = theirs.iter().map(|&p| (p, false)).collect();
-    sorted.sort_by(|a, b| a.0.x.total_cmp(&b.0.x));
-    let mut worst = 0.0f64;
-    for (i, p) in ours.iter().enumerate() {
-        let start = sorted.partition_point(|q| q.0.x < p.x - tolerance);
-        let mut best: Option<(usize, f64)> = None;
-        for (j, q) in sorted.iter().enumerate().skip(start) {
-            if q.0.x > p.x + tolerance {
-                break;
-            }
-            let d = q.0.distance(*p);
-            if !q.1 && d <= tolerance && best.is_none_or(|(_, bd)| d < bd) {
-                best = Some((j, d));
-            }
-        }
-        match best {
-            Some((j, d)) => {
-                sorted[j].1 = true;
-                worst = worst.max(d);
-            }
-            None => {
-                let nearest = theirs.iter().map(|q| q.distance(*p)).fold(f64::INFINITY, f64::min);
-                return Err(format!(
-                    "our vertex {i} at {p} is {:.3e} × bbox from OpenSubdiv's nearest",
-                    nearest / (hi - lo).length()
-                ));
-            }
-        }
-    }
-    Ok(())
+    if report.differ.is_empty() { Ok(()) } else { Err(format!("{} mesh-levels differ", report.differ.len())) }
 }

@@ -7,6 +7,8 @@
 
 #![allow(clippy::print_stderr)]
 
+pub mod opensubdiv;
+
 use std::path::{Path, PathBuf};
 
 /// The shared folder, or `None` (after saying so on stderr) when `SUBDIV_SHARED` is unset and
