@@ -28,8 +28,9 @@ impl LocalMatrix {
     ///
     /// let m = LocalMatrix::one_ring(Scheme::CatmullClark, 5)?;
     /// assert_eq!(m.size(), 11);
-    /// // The centre's row is the smooth vertex rule: (k - 2) / k on itself.
-    /// assert!((m.get(0, 0) - 3.0 / 5.0).abs() < 1e-15);
+    /// // The centre's row is the smooth vertex rule: (k - 2) / k on itself, plus 1 / (4k) from
+    /// // the k face points around it.
+    /// assert!((m.get(0, 0) - (3.0 / 5.0 + 1.0 / 20.0)).abs() < 1e-15);
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     ///

@@ -50,3 +50,22 @@ pub fn shared_mesh(relative: &str) -> Option<PathBuf> {
     assert!(path.is_file(), "{} is missing from the shared corpus", path.display());
     Some(path)
 }
+
+/// Every `.obj` file below `dir`, recursively, in sorted path order.
+pub fn obj_files(dir: &Path) -> Vec<PathBuf> {
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        let Ok(entries) = std::fs::read_dir(dir) else { return };
+        let mut entries: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
+        entries.sort();
+        for path in entries {
+            if path.is_dir() {
+                walk(&path, out);
+            } else if path.extension().is_some_and(|e| e == "obj") {
+                out.push(path);
+            }
+        }
+    }
+    let mut files = Vec::new();
+    walk(dir, &mut files);
+    files
+}

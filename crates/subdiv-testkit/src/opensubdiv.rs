@@ -6,7 +6,7 @@
 //! point sets (edge points are numbered differently) to 1e-12 × the bounding-box diagonal, and
 //! the faces that are not holes by count.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use subdiv_mesh::{BuildOptions, DVec3, Mesh};
@@ -30,8 +30,7 @@ use subdiv_schemes::{RefineOptions, Scheme, refine_uniform};
 /// # Errors
 /// When `osd_refine` cannot be run or a file cannot be read.
 pub fn compare_refinement(osd_refine: &Path, meshes: &Path, levels: &[usize]) -> Result<RefinementReport, String> {
-    let mut files = Vec::new();
-    collect(meshes, &mut files);
+    let files = crate::obj_files(meshes);
     let mut report = RefinementReport::default();
     let RefinementReport { equal: same, differ, skipped } = &mut report;
     for path in &files {
@@ -89,19 +88,6 @@ pub fn compare_refinement(osd_refine: &Path, meshes: &Path, levels: &[usize]) ->
         }
     }
     Ok(report)
-}
-
-fn collect(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(entries) = std::fs::read_dir(dir) else { return };
-    let mut entries: Vec<_> = entries.filter_map(|e| e.ok().map(|e| e.path())).collect();
-    entries.sort();
-    for path in entries {
-        if path.is_dir() {
-            collect(&path, out);
-        } else if path.extension().is_some_and(|e| e == "obj") {
-            out.push(path);
-        }
-    }
 }
 
 /// Matches every point of `ours` to a distinct point of `theirs` within 1e-12 × bbox diagonal.

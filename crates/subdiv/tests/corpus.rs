@@ -3,9 +3,8 @@
 //! table marks non-manifold, degenerate or misoriented — fails with the matching named errors.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
 
-use subdiv_testkit::meshes_dir;
+use subdiv_testkit::{meshes_dir, obj_files};
 
 use subdiv::mesh::{Mesh, MeshError, RegularValence, validate};
 
@@ -85,24 +84,11 @@ fn parse_rows(sources: &str) -> BTreeMap<String, Row> {
     rows
 }
 
-fn obj_files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let mut entries: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
-    entries.sort();
-    for path in entries {
-        if path.is_dir() {
-            obj_files(&path, out);
-        } else if path.extension().is_some_and(|e| e == "obj") {
-            out.push(path);
-        }
-    }
-}
-
 #[test]
 fn every_shared_mesh_matches_its_sources_row() {
     let Some(meshes) = meshes_dir() else { return };
     let rows = parse_rows(&std::fs::read_to_string(meshes.join("SOURCES.md")).unwrap());
-    let mut files = Vec::new();
-    obj_files(&meshes, &mut files);
+    let files = obj_files(&meshes);
     assert_eq!(files.len(), 134, "the corpus has 134 OBJ files");
     assert_eq!(rows.len(), files.len(), "SOURCES.md has a row per file");
 
