@@ -7,14 +7,14 @@
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use subdiv::mesh::{Mesh, shapes};
-use subdiv::schemes::{RefineOptions, Refiner, Scheme, refine_uniform};
+use subdiv::schemes::{Builtin, RefineOptions, Refiner, refine_uniform};
 
 fn refine(c: &mut Criterion) {
     let mut group = c.benchmark_group("refine");
     group.sample_size(10);
     let cases = [
-        ("catmull_clark_torus64x32_level4", Scheme::CatmullClark, shapes::quad_torus(64, 32)),
-        ("loop_torus64x32_level4", Scheme::Loop, shapes::triangle_torus(64, 32)),
+        ("catmull_clark_torus64x32_level4", Builtin::CatmullClark, shapes::quad_torus(64, 32)),
+        ("loop_torus64x32_level4", Builtin::Loop, shapes::triangle_torus(64, 32)),
     ];
     for (name, scheme, soup) in cases {
         let mesh = Mesh::build(soup).expect("torus is valid");
@@ -22,11 +22,11 @@ fn refine(c: &mut Criterion) {
         group.throughput(Throughput::Elements(refined_faces));
         // Topology and stencils, then positions: what a first refinement costs.
         group.bench_function(format!("{name}_topology_and_positions"), |b| {
-            b.iter(|| refine_uniform(&mesh, scheme, 4, &RefineOptions::DEFAULT).expect("refines"));
+            b.iter(|| refine_uniform(&mesh, scheme.scheme(), 4, &RefineOptions::DEFAULT).expect("refines"));
         });
         // Positions alone through precomputed stencils: the animation case, and what the peers'
         // primvar figures measure.
-        let refiner = Refiner::new(&mesh, scheme, 4, &RefineOptions::DEFAULT).expect("refines");
+        let refiner = Refiner::new(&mesh, scheme.scheme(), 4, &RefineOptions::DEFAULT).expect("refines");
         let (mut out, mut scratch) = (Vec::new(), Vec::new());
         group.bench_function(format!("{name}_positions"), |b| {
             b.iter(|| refiner.interpolate(mesh.positions(), &mut out, &mut scratch));

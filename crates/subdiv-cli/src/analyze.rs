@@ -1,61 +1,113 @@
-//! `subdiv analyze`: the spectrum of a scheme's one-ring matrix at a valence.
+//! `subdiv analyze`: Reif's C1 test of a scheme at an extraordinary vertex, or a table of it
+//! for every built-in surface scheme.
 
 use std::io::Write;
 
 use serde_json::json;
-use subdiv::schemes::{Scheme, Spectrum};
+use subdiv::schemes::{Analysis, Builtin};
 
 use crate::UserError;
-use crate::refine::parse_scheme;
+use crate::scheme_arg::SchemeArgs;
 
 /// Arguments of `subdiv analyze`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct AnalyzeArgs {
-    /// Subdivision scheme.
-    #[arg(long, default_value = "catmull-clark", value_parser = parse_scheme)]
-    scheme: Scheme,
-    /// Valence of the interior extraordinary vertex.
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(3..=256))]
+    #[command(flatten)]
+    scheme: SchemeArgs,
+    /// Valence of the extraordinary vertex.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(3..=64))]
     valence: u32,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
+    /// Print a Markdown table for every built-in scheme at valences 3 to this one instead.
+    #[arg(long, value_name = "MAX_VALENCE", value_parser = clap::value_parser!(u32).range(3..=64))]
+    table: Option<u32>,
+}
+
+fn format_eigenvalue(&(re, im): &(f64, f64)) -> String {
+    if im.abs() < 1e-9 { format!("{re:.6}") } else { format!("{re:.4}{im:+.4}i") }
 }
 
 pub(crate) fn run(args: &AnalyzeArgs, out: &mut impl Write) -> Result<(), UserError> {
-    let spectrum = Spectrum::of(args.scheme, args.valence as usize)?;
+    if let Some(max) = args.table {
+        return table(max as usize, out);
+    }
+    let scheme = args.scheme.resolve()?;
+    let analysis = Analysis::of(&scheme, args.valence as usize)?;
+    let spectrum = &analysis.spectrum;
+    let map = analysis.characteristic_map.as_ref();
     if args.json {
         let eigenvalues: Vec<_> = spectrum.eigenvalues.iter().map(|&(re, im)| json!([re, im])).collect();
         let report = json!({
-            "scheme": args.scheme.name(),
+            "scheme": scheme.name(),
             "valence": args.valence,
+            "matrix_size": analysis.matrix_size,
+            "radius": analysis.radius,
             "eigenvalues": eigenvalues,
             "subdominant": spectrum.subdominant(),
             "unit_dominant_simple": spectrum.unit_dominant_simple,
             "subdominant_real_double": spectrum.subdominant_real_double,
             "subdominant_strict": spectrum.subdominant_strict,
+            "characteristic_map": map.map(|m| json!({
+                "levels": m.levels,
+                "faces": m.faces,
+                "flipped_faces": m.flipped_faces,
+                "min_area_ratio": m.min_area_ratio,
+                "windings": [m.windings.0, m.windings.1],
+                "regular": m.is_regular(),
+                "injective": m.is_injective(),
+            })),
+            "c1": analysis.is_c1(),
         });
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
         return Ok(());
     }
-    writeln!(out, "scheme        {} at an interior vertex of valence {}", args.scheme, args.valence)?;
+    writeln!(out, "scheme        {} at an extraordinary vertex of valence {}", scheme, args.valence)?;
     writeln!(
         out,
-        "one-ring      {} × {} matrix, derived by refining a canonical mesh",
-        spectrum.eigenvalues.len(),
-        spectrum.eigenvalues.len()
+        "matrix        {n} × {n}, the {}-ring neighbourhood, derived by refining a canonical mesh",
+        analysis.radius,
+        n = analysis.matrix_size,
     )?;
-    let head: Vec<String> = spectrum
-        .eigenvalues
-        .iter()
-        .take(6)
-        .map(|&(re, im)| if im.abs() < 1e-12 { format!("{re:.12}") } else { format!("{re:.6}{im:+.6}i") })
-        .collect();
+    let head: Vec<String> = spectrum.eigenvalues.iter().take(6).map(format_eigenvalue).collect();
     writeln!(out, "spectrum      {}", head.join(", "))?;
     let yes = |b: bool| if b { "yes" } else { "no" };
     writeln!(out, "λ0 = 1 simple            {}", yes(spectrum.unit_dominant_simple))?;
     writeln!(out, "λ1 = λ2 real, positive   {}", yes(spectrum.subdominant_real_double))?;
     writeln!(out, "|λ3| < λ1                {}", yes(spectrum.subdominant_strict))?;
-    writeln!(out, "(spectral conditions of Reif's C1 test; the characteristic-map check is not implemented yet)")?;
+    match map {
+        Some(m) => {
+            writeln!(
+                out,
+                "characteristic map       {} faces sampled after {} levels: {} flipped, min/max area {:.3}, windings {} and {}",
+                m.faces, m.levels, m.flipped_faces, m.min_area_ratio, m.windings.0, m.windings.1
+            )?;
+            writeln!(out, "  regular                {}", yes(m.is_regular()))?;
+            writeln!(out, "  injective              {}", yes(m.is_injective()))?;
+        }
+        None => writeln!(out, "characteristic map       not checked: no real double subdominant eigenvalue")?,
+    }
+    writeln!(out, "C1 (Reif)                {}", yes(analysis.is_c1()))?;
+    Ok(())
+}
+
+fn table(max: usize, out: &mut impl Write) -> Result<(), UserError> {
+    writeln!(out, "| scheme | k | matrix | λ0 … λ4 (moduli of complex ones with i) | C1 |")?;
+    writeln!(out, "|---|---|---|---|---|")?;
+    for builtin in Builtin::ALL {
+        for k in 3..=max {
+            let a = Analysis::of(builtin.scheme(), k)?;
+            let head: Vec<String> = a.spectrum.eigenvalues.iter().take(5).map(format_eigenvalue).collect();
+            let verdict = if a.is_c1() {
+                "yes"
+            } else if !a.spectrum.passes() {
+                "no (spectrum)"
+            } else {
+                "no (characteristic map)"
+            };
+            writeln!(out, "| {builtin} | {k} | {0}×{0} | {1} | {verdict} |", a.matrix_size, head.join(", "))?;
+        }
+    }
     Ok(())
 }

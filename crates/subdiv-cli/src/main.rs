@@ -10,6 +10,7 @@ mod analyze;
 mod info;
 mod input;
 mod refine;
+mod scheme_arg;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -29,10 +30,14 @@ enum Command {
     /// Print a mesh's topology (counts, face sizes, valences, boundaries, genus, tags) and every
     /// rule it breaks.
     Info(info::InfoArgs),
-    /// Refine a mesh uniformly (OpenSubdiv's rules) and write it as OBJ.
+    /// Refine a mesh uniformly with any scheme (OpenSubdiv's rules for Catmull-Clark and Loop)
+    /// and write it as OBJ.
     Refine(refine::RefineArgs),
-    /// Eigenvalues of a scheme's one-ring subdivision matrix at an extraordinary vertex.
+    /// Reif's C1 test of a scheme at an extraordinary vertex: the spectrum of its derived local
+    /// subdivision matrix and its characteristic map.
     Analyze(analyze::AnalyzeArgs),
+    /// Print a built-in scheme's definition (TOML, or RON), a template for `--scheme-file`.
+    Scheme(scheme_arg::PrintArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -53,6 +58,7 @@ fn main() -> ExitCode {
         Command::Info(args) => info::run(args, &mut out),
         Command::Refine(args) => refine::run(args, &mut out),
         Command::Analyze(args) => analyze::run(args, &mut out),
+        Command::Scheme(args) => scheme_arg::print(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

@@ -5,32 +5,25 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use subdiv::mesh::{BuildOptions, FaceId, Mesh, PolygonSoup, shapes};
-use subdiv::schemes::{RefineOptions, Scheme, refine_uniform};
+use subdiv::schemes::{RefineOptions, Refiner};
 
 use crate::UserError;
 use crate::input::LoadedMesh;
+use crate::scheme_arg::SchemeArgs;
 
 /// Arguments of `subdiv refine`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct RefineArgs {
     /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
     mesh: Option<PathBuf>,
-    /// Subdivision scheme.
-    #[arg(long, default_value = "catmull-clark", value_parser = parse_scheme)]
-    scheme: Scheme,
+    #[command(flatten)]
+    scheme: SchemeArgs,
     /// Number of refinement levels (each multiplies the face count by about 4).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=8))]
     levels: u32,
     /// Output OBJ file; standard output when omitted. Hole faces are left out.
     #[arg(short, long)]
     output: Option<PathBuf>,
-}
-
-pub(crate) fn parse_scheme(name: &str) -> Result<Scheme, String> {
-    Scheme::from_name(name).ok_or_else(|| {
-        let known: Vec<_> = Scheme::ALL.iter().map(|s| s.name()).collect();
-        format!("unknown scheme {name:?}; known: {}", known.join(", "))
-    })
 }
 
 pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserError> {
@@ -40,9 +33,27 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
     };
     let mesh = Mesh::build_with(loaded.soup.clone(), &BuildOptions::default())
         .map_err(|error| UserError(loaded.locate(&error)))?;
+    let scheme = args.scheme.resolve()?;
+    let levels = args.levels as usize;
     let start = Instant::now();
-    let refined = refine_uniform(&mesh, args.scheme, args.levels as usize, &RefineOptions::DEFAULT)
-        .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
+    // A progress bar on stderr when the run is long (indicatif draws nothing when stderr is not
+    // a terminal).
+    let estimated_faces = mesh.half_edge_count() as f64 * 4f64.powi(levels as i32 - 1);
+    let bar = if estimated_faces > 2e6 {
+        indicatif::ProgressBar::new(levels as u64).with_message(format!("refining with {}", scheme.name()))
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg} [{bar:30}] level {pos}/{len} {elapsed}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let refined = Refiner::with_progress(&mesh, &scheme, levels, &RefineOptions::DEFAULT, |level| {
+        bar.set_position(level as u64);
+    })
+    .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?
+    .into_mesh();
+    bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
     let soup = without_holes(&refined);
     match &args.output {
@@ -54,7 +65,7 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
         std::io::stderr(),
         "subdiv refine: {} with {} x{}: {} vertices, {faces} faces in {seconds:.3} s ({:.1} M faces/s)",
         loaded.name,
-        args.scheme,
+        scheme,
         args.levels,
         soup.vertex_count(),
         faces as f64 / seconds.max(1e-9) / 1e6,

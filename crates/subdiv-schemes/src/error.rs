@@ -2,17 +2,15 @@
 
 use subdiv_mesh::FaceId;
 
-use crate::Scheme;
-
-/// Why a scheme cannot refine a mesh.
+/// Why a scheme cannot be loaded, or cannot refine or analyse a mesh.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[non_exhaustive]
 pub enum SchemeError {
     /// The scheme takes only faces of one size (Loop: triangles).
     #[error("{scheme} takes only {expected}-sided faces, but {face} has {size} sides")]
     FaceNotSupported {
-        /// The scheme.
-        scheme: Scheme,
+        /// The scheme's name.
+        scheme: String,
         /// The first face it cannot take.
         face: FaceId,
         /// That face's size.
@@ -20,13 +18,43 @@ pub enum SchemeError {
         /// The size the scheme takes.
         expected: usize,
     },
-    /// The analysis needs an interior vertex of valence at least 3.
-    #[error("{scheme}: valence {valence} is not supported; analysis needs valence 3 or more")]
+    /// The scheme has no rules for boundaries, creases, corners or holes, and the mesh has one.
+    #[error("{scheme} has no rules for {feature}, but the mesh has them ({element})")]
+    FeatureNotSupported {
+        /// The scheme's name.
+        scheme: String,
+        /// `boundaries`, `creases`, `corners` or `holes`.
+        feature: &'static str,
+        /// The first element that has it, e.g. `edge 3-7`.
+        element: String,
+    },
+    /// The analysis cannot take this valence.
+    #[error("{scheme}: valence {valence} is not supported; {reason}")]
     ValenceNotSupported {
-        /// The scheme.
-        scheme: Scheme,
+        /// The scheme's name.
+        scheme: String,
         /// The valence asked for.
         valence: usize,
+        /// What the analysis needs.
+        reason: &'static str,
+    },
+    /// A scheme file does not parse (syntax, unknown field, bad formula).
+    #[error("cannot read the scheme ({format}): {message}")]
+    Parse {
+        /// `TOML` or `RON`.
+        format: &'static str,
+        /// The parser's message, with the place.
+        message: String,
+    },
+    /// A scheme's masks break a rule (weights that do not sum to 1, a table of the wrong size).
+    #[error("scheme `{scheme}`, rule `{rule}`: {detail}")]
+    InvalidScheme {
+        /// The scheme's name.
+        scheme: String,
+        /// The rule, as its path in the scheme file (`vertex`, `edge.extraordinary`, ...).
+        rule: String,
+        /// What is wrong, with the valence.
+        detail: String,
     },
     /// The eigen solver did not converge.
     #[error("the eigen solver did not converge: {0}")]

@@ -1,72 +1,99 @@
-//! Subdivision schemes: uniform refinement of a [`Mesh`](subdiv_mesh::Mesh) with Catmull-Clark,
-//! Loop or bilinear rules, following OpenSubdiv's `Sdc` exactly — boundaries (edge-only,
-//! edge-and-corner, none), infinitely sharp and semi-sharp creases and corners (uniform and
-//! Chaikin creasing), holes, and N-gons for Catmull-Clark.
+//! Subdivision schemes as data, and one refinement engine for all of them.
 //!
-//! Child vertices are numbered as OpenSubdiv's `Far` levels: the children of the parent's
-//! vertices first (vertex `v` stays vertex `v` at every level), then one point per face
-//! (quad schemes), then one per edge. Child faces follow their parent's, in corner order.
+//! A [`Scheme`] is a value: its topological split ([`Split`]) and its masks as weight formulas
+//! in the valence ([`Rules`], [`Expr`]). The built-ins ([`Builtin`]) are TOML files under
+//! `schemes/` parsed by the same code as a user's file: Catmull-Clark, Loop, Doo-Sabin,
+//! mid-edge, √3, modified Butterfly, Kobbelt's interpolatory quad scheme, Schaefer and
+//! Warren's C1 non-polynomial quad scheme, and bilinear. Catmull-Clark, Loop and bilinear
+//! follow OpenSubdiv's `Sdc` exactly — boundaries (edge-only, edge-and-corner, none),
+//! infinitely sharp and semi-sharp creases and corners (uniform and Chaikin creasing), holes,
+//! and N-gons for Catmull-Clark; any scheme with crease rules gets the same treatment.
 //!
-//! **Architecture invariant:** this crate knows no file format and does no I/O.
+//! For primal schemes, child vertices are numbered as OpenSubdiv's `Far` levels: the children
+//! of the parent's vertices first (vertex `v` stays vertex `v` at every level), then one point
+//! per face (quad schemes), then one per edge. Child faces follow their parent's, in corner
+//! order.
+//!
+//! Curve schemes ([`CurveScheme`], [`NonUniformCubicBSpline`]) are data too: cubic B-spline,
+//! Chaikin, the four-point and six-point interpolating schemes, Schaefer and Warren's
+//! non-polynomial curve scheme, and the non-uniform cubic B-spline refined by knot insertion.
+//!
+//! Analysis ([`Analysis`], [`LocalMatrix`], [`Spectrum`]) derives each scheme's local
+//! subdivision matrix by running the engine on a canonical mesh and applies Reif's C1 test,
+//! characteristic map included; [`c1_table`] lists the verdicts at valences 3 to 16.
+//!
+//! # The sw-quad rules at extraordinary vertices
+//!
+//! Paper 000 (§5.4) gives the regular rules of its C1 quad scheme, the tensor product of the
+//! curve rules (1/6, 2/3, 1/6) and (1/2, 1/2), but its Figure 5, the rules at a vertex of
+//! valence `k`, is missing from our copy. Written with face points (centroids), the regular
+//! masks are: edge point = 1/6 of each endpoint + 1/3 of each adjacent face point; vertex
+//! point = 1/3 of the vertex + 1/18 of each neighbour + 1/9 of each adjacent face point. We
+//! keep the face and edge rules at every valence and spread the vertex rule's shares evenly:
+//! the vertex keeps 1/3, its `k` neighbours share 2/9 and its `k` face points 4/9
+//! (`schemes/sw-quad.toml`). Why this is C1, by the discrete Fourier transform of the one-ring
+//! (centre `c`, edge neighbours `e_i`, face neighbours `f_i`):
+//!
+//! - At frequency ω ≠ 0 the centre drops out and the refined ring is
+//!   `e' = (1/3 + cos θ/6)·e + (1 + e^{−iθ})/12·f`, `f' = (1 + e^{iθ})/4·e + f/4` with
+//!   θ = 2πω/k. Its eigenvalues are the roots of x² − (7/12 + cos θ/6)·x + 1/24: they depend
+//!   on the edge and face rules only, are real, and the larger one grows with cos θ, so ω = 1
+//!   and ω = k − 1 give the subdominant pair λ1 = λ2, strictly above every other frequency.
+//! - At frequency 0, over the centre and the means ē, f̄ of the rings, the face points expanded:
+//!   `c' = 4/9·c + 4/9·ē + 1/9·f̄`, `ē' = 1/3·c + 1/2·ē + 1/6·f̄`, `f̄' = 1/4·c + 1/2·ē + 1/4·f̄`.
+//!   With the even spread no entry depends on `k`, so the eigenvalues are the regular ones,
+//!   1, 1/6 and 1/36, below λ1 (which is 0.394 at k = 3 and rises towards 0.689).
+//! - The characteristic map, from the ω = 1 eigenvectors, is then checked regular and
+//!   injective numerically by [`Analysis`], at every valence 3..=16 (the test
+//!   `sw_quad_is_c1_at_valences_3_to_16` asserts it, and λ1 against the formula above).
+//!
+//! # Kobbelt's rule next to an extraordinary vertex
+//!
+//! Kobbelt's interpolatory quad scheme applies the four-point rule along grid lines; an edge
+//! point next to a vertex `p` of valence `k ≠ 4` needs a point beyond `p` that the grid lacks.
+//! We use the virtual point `4/k · Σ q − q_{i−1} − q_i − q_{i+1}` over `p`'s neighbours `q`
+//! (`q_i` the edge's far end), which is the opposite neighbour when `k = 4`, and take face
+//! points as the four-point rule through the new edge points in both grid directions,
+//! averaged. We could not consult Kobbelt's paper for its exact extraordinary rule; this
+//! reconstruction reproduces the regular scheme exactly (tested) and passes the C1 test at
+//! valences 3 to 16, but it may differ from the original next to extraordinary vertices.
+//!
+//! **Architecture invariant:** this crate does no I/O; scheme files arrive as text.
 //!
 //! ```
 //! use subdiv_mesh::{shapes, Mesh};
-//! use subdiv_schemes::{refine, RefineOptions, Scheme};
+//! use subdiv_schemes::{refine, Builtin, RefineOptions};
 //!
 //! let icosahedron = Mesh::build(shapes::icosahedron())?;
-//! let refined = refine(&icosahedron, Scheme::Loop, &RefineOptions::DEFAULT)?;
+//! let refined = refine(&icosahedron, Builtin::Loop.scheme(), &RefineOptions::DEFAULT)?;
 //! assert_eq!((refined.vertex_count(), refined.face_count()), (42, 80));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
-
+//!
 mod analysis;
 mod crease;
+mod curve;
+mod dual;
 mod error;
+mod expr;
+mod primal;
 mod refine;
+mod scheme;
 mod stencil;
 
-pub use analysis::{LocalMatrix, Spectrum};
+pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, Spectrum};
+pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};
 pub use error::SchemeError;
+pub use expr::{Expr, ExprError};
 pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
+pub use scheme::{
+    Builtin, CreaseMask, ExtraordinaryEdgeMask, FaceMask, QuadEdgeMask, Rules, Scheme, Split, TriangleEdgeMask,
+    VertexMask,
+};
 pub use stencil::Stencils;
 
-/// A subdivision scheme.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Scheme {
-    /// Catmull-Clark (`catmull-clark`): any polygons, split into quads.
-    CatmullClark,
-    /// Loop (`loop`): triangles only.
-    Loop,
-    /// Bilinear (`bilinear`): any polygons, split into quads; points stay on the cage.
-    Bilinear,
-}
-
-impl Scheme {
-    /// Every scheme, in CLI order.
-    pub const ALL: [Self; 3] = [Self::CatmullClark, Self::Loop, Self::Bilinear];
-
-    /// The CLI name.
-    pub fn name(self) -> &'static str {
-        match self {
-            Self::CatmullClark => "catmull-clark",
-            Self::Loop => "loop",
-            Self::Bilinear => "bilinear",
-        }
-    }
-
-    /// The scheme of a CLI name.
-    pub fn from_name(name: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|s| s.name() == name)
-    }
-
-    /// Whether faces split into quads (one per corner) rather than into four triangles.
-    pub fn splits_into_quads(self) -> bool {
-        !matches!(self, Self::Loop)
-    }
-}
-
-impl std::fmt::Display for Scheme {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
+pub mod c1_table {
+    //! The C1 verdicts of every built-in surface scheme at valences 3 to 16, from
+    //! `subdiv analyze --table 16`.
+    #![doc = include_str!("../C1_TABLE.md")]
 }

@@ -1,22 +1,25 @@
-//! Properties every refinement must have: affine invariance, interpolation where the scheme
-//! interpolates, and on regular grids the spline refinement the scheme generalises
-//! (Catmull-Clark: bicubic B-spline knot insertion; Loop: the quartic box spline).
+//! Properties every refinement must have, for every built-in scheme: affine invariance,
+//! interpolation where the scheme interpolates, and on regular grids the refinement the scheme
+//! generalises (Catmull-Clark: bicubic B-spline knot insertion; sw-quad: the tensor product of
+//! its curve rules; Kobbelt: the tensor-product four-point rule; Loop: the quartic box spline).
 
 use proptest::prelude::*;
 use subdiv_mesh::{CornerTag, CreaseTag, DVec3, Mesh, PolygonSoup, VertexId, shapes};
-use subdiv_schemes::{RefineOptions, Scheme, refine_uniform};
+use subdiv_schemes::{Builtin, RefineOptions, Scheme, refine_uniform};
 
-fn shape(scheme: Scheme, index: usize) -> PolygonSoup {
-    match (scheme, index % 4) {
-        (Scheme::Loop, 0) => shapes::icosahedron(),
-        (Scheme::Loop, 1) => shapes::triangle_torus(5, 4),
-        (Scheme::Loop, 2) => shapes::octahedron(),
-        (Scheme::Loop, _) => shapes::tetrahedron(),
-        (_, 0) => shapes::default_model(),
-        (_, 1) => shapes::pole(5),
-        (_, 2) => shapes::ngon_prism(6),
-        (_, _) => shapes::quad_grid(3, 2),
-    }
+/// Meshes the scheme takes: triangles for triangle schemes, closed meshes for schemes without
+/// crease rules, quads only for Kobbelt's.
+fn shape(scheme: &Scheme, index: usize) -> PolygonSoup {
+    let shapes: [fn() -> PolygonSoup; 4] = if scheme.face_size() == Some(3) {
+        [shapes::icosahedron, || shapes::triangle_torus(5, 4), shapes::octahedron, shapes::tetrahedron]
+    } else if scheme.has_crease_rules() {
+        [shapes::default_model, || shapes::pole(5), || shapes::ngon_prism(6), || shapes::quad_grid(3, 2)]
+    } else if scheme.face_size() == Some(4) {
+        [shapes::default_model, shapes::cube, || shapes::quad_torus(5, 4), || shapes::quad_torus(3, 5)]
+    } else {
+        [shapes::default_model, shapes::cube, || shapes::ngon_prism(6), shapes::dodecahedron]
+    };
+    shapes[index % 4]()
 }
 
 /// A small deterministic generator, so that a failing seed reproduces.
@@ -33,12 +36,16 @@ impl Lcg {
     }
 }
 
-/// `soup` with jittered positions and a few semi-sharp and infinitely sharp tags.
-fn tagged(mut soup: PolygonSoup, rng: &mut Lcg) -> Mesh {
+/// `soup` with jittered positions and, where the scheme has crease rules, a few semi-sharp and
+/// infinitely sharp tags.
+fn tagged(scheme: &Scheme, mut soup: PolygonSoup, rng: &mut Lcg) -> Mesh {
     for p in soup.positions_mut() {
         *p += rng.vector() * 0.1;
     }
     let mesh = Mesh::build(soup.clone()).unwrap();
+    if !scheme.has_crease_rules() {
+        return mesh;
+    }
     for (k, e) in mesh.edges().enumerate().filter(|(k, _)| k % 5 == 0) {
         let [a, b] = mesh.edge_vertices(e);
         let sharpness = [0.4, 1.7, 10.0][k % 3];
@@ -52,10 +59,10 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
     #[test]
-    fn refinement_commutes_with_affine_maps(scheme_index in 0usize..3, index in 0usize..4, levels in 1usize..3, seed: u64) {
-        let scheme = Scheme::ALL[scheme_index];
+    fn refinement_commutes_with_affine_maps(scheme_index in 0usize..Builtin::ALL.len(), index in 0usize..4, levels in 1usize..3, seed: u64) {
+        let scheme = Builtin::ALL[scheme_index].scheme();
         let mut rng = Lcg(seed);
-        let mesh = tagged(shape(scheme, index), &mut rng);
+        let mesh = tagged(scheme, shape(scheme, index), &mut rng);
         let (x, y, z, t) = (rng.vector(), rng.vector(), rng.vector(), rng.vector());
         let map = |p: DVec3| x * p.x + y * p.y + z * p.z + t + p * 1.5;
         let mut mapped = mesh.clone();
@@ -72,9 +79,11 @@ proptest! {
     }
 
     #[test]
-    fn bilinear_keeps_every_old_vertex(index in 0usize..4, seed: u64) {
-        let mesh = tagged(shape(Scheme::Bilinear, index), &mut Lcg(seed));
-        let refined = refine_uniform(&mesh, Scheme::Bilinear, 2, &RefineOptions::DEFAULT).unwrap();
+    fn interpolating_schemes_keep_every_old_vertex(which in 0usize..3, index in 0usize..4, seed: u64) {
+        let scheme = [Builtin::Bilinear, Builtin::Butterfly, Builtin::Kobbelt][which].scheme();
+        prop_assert!(scheme.is_interpolating());
+        let mesh = tagged(scheme, shape(scheme, index), &mut Lcg(seed));
+        let refined = refine_uniform(&mesh, scheme, 2, &RefineOptions::DEFAULT).unwrap();
         prop_assert_eq!(&refined.positions()[..mesh.vertex_count()], mesh.positions());
     }
 }
@@ -82,8 +91,8 @@ proptest! {
 #[test]
 fn infinitely_sharp_corners_and_creases_stay_put() {
     // Catmull-Clark and Loop are approximating, but an infinitely sharp corner interpolates.
-    for scheme in [Scheme::CatmullClark, Scheme::Loop] {
-        let mut soup = if scheme == Scheme::Loop { shapes::icosahedron() } else { shapes::cube() };
+    for scheme in [Builtin::CatmullClark, Builtin::Loop, Builtin::SwQuad].map(Builtin::scheme) {
+        let mut soup = if scheme.face_size() == Some(3) { shapes::icosahedron() } else { shapes::cube() };
         soup.tags.corners.push(CornerTag { vertex: VertexId::new(3), sharpness: 10.0 });
         let mesh = Mesh::build(soup).unwrap();
         let refined = refine_uniform(&mesh, scheme, 3, &RefineOptions::DEFAULT).unwrap();
@@ -92,11 +101,9 @@ fn infinitely_sharp_corners_and_creases_stay_put() {
     }
 }
 
-/// On a torus of regular quads, one Catmull-Clark step is bicubic B-spline knot insertion: the
-/// tensor products of the cubic B-spline's refinement masks [1, 6, 1]/8 (at old vertices) and
-/// [1, 1]/2 (at new ones).
-#[test]
-fn regular_catmull_clark_is_bicubic_knot_insertion() {
+/// On a torus of regular quads, one step of a tensor-product scheme applies the tensor products
+/// of its curve masks: `old` at old vertices, `new` at new ones (offsets from the vertex).
+fn assert_tensor_product(scheme: &Scheme, old: &[(isize, f64)], new: &[(isize, f64)]) {
     let (m, n) = (7usize, 6usize);
     let mut soup = shapes::quad_torus(m, n);
     let mut rng = Lcg(7);
@@ -104,14 +111,12 @@ fn regular_catmull_clark_is_bicubic_knot_insertion() {
         *p += rng.vector() * 0.2;
     }
     let mesh = Mesh::build(soup).unwrap();
-    let refined = refine_uniform(&mesh, Scheme::CatmullClark, 1, &RefineOptions::DEFAULT).unwrap();
+    let refined = refine_uniform(&mesh, scheme, 1, &RefineOptions::DEFAULT).unwrap();
     // Control point (i, j) of the torus is vertex i n + j, indices taken cyclically.
     let id = |i: isize, j: isize| {
         VertexId::new((i.rem_euclid(m as isize) as usize * n + j.rem_euclid(n as isize) as usize) as u32)
     };
     let point = |i: isize, j: isize| mesh.position(id(i, j));
-    let old = [(-1, 0.125), (0, 0.75), (1, 0.125)];
-    let new = [(0, 0.5), (1, 0.5)];
     let tensor = |i: isize, j: isize, mi: &[(isize, f64)], mj: &[(isize, f64)]| -> DVec3 {
         mi.iter().flat_map(|&(a, wa)| mj.iter().map(move |&(b, wb)| point(i + a, j + b) * (wa * wb))).sum()
     };
@@ -119,14 +124,35 @@ fn regular_catmull_clark_is_bicubic_knot_insertion() {
     let edge_point = |a: VertexId, b: VertexId| VertexId::new((nv + nf + mesh.find_edge(a, b).unwrap().index()) as u32);
     for i in 0..m as isize {
         for j in 0..n as isize {
-            let close = |p: DVec3, q: DVec3| assert!(p.distance(q) < 1e-14, "{p} vs {q} at ({i}, {j})");
-            close(refined.position(id(i, j)), tensor(i, j, &old, &old));
-            close(refined.position(edge_point(id(i, j), id(i + 1, j))), tensor(i, j, &new, &old));
-            close(refined.position(edge_point(id(i, j), id(i, j + 1))), tensor(i, j, &old, &new));
+            let close = |p: DVec3, q: DVec3| assert!(p.distance(q) < 1e-14, "{scheme}: {p} vs {q} at ({i}, {j})");
+            close(refined.position(id(i, j)), tensor(i, j, old, old));
+            close(refined.position(edge_point(id(i, j), id(i + 1, j))), tensor(i, j, new, old));
+            close(refined.position(edge_point(id(i, j), id(i, j + 1))), tensor(i, j, old, new));
             let face = VertexId::new((nv + i as usize * n + j as usize) as u32);
-            close(refined.position(face), tensor(i, j, &new, &new));
+            close(refined.position(face), tensor(i, j, new, new));
         }
     }
+}
+
+/// Catmull-Clark: bicubic B-spline knot insertion, the cubic B-spline's masks [1, 6, 1]/8 and
+/// [1, 1]/2.
+#[test]
+fn regular_catmull_clark_is_bicubic_knot_insertion() {
+    assert_tensor_product(Builtin::CatmullClark.scheme(), &[(-1, 0.125), (0, 0.75), (1, 0.125)], &[(0, 0.5), (1, 0.5)]);
+}
+
+/// sw-quad: the tensor product of paper 000's curve rules (1/6, 2/3, 1/6) and (1/2, 1/2).
+#[test]
+fn regular_sw_quad_is_the_tensor_product_of_its_curve_rules() {
+    let old = [(-1, 1.0 / 6.0), (0, 2.0 / 3.0), (1, 1.0 / 6.0)];
+    assert_tensor_product(Builtin::SwQuad.scheme(), &old, &[(0, 0.5), (1, 0.5)]);
+}
+
+/// Kobbelt: the tensor-product four-point rule.
+#[test]
+fn regular_kobbelt_is_the_tensor_product_four_point_rule() {
+    let new = [(-1, -1.0 / 16.0), (0, 9.0 / 16.0), (1, 9.0 / 16.0), (2, -1.0 / 16.0)];
+    assert_tensor_product(Builtin::Kobbelt.scheme(), &[(0, 1.0)], &new);
 }
 
 /// On a torus of regular triangles (every vertex of valence 6), one Loop step is the refinement
@@ -141,7 +167,7 @@ fn regular_loop_is_the_quartic_box_spline() {
         *p += rng.vector() * 0.2;
     }
     let mesh = Mesh::build(soup).unwrap();
-    let refined = refine_uniform(&mesh, Scheme::Loop, 1, &RefineOptions::DEFAULT).unwrap();
+    let refined = refine_uniform(&mesh, Builtin::Loop.scheme(), 1, &RefineOptions::DEFAULT).unwrap();
     let id = |i: isize, j: isize| {
         VertexId::new((i.rem_euclid(m as isize) as usize * n + j.rem_euclid(n as isize) as usize) as u32)
     };
@@ -174,10 +200,10 @@ fn regular_loop_is_the_quartic_box_spline() {
 #[test]
 fn stencil_rows_sum_to_one_and_reproduce_the_refined_positions() {
     let mut rng = Lcg(3);
-    for scheme in Scheme::ALL {
+    for scheme in Builtin::ALL.map(Builtin::scheme) {
         for index in 0..4 {
-            let mesh = tagged(shape(scheme, index), &mut rng);
-            let refiner = subdiv_schemes::Refiner::new(&mesh, scheme, 3, &RefineOptions::DEFAULT).unwrap();
+            let mesh = tagged(scheme, shape(scheme, index), &mut rng);
+            let refiner = subdiv_schemes::Refiner::new(&mesh, scheme, 2, &RefineOptions::DEFAULT).unwrap();
             for level in refiner.levels() {
                 for child in 0..level.child_count() {
                     let sum: f64 = level.row(child).map(|(_, w)| w).sum();
@@ -189,4 +215,46 @@ fn stencil_rows_sum_to_one_and_reproduce_the_refined_positions() {
             assert_eq!(out, refiner.mesh().positions());
         }
     }
+}
+
+/// A scheme that cannot take a mesh says why, naming the element.
+#[test]
+fn unsupported_input_is_a_typed_error() {
+    use subdiv_schemes::SchemeError;
+    let grid = Mesh::build(shapes::quad_grid(2, 2)).unwrap();
+    for builtin in [Builtin::DooSabin, Builtin::Midedge, Builtin::Kobbelt] {
+        match refine_uniform(&grid, builtin.scheme(), 1, &RefineOptions::DEFAULT) {
+            Err(SchemeError::FeatureNotSupported { feature: "boundaries", element, .. }) => {
+                assert!(element.starts_with("edge "), "{element}");
+            }
+            other => panic!("{builtin}: {other:?}"),
+        }
+    }
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    for builtin in [Builtin::Loop, Builtin::Butterfly, Builtin::Sqrt3] {
+        let e = refine_uniform(&cube, builtin.scheme(), 1, &RefineOptions::DEFAULT).unwrap_err();
+        assert!(matches!(e, SchemeError::FaceNotSupported { size: 4, expected: 3, .. }), "{builtin}: {e}");
+    }
+    let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    let e = refine_uniform(&prism, Builtin::Kobbelt.scheme(), 1, &RefineOptions::DEFAULT).unwrap_err();
+    assert!(matches!(e, SchemeError::FaceNotSupported { size: 5, expected: 4, .. }), "{e}");
+}
+
+/// Face and vertex counts of one step of each split on the cube (V 8, E 12, F 6) and the
+/// icosahedron (V 12, E 30, F 20).
+#[test]
+fn splits_have_the_expected_counts() {
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    let icosahedron = Mesh::build(shapes::icosahedron()).unwrap();
+    let counts = |mesh: &Mesh, b: Builtin| {
+        let r = refine_uniform(mesh, b.scheme(), 1, &RefineOptions::DEFAULT).unwrap();
+        assert_eq!(r.euler_characteristic(), 2, "{b}");
+        (r.vertex_count(), r.face_count())
+    };
+    assert_eq!(counts(&cube, Builtin::CatmullClark), (26, 24));
+    assert_eq!(counts(&cube, Builtin::DooSabin), (24, 26));
+    assert_eq!(counts(&cube, Builtin::Midedge), (12, 14));
+    assert_eq!(counts(&icosahedron, Builtin::Loop), (42, 80));
+    assert_eq!(counts(&icosahedron, Builtin::Sqrt3), (32, 60));
+    assert_eq!(counts(&icosahedron, Builtin::Butterfly), (42, 80));
 }

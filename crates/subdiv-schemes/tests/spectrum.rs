@@ -2,14 +2,14 @@
 
 use std::f64::consts::PI;
 
-use subdiv_schemes::{LocalMatrix, Scheme, SchemeError, Spectrum};
+use subdiv_schemes::{Analysis, Builtin, LocalMatrix, SchemeError, Spectrum};
 
 #[test]
 fn catmull_clark_subdominant_eigenvalue_matches_the_closed_form() {
     for k in 3..=64 {
         let c = (2.0 * PI / k as f64).cos();
         let expected = (5.0 + c + (PI / k as f64).cos() * (18.0 + 2.0 * c).sqrt()) / 16.0;
-        let spectrum = Spectrum::of(Scheme::CatmullClark, k).unwrap();
+        let spectrum = Spectrum::of(Builtin::CatmullClark.scheme(), k).unwrap();
         assert!((spectrum.subdominant() - expected).abs() < 1e-12, "k = {k}: {} vs {expected}", spectrum.subdominant());
         assert!(
             spectrum.unit_dominant_simple && spectrum.subdominant_real_double && spectrum.subdominant_strict,
@@ -22,7 +22,7 @@ fn catmull_clark_subdominant_eigenvalue_matches_the_closed_form() {
 fn loop_subdominant_eigenvalue_matches_the_closed_form() {
     for k in 3..=64 {
         let expected = 0.375 + (2.0 * PI / k as f64).cos() / 4.0;
-        let spectrum = Spectrum::of(Scheme::Loop, k).unwrap();
+        let spectrum = Spectrum::of(Builtin::Loop.scheme(), k).unwrap();
         assert!((spectrum.subdominant() - expected).abs() < 1e-12, "k = {k}: {} vs {expected}", spectrum.subdominant());
         assert!(
             spectrum.unit_dominant_simple && spectrum.subdominant_real_double && spectrum.subdominant_strict,
@@ -32,15 +32,46 @@ fn loop_subdominant_eigenvalue_matches_the_closed_form() {
 }
 
 #[test]
-fn one_ring_rows_sum_to_one_and_valence_below_3_is_refused() {
-    for scheme in Scheme::ALL {
+fn local_matrix_rows_sum_to_one_and_valence_below_3_is_refused() {
+    for scheme in Builtin::ALL.map(Builtin::scheme) {
         for k in [3, 4, 7] {
-            let m = LocalMatrix::one_ring(scheme, k).unwrap();
+            let m = LocalMatrix::around(scheme, k).unwrap();
             for r in 0..m.size() {
                 let sum: f64 = (0..m.size()).map(|c| m.get(r, c)).sum();
-                assert!((sum - 1.0).abs() < 1e-14, "{scheme} k = {k} row {r}");
+                assert!((sum - 1.0).abs() < 1e-13, "{scheme} k = {k} row {r}");
             }
         }
-        assert!(matches!(LocalMatrix::one_ring(scheme, 2), Err(SchemeError::ValenceNotSupported { valence: 2, .. })));
+        assert!(matches!(LocalMatrix::around(scheme, 2), Err(SchemeError::ValenceNotSupported { valence: 2, .. })));
     }
+}
+
+/// The derived rules of the Schaefer-Warren quad scheme keep it C1 at every valence 3..=16:
+/// spectrum and characteristic map (see the crate docs for the derivation).
+#[test]
+fn sw_quad_is_c1_at_valences_3_to_16() {
+    for k in 3..=16 {
+        let analysis = Analysis::of(Builtin::SwQuad.scheme(), k).unwrap();
+        assert!(analysis.is_c1(), "k = {k}: {analysis:?}");
+        // The subdominant eigenvalue comes from the edge and face rules alone (crate docs):
+        // the larger root of x² − (7/12 + cos(2π/k)/6)·x + 1/24.
+        let t = 7.0 / 12.0 + (2.0 * PI / k as f64).cos() / 6.0;
+        let expected = (t + (t * t - 1.0 / 6.0).sqrt()) / 2.0;
+        assert!((analysis.spectrum.subdominant() - expected).abs() < 1e-12, "k = {k}");
+    }
+}
+
+/// The verdict separates smooth schemes from others: Catmull-Clark, Loop and the other
+/// smooth built-ins are C1 at valences 3, 5 and 8; bilinear is not.
+#[test]
+fn c1_verdicts() {
+    for b in
+        [Builtin::CatmullClark, Builtin::Loop, Builtin::DooSabin, Builtin::Sqrt3, Builtin::Butterfly, Builtin::Kobbelt]
+    {
+        for k in [3, 5, 8] {
+            let analysis = Analysis::of(b.scheme(), k).unwrap();
+            assert!(analysis.is_c1(), "{b} k = {k}: {analysis:?}");
+        }
+    }
+    let bilinear = Analysis::of(Builtin::Bilinear.scheme(), 5).unwrap();
+    assert!(!bilinear.spectrum.subdominant_strict && !bilinear.is_c1());
 }

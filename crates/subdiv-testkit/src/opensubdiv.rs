@@ -21,7 +21,7 @@ pub struct RefinementReport {
     /// Meshes not compared, each with why (invalid here, or rejected by OpenSubdiv).
     pub skipped: Vec<String>,
 }
-use subdiv_schemes::{RefineOptions, Scheme, refine_uniform};
+use subdiv_schemes::{Builtin, RefineOptions, refine_uniform};
 
 /// Compares `refine_uniform` with `osd_refine` on every OBJ below `meshes` at `levels`; the
 /// scheme comes from the file name's prefix (`loop_`, `bilinear_`, else Catmull-Clark, and Loop
@@ -39,11 +39,11 @@ pub fn compare_refinement(osd_refine: &Path, meshes: &Path, levels: &[usize]) ->
         let scheme = if name.starts_with("loop_")
             || (!name.starts_with("catmark_") && !name.starts_with("bilinear_") && soup.faces().all(|f| f.len() == 3))
         {
-            Scheme::Loop
+            Builtin::Loop
         } else if name.starts_with("bilinear_") {
-            Scheme::Bilinear
+            Builtin::Bilinear
         } else {
-            Scheme::CatmullClark
+            Builtin::CatmullClark
         };
         let Ok(mesh) = Mesh::build_with(soup, &BuildOptions::default()) else {
             skipped.push(format!("{name}: not a valid mesh here (SOURCES.md marks it irregular)"));
@@ -51,9 +51,9 @@ pub fn compare_refinement(osd_refine: &Path, meshes: &Path, levels: &[usize]) ->
         };
         for &level in levels {
             let osd_name = match scheme {
-                Scheme::CatmullClark => "catmark",
-                Scheme::Loop => "loop",
-                Scheme::Bilinear => "bilinear",
+                Builtin::Loop => "loop",
+                Builtin::Bilinear => "bilinear",
+                _ => "catmark",
             };
             let out = std::env::temp_dir().join(format!("osd_refine_{}_{level}.obj", std::process::id()));
             let status = Command::new(osd_refine)
@@ -69,7 +69,7 @@ pub fn compare_refinement(osd_refine: &Path, meshes: &Path, levels: &[usize]) ->
             }
             let theirs = subdiv_io::load(&out).map_err(|e| e.to_string())?;
             let _ = std::fs::remove_file(&out);
-            let ours = match refine_uniform(&mesh, scheme, level, &RefineOptions::DEFAULT) {
+            let ours = match refine_uniform(&mesh, scheme.scheme(), level, &RefineOptions::DEFAULT) {
                 Ok(mesh) => mesh,
                 Err(e) => {
                     differ.push(format!("{name} level {level}: we refuse it: {e}"));

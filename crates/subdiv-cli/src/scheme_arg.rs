@@ -1,0 +1,63 @@
+//! The scheme options shared by the subcommands: a built-in by name, or a scheme file.
+
+use std::path::PathBuf;
+
+use subdiv::schemes::{Builtin, Scheme};
+
+use crate::UserError;
+
+/// `--scheme NAME` or `--scheme-file FILE`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct SchemeArgs {
+    /// Built-in subdivision scheme.
+    #[arg(long, default_value = "catmull-clark", value_parser = parse_builtin)]
+    scheme: Builtin,
+    /// A user-defined scheme: a TOML file, or RON when the name ends in `.ron` (`subdiv scheme
+    /// NAME` prints a built-in's file as a start). Overrides `--scheme`.
+    #[arg(long, value_name = "FILE")]
+    scheme_file: Option<PathBuf>,
+}
+
+impl SchemeArgs {
+    /// The scheme asked for.
+    pub(crate) fn resolve(&self) -> Result<Scheme, UserError> {
+        let Some(path) = &self.scheme_file else {
+            return Ok(self.scheme.scheme().clone());
+        };
+        let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+        let parsed = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
+            Scheme::from_ron_str(&text)
+        } else {
+            Scheme::from_toml_str(&text)
+        };
+        parsed.map_err(|e| UserError(format!("{}: {e}", path.display())))
+    }
+}
+
+pub(crate) fn parse_builtin(name: &str) -> Result<Builtin, String> {
+    Builtin::from_name(name).ok_or_else(|| {
+        let known: Vec<_> = Builtin::ALL.iter().map(|s| s.name()).collect();
+        format!("unknown scheme {name:?}; known: {}", known.join(", "))
+    })
+}
+
+/// Arguments of `subdiv scheme`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct PrintArgs {
+    /// The built-in scheme to print.
+    #[arg(value_parser = parse_builtin)]
+    name: Builtin,
+    /// Print RON instead of TOML.
+    #[arg(long)]
+    ron: bool,
+}
+
+/// `subdiv scheme NAME [--ron]`: a built-in scheme as a file, a template for one's own.
+pub(crate) fn print(args: &PrintArgs, out: &mut impl std::io::Write) -> Result<(), UserError> {
+    if args.ron {
+        writeln!(out, "{}", args.name.scheme().to_ron_string())?;
+    } else {
+        write!(out, "{}", args.name.toml())?;
+    }
+    Ok(())
+}

@@ -1,0 +1,115 @@
+//! The splits that do not keep the old vertices in place: dual (Doo-Sabin), mid-edge
+//! (Peters-Reif) and √3 (Kobbelt). They take closed meshes (checked before).
+//!
+//! Child numbering: Doo-Sabin numbers its points by face corner (the parent's half-edge
+//! index), mid-edge by parent edge, √3 keeps the old vertices first and then one point per
+//! face. Child faces: Doo-Sabin and mid-edge list the faces made from parent faces, then (Doo-
+//! Sabin) those from edges, then those from vertices; √3 has one triangle per half-edge.
+
+use subdiv_mesh::{HalfEdgeId, Mesh, PolygonSoup, VertexId};
+
+use crate::scheme::{VertexMask, vertex_weights};
+use crate::stencil::{Row, Stencils};
+use crate::{Expr, SchemeError};
+
+fn build(soup: PolygonSoup) -> Result<Mesh, SchemeError> {
+    Mesh::build(soup).map_err(|e| SchemeError::Internal(format!("the refined mesh is invalid: {e}")))
+}
+
+fn finish(mesh: &Mesh, stencils: Stencils, faces: Vec<Vec<u32>>) -> Result<(Mesh, Stencils), SchemeError> {
+    let mut positions = Vec::with_capacity(stencils.child_count());
+    stencils.apply(mesh.positions(), &mut positions);
+    let mut soup = PolygonSoup::with_capacity(positions.len(), faces.len(), faces.iter().map(Vec::len).sum());
+    for p in positions {
+        soup.push_vertex(p);
+    }
+    for face in faces {
+        soup.push_face(face.into_iter().map(VertexId::new));
+    }
+    Ok((build(soup)?, stencils))
+}
+
+/// Doo-Sabin: the point of corner `h` is `own · origin(h) + Σ_j corner(n, j) · v_j` over the
+/// face's vertices `v_j`, `j` counted from `h`'s corner.
+pub(crate) fn doo_sabin(mesh: &Mesh, own: &Expr, corner: &Expr) -> Result<(Mesh, Stencils), SchemeError> {
+    let max_face = mesh.face_ids().map(|f| mesh.face_size(f)).max().unwrap_or(0);
+    let weights: Vec<(f64, Vec<f64>)> =
+        (0..=max_face).map(|n| (own.eval(n, 0), (0..n).map(|j| corner.eval(n, j)).collect())).collect();
+    let mut stencils = Stencils::with_capacity(mesh.half_edge_count(), 4 * mesh.half_edge_count(), mesh.vertex_count());
+    for f in mesh.face_ids() {
+        let vertices = mesh.face_vertices(f);
+        let n = vertices.len();
+        let (own, corners) = &weights[n];
+        for i in 0..n {
+            let mut row = Row::default();
+            row.add(vertices[i].raw(), *own);
+            for (j, w) in corners.iter().enumerate() {
+                row.add(vertices[(i + j) % n].raw(), *w);
+            }
+            stencils.push(&row);
+        }
+    }
+    let corner = |h: HalfEdgeId| h.raw();
+    let mut faces: Vec<Vec<u32>> = mesh.face_ids().map(|f| mesh.face_half_edges(f).map(corner).collect()).collect();
+    for e in mesh.edges() {
+        let h = mesh.edge_half_edge(e);
+        let t = mesh.twin(h).ok_or_else(|| SchemeError::Internal("Doo-Sabin met a boundary edge".into()))?;
+        faces.push(vec![corner(mesh.next(h)), corner(h), corner(mesh.next(t)), corner(t)]);
+    }
+    for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v)) {
+        faces.push(mesh.outgoing(v).map(corner).collect());
+    }
+    finish(mesh, stencils, faces)
+}
+
+/// Mid-edge: a point at the middle of every edge; a face per old face (its edge points) and
+/// per old vertex (the points of its edges).
+pub(crate) fn midedge(mesh: &Mesh) -> Result<(Mesh, Stencils), SchemeError> {
+    let mut stencils = Stencils::with_capacity(mesh.edge_count(), 2 * mesh.edge_count(), mesh.vertex_count());
+    for e in mesh.edges() {
+        let [a, b] = mesh.edge_vertices(e);
+        let mut row = Row::default();
+        row.add(a.raw(), 0.5);
+        row.add(b.raw(), 0.5);
+        stencils.push(&row);
+    }
+    let edge = |h: HalfEdgeId| mesh.edge(h).raw();
+    let mut faces: Vec<Vec<u32>> = mesh.face_ids().map(|f| mesh.face_half_edges(f).map(edge).collect()).collect();
+    for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v)) {
+        faces.push(mesh.outgoing(v).map(edge).collect());
+    }
+    finish(mesh, stencils, faces)
+}
+
+/// √3: old vertices relaxed by the vertex mask, a centroid per triangle, and one triangle per
+/// half-edge `h` (face `F`, twin in face `G`): `origin(h)`, the point of `G`, the point of `F`.
+pub(crate) fn sqrt3(mesh: &Mesh, vertex: &VertexMask) -> Result<(Mesh, Stencils), SchemeError> {
+    let nv = mesh.vertex_count();
+    let mut stencils = Stencils::with_capacity(nv + mesh.face_count(), 16 * nv, nv);
+    for v in mesh.vertices() {
+        let ring = mesh.one_ring(v);
+        let (centre, spoke, _) = vertex_weights(vertex, ring.len());
+        let mut row = Row::default();
+        row.add(v.raw(), if ring.is_empty() { 1.0 } else { centre });
+        for w in ring {
+            row.add(w.raw(), spoke);
+        }
+        stencils.push(&row);
+    }
+    for f in mesh.face_ids() {
+        let mut row = Row::default();
+        for v in mesh.face_vertices(f) {
+            row.add(v.raw(), 1.0 / 3.0);
+        }
+        stencils.push(&row);
+    }
+    let face_point = |h: HalfEdgeId| nv as u32 + mesh.face(h).raw();
+    let mut faces = Vec::with_capacity(mesh.half_edge_count());
+    for f in mesh.face_ids() {
+        for h in mesh.face_half_edges(f) {
+            let t = mesh.twin(h).ok_or_else(|| SchemeError::Internal("√3 met a boundary edge".into()))?;
+            faces.push(vec![mesh.origin(h).raw(), face_point(t), face_point(h)]);
+        }
+    }
+    finish(mesh, stencils, faces)
+}

@@ -1,0 +1,482 @@
+//! Primal splits: every n-gon into n quads (quad schemes) or every triangle into four
+//! (triangle schemes). The vertex and edge rules come from the scheme's masks; where the
+//! scheme has crease rules, boundaries, creases and corners follow OpenSubdiv (smooth, dart,
+//! crease, corner, and the fractional blend where a semi-sharp feature fades out).
+//!
+//! Child vertex numbering is Far's: vertex points (parent order), then face points (quad
+//! schemes), then edge points.
+
+use smallvec::SmallVec;
+use subdiv_mesh::{EdgeId, FaceId, HalfEdgeId, Mesh, PolygonSoup, Tags, VertexId};
+
+use crate::crease::{self, Rule};
+use crate::refine::Options;
+use crate::scheme::{CreaseMask, ExtraordinaryEdgeMask, Rules, Scheme, TriangleEdgeMask, extraordinary_spokes};
+use crate::stencil::{Row, Stencils};
+use crate::{Expr, SchemeError};
+
+/// A scheme's primal masks, evaluated for the valences and face sizes of one level.
+struct Masks {
+    kind: Kind,
+    /// `(centre, spoke, face)` per valence.
+    vertex: Vec<(f64, f64, f64)>,
+    /// `(own, neighbour)` along creases; `None`: no crease rules.
+    crease: Option<(f64, f64)>,
+}
+
+enum Kind {
+    Quad {
+        /// Corner weights per face size.
+        corners: Vec<Vec<f64>>,
+        endpoint: f64,
+        face: f64,
+        /// OpenSubdiv's smooth-triangle rule applies (Catmull-Clark's edge mask, and the
+        /// option set).
+        smooth_triangles: bool,
+    },
+    FourPoint {
+        weight: f64,
+    },
+    Triangle {
+        endpoint: f64,
+        opposite: f64,
+        wing: f64,
+        /// `(centre, spokes)` per valence, for edges at an extraordinary vertex.
+        extraordinary: Option<Vec<(f64, Vec<f64>)>>,
+    },
+}
+
+impl Masks {
+    fn new(scheme: &Scheme, mesh: &Mesh, options: Options) -> Self {
+        let max_valence = mesh.vertices().map(|v| mesh.valence(v)).max().unwrap_or(0);
+        let max_face = mesh.face_ids().map(|f| mesh.face_size(f)).max().unwrap_or(0);
+        let vertex_table = |mask| (0..=max_valence).map(|k| crate::scheme::vertex_weights(mask, k)).collect();
+        let crease_pair = |c: &Option<CreaseMask>| c.as_ref().map(|c| (c.own.eval(2, 0), c.neighbour.eval(2, 0)));
+        match &scheme.rules {
+            Rules::Quad { face, edge, vertex, crease } => {
+                let corners =
+                    (0..=max_face).map(|n| (0..n).map(|j| face.corner.eval(n, j)).collect::<Vec<f64>>()).collect();
+                let (endpoint, face) = (edge.endpoint.eval(4, 0), edge.face.eval(4, 0));
+                Self {
+                    kind: Kind::Quad {
+                        corners,
+                        endpoint,
+                        face,
+                        smooth_triangles: options.smooth_triangles && endpoint == 0.25 && face == 0.25,
+                    },
+                    vertex: vertex_table(vertex),
+                    crease: crease_pair(crease),
+                }
+            }
+            Rules::FourPointQuad { weight } => Self {
+                kind: Kind::FourPoint { weight: weight.eval(4, 0) },
+                vertex: vec![(1.0, 0.0, 0.0); max_valence + 1],
+                crease: None,
+            },
+            Rules::Triangle { edge, vertex, crease } => {
+                let TriangleEdgeMask { endpoint, opposite, wing, extraordinary } = edge;
+                let extraordinary = extraordinary.as_ref().map(|m: &ExtraordinaryEdgeMask| {
+                    (0..=max_valence).map(|k| (m.centre.eval(k, 0), extraordinary_spokes(m, k))).collect()
+                });
+                let eval = |e: &Expr| e.eval(6, 0);
+                Self {
+                    kind: Kind::Triangle {
+                        endpoint: eval(endpoint),
+                        opposite: eval(opposite),
+                        wing: eval(wing),
+                        extraordinary,
+                    },
+                    vertex: vertex_table(vertex),
+                    crease: crease_pair(crease),
+                }
+            }
+            Rules::Dual { .. } | Rules::Midedge | Rules::Sqrt3 { .. } => {
+                unreachable!("primal::refine is only called for primal splits")
+            }
+        }
+    }
+
+    fn splits_into_quads(&self) -> bool {
+        !matches!(self.kind, Kind::Triangle { .. })
+    }
+}
+
+/// The edges at `v` in fan order, each with its far end; for a boundary vertex the trailing
+/// boundary edge comes last.
+pub(crate) fn vertex_edges(mesh: &Mesh, v: VertexId) -> SmallVec<[(EdgeId, VertexId); 8]> {
+    let mut edges: SmallVec<[(EdgeId, VertexId); 8]> = SmallVec::new();
+    let mut last = None;
+    for h in mesh.outgoing(v) {
+        edges.push((mesh.edge(h), mesh.dest(h)));
+        last = Some(h);
+    }
+    if let Some(h) = last
+        && mesh.is_boundary_vertex(v)
+    {
+        let incoming = mesh.prev(h);
+        edges.push((mesh.edge(incoming), mesh.origin(incoming)));
+    }
+    edges
+}
+
+fn sharpness(s: f64) -> f32 {
+    // Sharpness is single precision in OpenSubdiv; rounding here keeps fractional weights equal.
+    s as f32
+}
+
+/// Child vertex numbering: vertex points (parent order), then face points (quad schemes), then
+/// edge points — the order of OpenSubdiv's `Far` levels as the peer harness writes them.
+struct Numbering {
+    face_base: u32,
+    edge_base: u32,
+}
+
+impl Numbering {
+    fn face(&self, f: FaceId) -> VertexId {
+        VertexId::new(self.face_base + f.raw())
+    }
+
+    fn edge(&self, e: EdgeId) -> VertexId {
+        VertexId::new(self.edge_base + e.raw())
+    }
+}
+
+pub(crate) fn refine(mesh: &Mesh, scheme: &Scheme, options: Options) -> Result<(Mesh, Stencils), SchemeError> {
+    let masks = Masks::new(scheme, mesh, options);
+    let method = options.crease_method;
+    let quads = masks.splits_into_quads();
+    let nv = mesh.vertex_count() as u32;
+    let face_points = if quads { mesh.face_count() as u32 } else { 0 };
+    let numbering = Numbering { face_base: nv, edge_base: nv + face_points };
+    let child_count = (numbering.edge_base as usize) + mesh.edge_count();
+
+    // Geometry: one stencil row per child vertex, in child order.
+    let mut stencils = Stencils::with_capacity(child_count, 8 * child_count, mesh.vertex_count());
+    let face_rows: Vec<Row> =
+        if quads { mesh.face_ids().map(|f| face_point(mesh, &masks, f)).collect() } else { vec![] };
+    let edge_rows: Vec<Row> = mesh.edges().map(|e| edge_row(mesh, &masks, &face_rows, options, e)).collect();
+    for v in mesh.vertices() {
+        stencils.push(&vertex_row(mesh, &masks, &face_rows, method, v));
+    }
+    match &masks.kind {
+        Kind::FourPoint { weight } => {
+            for f in mesh.face_ids() {
+                stencils.push(&four_point_face(mesh, &edge_rows, *weight, f));
+            }
+        }
+        _ => {
+            for row in &face_rows {
+                stencils.push(row);
+            }
+        }
+    }
+    for row in &edge_rows {
+        stencils.push(row);
+    }
+    let mut positions = Vec::with_capacity(child_count);
+    stencils.apply(mesh.positions(), &mut positions);
+
+    // Topology.
+    let mut soup = PolygonSoup::with_capacity(child_count, 4 * mesh.face_count(), 4 * mesh.half_edge_count());
+    for p in positions {
+        soup.push_vertex(p);
+    }
+    let mut holes = Vec::new();
+    for f in mesh.face_ids() {
+        let halves: SmallVec<[HalfEdgeId; 8]> = mesh.face_half_edges(f).collect();
+        let n = halves.len();
+        let first_child = soup.face_count();
+        for j in 0..n {
+            let corner = mesh.origin(halves[j]);
+            let after = numbering.edge(mesh.edge(halves[j]));
+            let before = numbering.edge(mesh.edge(halves[(j + n - 1) % n]));
+            if quads {
+                let mut child = [corner, after, numbering.face(f), before];
+                // OpenSubdiv rotates a quad's children so that the corner sits at position j.
+                if n == 4 {
+                    child.rotate_right(j);
+                }
+                soup.push_face(child);
+            } else {
+                let mut child = [corner, after, before];
+                child.rotate_right(j);
+                soup.push_face(child);
+            }
+        }
+        if !quads {
+            let e = |j: usize| numbering.edge(mesh.edge(halves[j]));
+            soup.push_face([e(1), e(2), e(0)]);
+        }
+        if mesh.is_hole(f) {
+            holes.extend((first_child..soup.face_count()).map(|c| FaceId::new(c as u32)));
+        }
+    }
+    soup.tags = Tags {
+        boundary_interpolation: mesh.tags().boundary_interpolation,
+        crease_method: mesh.tags().crease_method,
+        triangle_subdivision: mesh.tags().triangle_subdivision,
+        face_varying_interpolation: mesh.tags().face_varying_interpolation,
+        ..Tags::default()
+    };
+    let mut child =
+        Mesh::build(soup).map_err(|e| SchemeError::Internal(format!("the refined mesh is invalid: {e}")))?;
+
+    // Sharpness and holes of the child level.
+    for f in holes {
+        child.set_hole(f, true);
+    }
+    if masks.crease.is_some() {
+        for v in mesh.vertices() {
+            child.set_vertex_sharpness(v, f64::from(crease::decrement(sharpness(mesh.vertex_sharpness(v)))));
+            let edges = vertex_edges(mesh, v);
+            let around: SmallVec<[f32; 8]> = edges.iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
+            for (&(e, _), &s) in edges.iter().zip(&around) {
+                if crease::is_sharp(s) {
+                    let half = child
+                        .find_edge(v, numbering.edge(e))
+                        .ok_or_else(|| SchemeError::Internal(format!("the child of edge {e} at {v} is missing")))?;
+                    child.set_edge_sharpness(half, f64::from(crease::child_edge_sharpness(method, s, &around)));
+                }
+            }
+        }
+    }
+    Ok((child, stencils))
+}
+
+/// The smooth edge point of the edge of `h` (its rule away from creases).
+fn smooth_edge_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], h: HalfEdgeId) -> Row {
+    let (a, b) = (mesh.origin(h), mesh.dest(h));
+    let Some(t) = mesh.twin(h) else {
+        return midpoint(a, b);
+    };
+    let mut row = Row::default();
+    match &masks.kind {
+        Kind::Quad { endpoint, face, smooth_triangles, .. } => {
+            let (g0, g1) = (mesh.face(h), mesh.face(t));
+            let (tri0, tri1) = (mesh.face_size(g0) == 3, mesh.face_size(g1) == 3);
+            let (vertex_weight, face_weight) = if *smooth_triangles && (tri0 || tri1) {
+                // OpenSubdiv's (and Hbr's) "smooth triangle" weights, in their order of operations.
+                const TRIANGLE_FACE_WEIGHT: f64 = 0.470;
+                let w0 = if tri0 { TRIANGLE_FACE_WEIGHT } else { 0.25 };
+                let w1 = if tri1 { TRIANGLE_FACE_WEIGHT } else { 0.25 };
+                let face_weight = 0.5 * (w0 + w1);
+                (0.5 * (1.0 - 2.0 * face_weight), face_weight)
+            } else {
+                (*endpoint, *face)
+            };
+            add(&mut row, a, vertex_weight);
+            add(&mut row, b, vertex_weight);
+            if face_weight != 0.0 {
+                row.add_row(&face_rows[g0.index()], face_weight);
+                row.add_row(&face_rows[g1.index()], face_weight);
+            }
+        }
+        Kind::FourPoint { weight } => {
+            let w = *weight;
+            row.add_row(&beyond(mesh, t), -w);
+            add(&mut row, a, 0.5 + w);
+            add(&mut row, b, 0.5 + w);
+            row.add_row(&beyond(mesh, h), -w);
+        }
+        Kind::Triangle { endpoint, opposite, wing, extraordinary } => {
+            let regular = |v: VertexId| mesh.valence(v) == 6;
+            if let Some(table) = extraordinary
+                && !(regular(a) && regular(b))
+            {
+                // The modified Butterfly rule from each extraordinary end, averaged over both.
+                let ends: SmallVec<[HalfEdgeId; 2]> =
+                    [h, t].into_iter().filter(|&x| !regular(mesh.origin(x))).collect();
+                let share = 1.0 / ends.len() as f64;
+                for x in ends {
+                    let centre = mesh.origin(x);
+                    let (w, spokes) = &table[mesh.valence(centre)];
+                    add(&mut row, centre, w * share);
+                    for (q, s) in fan_from(mesh, x).into_iter().zip(spokes) {
+                        add(&mut row, q, s * share);
+                    }
+                }
+                return row;
+            }
+            add(&mut row, a, *endpoint);
+            add(&mut row, b, *endpoint);
+            add(&mut row, mesh.origin(mesh.prev(h)), *opposite);
+            add(&mut row, mesh.origin(mesh.prev(t)), *opposite);
+            if *wing != 0.0 {
+                for x in [h, t] {
+                    for side in [mesh.next(x), mesh.prev(x)] {
+                        let across = mesh.twin(side).expect("wings exist: the scheme takes closed meshes only");
+                        add(&mut row, mesh.origin(mesh.prev(across)), *wing);
+                    }
+                }
+            }
+        }
+    }
+    row
+}
+
+fn add(row: &mut Row, v: VertexId, weight: f64) {
+    if weight != 0.0 {
+        row.add(v.raw(), weight);
+    }
+}
+
+fn midpoint(a: VertexId, b: VertexId) -> Row {
+    let mut row = Row::default();
+    row.add(a.raw(), 0.5);
+    row.add(b.raw(), 0.5);
+    row
+}
+
+/// The far ends of the edges at `origin(h)`, counter-clockwise from `h`'s.
+fn fan_from(mesh: &Mesh, h: HalfEdgeId) -> SmallVec<[VertexId; 8]> {
+    let mut fan: SmallVec<[VertexId; 8]> = SmallVec::new();
+    let mut x = h;
+    loop {
+        fan.push(mesh.dest(x));
+        match mesh.twin(mesh.prev(x)) {
+            Some(next) if next != h => x = next,
+            _ => break,
+        }
+    }
+    fan
+}
+
+/// The point that continues the grid line of `h` beyond its end `dest(h)`: the opposite
+/// neighbour at a vertex of valence 4; elsewhere the virtual point `4/k · Σ q − q_{i−1} − q_i −
+/// q_{i+1}` over `dest(h)`'s neighbours `q`, `q_i = origin(h)`, which is the opposite neighbour
+/// when `k = 4`.
+fn beyond(mesh: &Mesh, h: HalfEdgeId) -> Row {
+    let back = mesh.twin(h).expect("the four-point scheme takes closed meshes only");
+    let fan = fan_from(mesh, back);
+    let k = fan.len();
+    let mut row = Row::default();
+    if k == 4 {
+        row.add(fan[2].raw(), 1.0);
+        return row;
+    }
+    for &q in &fan {
+        row.add(q.raw(), 4.0 / k as f64);
+    }
+    for q in [fan[k - 1], fan[0], fan[1]] {
+        row.add(q.raw(), -1.0);
+    }
+    row
+}
+
+/// Kobbelt's face point: the four-point rule across the face through the new points of two
+/// opposite edges and of the edges opposite them in the neighbouring quads, taken in both
+/// directions and averaged (the two agree on a regular grid).
+fn four_point_face(mesh: &Mesh, edge_rows: &[Row], w: f64, f: FaceId) -> Row {
+    let halves: SmallVec<[HalfEdgeId; 4]> = mesh.face_half_edges(f).collect();
+    let across = |h: HalfEdgeId| {
+        let t = mesh.twin(h).expect("the four-point scheme takes closed meshes only");
+        mesh.next(mesh.next(t))
+    };
+    let edge = |h: HalfEdgeId| &edge_rows[mesh.edge(h).index()];
+    let mut row = Row::default();
+    for (first, second) in [(halves[0], halves[2]), (halves[1], halves[3])] {
+        row.add_row(edge(across(first)), -w / 2.0);
+        row.add_row(edge(first), (0.5 + w) / 2.0);
+        row.add_row(edge(second), (0.5 + w) / 2.0);
+        row.add_row(edge(across(second)), -w / 2.0);
+    }
+    row
+}
+
+/// The stencil of the point of edge `e`.
+fn edge_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], options: Options, e: EdgeId) -> Row {
+    let h = mesh.edge_half_edge(e);
+    let smooth = smooth_edge_row(mesh, masks, face_rows, h);
+    let s = sharpness(mesh.edge_sharpness(e));
+    if !crease::is_sharp(s) || masks.crease.is_none() {
+        return smooth;
+    }
+    let (a, b) = (mesh.origin(h), mesh.dest(h));
+    // The child vertex is a crease if both halves stay sharp; otherwise blend by sharpness.
+    let half = |v: VertexId| {
+        let around: SmallVec<[f32; 8]> =
+            vertex_edges(mesh, v).iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
+        crease::child_edge_sharpness(options.crease_method, s, &around)
+    };
+    if crease::is_sharp(half(a)) && crease::is_sharp(half(b)) {
+        return midpoint(a, b);
+    }
+    midpoint(a, b).blend(&smooth, f64::from(s))
+}
+
+/// The stencil of the face point of `f`.
+fn face_point(mesh: &Mesh, masks: &Masks, f: FaceId) -> Row {
+    let face = mesh.face_vertices(f);
+    let mut row = Row::default();
+    match &masks.kind {
+        Kind::Quad { corners, .. } => {
+            for (v, &w) in face.iter().zip(&corners[face.len()]) {
+                add(&mut row, *v, w);
+            }
+        }
+        // The four-point scheme's face points are built from its edge points; this centroid
+        // only serves the smooth edge rule, which that scheme does not use.
+        _ => {
+            for v in face {
+                row.add(v.raw(), 1.0 / face.len() as f64);
+            }
+        }
+    }
+    row
+}
+
+/// The stencil of the child of vertex `v`: the smooth, crease or corner mask, or a blend of the
+/// parent's and the child's where a semi-sharp feature fades out.
+fn vertex_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], method: subdiv_mesh::CreaseMethod, v: VertexId) -> Row {
+    if mesh.is_isolated(v) {
+        return Row::single(v.raw());
+    }
+    let edges = vertex_edges(mesh, v);
+    let smooth = || -> Row {
+        let (centre, spoke, face) = masks.vertex[edges.len()];
+        let mut row = Row::default();
+        add(&mut row, v, centre);
+        if spoke != 0.0 {
+            for &(_, w) in &edges {
+                row.add(w.raw(), spoke);
+            }
+        }
+        if face != 0.0 {
+            for f in mesh.vertex_faces(v) {
+                row.add_row(&face_rows[f.index()], face);
+            }
+        }
+        row
+    };
+    let Some((own, neighbour)) = masks.crease else {
+        return smooth();
+    };
+    let parent_edges: SmallVec<[f32; 8]> = edges.iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
+    let parent_vertex = sharpness(mesh.vertex_sharpness(v));
+    let crease_along = |sharp: &[f32]| -> Row {
+        let mut row = Row::default();
+        row.add(v.raw(), own);
+        for (&(_, w), _) in edges.iter().zip(sharp).filter(|&(_, &s)| crease::is_sharp(s)).take(2) {
+            add(&mut row, w, neighbour);
+        }
+        row
+    };
+    let mask = |rule: Rule, sharp: &[f32]| match rule {
+        Rule::Smooth | Rule::Dart => smooth(),
+        Rule::Crease => crease_along(sharp),
+        Rule::Corner => Row::single(v.raw()),
+    };
+    let parent_rule = crease::vertex_rule(parent_vertex, &parent_edges);
+    if matches!(parent_rule, Rule::Smooth | Rule::Dart) {
+        return smooth();
+    }
+    let child_vertex = crease::decrement(parent_vertex);
+    let child_edges: SmallVec<[f32; 8]> =
+        parent_edges.iter().map(|&s| crease::child_edge_sharpness(method, s, &parent_edges)).collect();
+    let child_rule = crease::vertex_rule(child_vertex, &child_edges);
+    if child_rule == parent_rule {
+        return mask(parent_rule, &parent_edges);
+    }
+    let w = f64::from(crease::fractional_weight(parent_vertex, child_vertex, &parent_edges, &child_edges));
+    mask(parent_rule, &parent_edges).blend(&mask(child_rule, &child_edges), w)
+}
