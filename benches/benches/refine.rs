@@ -1,9 +1,25 @@
 //! Uniform refinement throughput: refined faces per second, one thread.
 //!
-//! Peers on this machine (`../shared/peers/`): OpenSubdiv Far primvar interpolation 61-149 M
-//! faces/s, subdiv-kernels 112 M faces/s (Catmull-Clark, 64×32 torus, level 4) and 373 M faces/s
-//! (Loop), opensubdiv-rs 31 M faces/s. Run with `cargo bench -p subdiv-benches --bench refine`;
-//! faces/s = refined faces / median time.
+//! Run with `cargo bench -p subdiv-benches --bench refine -- _positions` (or `cargo xtask bench
+//! refine` for `key=value` lines); faces/s = refined faces / median time. The `_positions`
+//! cases time `Refiner::interpolate` alone: what the peers' primvar figures measure.
+//!
+//! One session on the 2-core machine (shared and noisy: take the figures to ±20 %), 64 × 32
+//! torus to level 4, f64 positions:
+//!
+//! | case | before the stencil palette | after |
+//! |---|---|---|
+//! | Catmull-Clark, 524,288 faces | 8.11 ms = 65 M faces/s | 4.52 ms = 116 M faces/s |
+//! | Loop, 1,048,576 faces | 5.47 ms = 192 M faces/s | 3.23 ms = 325 M faces/s |
+//!
+//! Peers in the same session (`../shared/peers/`; f32 positions unless said): subdiv-kernels
+//! 70-86 M faces/s Catmull-Clark on the same torus (47 M in f64), 182-218 M faces/s Loop on the
+//! same-size triangle torus (115 M in f64) and 148-257 M faces/s on the 16 × 8 one (65,536
+//! faces, where we reach 320-515 M faces/s); opensubdiv-rs 10-11 M faces/s (31 M on a quiet
+//! machine); OpenSubdiv Far (`osd_bench`, 128 × 64 torus to level 3, the same 524,288 faces)
+//! 39 M faces/s primvar and 67 M faces/s stencil tables for Catmull-Clark, 48 M and 115 M for
+//! Loop. Earlier quiet-machine figures: subdiv-kernels 112 M (Catmull-Clark) and 373 M faces/s
+//! (Loop, 16 × 8 torus), OpenSubdiv 61-149 M faces/s.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use subdiv::mesh::{Mesh, shapes};
