@@ -23,6 +23,10 @@ use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 /// on finding one that refinement maps into itself.
 const MAX_RADIUS: usize = 4;
 
+/// How many rings past the invariant neighbourhood the characteristic map's eigenvectors are
+/// extended, so that a few refinements leave a dense ring whose every vertex is known.
+const EXTENSION: usize = 3;
+
 /// The square subdivision matrix of the smallest closed neighbourhood of an extraordinary
 /// vertex: row `r` holds the weights of refined vertex `r` over the parent vertices.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,7 +54,7 @@ impl LocalMatrix {
     /// # Errors
     /// [`SchemeError::ValenceNotSupported`] below valence 3, and errors of the engine.
     pub fn around(scheme: &Scheme, valence: usize) -> Result<Self, SchemeError> {
-        Canonical::new(scheme, valence, MAX_RADIUS + 2)?.closed()
+        Canonical::new(scheme, valence, MAX_RADIUS)?.closed()
     }
 
     /// Rows (and columns).
@@ -68,21 +72,13 @@ impl LocalMatrix {
         self.entries[row * self.size + column]
     }
 
-    fn to_faer(&self) -> Mat<f64> {
-        Mat::<f64>::from_fn(self.size, self.size, |i, j| self.get(i, j))
-    }
-
     /// The eigenvalues, largest modulus first (ties: larger real part first), as `(re, im)`.
     ///
     /// # Errors
     /// [`SchemeError::Eigen`] when the eigen solver does not converge.
     pub fn eigenvalues(&self) -> Result<Vec<(f64, f64)>, SchemeError> {
-        let values = self.to_faer().eigenvalues().map_err(|e| SchemeError::Eigen(format!("{e:?}")))?;
-        let mut values: Vec<(f64, f64)> = values.iter().map(|z| (z.re, z.im)).collect();
-        values.sort_by(|a, b| {
-            let (ma, mb) = (a.0.hypot(a.1), b.0.hypot(b.1));
-            mb.total_cmp(&ma).then(b.0.total_cmp(&a.0))
-        });
+        let mut values = crate::eigen::eigenvalues(self.size, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)?;
+        crate::eigen::sort_by_modulus(&mut values);
         Ok(values)
     }
 
@@ -108,10 +104,15 @@ struct Canonical {
     /// `steps_per_cycle` levels of refinement of `mesh`.
     refiner: Refiner,
     centre_is_face: bool,
+    /// The centres of `mesh` and of the refined mesh, found once.
+    centres: [Vec<VertexId>; 2],
 }
 
 impl Canonical {
-    fn new(scheme: &Scheme, valence: usize, rings: usize) -> Result<Self, SchemeError> {
+    /// The canonical mesh for neighbourhoods of radius up to `largest_radius`: the pillow has
+    /// two rings more, so that no such neighbourhood reaches its rim.
+    fn new(scheme: &Scheme, valence: usize, largest_radius: usize) -> Result<Self, SchemeError> {
+        let rings = largest_radius + 2;
         if valence < 3 {
             return Err(SchemeError::ValenceNotSupported {
                 scheme: scheme.name.clone(),
@@ -129,12 +130,8 @@ impl Canonical {
             pillow
         };
         let refiner = Refiner::new(&mesh, scheme, scheme.steps_per_cycle(), &RefineOptions::DEFAULT)?;
-        Ok(Self { scheme: scheme.clone(), valence, mesh, refiner, centre_is_face })
-    }
-
-    /// The centre of `mesh`: vertex 0, or the extraordinary face's vertices.
-    fn centre(&self, mesh: &Mesh) -> Vec<VertexId> {
-        if self.centre_is_face { mesh.face_vertices(centre_face(mesh)).to_vec() } else { vec![VertexId::new(0)] }
+        let centres = [centre(&mesh, centre_is_face), centre(refiner.mesh(), centre_is_face)];
+        Ok(Self { scheme: scheme.clone(), valence, mesh, refiner, centre_is_face, centres })
     }
 
     /// The matrix of the smallest neighbourhood that refinement maps into itself.
@@ -163,10 +160,11 @@ impl Canonical {
         })
     }
 
-    /// The ordered neighbourhood of radius `radius` of the centre of `mesh`, with each
-    /// vertex's ring.
-    fn neighbourhood(&self, mesh: &Mesh, radius: usize) -> Vec<(VertexId, usize)> {
-        let ring = ring_distances(mesh, &self.centre(mesh), radius);
+    /// The ordered neighbourhood of radius `radius` of the centre of the parent mesh (or, if
+    /// `refined`, of the refined one), with each vertex's ring.
+    fn neighbourhood(&self, refined: bool, radius: usize) -> Vec<(VertexId, usize)> {
+        let mesh = if refined { self.refiner.mesh() } else { &self.mesh };
+        let ring = ring_distances(mesh, &self.centres[usize::from(refined)], radius);
         let all = mesh.vertices().filter(|v| ring[v.index()] != usize::MAX);
         let key = |v: VertexId| {
             let p = mesh.position(v);
@@ -185,8 +183,8 @@ impl Canonical {
     /// The matrix of the neighbourhood of radius `radius`, or `None` when refinement does not
     /// map that neighbourhood into itself.
     fn matrix(&self, radius: usize) -> Result<Option<LocalMatrix>, SchemeError> {
-        let parent = self.neighbourhood(&self.mesh, radius);
-        let child = self.neighbourhood(self.refiner.mesh(), radius);
+        let parent = self.neighbourhood(false, radius);
+        let child = self.neighbourhood(true, radius);
         if parent.len() != child.len() || parent.iter().zip(&child).any(|(a, b)| a.1 != b.1) {
             return Err(SchemeError::Internal(format!(
                 "{} at valence {}: the refined neighbourhood of radius {radius} differs from the parent's",
@@ -255,6 +253,11 @@ fn composed_row(refiner: &Refiner, child: usize) -> Vec<(usize, f64)> {
         row = next;
     }
     row
+}
+
+/// The centre of a canonical mesh: vertex 0, or the extraordinary face's vertices.
+fn centre(mesh: &Mesh, is_face: bool) -> Vec<VertexId> {
+    if is_face { mesh.face_vertices(centre_face(mesh)).to_vec() } else { vec![VertexId::new(0)] }
 }
 
 /// The face of `mesh` whose centroid is nearest the origin: the extraordinary face of a dual
@@ -382,7 +385,7 @@ impl Spectrum {
     /// # Errors
     /// As [`LocalMatrix::around`] and [`LocalMatrix::eigenvalues`].
     pub fn of(scheme: &Scheme, valence: usize) -> Result<Self, SchemeError> {
-        Self::of_matrix(&Canonical::new(scheme, valence, MAX_RADIUS + 3)?.invariant()?)
+        Self::of_matrix(&Canonical::new(scheme, valence, MAX_RADIUS + 1)?.invariant()?)
     }
 
     fn of_matrix(matrix: &LocalMatrix) -> Result<Self, SchemeError> {
@@ -473,7 +476,7 @@ impl Analysis {
     /// # Errors
     /// As [`LocalMatrix::around`].
     pub fn of(scheme: &Scheme, valence: usize) -> Result<Self, SchemeError> {
-        let canonical = Canonical::new(scheme, valence, MAX_RADIUS + 6)?;
+        let canonical = Canonical::new(scheme, valence, MAX_RADIUS + 1 + EXTENSION)?;
         let matrix = canonical.invariant()?;
         let spectrum = Spectrum::of_matrix(&matrix)?;
         let characteristic_map = if spectrum.subdominant_real_double && spectrum.unit_dominant_simple {
@@ -508,7 +511,7 @@ fn characteristic_map(
     // The eigenvectors on the invariant neighbourhood, extended outwards: outer rows depend on
     // the inner ones, so the extension solves (λ·I − S_oo) v_o = S_oi v_i.
     let basis = inner.eigenspace(lambda, 2)?;
-    let radius = inner.radius + 3;
+    let radius = inner.radius + EXTENSION;
     let outer = canonical.matrix(radius)?.ok_or_else(|| {
         SchemeError::Internal(format!("{}: the radius-{radius} neighbourhood is not closed", canonical.scheme))
     })?;
@@ -532,7 +535,7 @@ fn characteristic_map(
     }
     // The planar net on the parent mesh; everything outside the neighbourhood is unknown, and
     // only refined vertices whose every ancestor is known are used.
-    let order = canonical.neighbourhood(&canonical.mesh, radius);
+    let order = canonical.neighbourhood(false, radius);
     let mut positions = vec![DVec3::ZERO; canonical.mesh.vertex_count()];
     let mut known = vec![false; canonical.mesh.vertex_count()];
     for (i, (v, _)) in order.iter().enumerate() {
@@ -548,7 +551,7 @@ fn characteristic_map(
     }
     let fine = refiner.mesh();
     // Ring distances from the centre in the refined mesh, and how far every vertex is known.
-    let ring = ring_distances(fine, &canonical.centre(fine), usize::MAX);
+    let ring = ring_distances(fine, &centre(fine, canonical.centre_is_face), usize::MAX);
     let reach = fine
         .vertices()
         .filter(|v| !known[v.index()] && ring[v.index()] != usize::MAX)

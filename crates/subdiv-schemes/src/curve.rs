@@ -113,53 +113,13 @@ impl fmt::Display for PolygonKind {
     }
 }
 
-/// The built-in schemes, as the TOML a user would write.
+/// The built-in schemes, as the TOML a user would write (files under `schemes/curves/`).
 const BUILTINS: [(&str, &str); 5] = [
-    (
-        "cubic-bspline",
-        r#"
-        name = "cubic-bspline"
-        arity = 2
-        offset = 2
-        mask = ["1/8", "1/2", "3/4", "1/2", "1/8"]
-        "#,
-    ),
-    (
-        "chaikin",
-        r#"
-        name = "chaikin"
-        arity = 2
-        offset = 2
-        mask = ["1/4", "3/4", "3/4", "1/4"]
-        "#,
-    ),
-    (
-        "four-point",
-        r#"
-        name = "four-point"
-        arity = 2
-        offset = 3
-        mask = ["-1/16", 0, "9/16", 1, "9/16", 0, "-1/16"]
-        "#,
-    ),
-    (
-        "six-point",
-        r#"
-        name = "six-point"
-        arity = 2
-        offset = 5
-        mask = ["3/256", 0, "-25/256", 0, "75/128", 1, "75/128", 0, "-25/256", 0, "3/256"]
-        "#,
-    ),
-    (
-        "sw-curve",
-        r#"
-        name = "sw-curve"
-        arity = 2
-        offset = 2
-        mask = ["1/6", "1/2", "2/3", "1/2", "1/6"]
-        "#,
-    ),
+    ("cubic-bspline", include_str!("../schemes/curves/cubic-bspline.toml")),
+    ("chaikin", include_str!("../schemes/curves/chaikin.toml")),
+    ("four-point", include_str!("../schemes/curves/four-point.toml")),
+    ("six-point", include_str!("../schemes/curves/six-point.toml")),
+    ("sw-curve", include_str!("../schemes/curves/sw-curve.toml")),
 ];
 
 /// A stationary, uniform curve subdivision scheme given by its mask: child `p'_i` of the
@@ -278,7 +238,15 @@ type Rule = Vec<(i64, f64)>;
 
 impl CurveScheme {
     /// The built-in schemes' names.
-    pub const BUILTIN_NAMES: [&'static str; 5] = ["cubic-bspline", "chaikin", "four-point", "six-point", "sw-curve"];
+    pub const BUILTIN_NAMES: [&'static str; BUILTINS.len()] = {
+        let mut names = [""; BUILTINS.len()];
+        let mut i = 0;
+        while i < BUILTINS.len() {
+            names[i] = BUILTINS[i].0;
+            i += 1;
+        }
+        names
+    };
 
     /// The largest arity (children per span) a scheme may have.
     pub const MAX_ARITY: u32 = 16;
@@ -699,14 +667,9 @@ impl CurveMatrix {
     /// # Errors
     /// [`CurveError::Eigen`] when the eigen solver does not converge.
     pub fn eigenvalues(&self) -> Result<Vec<(f64, f64)>, CurveError> {
-        let matrix = faer::Mat::<f64>::from_fn(self.size, self.size, |i, j| self.get(i, j));
-        let values = matrix.eigenvalues().map_err(|e| CurveError::Eigen(format!("{e:?}")))?;
-        let values: Vec<(f64, f64)> = values.iter().map(|z| (z.re, z.im)).collect();
+        let values = crate::eigen::eigenvalues(self.size, |i, j| self.get(i, j)).map_err(CurveError::Eigen)?;
         let mut values = merge_clusters(&values, 1e-6);
-        values.sort_by(|a, b| {
-            let (ma, mb) = (a.0.hypot(a.1), b.0.hypot(b.1));
-            mb.total_cmp(&ma).then(b.0.total_cmp(&a.0))
-        });
+        crate::eigen::sort_by_modulus(&mut values);
         Ok(values)
     }
 }

@@ -12,21 +12,15 @@ use crate::scheme::{VertexMask, vertex_weights};
 use crate::stencil::{Row, Stencils};
 use crate::{Expr, SchemeError};
 
-fn build(soup: PolygonSoup) -> Result<Mesh, SchemeError> {
-    Mesh::build(soup).map_err(|e| SchemeError::Internal(format!("the refined mesh is invalid: {e}")))
-}
-
-fn finish(mesh: &Mesh, stencils: Stencils, faces: Vec<Vec<u32>>) -> Result<(Mesh, Stencils), SchemeError> {
+/// The child mesh: `soup` holds the child faces; the positions come from the stencils.
+fn finish(mesh: &Mesh, stencils: Stencils, mut soup: PolygonSoup) -> Result<(Mesh, Stencils), SchemeError> {
     let mut positions = Vec::with_capacity(stencils.child_count());
     stencils.apply(mesh.positions(), &mut positions);
-    let mut soup = PolygonSoup::with_capacity(positions.len(), faces.len(), faces.iter().map(Vec::len).sum());
     for p in positions {
         soup.push_vertex(p);
     }
-    for face in faces {
-        soup.push_face(face.into_iter().map(VertexId::new));
-    }
-    Ok((build(soup)?, stencils))
+    let child = Mesh::build(soup).map_err(|e| SchemeError::Internal(format!("the refined mesh is invalid: {e}")))?;
+    Ok((child, stencils))
 }
 
 /// Doo-Sabin: the point of corner `h` is `own · origin(h) + Σ_j corner(n, j) · v_j` over the
@@ -49,17 +43,21 @@ pub(crate) fn doo_sabin(mesh: &Mesh, own: &Expr, corner: &Expr) -> Result<(Mesh,
             stencils.push(&row);
         }
     }
-    let corner = |h: HalfEdgeId| h.raw();
-    let mut faces: Vec<Vec<u32>> = mesh.face_ids().map(|f| mesh.face_half_edges(f).map(corner).collect()).collect();
+    let corner = |h: HalfEdgeId| VertexId::new(h.raw());
+    let faces = mesh.face_count() + mesh.edge_count() + mesh.vertex_count();
+    let mut soup = PolygonSoup::with_capacity(mesh.half_edge_count(), faces, 3 * mesh.half_edge_count());
+    for f in mesh.face_ids() {
+        soup.push_face(mesh.face_half_edges(f).map(corner));
+    }
     for e in mesh.edges() {
         let h = mesh.edge_half_edge(e);
         let t = mesh.twin(h).ok_or_else(|| SchemeError::Internal("Doo-Sabin met a boundary edge".into()))?;
-        faces.push(vec![corner(mesh.next(h)), corner(h), corner(mesh.next(t)), corner(t)]);
+        soup.push_face([corner(mesh.next(h)), corner(h), corner(mesh.next(t)), corner(t)]);
     }
     for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v)) {
-        faces.push(mesh.outgoing(v).map(corner).collect());
+        soup.push_face(mesh.outgoing(v).map(corner));
     }
-    finish(mesh, stencils, faces)
+    finish(mesh, stencils, soup)
 }
 
 /// Mid-edge: a point at the middle of every edge; a face per old face (its edge points) and
@@ -73,12 +71,16 @@ pub(crate) fn midedge(mesh: &Mesh) -> Result<(Mesh, Stencils), SchemeError> {
         row.add(b.raw(), 0.5);
         stencils.push(&row);
     }
-    let edge = |h: HalfEdgeId| mesh.edge(h).raw();
-    let mut faces: Vec<Vec<u32>> = mesh.face_ids().map(|f| mesh.face_half_edges(f).map(edge).collect()).collect();
-    for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v)) {
-        faces.push(mesh.outgoing(v).map(edge).collect());
+    let edge = |h: HalfEdgeId| VertexId::new(mesh.edge(h).raw());
+    let faces = mesh.face_count() + mesh.vertex_count();
+    let mut soup = PolygonSoup::with_capacity(mesh.edge_count(), faces, 2 * mesh.half_edge_count());
+    for f in mesh.face_ids() {
+        soup.push_face(mesh.face_half_edges(f).map(edge));
     }
-    finish(mesh, stencils, faces)
+    for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v)) {
+        soup.push_face(mesh.outgoing(v).map(edge));
+    }
+    finish(mesh, stencils, soup)
 }
 
 /// √3: old vertices relaxed by the vertex mask, a centroid per triangle, and one triangle per
@@ -103,13 +105,14 @@ pub(crate) fn sqrt3(mesh: &Mesh, vertex: &VertexMask) -> Result<(Mesh, Stencils)
         }
         stencils.push(&row);
     }
-    let face_point = |h: HalfEdgeId| nv as u32 + mesh.face(h).raw();
-    let mut faces = Vec::with_capacity(mesh.half_edge_count());
+    let face_point = |h: HalfEdgeId| VertexId::new(nv as u32 + mesh.face(h).raw());
+    let mut soup =
+        PolygonSoup::with_capacity(nv + mesh.face_count(), mesh.half_edge_count(), 3 * mesh.half_edge_count());
     for f in mesh.face_ids() {
         for h in mesh.face_half_edges(f) {
             let t = mesh.twin(h).ok_or_else(|| SchemeError::Internal("√3 met a boundary edge".into()))?;
-            faces.push(vec![mesh.origin(h).raw(), face_point(t), face_point(h)]);
+            soup.push_face([mesh.origin(h), face_point(t), face_point(h)]);
         }
     }
-    finish(mesh, stencils, faces)
+    finish(mesh, stencils, soup)
 }

@@ -197,22 +197,23 @@ impl Parser<'_> {
     }
 
     fn sum(&mut self) -> Result<Node, ExprError> {
-        let mut left = self.product()?;
-        while let Some(c @ (b'+' | b'-')) = self.peek() {
-            self.at += 1;
-            let right = self.product()?;
-            let op = if c == b'+' { Op::Add } else { Op::Sub };
-            left = Node::Binary(op, Box::new(left), Box::new(right));
-        }
-        Ok(left)
+        self.left_associative(&[(b'+', Op::Add), (b'-', Op::Sub)], Self::product)
     }
 
     fn product(&mut self) -> Result<Node, ExprError> {
-        let mut left = self.unary()?;
-        while let Some(c @ (b'*' | b'/')) = self.peek() {
+        self.left_associative(&[(b'*', Op::Mul), (b'/', Op::Div)], Self::unary)
+    }
+
+    /// `operand (op operand)*` for one precedence level, folded to the left.
+    fn left_associative(
+        &mut self,
+        ops: &[(u8, Op)],
+        operand: fn(&mut Self) -> Result<Node, ExprError>,
+    ) -> Result<Node, ExprError> {
+        let mut left = operand(self)?;
+        while let Some(&(_, op)) = self.peek().and_then(|c| ops.iter().find(|(symbol, _)| *symbol == c)) {
             self.at += 1;
-            let right = self.unary()?;
-            let op = if c == b'*' { Op::Mul } else { Op::Div };
+            let right = operand(self)?;
             left = Node::Binary(op, Box::new(left), Box::new(right));
         }
         Ok(left)

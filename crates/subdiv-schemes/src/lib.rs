@@ -74,6 +74,7 @@ mod analysis;
 mod crease;
 mod curve;
 mod dual;
+mod eigen;
 mod error;
 mod expr;
 mod primal;

@@ -30,9 +30,9 @@ enum Kind {
         corners: Vec<Vec<f64>>,
         endpoint: f64,
         face: f64,
-        /// OpenSubdiv's smooth-triangle rule applies (Catmull-Clark's edge mask, and the
-        /// option set).
-        smooth_triangles: bool,
+        /// The face-point weight of an adjacent triangle, when the scheme has a smooth-triangle
+        /// rule and the options ask for it.
+        triangle_face: Option<f64>,
     },
     FourPoint {
         weight: f64,
@@ -56,13 +56,13 @@ impl Masks {
             Rules::Quad { face, edge, vertex, crease } => {
                 let corners =
                     (0..=max_face).map(|n| (0..n).map(|j| face.corner.eval(n, j)).collect::<Vec<f64>>()).collect();
-                let (endpoint, face) = (edge.endpoint.eval(4, 0), edge.face.eval(4, 0));
+                let triangle_face = edge.triangle_face.as_ref().filter(|_| options.smooth_triangles);
                 Self {
                     kind: Kind::Quad {
                         corners,
-                        endpoint,
-                        face,
-                        smooth_triangles: options.smooth_triangles && endpoint == 0.25 && face == 0.25,
+                        endpoint: edge.endpoint.eval(4, 0),
+                        face: edge.face.eval(4, 0),
+                        triangle_face: triangle_face.map(|w| w.eval(3, 0)),
                     },
                     vertex: vertex_table(vertex),
                     crease: crease_pair(crease),
@@ -152,8 +152,11 @@ pub(crate) fn refine(mesh: &Mesh, scheme: &Scheme, options: Options) -> Result<(
 
     // Geometry: one stencil row per child vertex, in child order.
     let mut stencils = Stencils::with_capacity(child_count, 8 * child_count, mesh.vertex_count());
-    let face_rows: Vec<Row> =
-        if quads { mesh.face_ids().map(|f| face_point(mesh, &masks, f)).collect() } else { vec![] };
+    // Face points of the averaging quad schemes, which their edge and vertex rules reuse.
+    let face_rows: Vec<Row> = match &masks.kind {
+        Kind::Quad { corners, .. } => mesh.face_ids().map(|f| face_point(mesh, corners, f)).collect(),
+        _ => vec![],
+    };
     let edge_rows: Vec<Row> = mesh.edges().map(|e| edge_row(mesh, &masks, &face_rows, options, e)).collect();
     for v in mesh.vertices() {
         stencils.push(&vertex_row(mesh, &masks, &face_rows, method, v));
@@ -251,18 +254,17 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], h: HalfEdgeId)
     };
     let mut row = Row::default();
     match &masks.kind {
-        Kind::Quad { endpoint, face, smooth_triangles, .. } => {
+        Kind::Quad { endpoint, face, triangle_face, .. } => {
             let (g0, g1) = (mesh.face(h), mesh.face(t));
             let (tri0, tri1) = (mesh.face_size(g0) == 3, mesh.face_size(g1) == 3);
-            let (vertex_weight, face_weight) = if *smooth_triangles && (tri0 || tri1) {
-                // OpenSubdiv's (and Hbr's) "smooth triangle" weights, in their order of operations.
-                const TRIANGLE_FACE_WEIGHT: f64 = 0.470;
-                let w0 = if tri0 { TRIANGLE_FACE_WEIGHT } else { 0.25 };
-                let w1 = if tri1 { TRIANGLE_FACE_WEIGHT } else { 0.25 };
-                let face_weight = 0.5 * (w0 + w1);
-                (0.5 * (1.0 - 2.0 * face_weight), face_weight)
-            } else {
-                (*endpoint, *face)
+            let (vertex_weight, face_weight) = match triangle_face {
+                Some(w) if tri0 || tri1 => {
+                    // OpenSubdiv's (and Hbr's) "smooth triangle" weights, in their order of
+                    // operations: each side's face weight, averaged; the endpoints take the rest.
+                    let face_weight = 0.5 * (if tri0 { *w } else { *face } + if tri1 { *w } else { *face });
+                    (0.5 * (1.0 - 2.0 * face_weight), face_weight)
+                }
+                _ => (*endpoint, *face),
             };
             add(&mut row, a, vertex_weight);
             add(&mut row, b, vertex_weight);
@@ -404,23 +406,12 @@ fn edge_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], options: Options, e: 
     midpoint(a, b).blend(&smooth, f64::from(s))
 }
 
-/// The stencil of the face point of `f`.
-fn face_point(mesh: &Mesh, masks: &Masks, f: FaceId) -> Row {
+/// The stencil of the face point of `f`, from the corner weights per face size.
+fn face_point(mesh: &Mesh, corners: &[Vec<f64>], f: FaceId) -> Row {
     let face = mesh.face_vertices(f);
     let mut row = Row::default();
-    match &masks.kind {
-        Kind::Quad { corners, .. } => {
-            for (v, &w) in face.iter().zip(&corners[face.len()]) {
-                add(&mut row, *v, w);
-            }
-        }
-        // The four-point scheme's face points are built from its edge points; this centroid
-        // only serves the smooth edge rule, which that scheme does not use.
-        _ => {
-            for v in face {
-                row.add(v.raw(), 1.0 / face.len() as f64);
-            }
-        }
+    for (v, &w) in face.iter().zip(&corners[face.len()]) {
+        add(&mut row, *v, w);
     }
     row
 }

@@ -21,8 +21,10 @@ pub struct RefineOptions {
     /// How semi-sharp creases fade; default: the mesh's `creasemethod` tag, else
     /// [`CreaseMethod::Uniform`].
     pub crease_method: Option<CreaseMethod>,
-    /// Catmull-Clark's rule at edges next to triangles; default: the mesh's `smoothtriangles`
-    /// tag, else [`TriangleSubdivision::Catmark`] (other schemes ignore it).
+    /// The rule at edges next to triangles; default: the mesh's `smoothtriangles` tag, else
+    /// [`TriangleSubdivision::Catmark`]. Schemes without a smooth-triangle mask
+    /// ([`QuadEdgeMask::triangle_face`](crate::QuadEdgeMask::triangle_face); of the built-ins
+    /// only Catmull-Clark has one) ignore it.
     pub triangle_subdivision: Option<TriangleSubdivision>,
 }
 

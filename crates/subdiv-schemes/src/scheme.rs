@@ -114,6 +114,12 @@ pub struct QuadEdgeMask {
     pub endpoint: Expr,
     /// Weight of each adjacent face point.
     pub face: Expr,
+    /// The face-point weight of an adjacent triangle under OpenSubdiv's smooth-triangle rule
+    /// (`smoothtriangles`, [`TriangleSubdivision::Smooth`](subdiv_mesh::TriangleSubdivision)):
+    /// the two sides' face weights are averaged and the endpoints take the rest. Absent, the
+    /// scheme has no such rule and ignores the option.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub triangle_face: Option<Expr>,
 }
 
 /// The new position of an old vertex of valence `k`: `centre · v + spoke · Σ neighbours +
@@ -459,6 +465,11 @@ impl Scheme {
                     check("face", n, &weights)?;
                 }
                 check("edge", 4, &[2.0 * edge.endpoint.eval(4, 0), 2.0 * edge.face.eval(4, 0)])?;
+                if let Some(w) = &edge.triangle_face {
+                    // The endpoints take what the face points leave, so only finiteness can fail.
+                    let w = w.eval(3, 0);
+                    check("edge.triangle_face", 3, &[2.0 * w, 1.0 - 2.0 * w])?;
+                }
                 vertex_check(vertex, true)?;
                 crease_check(crease)?;
             }
