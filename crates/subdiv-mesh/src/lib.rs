@@ -27,6 +27,7 @@ mod build;
 mod error;
 mod ids;
 mod mesh;
+mod patch;
 pub mod shapes;
 mod soup;
 
@@ -34,6 +35,7 @@ pub use build::{BuildOptions, validate};
 pub use error::MeshError;
 pub use ids::{EdgeId, FaceId, HalfEdgeId, VertexId};
 pub use mesh::{BoundaryLoop, Components, Mesh, OutgoingHalfEdges, RegularValence};
+pub use patch::Patch;
 pub use soup::{BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, PolygonSoup, Tags, TriangleSubdivision};
 
 pub use glam::DVec3;

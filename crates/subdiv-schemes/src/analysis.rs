@@ -15,7 +15,7 @@
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
-use subdiv_mesh::{DVec3, FaceId, Mesh, PolygonSoup, VertexId};
+use subdiv_mesh::{DVec3, FaceId, Mesh, VertexId};
 
 use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
@@ -121,8 +121,8 @@ impl Canonical {
             });
         }
         let triangles = matches!(scheme.split(), Split::Triangle | Split::Sqrt3);
-        let pillow =
-            Mesh::build(pillow(valence, rings, triangles)).map_err(|e| SchemeError::Internal(e.to_string()))?;
+        let pillow = Mesh::build(crate::canonical::pillow(valence, rings, triangles))
+            .map_err(|e| SchemeError::Internal(e.to_string()))?;
         let centre_is_face = matches!(scheme.split(), Split::Dual | Split::Midedge);
         let mesh = if centre_is_face {
             Refiner::new(&pillow, scheme, 1, &RefineOptions::DEFAULT)?.into_mesh()
@@ -270,98 +270,6 @@ fn centre_face(mesh: &Mesh) -> FaceId {
     mesh.face_ids()
         .min_by(|&a, &b| centroid(a).length_squared().total_cmp(&centroid(b).length_squared()))
         .expect("the canonical mesh has faces")
-}
-
-/// `k` sectors of a regular grid of `rings` rings around vertex 0 in the plane z = 0 (quads, or
-/// triangles), and a mirrored copy far below, joined along their rims by a band of quads (split
-/// into triangles for triangle schemes) so that the mesh is closed and every vertex has valence
-/// 3 or more. Sector `s` spans the directions `e_s` and `e_{s+1}` (`e_s` at angle 2πs/k); its
-/// grid point `(i, j)` sits at `i·e_s + j·e_{s+1}`.
-fn pillow(k: usize, rings: usize, triangles: bool) -> PolygonSoup {
-    use std::collections::HashMap;
-    let mut soup = PolygonSoup::new();
-    let direction = |s: usize| {
-        let angle = std::f64::consts::TAU * (s % k) as f64 / k as f64;
-        DVec3::new(angle.cos(), angle.sin(), 0.0)
-    };
-    let inside = |i: usize, j: usize| if triangles { i + j <= rings } else { i.max(j) <= rings };
-    let depth = DVec3::Z * 4.0 * rings as f64;
-    // Per sheet: the centre, then per sector the points with i ≥ 1 (points with i = 0 belong to
-    // the sector before, as its (j, 0)).
-    // A sheet: its centre, and its other points by (sector, i, j).
-    type Sheet = (VertexId, HashMap<(usize, usize, usize), VertexId>);
-    let mut sheets: Vec<Sheet> = Vec::new();
-    for sheet in 0..2 {
-        let offset = if sheet == 0 { DVec3::ZERO } else { -depth };
-        let centre = soup.push_vertex(offset);
-        let mut ids = HashMap::new();
-        for s in 0..k {
-            for i in 1..=rings {
-                for j in 0..=rings {
-                    if inside(i, j) {
-                        let p = direction(s) * i as f64 + direction(s + 1) * j as f64 + offset;
-                        ids.insert((s, i, j), soup.push_vertex(p));
-                    }
-                }
-            }
-        }
-        sheets.push((centre, ids));
-    }
-    let id = |sheet: usize, s: usize, i: usize, j: usize| -> VertexId {
-        let (centre, ids) = &sheets[sheet];
-        match (i, j) {
-            (0, 0) => *centre,
-            (0, j) => ids[&((s + 1) % k, j, 0)],
-            _ => ids[&(s, i, j)],
-        }
-    };
-    let face = |soup: &mut PolygonSoup, sheet: usize, s: usize, cell: &[(usize, usize)]| {
-        let mut vs: Vec<VertexId> = cell.iter().map(|&(i, j)| id(sheet, s, i, j)).collect();
-        if sheet == 1 {
-            vs.reverse();
-        }
-        soup.push_face(vs);
-    };
-    for sheet in 0..2 {
-        for s in 0..k {
-            for i in 0..rings {
-                for j in 0..rings {
-                    if !triangles {
-                        face(&mut soup, sheet, s, &[(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)]);
-                        continue;
-                    }
-                    if i + j < rings {
-                        face(&mut soup, sheet, s, &[(i, j), (i + 1, j), (i, j + 1)]);
-                    }
-                    if i + j + 1 < rings {
-                        face(&mut soup, sheet, s, &[(i + 1, j), (i + 1, j + 1), (i, j + 1)]);
-                    }
-                }
-            }
-        }
-    }
-    // The rim, counter-clockwise: per sector from (R, 0) to just before the next spoke.
-    let mut rim = Vec::new();
-    for s in 0..k {
-        if triangles {
-            rim.extend((0..rings).map(|j| (s, rings - j, j)));
-        } else {
-            rim.extend((0..=rings).map(|j| (s, rings, j)));
-            rim.extend((1..rings).rev().map(|i| (s, i, rings)));
-        }
-    }
-    for (n, &(s, i, j)) in rim.iter().enumerate() {
-        let (t, p, q) = rim[(n + 1) % rim.len()];
-        let (a, b) = (id(0, s, i, j), id(0, t, p, q));
-        let (a2, b2) = (id(1, s, i, j), id(1, t, p, q));
-        if triangles {
-            soup.push_face([b, a, a2]);
-            soup.push_face([b, a2, b2]);
-        } else {
-            soup.push_face([b, a, a2, b2]);
-        }
-    }
-    soup
 }
 
 /// The spectral part of Reif's C1 conditions at one valence.

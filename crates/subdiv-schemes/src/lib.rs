@@ -21,6 +21,10 @@
 //! Analysis ([`Analysis`], [`LocalMatrix`], [`Spectrum`]) derives each scheme's local
 //! subdivision matrix by running the engine on a canonical mesh and applies Reif's C1 test,
 //! characteristic map included; [`c1_table`] lists the verdicts at valences 3 to 16.
+//! [`PatchMatrices`] derives the sub-patch matrices of the primal schemes the same way: for a
+//! regular patch, one at an extraordinary vertex of any valence, or one at a boundary vertex,
+//! the matrix that maps a face's control points to each of its sub-faces', every shape that
+//! appears below it included.
 //!
 //! # The sw-quad rules at extraordinary vertices
 //!
@@ -71,12 +75,14 @@
 //! ```
 //!
 mod analysis;
+mod canonical;
 mod crease;
 mod curve;
 mod dual;
 mod eigen;
 mod error;
 mod expr;
+mod patch;
 mod primal;
 mod refine;
 mod scheme;
@@ -86,6 +92,7 @@ pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, Spectrum};
 pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError};
+pub use patch::{ChildDomain, PatchMatrices, PatchShape, PatchType, SubPatch, sub_patch_starts};
 pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
 pub use scheme::{
     Builtin, CreaseMask, ExtraordinaryEdgeMask, FaceMask, QuadEdgeMask, Rules, Scheme, Split, TriangleEdgeMask,

@@ -1,0 +1,113 @@
+//! Patch gathering: the control vertices around a face in a canonical, purely topological order,
+//! and a signature that tells two patches of the same shape apart from different ones.
+
+use crate::{FaceId, HalfEdgeId, Mesh, VertexId};
+
+/// The control vertices within `radius` rings of a face, gathered by [`Mesh::patch`].
+///
+/// The order is a breadth-first walk over the faces of the patch that starts at the given
+/// half-edge and, in each face, visits the corners from the half-edge it entered by. It uses
+/// the connectivity alone, so two patches with the same [`signature`](Self::signature) list
+/// corresponding vertices at the same places, whatever the meshes and positions.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Patch {
+    /// The patch's vertices, in canonical order; the face's own corners come first, starting
+    /// at the origin of the start half-edge.
+    pub vertices: Vec<VertexId>,
+    /// The patch's shape: per face of the walk its size and, per side, the corner's place in
+    /// [`vertices`](Self::vertices) and what lies across (a boundary, a face outside the patch
+    /// or which face of the walk); then per vertex its valence and whether it is on a
+    /// boundary. Equal signatures mean equal shapes, down to the valences of the outermost
+    /// ring.
+    pub signature: Vec<u32>,
+}
+
+/// Codes in a signature for what lies across a side; faces of the walk follow as `2 + index`.
+const ACROSS_BOUNDARY: u32 = 0;
+const ACROSS_OUTSIDE: u32 = 1;
+
+impl Mesh {
+    /// The patch of `start`'s face: every vertex within `radius` rings of faces of it (radius
+    /// 0: the face's corners; 1: the corners of every face touching one of them, the 16
+    /// control points of a regular Catmull-Clark patch), in canonical order.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, FaceId, Mesh};
+    ///
+    /// let grid = Mesh::build(shapes::quad_grid(7, 7))?;
+    /// // The centre face of a 7×7 grid of quads.
+    /// let face = FaceId::new(24);
+    /// let start = grid.face_half_edges(face).next().unwrap();
+    /// let patch = grid.patch(start, 1);
+    /// assert_eq!(patch.vertices.len(), 16);
+    /// assert_eq!(&patch.vertices[..4], grid.face_vertices(face));
+    /// // Faces whose patches stay clear of the grid's boundary have patches of the same shape.
+    /// let other = grid.face_half_edges(FaceId::new(16)).next().unwrap();
+    /// assert_eq!(grid.patch(other, 1).signature, patch.signature);
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
+    pub fn patch(&self, start: HalfEdgeId, radius: usize) -> Patch {
+        const UNSEEN: u32 = u32::MAX;
+        let start_face = self.face(start);
+        // Rings of vertices: 0 on the face, r on the faces touching ring r - 1.
+        let mut ring = vec![UNSEEN; self.vertex_count()];
+        let mut current: Vec<VertexId> = self.face_vertices(start_face).to_vec();
+        for v in &current {
+            ring[v.index()] = 0;
+        }
+        for r in 1..=radius as u32 {
+            let mut next = Vec::new();
+            for &v in &current {
+                for f in self.vertex_faces(v) {
+                    for &w in self.face_vertices(f) {
+                        if ring[w.index()] == UNSEEN {
+                            ring[w.index()] = r;
+                            next.push(w);
+                        }
+                    }
+                }
+            }
+            current = next;
+        }
+        // The patch's faces touch a vertex of ring < radius (the face itself when radius is 0).
+        let in_patch =
+            |f: FaceId| f == start_face || self.face_vertices(f).iter().any(|v| (ring[v.index()] as usize) < radius);
+
+        let mut place = vec![UNSEEN; self.vertex_count()];
+        let mut vertices = Vec::new();
+        let mut signature = Vec::new();
+        let mut walk_index: std::collections::HashMap<FaceId, u32> = std::collections::HashMap::new();
+        let mut queue = std::collections::VecDeque::from([start]);
+        walk_index.insert(start_face, 0);
+        while let Some(entry) = queue.pop_front() {
+            let size = self.face_size(self.face(entry));
+            signature.push(size as u32);
+            let mut h = entry;
+            for _ in 0..size {
+                let v = self.origin(h);
+                if place[v.index()] == UNSEEN {
+                    place[v.index()] = vertices.len() as u32;
+                    vertices.push(v);
+                }
+                signature.push(place[v.index()]);
+                signature.push(match self.twin(h) {
+                    None => ACROSS_BOUNDARY,
+                    Some(t) if !in_patch(self.face(t)) => ACROSS_OUTSIDE,
+                    Some(t) => {
+                        let count = walk_index.len() as u32;
+                        2 + *walk_index.entry(self.face(t)).or_insert_with(|| {
+                            queue.push_back(t);
+                            count
+                        })
+                    }
+                });
+                h = self.next(h);
+            }
+        }
+        for &v in &vertices {
+            signature.push(self.valence(v) as u32);
+            signature.push(u32::from(self.is_boundary_vertex(v)));
+        }
+        Patch { vertices, signature }
+    }
+}

@@ -1,0 +1,472 @@
+//! Sub-patch matrices, derived by running the engine on a canonical mesh.
+//!
+//! A *patch* is a face of the control mesh with the control vertices its limit surface depends
+//! on: every vertex within `radius` rings of faces of it, gathered in a topological order by
+//! [`Mesh::patch`]. One refinement splits the face into sub-faces (four for quad and triangle
+//! splits), each the face of a sub-patch of the refined mesh; the rows of the sub-patch's
+//! vertices over the parent patch's are that sub-patch's matrix. The radius is the smallest for
+//! which every such row stays inside the parent patch, so the limit surface over a face is a
+//! function of its patch alone, and the matrices compose: a point given by its address (which
+//! sub-patch at every level) has the stencil `… · A_2 · A_1` over the patch.
+//!
+//! Patches of equal [shape](subdiv_mesh::Patch::signature) have equal matrices. Starting from a
+//! [`PatchType`], the sub-patches' shapes are collected level by level until no new shape
+//! appears; each [`PatchShape`] lists its children. Around an extraordinary vertex the child at
+//! corner 0 keeps the vertex and the shape, so its matrix is square (the matrix whose
+//! eigenvectors give the limit at the vertex); the other children lead, within two levels, to
+//! the regular shape.
+//!
+//! Child `j` of a quad face sits at corner `j` of the parent's domain `[0, 1]²` and has the same
+//! axes; children 0..3 of a triangle sit at the corners of the domain `u, v ≥ 0, u + v ≤ 1` and
+//! child 3 is the middle one, turned by half a turn (see [`ChildDomain`]).
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh};
+
+use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
+
+/// The largest patch radius tried.
+const MAX_RADIUS: usize = 3;
+
+/// Refinement levels after which the shapes must have closed up.
+const MAX_LEVELS: usize = 5;
+
+/// Which canonical patch to start from: a face whose corner 0 is the only irregular place.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PatchType {
+    /// Corner 0 is an interior vertex of this valence; the scheme's regular valence (4, or 6
+    /// for triangles) gives the regular patch.
+    Interior {
+        /// The valence of corner 0 (3 or more).
+        valence: usize,
+    },
+    /// Corner 0 is a boundary vertex with this many faces around it, and the face is the
+    /// `index`-th of them counted counter-clockwise from the boundary: index 0 has its first
+    /// side (corner 0 to corner 1) on the boundary, index `faces − 1` its last side. 2 faces
+    /// (3 for triangles) is the regular boundary, 1 a corner.
+    Boundary {
+        /// Faces around corner 0 (1 or more).
+        faces: usize,
+        /// The face's place in the fan, `0..faces`.
+        index: usize,
+    },
+}
+
+impl PatchType {
+    /// The regular interior patch of `scheme`.
+    pub fn regular(scheme: &Scheme) -> Self {
+        Self::Interior { valence: scheme.regular_valence() }
+    }
+}
+
+/// Where a child's domain lies in its parent's: the child's parameters are
+/// `sign · (2·(u, v) − offset)`, with `sign = −1` for the flipped middle triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct ChildDomain {
+    /// The offset, in units of the child's size.
+    pub offset: [u8; 2],
+    /// Whether the child is turned by half a turn (the middle child of a triangle).
+    pub flipped: bool,
+}
+
+impl ChildDomain {
+    /// The child's parameters of the parent's point `(u, v)`.
+    pub fn to_child(self, u: f64, v: f64) -> (f64, f64) {
+        let sign = if self.flipped { -1.0 } else { 1.0 };
+        (sign * (2.0 * u - f64::from(self.offset[0])), sign * (2.0 * v - f64::from(self.offset[1])))
+    }
+
+    /// The parent's parameters of the child's point `(u, v)`.
+    pub fn to_parent(self, u: f64, v: f64) -> (f64, f64) {
+        let sign = if self.flipped { -1.0 } else { 1.0 };
+        ((sign * u + f64::from(self.offset[0])) / 2.0, (sign * v + f64::from(self.offset[1])) / 2.0)
+    }
+
+    /// The children of a face of `size` sides (4: quads, 3: triangles), in the engine's order.
+    fn of_split(size: usize) -> &'static [ChildDomain] {
+        const fn at(u: u8, v: u8, flipped: bool) -> ChildDomain {
+            ChildDomain { offset: [u, v], flipped }
+        }
+        const QUAD: [ChildDomain; 4] = [at(0, 0, false), at(1, 0, false), at(1, 1, false), at(0, 1, false)];
+        const TRIANGLE: [ChildDomain; 4] = [at(0, 0, false), at(1, 0, false), at(0, 1, false), at(1, 1, true)];
+        if size == 3 { &TRIANGLE } else { &QUAD }
+    }
+}
+
+/// One child of a [`PatchShape`]: its shape, where its domain lies, and the matrix taking the
+/// parent patch's control points to its own.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SubPatch {
+    /// The child's shape, an index into [`PatchMatrices::shapes`].
+    pub shape: usize,
+    /// Where the child lies in the parent's domain.
+    pub domain: ChildDomain,
+    rows: usize,
+    columns: usize,
+    /// Row-major.
+    entries: Vec<f64>,
+}
+
+impl SubPatch {
+    /// Rows: the child patch's size.
+    pub fn rows(&self) -> usize {
+        self.rows
+    }
+
+    /// Columns: the parent patch's size.
+    pub fn columns(&self) -> usize {
+        self.columns
+    }
+
+    /// The weight of parent control point `column` in child control point `row`.
+    pub fn get(&self, row: usize, column: usize) -> f64 {
+        self.entries[row * self.columns + column]
+    }
+
+    /// Row `row`, over the parent's control points.
+    pub fn row(&self, row: usize) -> &[f64] {
+        &self.entries[row * self.columns..(row + 1) * self.columns]
+    }
+
+    /// The eigenvalues of a square sub-patch matrix (one that keeps its shape), largest
+    /// modulus first, as `(re, im)`.
+    ///
+    /// # Errors
+    /// [`SchemeError::Eigen`] when the matrix is not square or the solver does not converge.
+    pub fn eigenvalues(&self) -> Result<Vec<(f64, f64)>, SchemeError> {
+        if self.rows != self.columns {
+            return Err(SchemeError::Eigen(format!(
+                "a {}×{} sub-patch matrix has no eigenvalues",
+                self.rows, self.columns
+            )));
+        }
+        let mut values = crate::eigen::eigenvalues(self.rows, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)?;
+        crate::eigen::sort_by_modulus(&mut values);
+        Ok(values)
+    }
+
+    /// The child's control points from the parent's.
+    ///
+    /// # Panics
+    /// If `parent` does not have [`columns`](Self::columns) points.
+    pub fn apply(&self, parent: &[DVec3]) -> Vec<DVec3> {
+        assert_eq!(parent.len(), self.columns, "the parent patch has {} control points", self.columns);
+        (0..self.rows).map(|r| self.row(r).iter().zip(parent).map(|(&w, &p)| w * p).sum()).collect()
+    }
+}
+
+/// A patch shape: its control-point count, its signature and its children.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatchShape {
+    /// Control points.
+    pub size: usize,
+    /// The shape's [`Patch::signature`](subdiv_mesh::Patch::signature).
+    pub signature: Vec<u32>,
+    /// The sub-patches, in the engine's child order.
+    pub children: Vec<SubPatch>,
+}
+
+/// The sub-patch matrices of every shape reachable from one [`PatchType`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PatchMatrices {
+    /// The scheme's name.
+    pub scheme: String,
+    /// The patch type the shapes start from; [`shapes`](Self::shapes)`[0]` is its shape.
+    pub patch_type: PatchType,
+    /// The patch radius in rings of faces (Catmull-Clark and Loop: 1).
+    pub radius: usize,
+    /// The shapes; the first is the patch type's.
+    pub shapes: Vec<PatchShape>,
+    by_signature: HashMap<Vec<u32>, usize>,
+}
+
+type CacheKey = (String, PatchType, BoundaryInterpolation);
+
+impl PatchMatrices {
+    /// The matrices of `scheme` from `patch_type`, computed once per process and shared.
+    /// `boundary` is the boundary rule of boundary patches (interior ones ignore it).
+    ///
+    /// ```
+    /// use subdiv_mesh::BoundaryInterpolation;
+    /// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
+    ///
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// let m = PatchMatrices::of(cc, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly)?;
+    /// // 2k + 8 control points, and the child at the extraordinary corner keeps the shape.
+    /// assert_eq!(m.shapes[0].size, 18);
+    /// assert_eq!(m.shapes[0].children[0].shape, 0);
+    /// // The regular shape is among the others: 16 control points.
+    /// assert!(m.shapes.iter().any(|s| s.size == 16));
+    /// # Ok::<(), subdiv_schemes::SchemeError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`compute`](Self::compute).
+    pub fn of(
+        scheme: &Scheme,
+        patch_type: PatchType,
+        boundary: BoundaryInterpolation,
+    ) -> Result<Arc<Self>, SchemeError> {
+        static CACHE: OnceLock<Mutex<HashMap<CacheKey, Arc<PatchMatrices>>>> = OnceLock::new();
+        let boundary =
+            if matches!(patch_type, PatchType::Interior { .. }) { BoundaryInterpolation::EdgeOnly } else { boundary };
+        let key = (format!("{scheme:?}"), patch_type, boundary);
+        let cache = CACHE.get_or_init(Mutex::default);
+        if let Some(found) = cache.lock().unwrap_or_else(std::sync::PoisonError::into_inner).get(&key) {
+            return Ok(found.clone());
+        }
+        // Computed outside the lock; a race computes twice and keeps one, both equal.
+        let computed = Arc::new(Self::compute(scheme, patch_type, boundary)?);
+        let mut cache = cache.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        Ok(cache.entry(key).or_insert(computed).clone())
+    }
+
+    /// Computes the matrices without the cache.
+    ///
+    /// # Errors
+    /// [`SchemeError::FeatureNotSupported`] for dual, mid-edge and √3 splits (their patches
+    /// are not faces of the control mesh) and for boundary patches of schemes without boundary
+    /// rules; [`SchemeError::ValenceNotSupported`] below valence 3, with no faces, or when no
+    /// patch radius up to 3 is closed under refinement (Kobbelt's scheme at valences other
+    /// than 3 and 4: its virtual points make the support near the vertex wider than any ring).
+    pub fn compute(
+        scheme: &Scheme,
+        patch_type: PatchType,
+        boundary: BoundaryInterpolation,
+    ) -> Result<Self, SchemeError> {
+        let triangles = match scheme.split() {
+            Split::Quad => false,
+            Split::Triangle => true,
+            split @ (Split::Dual | Split::Midedge | Split::Sqrt3) => {
+                return Err(SchemeError::FeatureNotSupported {
+                    scheme: scheme.name.clone(),
+                    feature: "sub-patch matrices",
+                    element: format!("the {split:?} split, whose sub-patches are not faces of the control mesh"),
+                });
+            }
+        };
+        let (valence, reason) = match patch_type {
+            PatchType::Interior { valence } => (valence, "an interior patch needs valence 3 or more"),
+            PatchType::Boundary { faces, .. } => {
+                (faces + 1, "a boundary patch needs one face or more, and an index below the face count")
+            }
+        };
+        let bad_index = matches!(patch_type, PatchType::Boundary { faces, index } if index >= faces);
+        if valence < 3 && matches!(patch_type, PatchType::Interior { .. }) || valence < 2 || bad_index {
+            return Err(SchemeError::ValenceNotSupported { scheme: scheme.name.clone(), valence, reason });
+        }
+        for radius in 1..=MAX_RADIUS {
+            let rings = radius + 3;
+            let mut soup = match patch_type {
+                PatchType::Interior { valence } => crate::canonical::pillow(valence, rings, triangles),
+                PatchType::Boundary { faces, .. } => crate::canonical::open_fan(faces, rings, triangles),
+            };
+            soup.tags.boundary_interpolation = Some(boundary);
+            let mesh = Mesh::build(soup).map_err(|e| SchemeError::Internal(e.to_string()))?;
+            if let Some(found) = Derivation::new(scheme, mesh, radius).run(patch_type)? {
+                return Ok(found);
+            }
+        }
+        Err(SchemeError::ValenceNotSupported {
+            scheme: scheme.name.clone(),
+            valence,
+            reason: "the limit surface over a face near this vertex depends on vertices beyond every patch \
+                     radius up to 3 (the scheme's rules there reach further than its regular support)",
+        })
+    }
+
+    /// The shape with this signature, if it is among the shapes: how a face of a real mesh
+    /// finds its matrices (gather its patch with [`Mesh::patch`] at [`radius`](Self::radius)).
+    pub fn find(&self, signature: &[u32]) -> Option<usize> {
+        self.by_signature.get(signature).copied()
+    }
+
+    /// The child of `shape` that keeps its shape (the one at an extraordinary corner), with
+    /// its index, if there is one.
+    pub fn keeping(&self, shape: usize) -> Option<(usize, &SubPatch)> {
+        self.shapes[shape].children.iter().enumerate().find(|(_, c)| c.shape == shape)
+    }
+}
+
+/// The canonical mesh refined level by level, and the shapes found so far.
+struct Derivation<'a> {
+    scheme: &'a Scheme,
+    radius: usize,
+    meshes: Vec<Mesh>,
+    refiners: Vec<Refiner>,
+    shapes: Vec<PatchShape>,
+    by_signature: HashMap<Vec<u32>, usize>,
+}
+
+impl<'a> Derivation<'a> {
+    fn new(scheme: &'a Scheme, mesh: Mesh, radius: usize) -> Self {
+        Self {
+            scheme,
+            radius,
+            meshes: vec![mesh],
+            refiners: Vec::new(),
+            shapes: Vec::new(),
+            by_signature: HashMap::new(),
+        }
+    }
+
+    /// The matrices, or `None` if the radius is too small.
+    fn run(mut self, patch_type: PatchType) -> Result<Option<PatchMatrices>, SchemeError> {
+        // The patch's face starts at the centre, vertex 0, in sector `index` (see `canonical`).
+        let mesh = &self.meshes[0];
+        let index = match patch_type {
+            PatchType::Interior { .. } => 0,
+            PatchType::Boundary { index, .. } => index,
+        };
+        let start = mesh
+            .face_ids()
+            .map(|f| mesh.face_half_edges(f).next().expect("faces have corners"))
+            .filter(|&h| mesh.origin(h).index() == 0)
+            .nth(index)
+            .expect("the canonical mesh has a face at its centre in every sector");
+        let root = self.meshes[0].patch(start, self.radius);
+        self.by_signature.insert(root.signature.clone(), 0);
+        self.shapes.push(PatchShape { size: root.vertices.len(), signature: root.signature, children: Vec::new() });
+        let mut pending = std::collections::VecDeque::from([(0, 0, start)]);
+        while let Some((shape, level, start)) = pending.pop_front() {
+            if level == MAX_LEVELS {
+                return Err(SchemeError::Internal(format!(
+                    "{}: the sub-patch shapes do not close up within {MAX_LEVELS} levels",
+                    self.scheme
+                )));
+            }
+            self.refine_to(level + 1)?;
+            let Some(children) = self.children(level, start, &mut pending)? else {
+                return Ok(None);
+            };
+            self.shapes[shape].children = children;
+        }
+        Ok(Some(PatchMatrices {
+            scheme: self.scheme.name.clone(),
+            patch_type,
+            radius: self.radius,
+            shapes: self.shapes,
+            by_signature: self.by_signature,
+        }))
+    }
+
+    fn refine_to(&mut self, level: usize) -> Result<(), SchemeError> {
+        while self.meshes.len() <= level {
+            let refiner = Refiner::new(self.meshes.last().expect("level 0"), self.scheme, 1, &RefineOptions::DEFAULT)?;
+            self.meshes.push(refiner.mesh().clone());
+            self.refiners.push(refiner);
+        }
+        Ok(())
+    }
+
+    /// The sub-patches of the patch starting at `start` on `level`, registering new shapes in
+    /// `pending`; `None` if a child's row leaves the parent patch.
+    fn children(
+        &mut self,
+        level: usize,
+        start: HalfEdgeId,
+        pending: &mut std::collections::VecDeque<(usize, usize, HalfEdgeId)>,
+    ) -> Result<Option<Vec<SubPatch>>, SchemeError> {
+        let (parent_mesh, child_mesh) = (&self.meshes[level], &self.meshes[level + 1]);
+        let parent = parent_mesh.patch(start, self.radius);
+        let mut column = vec![usize::MAX; parent_mesh.vertex_count()];
+        for (c, v) in parent.vertices.iter().enumerate() {
+            column[v.index()] = c;
+        }
+        let starts = sub_patch_starts(self.scheme, parent_mesh, start, child_mesh)?;
+        let domains = ChildDomain::of_split(parent_mesh.face_size(parent_mesh.face(start)));
+        let stencils = &self.refiners[level].levels()[0];
+        let mut children = Vec::new();
+        for (&domain, &child_start) in domains.iter().zip(&starts) {
+            let patch = child_mesh.patch(child_start, self.radius);
+            let columns = parent.vertices.len();
+            let mut entries = vec![0.0; patch.vertices.len() * columns];
+            for (r, v) in patch.vertices.iter().enumerate() {
+                for (p, w) in stencils.row(v.index()) {
+                    match column[p] {
+                        usize::MAX if w.abs() > 1e-14 => return Ok(None),
+                        usize::MAX => {}
+                        c => entries[r * columns + c] += w,
+                    }
+                }
+            }
+            let shape = match self.by_signature.get(&patch.signature) {
+                Some(&s) => s,
+                None => {
+                    let s = self.shapes.len();
+                    self.by_signature.insert(patch.signature.clone(), s);
+                    self.shapes.push(PatchShape {
+                        size: patch.vertices.len(),
+                        signature: patch.signature,
+                        children: Vec::new(),
+                    });
+                    pending.push_back((s, level + 1, child_start));
+                    s
+                }
+            };
+            children.push(SubPatch { shape, domain, rows: patch.vertices.len(), columns, entries });
+        }
+        Ok(Some(children))
+    }
+}
+
+/// Where the sub-patches of the patch starting at `start` start in `child`, the mesh the engine
+/// refined `parent` into with `scheme`, in the order of [`PatchShape::children`]: the same
+/// corner of each child face as `start` is of its face, so that the children's axes follow the
+/// parent's whichever corner the patch starts at.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::{sub_patch_starts, refine, Builtin, RefineOptions};
+///
+/// let cube = Mesh::build(shapes::cube())?;
+/// let cc = Builtin::CatmullClark.scheme();
+/// let refined = refine(&cube, cc, &RefineOptions::DEFAULT)?;
+/// let start = cube.face_half_edges(cube.face_ids().next().unwrap()).next().unwrap();
+/// let children = sub_patch_starts(cc, &cube, start, &refined)?;
+/// // The first child starts where the parent does.
+/// assert_eq!(refined.origin(children[0]), cube.origin(start));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// [`SchemeError::FaceNotSupported`] for faces other than quads (quad splits) or triangles
+/// (triangle splits), [`SchemeError::FeatureNotSupported`] for other splits.
+pub fn sub_patch_starts(
+    scheme: &Scheme,
+    parent: &Mesh,
+    start: HalfEdgeId,
+    child: &Mesh,
+) -> Result<Vec<HalfEdgeId>, SchemeError> {
+    let face = parent.face(start);
+    let size = parent.face_size(face);
+    let (expected, per_face): (usize, &dyn Fn(FaceId) -> usize) = match scheme.split() {
+        Split::Quad => (4, &|f| parent.face_size(f)),
+        Split::Triangle => (3, &|_| 4),
+        split => {
+            return Err(SchemeError::FeatureNotSupported {
+                scheme: scheme.name.clone(),
+                feature: "sub-patches",
+                element: format!("the {split:?} split, whose sub-patches are not faces of the control mesh"),
+            });
+        }
+    };
+    if size != expected {
+        return Err(SchemeError::FaceNotSupported { scheme: scheme.name.clone(), face, size, expected });
+    }
+    // The engine numbers children face by face: one per corner for quads, four per triangle;
+    // child `j` has corner `j` of the parent at its own corner `j` (the middle triangle starts
+    // at the midpoint of side 1), so the rotation of `start` carries over.
+    let first_child: usize = parent.face_ids().take(face.index()).map(per_face).sum();
+    let rotation = parent.face_half_edges(face).position(|h| h == start).expect("start lies on its face");
+    let children = if size == 3 { 4 } else { size };
+    Ok((0..children)
+        .map(|j| {
+            let corner = if j < size { (j + rotation) % size } else { j };
+            let child_face = FaceId::new((first_child + corner) as u32);
+            child.face_half_edges(child_face).nth(rotation).expect("children have as many corners as the parent")
+        })
+        .collect())
+}
