@@ -1,6 +1,8 @@
 //! Patch gathering: the control vertices around a face in a canonical, purely topological order,
 //! and a signature that tells two patches of the same shape apart from different ones.
 
+use std::collections::HashMap;
+
 use crate::{FaceId, HalfEdgeId, Mesh, VertexId};
 
 /// The control vertices within `radius` rings of a face, gathered by [`Mesh::patch`].
@@ -47,36 +49,37 @@ impl Mesh {
     /// # Ok::<(), subdiv_mesh::MeshError>(())
     /// ```
     pub fn patch(&self, start: HalfEdgeId, radius: usize) -> Patch {
-        const UNSEEN: u32 = u32::MAX;
+        // Patches are small: maps keyed by the few vertices they hold, not arrays over the mesh.
         let start_face = self.face(start);
         // Rings of vertices: 0 on the face, r on the faces touching ring r - 1.
-        let mut ring = vec![UNSEEN; self.vertex_count()];
+        let mut ring: HashMap<VertexId, usize> = HashMap::new();
         let mut current: Vec<VertexId> = self.face_vertices(start_face).to_vec();
-        for v in &current {
-            ring[v.index()] = 0;
+        for &v in &current {
+            ring.insert(v, 0);
         }
-        for r in 1..=radius as u32 {
+        for r in 1..=radius {
             let mut next = Vec::new();
             for &v in &current {
                 for f in self.vertex_faces(v) {
                     for &w in self.face_vertices(f) {
-                        if ring[w.index()] == UNSEEN {
-                            ring[w.index()] = r;
+                        ring.entry(w).or_insert_with(|| {
                             next.push(w);
-                        }
+                            r
+                        });
                     }
                 }
             }
             current = next;
         }
         // The patch's faces touch a vertex of ring < radius (the face itself when radius is 0).
-        let in_patch =
-            |f: FaceId| f == start_face || self.face_vertices(f).iter().any(|v| (ring[v.index()] as usize) < radius);
+        let in_patch = |f: FaceId| {
+            f == start_face || self.face_vertices(f).iter().any(|v| ring.get(v).is_some_and(|&r| r < radius))
+        };
 
-        let mut place = vec![UNSEEN; self.vertex_count()];
+        let mut place: HashMap<VertexId, u32> = HashMap::new();
         let mut vertices = Vec::new();
         let mut signature = Vec::new();
-        let mut walk_index: std::collections::HashMap<FaceId, u32> = std::collections::HashMap::new();
+        let mut walk_index: HashMap<FaceId, u32> = HashMap::new();
         let mut queue = std::collections::VecDeque::from([start]);
         walk_index.insert(start_face, 0);
         while let Some(entry) = queue.pop_front() {
@@ -85,11 +88,12 @@ impl Mesh {
             let mut h = entry;
             for _ in 0..size {
                 let v = self.origin(h);
-                if place[v.index()] == UNSEEN {
-                    place[v.index()] = vertices.len() as u32;
+                let count = vertices.len() as u32;
+                let p = *place.entry(v).or_insert_with(|| {
                     vertices.push(v);
-                }
-                signature.push(place[v.index()]);
+                    count
+                });
+                signature.push(p);
                 signature.push(match self.twin(h) {
                     None => ACROSS_BOUNDARY,
                     Some(t) if !in_patch(self.face(t)) => ACROSS_OUTSIDE,

@@ -21,6 +21,9 @@
 //! child 3 is the middle one, turned by half a turn (see [`ChildDomain`]).
 
 use std::collections::HashMap;
+
+use faer::Mat;
+use faer::linalg::solvers::SolveLstsq;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh};
@@ -84,8 +87,9 @@ impl ChildDomain {
         ((sign * u + f64::from(self.offset[0])) / 2.0, (sign * v + f64::from(self.offset[1])) / 2.0)
     }
 
-    /// The children of a face of `size` sides (4: quads, 3: triangles), in the engine's order.
-    fn of_split(size: usize) -> &'static [ChildDomain] {
+    /// The children of a face of `size` sides (3: triangles, anything else: quads), in the
+    /// engine's order.
+    pub fn of_face(size: usize) -> &'static [ChildDomain] {
         const fn at(u: u8, v: u8, flipped: bool) -> ChildDomain {
             ChildDomain { offset: [u, v], flipped }
         }
@@ -166,6 +170,11 @@ pub struct PatchShape {
     pub signature: Vec<u32>,
     /// The sub-patches, in the engine's child order.
     pub children: Vec<SubPatch>,
+    /// The parameters `[u, v]` of the control points in the face's frame, where the matrices
+    /// reproduce linear functions of the parameters from this shape on (a regular grid gives
+    /// integer coordinates such as `(−1, 2)`); `None` where an irregular vertex of the face's
+    /// own domain breaks that (the extraordinary vertex's shape).
+    pub parameters: Option<[Vec<f64>; 2]>,
 }
 
 /// The sub-patch matrices of every shape reachable from one [`PatchType`].
@@ -177,6 +186,8 @@ pub struct PatchMatrices {
     pub patch_type: PatchType,
     /// The patch radius in rings of faces (Catmull-Clark and Loop: 1).
     pub radius: usize,
+    /// The faces' size: 4 (quad splits) or 3 (triangle splits).
+    pub face_size: usize,
     /// The shapes; the first is the patch type's.
     pub shapes: Vec<PatchShape>,
     by_signature: HashMap<Vec<u32>, usize>,
@@ -328,7 +339,12 @@ impl<'a> Derivation<'a> {
             .expect("the canonical mesh has a face at its centre in every sector");
         let root = self.meshes[0].patch(start, self.radius);
         self.by_signature.insert(root.signature.clone(), 0);
-        self.shapes.push(PatchShape { size: root.vertices.len(), signature: root.signature, children: Vec::new() });
+        self.shapes.push(PatchShape {
+            size: root.vertices.len(),
+            signature: root.signature,
+            children: Vec::new(),
+            parameters: None,
+        });
         let mut pending = std::collections::VecDeque::from([(0, 0, start)]);
         while let Some((shape, level, start)) = pending.pop_front() {
             if level == MAX_LEVELS {
@@ -343,10 +359,14 @@ impl<'a> Derivation<'a> {
             };
             self.shapes[shape].children = children;
         }
+        for s in 0..self.shapes.len() {
+            self.shapes[s].parameters = parameter_coordinates(&self.shapes, s);
+        }
         Ok(Some(PatchMatrices {
             scheme: self.scheme.name.clone(),
             patch_type,
             radius: self.radius,
+            face_size: if self.scheme.split() == Split::Triangle { 3 } else { 4 },
             shapes: self.shapes,
             by_signature: self.by_signature,
         }))
@@ -376,7 +396,7 @@ impl<'a> Derivation<'a> {
             column[v.index()] = c;
         }
         let starts = sub_patch_starts(self.scheme, parent_mesh, start, child_mesh)?;
-        let domains = ChildDomain::of_split(parent_mesh.face_size(parent_mesh.face(start)));
+        let domains = ChildDomain::of_face(parent_mesh.face_size(parent_mesh.face(start)));
         let stencils = &self.refiners[level].levels()[0];
         let mut children = Vec::new();
         for (&domain, &child_start) in domains.iter().zip(&starts) {
@@ -401,6 +421,7 @@ impl<'a> Derivation<'a> {
                         size: patch.vertices.len(),
                         signature: patch.signature,
                         children: Vec::new(),
+                        parameters: None,
                     });
                     pending.push_back((s, level + 1, child_start));
                     s
@@ -410,6 +431,54 @@ impl<'a> Derivation<'a> {
         }
         Ok(Some(children))
     }
+}
+
+/// The parameters `(u, v)` of the control points of `shape` in its face's frame, if the
+/// matrices reproduce linear functions of the parameters from `shape` on: the solution of
+/// `A_c · U_s = (±U_child + o_c) / 2` over every shape reachable from `shape` and each child.
+/// `None` next to an irregular vertex that is part of the shape's own domain.
+fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Option<[Vec<f64>; 2]> {
+    // The shapes reachable from `shape`, and where each one's unknowns start.
+    let mut reach = vec![shape];
+    let mut i = 0;
+    while i < reach.len() {
+        for child in &shapes[reach[i]].children {
+            if !reach.contains(&child.shape) {
+                reach.push(child.shape);
+            }
+        }
+        i += 1;
+    }
+    let mut start = vec![usize::MAX; shapes.len()];
+    let mut unknowns = 0;
+    for &s in &reach {
+        start[s] = unknowns;
+        unknowns += shapes[s].size;
+    }
+    let equations: usize = reach.iter().map(|&s| shapes[s].children.iter().map(|c| c.rows()).sum::<usize>()).sum();
+    let mut a = Mat::<f64>::zeros(equations, unknowns);
+    let mut b = Mat::<f64>::zeros(equations, 2);
+    let mut row = 0;
+    for &s in &reach {
+        for child in &shapes[s].children {
+            let sign = if child.domain.flipped { -1.0 } else { 1.0 };
+            for r in 0..child.rows() {
+                for c in 0..child.columns() {
+                    a[(row, start[s] + c)] += child.get(r, c);
+                }
+                a[(row, start[child.shape] + r)] -= sign / 2.0;
+                b[(row, 0)] = f64::from(child.domain.offset[0]) / 2.0;
+                b[(row, 1)] = f64::from(child.domain.offset[1]) / 2.0;
+                row += 1;
+            }
+        }
+    }
+    let x = a.qr().solve_lstsq(&b);
+    if (&a * &x - &b).norm_max() > 1e-9 || a.singular_values().ok()?.iter().any(|&s| s < 1e-9) {
+        return None;
+    }
+    let size = shapes[shape].size;
+    Some([(0..size).map(|i| x[(i, 0)]).collect(), (0..size).map(|i| x[(i, 1)]).collect()])
 }
 
 /// Where the sub-patches of the patch starting at `start` start in `child`, the mesh the engine

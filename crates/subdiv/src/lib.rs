@@ -1,9 +1,9 @@
 //! **subdiv**: exact, fast subdivision surfaces in Rust.
 //!
 //! This facade re-exports the workspace's crates under one name: half-edge topology ([`mesh`]),
-//! mesh files ([`io`]) and refinement with OpenSubdiv's rules ([`schemes`]). Exact stencils,
-//! evaluation, tessellation and the GPU backend arrive as their own crates and are re-exported
-//! here.
+//! mesh files ([`io`]), refinement with OpenSubdiv's rules ([`schemes`]) and exact limit
+//! stencils at rational parameters ([`stencil`]). Evaluation, tessellation and the GPU backend
+//! arrive as their own crates and are re-exported here.
 //!
 //! ```
 //! use subdiv::mesh::{shapes, Mesh, RegularValence};
@@ -17,5 +17,6 @@
 pub use subdiv_io as io;
 pub use subdiv_mesh as mesh;
 pub use subdiv_schemes as schemes;
+pub use subdiv_stencil as stencil;
 
 pub use subdiv_mesh::{DVec3, Mesh, MeshError, PolygonSoup};

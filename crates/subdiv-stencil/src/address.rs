@@ -1,0 +1,122 @@
+//! Periodic addresses: which sub-patch a rational parameter falls in at every level.
+
+use subdiv_schemes::ChildDomain;
+
+use crate::StencilError;
+
+/// The sub-patch choices of a rational point, level by level: a prefix, then a period repeated
+/// for ever. Every rational point has one, because its parameters keep their denominator under
+/// the map to a child's domain, so the sequence of points revisits one.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Address {
+    /// Children taken once, from the top.
+    pub prefix: Vec<u8>,
+    /// Children taken for ever after the prefix (never empty).
+    pub period: Vec<u8>,
+}
+
+/// A rational point of a face's domain over a common denominator.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct Dyadic {
+    /// `u · denominator`.
+    pub u: i64,
+    /// `v · denominator`.
+    pub v: i64,
+    /// The denominator, at least 1.
+    pub denominator: i64,
+}
+
+impl Dyadic {
+    /// The point `(u / denominator, v / denominator)`.
+    pub fn new(u: i64, v: i64, denominator: i64) -> Self {
+        Self { u, v, denominator }
+    }
+
+    /// The point in f64.
+    pub fn to_f64(self) -> (f64, f64) {
+        (self.u as f64 / self.denominator as f64, self.v as f64 / self.denominator as f64)
+    }
+}
+
+impl Address {
+    /// The address of `point` in the domain of a face of `face_size` sides: the unit square
+    /// (4) or the triangle `u, v ≥ 0, u + v ≤ 1` (3). Where a point lies on the border of two
+    /// children the first in the engine's order wins.
+    ///
+    /// ```
+    /// use subdiv_stencil::{Address, Dyadic};
+    ///
+    /// // 1/3 = 0.010101…₂: in u, child 0 then child 1 for ever; v = 0 stays in children 0, 1.
+    /// let a = Address::of(4, Dyadic::new(1, 0, 3))?;
+    /// assert_eq!((a.prefix.as_slice(), a.period.as_slice()), (&[][..], &[0, 1][..]));
+    /// # Ok::<(), subdiv_stencil::StencilError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`StencilError::OutsideDomain`] for a point outside the domain or a denominator below 1.
+    pub fn of(face_size: usize, point: Dyadic) -> Result<Self, StencilError> {
+        let Dyadic { u, v, denominator: q } = point;
+        let triangle = face_size == 3;
+        let inside = q >= 1 && u >= 0 && v >= 0 && if triangle { u + v <= q } else { u <= q && v <= q };
+        if !inside || q > i64::MAX / 4 {
+            return Err(StencilError::OutsideDomain {
+                u: format!("{u}/{q}"),
+                v: format!("{v}/{q}"),
+                domain: if triangle { "u, v ≥ 0, u + v ≤ 1" } else { "[0, 1]²" },
+            });
+        }
+        let children = ChildDomain::of_face(face_size);
+        let mut seen: Vec<(i64, i64)> = Vec::new();
+        let mut path: Vec<u8> = Vec::new();
+        let (mut a, mut b) = (u, v);
+        loop {
+            if let Some(first) = seen.iter().position(|&s| s == (a, b)) {
+                let period = path.split_off(first);
+                return Ok(Self { prefix: path, period });
+            }
+            seen.push((a, b));
+            let child = if triangle {
+                if 2 * (a + b) <= q {
+                    0
+                } else if 2 * a >= q {
+                    1
+                } else if 2 * b >= q {
+                    2
+                } else {
+                    3
+                }
+            } else {
+                match (2 * a >= q, 2 * b >= q) {
+                    (false, false) => 0,
+                    (true, false) => 1,
+                    (true, true) => 2,
+                    (false, true) => 3,
+                }
+            };
+            let ChildDomain { offset, flipped } = children[child];
+            let sign = if flipped { -1 } else { 1 };
+            (a, b) = (sign * (2 * a - i64::from(offset[0]) * q), sign * (2 * b - i64::from(offset[1]) * q));
+            path.push(child as u8);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn corners_and_centres() {
+        let a = Address::of(4, Dyadic::new(0, 0, 1)).unwrap();
+        assert_eq!((a.prefix, a.period), (vec![], vec![0]));
+        let a = Address::of(4, Dyadic::new(1, 1, 2)).unwrap();
+        assert_eq!((a.prefix, a.period), (vec![2], vec![0]));
+        let a = Address::of(4, Dyadic::new(1, 1, 1)).unwrap();
+        assert_eq!((a.prefix, a.period), (vec![], vec![2]));
+        // The centroid of a triangle is the middle child's centroid for ever.
+        let a = Address::of(3, Dyadic::new(1, 1, 3)).unwrap();
+        assert_eq!((a.prefix, a.period), (vec![], vec![3]));
+        assert!(Address::of(3, Dyadic::new(2, 2, 3)).is_err());
+        assert!(Address::of(4, Dyadic::new(0, 0, 0)).is_err());
+    }
+}

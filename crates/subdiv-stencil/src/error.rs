@@ -1,0 +1,105 @@
+//! [`StencilError`].
+
+use subdiv_schemes::SchemeError;
+
+/// Why a stencil cannot be computed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum StencilError {
+    /// The scheme or its patch matrices cannot serve this request.
+    #[error(transparent)]
+    Scheme(#[from] SchemeError),
+    /// A parameter outside the patch's domain, or not a finite rational.
+    #[error("parameter ({u}, {v}) is outside the domain {domain}")]
+    OutsideDomain {
+        /// The first parameter.
+        u: String,
+        /// The second parameter.
+        v: String,
+        /// The domain, e.g. `[0, 1]²`.
+        domain: &'static str,
+    },
+    /// A grid rate of zero, or one too large to address.
+    #[error("rate {rate} is not supported: {reason}")]
+    Rate {
+        /// The rate asked for.
+        rate: u64,
+        /// Why not.
+        reason: &'static str,
+    },
+    /// The eigenvector a stencil needs is not unique or does not exist (eigenvalue 1 not
+    /// simple, or the tangent eigenspace of the wrong dimension).
+    #[error("{scheme}: {detail}")]
+    Eigen {
+        /// The scheme's name.
+        scheme: String,
+        /// What went wrong, with the address.
+        detail: String,
+    },
+    // ---- curve stencils (curve.rs, rational.rs) -------------------------------------------
+    /// A curve scheme's mask weight is not a rational with a small denominator, so the exact
+    /// curve stencils cannot use it.
+    #[error(
+        "curve stencils (ExactMask::from_scheme, `{scheme}`): mask entry {index} = {value} is not within 1e-15 of a \
+         rational with denominator at most {max_denominator}"
+    )]
+    CurveMaskNotRational {
+        /// The scheme's name.
+        scheme: String,
+        /// The entry's index in the mask.
+        index: usize,
+        /// Its value.
+        value: f64,
+        /// The largest denominator tried.
+        max_denominator: u64,
+    },
+    /// A rule of an exact curve mask does not sum to exactly 1 (the scheme would not reproduce
+    /// constants).
+    #[error(
+        "curve stencils (ExactMask, `{scheme}`): the rule of the children {arity}j+{residue} sums to {sum}, not exactly 1"
+    )]
+    CurveMaskRuleSum {
+        /// The scheme's name.
+        scheme: String,
+        /// The arity.
+        arity: u32,
+        /// The residue of the rule's children modulo the arity.
+        residue: u32,
+        /// The exact sum, as `p/q`.
+        sum: String,
+    },
+    /// An exact curve mask of an unsupported shape (arity, all weights zero).
+    #[error("curve stencils (ExactMask, `{scheme}`): {reason}")]
+    CurveMaskShape {
+        /// The scheme's name.
+        scheme: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The scaling-relation system of a curve scheme (with its normalisations) has no unique
+    /// exact solution: the scheme does not converge (positions) or is not C¹ (derivatives).
+    #[error("curve stencils (scaling relations of `{scheme}` on the grid (1/{rate})Z, {quantity}): {detail}")]
+    CurveScalingSystem {
+        /// The scheme's name.
+        scheme: String,
+        /// The grid rate.
+        rate: u32,
+        /// `positions` or `derivatives`.
+        quantity: &'static str,
+        /// What went wrong: inconsistency, or the rank.
+        detail: String,
+    },
+    /// The left eigenvectors of a curve scheme's upsampled subdivision matrix do not give one
+    /// normalised vector (floating-point route).
+    #[error("curve stencils (upsampled subdivision matrix of `{scheme}` at rate {rate}, {quantity}): {detail}")]
+    CurveUpsampledEigen {
+        /// The scheme's name.
+        scheme: String,
+        /// The grid rate.
+        rate: u32,
+        /// `positions` or `derivatives`.
+        quantity: &'static str,
+        /// What went wrong.
+        detail: String,
+    },
+}

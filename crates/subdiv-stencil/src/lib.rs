@@ -1,0 +1,28 @@
+//! Exact limit stencils of subdivision schemes at rational parameters.
+//!
+//! A stencil is the list of weights that, applied to a patch's control points, gives a point of
+//! the limit surface (or curve) and its tangents. Following Schaefer and Warren (paper 000) and
+//! Morlet et al. (paper 003), this crate computes them without refining meshes:
+//!
+//! - **Curves** ([`curve`]): the scaling relation φ(x) = Σ s_i φ(2x − i) on the grid (1/n)ℤ
+//!   with partition of unity, solved exactly in rationals, and cross-checked against the
+//!   dominant left eigenvectors of the upsampled subdivision matrix.
+//! - **Surfaces** ([`SurfaceStencil`]): a rational parameter has an eventually periodic binary
+//!   expansion, a prefix σ and a period τ of sub-patch choices; its stencil is the dominant left
+//!   eigenvector of the period's composite sub-patch matrix, carried back through the prefix.
+//!   The sub-patch matrices come from [`subdiv_schemes::PatchMatrices`], derived by the
+//!   refinement engine, so this works for every primal scheme at regular, extraordinary and
+//!   boundary patches.
+
+mod address;
+mod error;
+mod surface;
+// ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
+pub mod curve;
+mod rational;
+pub use rational::Rational;
+// ---- end of curve stencils ----------------------------------------------------------------
+
+pub use address::{Address, Dyadic};
+pub use error::StencilError;
+pub use surface::{SurfaceStencil, surface_stencil};

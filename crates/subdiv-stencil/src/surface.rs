@@ -1,0 +1,210 @@
+//! Surface stencils by periodic addresses (paper 003 §4–5 joined with paper 000): the stencil of
+//! a rational point of a patch from the sub-patch matrices alone.
+
+use faer::Mat;
+use faer::linalg::solvers::SolveLstsq;
+use subdiv_schemes::PatchMatrices;
+
+use crate::{Address, Dyadic, StencilError};
+
+/// Weights over a patch's control points (in [`subdiv_mesh::Patch`] order) giving a point of
+/// the limit surface and its two tangents.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceStencil {
+    /// Position weights; they sum to 1.
+    pub position: Vec<f64>,
+    /// ∂/∂u weights; they sum to 0.
+    pub du: Vec<f64>,
+    /// ∂/∂v weights; they sum to 0.
+    pub dv: Vec<f64>,
+    /// Whether `du` and `dv` are the parameter derivatives. `false` at an extraordinary vertex
+    /// itself, where the parameterization has no derivative: there they are tangent
+    /// *directions*, along the face's first and last sides, whose cross product is the normal.
+    pub exact_derivatives: bool,
+}
+
+/// How close to zero a residual or singular value must be to count as zero.
+const TOLERANCE: f64 = 1e-9;
+
+/// The stencil of `point` in the patch of shape `shape` of `matrices`.
+///
+/// The point's [`Address`] splits into a prefix σ and a period τ; the prefix is lengthened by
+/// whole periods until the period maps a shape to itself. Then the position stencil is the left
+/// eigenvector of the period's square matrix `M_τ` for eigenvalue 1 (normalised to sum 1),
+/// carried back through the prefix's matrices. The derivative stencils are the left
+/// eigenvectors for `±2^−|τ|`, normalised on the linear functions `u` and `v` of the periodic
+/// shape ([`PatchShape::parameters`](subdiv_schemes::PatchShape::parameters)),
+/// times `±2^|σ|`. At a point that is its own extraordinary vertex (the period keeps an
+/// irregular shape) the tangents come from the subdominant eigenvectors instead (see
+/// [`SurfaceStencil::exact_derivatives`]).
+///
+/// ```
+/// use subdiv_mesh::BoundaryInterpolation;
+/// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
+/// use subdiv_stencil::{surface_stencil, Dyadic};
+///
+/// let cc = Builtin::CatmullClark.scheme();
+/// let m = PatchMatrices::of(cc, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly)?;
+/// // The extraordinary vertex itself: (k²·v + 4·Σ e + Σ f) / (k (k + 5)).
+/// let s = surface_stencil(&m, 0, Dyadic::new(0, 0, 1))?;
+/// assert!((s.position[0] - 25.0 / 50.0).abs() < 1e-12);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// [`StencilError::OutsideDomain`] for a point outside the face, [`StencilError::Eigen`] when
+/// an eigenvector the stencil needs is not unique.
+pub fn surface_stencil(matrices: &PatchMatrices, shape: usize, point: Dyadic) -> Result<SurfaceStencil, StencilError> {
+    let Address { mut prefix, period } = Address::of(matrices.face_size, point)?;
+    // Shapes along the path; lengthen the prefix until the period returns to its shape.
+    let shape_after = |start: usize, steps: &[u8]| {
+        steps.iter().fold(start, |s, &c| matrices.shapes[s].children[usize::from(c)].shape)
+    };
+    let mut periodic = shape_after(shape, &prefix);
+    let mut rounds = 0;
+    while shape_after(periodic, &period) != periodic {
+        prefix.extend_from_slice(&period);
+        periodic = shape_after(periodic, &period);
+        rounds += 1;
+        if rounds > matrices.shapes.len() + 2 {
+            return Err(eigen_error(matrices, "the shapes along the address never become periodic".into()));
+        }
+    }
+    let size = matrices.shapes[periodic].size;
+    // M_τ: the period's composite matrix, applied first to last.
+    let mut m_tau = Mat::<f64>::identity(size, size);
+    let mut flips = 0;
+    let mut s = periodic;
+    for &c in &period {
+        let child = &matrices.shapes[s].children[usize::from(c)];
+        let a = Mat::<f64>::from_fn(child.rows(), child.columns(), |i, j| child.get(i, j));
+        m_tau = &a * &m_tau;
+        flips += usize::from(child.domain.flipped);
+        s = child.shape;
+    }
+
+    let ones = vec![1.0; size];
+    let position = left_null_vector(&m_tau, 1.0, &[(&ones, 1.0)])
+        .ok_or_else(|| eigen_error(matrices, format!("eigenvalue 1 is not simple at {point:?}")))?;
+    let lambda = if flips % 2 == 1 { -1.0 } else { 1.0 } * 0.5_f64.powi(period.len() as i32);
+    let (du, dv, exact) = match &matrices.shapes[periodic].parameters {
+        Some([u, v]) => {
+            let du = left_null_vector(&m_tau, lambda, &[(&ones, 0.0), (u, 1.0), (v, 0.0)]);
+            let dv = left_null_vector(&m_tau, lambda, &[(&ones, 0.0), (u, 0.0), (v, 1.0)]);
+            match (du, dv) {
+                (Some(du), Some(dv)) => (du, dv, true),
+                _ => return Err(eigen_error(matrices, format!("no derivative eigenvectors at {point:?}"))),
+            }
+        }
+        None => {
+            let (du, dv) = irregular_tangents(matrices, &m_tau, matrices.face_size)?;
+            (du, dv, false)
+        }
+    };
+
+    // Back through the prefix, last step first: w ← w · A.
+    let steps: Vec<(usize, u8)> = prefix
+        .iter()
+        .scan(shape, |s, &c| {
+            let here = *s;
+            *s = matrices.shapes[here].children[usize::from(c)].shape;
+            Some((here, c))
+        })
+        .collect();
+    let (mut position, mut du, mut dv) = (position, du, dv);
+    let mut scale = 1.0;
+    for &(s, c) in steps.iter().rev() {
+        let child = &matrices.shapes[s].children[usize::from(c)];
+        let back = |w: &[f64]| -> Vec<f64> {
+            (0..child.columns()).map(|j| (0..child.rows()).map(|i| w[i] * child.get(i, j)).sum()).collect()
+        };
+        position = back(&position);
+        du = back(&du);
+        dv = back(&dv);
+        // u' = ±(2u − o): ∂/∂u = ±2 ∂/∂u'.
+        scale *= if child.domain.flipped { -2.0 } else { 2.0 };
+    }
+    if exact {
+        du.iter_mut().chain(dv.iter_mut()).for_each(|w| *w *= scale);
+    }
+    Ok(SurfaceStencil { position, du, dv, exact_derivatives: exact })
+}
+
+fn eigen_error(matrices: &PatchMatrices, detail: String) -> StencilError {
+    StencilError::Eigen { scheme: matrices.scheme.clone(), detail }
+}
+
+/// The row vector `w` with `w · (M − λ I) = 0` and `w · c = value` for each constraint
+/// `(c, value)`, if the least-squares solution satisfies all of them.
+fn left_null_vector(m: &Mat<f64>, lambda: f64, constraints: &[(&[f64], f64)]) -> Option<Vec<f64>> {
+    let n = m.nrows();
+    let rows = n + constraints.len();
+    // Unknown w as a column: (Mᵀ − λ I) w = 0, cᵀ w = value.
+    let a = Mat::<f64>::from_fn(rows, n, |i, j| {
+        if i < n { m[(j, i)] - if i == j { lambda } else { 0.0 } } else { constraints[i - n].0[j] }
+    });
+    let b = Mat::<f64>::from_fn(rows, 1, |i, _| if i < n { 0.0 } else { constraints[i - n].1 });
+    let w = a.qr().solve_lstsq(&b);
+    let residual = (&a * &w - &b).norm_max();
+    let w: Vec<f64> = (0..n).map(|i| w[(i, 0)]).collect();
+    let unique = a.singular_values().ok()?.iter().all(|&s| s > TOLERANCE);
+    (residual < TOLERANCE && unique && w.iter().all(|x| x.is_finite())).then_some(w)
+}
+
+/// Tangent directions at an irregular fixed point: the left eigenvectors of the two largest
+/// eigenvalues after 1, made dual to the right ones (the characteristic map), and turned to
+/// the map's directions of the face's first side (for `du`) and last side (for `dv`).
+fn irregular_tangents(
+    matrices: &PatchMatrices,
+    m: &Mat<f64>,
+    face_size: usize,
+) -> Result<(Vec<f64>, Vec<f64>), StencilError> {
+    let n = m.nrows();
+    let fail = |detail: &str| eigen_error(matrices, detail.to_string());
+    let mut values = m.eigenvalues().map_err(|e| fail(&format!("eigen solver: {e:?}")))?;
+    values.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
+    let subdominant: Vec<f64> = values.iter().skip(1).take(2).map(|z| z.re).collect();
+    if values.len() < 3 || values[1].im.abs() > TOLERANCE || values[2].im.abs() > TOLERANCE {
+        return Err(fail("the subdominant eigenvalues are not real"));
+    }
+    // Right and left eigenvectors of the subdominant values (one or two distinct values).
+    let null_space = |transpose: bool, lambda: f64, count: usize| -> Result<Vec<Vec<f64>>, StencilError> {
+        let shifted = Mat::<f64>::from_fn(n, n, |i, j| {
+            let x = if transpose { m[(j, i)] } else { m[(i, j)] };
+            x - if i == j { lambda } else { 0.0 }
+        });
+        let svd = shifted.svd().map_err(|e| fail(&format!("svd: {e:?}")))?;
+        let s = svd.S().column_vector();
+        let mut order: Vec<usize> = (0..n).collect();
+        order.sort_by(|&a, &b| s[a].total_cmp(&s[b]));
+        Ok(order[..count].iter().map(|&c| (0..n).map(|r| svd.V()[(r, c)]).collect()).collect())
+    };
+    let (right, left) = if (subdominant[0] - subdominant[1]).abs() < TOLERANCE {
+        (null_space(false, subdominant[0], 2)?, null_space(true, subdominant[0], 2)?)
+    } else {
+        let r = [null_space(false, subdominant[0], 1)?, null_space(false, subdominant[1], 1)?].concat();
+        let l = [null_space(true, subdominant[0], 1)?, null_space(true, subdominant[1], 1)?].concat();
+        (r, l)
+    };
+    // Dual basis: l'_a · r_b = δ_ab.
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let g =
+        [[dot(&left[0], &right[0]), dot(&left[0], &right[1])], [dot(&left[1], &right[0]), dot(&left[1], &right[1])]];
+    let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
+    if det.abs() < TOLERANCE {
+        return Err(fail("the subdominant left and right eigenvectors are not dual"));
+    }
+    // l'_a = Σ_c H[a][c] l_c with H = G⁻¹, so that l'_a · r_b = (H G)[a][b].
+    let h = [[g[1][1] / det, -g[0][1] / det], [-g[1][0] / det, g[0][0] / det]];
+    let dual: Vec<Vec<f64>> =
+        (0..2).map(|a| (0..n).map(|i| h[a][0] * left[0][i] + h[a][1] * left[1][i]).collect()).collect();
+    // Directions of the face's first and last sides in the characteristic map (corners come
+    // first in a patch, starting at corner 0).
+    let direction = |corner: usize| {
+        let (x, y) = (right[0][corner] - right[0][0], right[1][corner] - right[1][0]);
+        let length = x.hypot(y);
+        (x / length, y / length)
+    };
+    let combine = |(c, s): (f64, f64)| -> Vec<f64> { (0..n).map(|i| c * dual[0][i] + s * dual[1][i]).collect() };
+    Ok((combine(direction(1)), combine(direction(face_size - 1))))
+}

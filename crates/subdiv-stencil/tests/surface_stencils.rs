@@ -1,0 +1,248 @@
+//! Surface stencils by periodic addresses: exact on regular patches, consistent across levels
+//! everywhere (extraordinary and boundary patches included), affine.
+
+use std::sync::Arc;
+
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, PolygonSoup, shapes};
+use subdiv_schemes::{Builtin, PatchMatrices, PatchType, RefineOptions, refine, refine_uniform, sub_patch_starts};
+use subdiv_stencil::{Dyadic, SurfaceStencil, surface_stencil};
+
+/// The patch tables a mesh's faces need, and a lookup from a face's start half-edge.
+struct Tables {
+    tables: Vec<Arc<PatchMatrices>>,
+    radius: usize,
+}
+
+impl Tables {
+    fn for_mesh(builtin: Builtin, mesh: &Mesh) -> Self {
+        let boundary = mesh.tags().boundary_interpolation.unwrap_or(BoundaryInterpolation::EdgeOnly);
+        let mut tables: Vec<Arc<PatchMatrices>> = Vec::new();
+        for v in mesh.vertices() {
+            let faces = mesh.vertex_faces(v).count();
+            let types: Vec<PatchType> = if mesh.is_boundary_vertex(v) {
+                (0..faces).map(|index| PatchType::Boundary { faces, index }).collect()
+            } else {
+                vec![PatchType::Interior { valence: mesh.valence(v) }]
+            };
+            for t in types {
+                if !tables.iter().any(|m| m.patch_type == t) {
+                    tables.push(PatchMatrices::of(builtin.scheme(), t, boundary).unwrap());
+                }
+            }
+        }
+        let radius = tables[0].radius;
+        Self { tables, radius }
+    }
+
+    /// The face's patch positions, matrices and shape, in the first rotation that has a shape.
+    fn find(&self, mesh: &Mesh, face: FaceId) -> (HalfEdgeId, Vec<DVec3>, Arc<PatchMatrices>, usize) {
+        mesh.face_half_edges(face)
+            .find_map(|h| {
+                let patch = mesh.patch(h, self.radius);
+                let (t, s) = self.tables.iter().find_map(|t| t.find(&patch.signature).map(|s| (t.clone(), s)))?;
+                Some((h, patch.vertices.iter().map(|&v| mesh.position(v)).collect(), t, s))
+            })
+            .unwrap_or_else(|| panic!("face {face} has no shape"))
+    }
+}
+
+fn apply(weights: &[f64], points: &[DVec3]) -> DVec3 {
+    weights.iter().zip(points).map(|(&w, &p)| w * p).sum()
+}
+
+fn assert_close(a: DVec3, b: DVec3, tolerance: f64, what: &str) {
+    assert!((a - b).abs().max_element() <= tolerance, "{what}: {a} vs {b}");
+}
+
+fn check_sums(s: &SurfaceStencil, what: &str) {
+    let sum = |w: &[f64]| w.iter().sum::<f64>();
+    assert!((sum(&s.position) - 1.0).abs() < 1e-13, "{what}: position sums to {}", sum(&s.position));
+    assert!(
+        sum(&s.du).abs() < 1e-11 && sum(&s.dv).abs() < 1e-11,
+        "{what}: tangents sum to {} {}",
+        sum(&s.du),
+        sum(&s.dv)
+    );
+}
+
+/// On a regular grid lifted to z = x² + y², bicubic B-splines give x² + y² + 2/3 exactly, with
+/// derivatives (1, 0, 2x) and (0, 1, 2y): the Catmull-Clark stencils are exact there.
+#[test]
+fn regular_catmull_clark_stencils_are_bicubic_b_splines() {
+    let mut soup = shapes::quad_grid(6, 6);
+    for p in soup.positions_mut() {
+        p.z = p.x * p.x + p.y * p.y;
+    }
+    let mesh = Mesh::build(soup).unwrap();
+    let tables = Tables::for_mesh(Builtin::CatmullClark, &mesh);
+    let face = FaceId::new(3 * 6 + 2); // (2, 3): its patch is clear of the boundary.
+    let (start, points, m, shape) = tables.find(&mesh, face);
+    assert_eq!(start, mesh.face_half_edges(face).next().unwrap());
+    let corner = mesh.position(mesh.origin(start));
+    for n in [1, 2, 3, 5, 7, 12] {
+        for i in 0..=n {
+            for j in 0..=n {
+                let s = surface_stencil(&m, shape, Dyadic::new(i, j, n)).unwrap();
+                check_sums(&s, "regular");
+                assert!(s.exact_derivatives);
+                let (x, y) = (corner.x + i as f64 / n as f64, corner.y + j as f64 / n as f64);
+                let what = format!("({i}, {j})/{n}");
+                assert_close(apply(&s.position, &points), DVec3::new(x, y, x * x + y * y + 2.0 / 3.0), 1e-12, &what);
+                assert_close(apply(&s.du, &points), DVec3::new(1.0, 0.0, 2.0 * x), 1e-11, &what);
+                assert_close(apply(&s.dv, &points), DVec3::new(0.0, 1.0, 2.0 * y), 1e-11, &what);
+            }
+        }
+    }
+}
+
+/// Rational points of the domain of a face with `size` sides: the corners, edge and face
+/// midpoints, and a scattering with denominators 3 to 32.
+fn points(size: usize) -> Vec<Dyadic> {
+    let mut out = Vec::new();
+    for n in [1, 2, 3, 5, 7, 10, 32] {
+        let mut k = 0;
+        for i in 0..=n {
+            for j in 0..=n {
+                if size == 4 || i + j <= n {
+                    k += 1;
+                    if n <= 2 || k % (n as usize + 1) == 1 {
+                        out.push(Dyadic::new(i, j, n));
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The limit point at `(u, v)` of a face equals the limit point of the same place in the child
+/// face that holds it after one refinement, and the derivatives agree with the factor 2: the
+/// stencils of every face of `soup` (after `levels` refinements), extraordinary and boundary
+/// ones included, describe one surface.
+fn assert_consistent_across_levels(builtin: Builtin, soup: PolygonSoup, levels: usize, face_step: usize) {
+    let scheme = builtin.scheme();
+    let base = Mesh::build(soup).unwrap();
+    let mesh = refine_uniform(&base, scheme, levels, &RefineOptions::DEFAULT).unwrap();
+    let refined = refine(&mesh, scheme, &RefineOptions::DEFAULT).unwrap();
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    let tolerance = 1e-11 * (hi - lo).max_element();
+    let coarse = Tables::for_mesh(builtin, &mesh);
+    let fine = Tables::for_mesh(builtin, &refined);
+    for face in mesh.face_ids().step_by(face_step) {
+        let (start, points, m, shape) = coarse.find(&mesh, face);
+        // Each child's patch, matrices and shape.
+        let children: Vec<_> = sub_patch_starts(scheme, &mesh, start, &refined)
+            .unwrap()
+            .into_iter()
+            .map(|h| {
+                let patch = refined.patch(h, fine.radius);
+                let (cm, cs) = fine
+                    .tables
+                    .iter()
+                    .find_map(|t| t.find(&patch.signature).map(|s| (t.clone(), s)))
+                    .unwrap_or_else(|| panic!("{builtin}: a child of face {face} has no shape"));
+                let points: Vec<DVec3> = patch.vertices.iter().map(|&v| refined.position(v)).collect();
+                (cm, cs, points)
+            })
+            .collect();
+        for point in self::points(m.face_size) {
+            let s = surface_stencil(&m, shape, point).unwrap();
+            let what = format!("{builtin} face {face} at {point:?}");
+            check_sums(&s, &what);
+            // The child holding the point, and the point in its frame (denominator halves
+            // when even, else the numerators double).
+            let (u, v) = point.to_f64();
+            let domains = subdiv_schemes::ChildDomain::of_face(m.face_size);
+            let Some((c, domain)) = domains.iter().enumerate().find(|(_, d)| {
+                let (a, b) = d.to_child(u, v);
+                a >= 0.0 && b >= 0.0 && if m.face_size == 3 { a + b <= 1.0 } else { a <= 1.0 && b <= 1.0 }
+            }) else {
+                panic!("{what}: no child holds the point")
+            };
+            let sign = if domain.flipped { -1 } else { 1 };
+            let q = point.denominator;
+            let child_point = Dyadic::new(
+                sign * (2 * point.u - i64::from(domain.offset[0]) * q),
+                sign * (2 * point.v - i64::from(domain.offset[1]) * q),
+                q,
+            );
+            let (cm, cs, child_points) = &children[c];
+            let t = surface_stencil(cm, *cs, child_point).unwrap();
+            assert_close(apply(&s.position, &points), apply(&t.position, child_points), tolerance, &what);
+            if s.exact_derivatives && t.exact_derivatives {
+                let factor = 2.0 * sign as f64;
+                assert_close(apply(&s.du, &points), factor * apply(&t.du, child_points), 1e3 * tolerance, &what);
+                assert_close(apply(&s.dv, &points), factor * apply(&t.dv, child_points), 1e3 * tolerance, &what);
+            }
+        }
+    }
+}
+
+#[test]
+fn catmull_clark_stencils_are_consistent_across_levels() {
+    assert_consistent_across_levels(Builtin::CatmullClark, shapes::cube(), 2, 1);
+    assert_consistent_across_levels(Builtin::CatmullClark, shapes::pole(5), 2, 3);
+    let mut grid = shapes::quad_grid(3, 3);
+    grid.tags.boundary_interpolation = Some(BoundaryInterpolation::EdgeAndCorner);
+    assert_consistent_across_levels(Builtin::CatmullClark, grid, 1, 1);
+}
+
+#[test]
+fn loop_stencils_are_consistent_across_levels() {
+    assert_consistent_across_levels(Builtin::Loop, shapes::icosahedron(), 2, 2);
+    assert_consistent_across_levels(Builtin::Loop, shapes::tetrahedron(), 2, 1);
+}
+
+#[test]
+fn other_schemes_stencils_are_consistent_across_levels() {
+    assert_consistent_across_levels(Builtin::SwQuad, shapes::cube(), 2, 3);
+    assert_consistent_across_levels(Builtin::Butterfly, shapes::octahedron(), 3, 17);
+}
+
+/// Interpolating schemes keep their vertices: the stencil at a face's corner is that corner.
+#[test]
+fn interpolating_stencils_at_corners_are_the_vertices() {
+    for (builtin, soup, levels) in
+        [(Builtin::Butterfly, shapes::icosahedron(), 3), (Builtin::Kobbelt, shapes::cube(), 3)]
+    {
+        let mesh =
+            refine_uniform(&Mesh::build(soup).unwrap(), builtin.scheme(), levels, &RefineOptions::DEFAULT).unwrap();
+        let tables = Tables::for_mesh(builtin, &mesh);
+        for face in mesh.face_ids().step_by(7) {
+            let (start, points, m, shape) = tables.find(&mesh, face);
+            let s = surface_stencil(&m, shape, Dyadic::new(0, 0, 1)).unwrap();
+            assert_close(
+                apply(&s.position, &points),
+                mesh.position(mesh.origin(start)),
+                1e-13,
+                &format!("{builtin} {face}"),
+            );
+        }
+    }
+}
+
+/// At an extraordinary vertex the tangents are directions whose cross product is the normal:
+/// it is the limit of the normals at points approaching the vertex.
+#[test]
+fn normals_at_extraordinary_vertices_are_the_limit_of_nearby_normals() {
+    for k in [3, 5, 6, 9] {
+        let cc = Builtin::CatmullClark.scheme();
+        let mesh = refine_uniform(&Mesh::build(shapes::pole(k)).unwrap(), cc, 1, &RefineOptions::DEFAULT).unwrap();
+        let tables = Tables::for_mesh(Builtin::CatmullClark, &mesh);
+        let face = mesh.vertex_faces(subdiv_mesh::VertexId::new(0)).next().unwrap();
+        let start = mesh.face_half_edges(face).find(|&h| mesh.origin(h).index() == 0).unwrap();
+        let patch = mesh.patch(start, tables.radius);
+        let points: Vec<DVec3> = patch.vertices.iter().map(|&v| mesh.position(v)).collect();
+        let (m, shape) = tables.tables.iter().find_map(|t| t.find(&patch.signature).map(|s| (t.clone(), s))).unwrap();
+        let normal = |p: Dyadic| {
+            let s = surface_stencil(&m, shape, p).unwrap();
+            apply(&s.du, &points).cross(apply(&s.dv, &points)).normalize()
+        };
+        let at_vertex = normal(Dyadic::new(0, 0, 1));
+        let s = surface_stencil(&m, shape, Dyadic::new(0, 0, 1)).unwrap();
+        assert!(!s.exact_derivatives);
+        let near = normal(Dyadic::new(1, 1, 1 << 20));
+        assert!(at_vertex.dot(near) > 1.0 - 1e-6, "k = {k}: {at_vertex} vs {near}");
+        assert!(at_vertex.z > 0.9, "k = {k}: the dome's normal points up: {at_vertex}");
+    }
+}
