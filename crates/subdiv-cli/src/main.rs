@@ -11,6 +11,7 @@ mod info;
 mod input;
 mod refine;
 mod scheme_arg;
+mod stencil;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -38,6 +39,9 @@ enum Command {
     Analyze(analyze::AnalyzeArgs),
     /// Print a built-in scheme's definition (TOML, or RON), a template for `--scheme-file`.
     Scheme(scheme_arg::PrintArgs),
+    /// Exact limit stencils: a curve scheme's basis function and derivative on (1/n)ℤ, or a
+    /// surface patch's position and tangent weights at rational (u, v).
+    Stencil(stencil::StencilArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -59,6 +63,7 @@ fn main() -> ExitCode {
         Command::Refine(args) => refine::run(args, &mut out),
         Command::Analyze(args) => analyze::run(args, &mut out),
         Command::Scheme(args) => scheme_arg::print(args, &mut out),
+        Command::Stencil(args) => stencil::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

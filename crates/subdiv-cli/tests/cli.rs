@@ -152,3 +152,22 @@ fn analyze_reports_the_subdominant_eigenvalue() {
     assert_eq!(report["subdominant_real_double"], true);
     assert_eq!(subdiv(&["analyze", "--valence", "2"]).status.code(), Some(2));
 }
+
+#[test]
+fn stencil_prints_the_papers_four_point_numbers() {
+    // Paper 000: the four-point scheme at n = 3 has denominator 5589, its derivative 540.
+    let report = json(&["stencil", "--scheme", "four-point", "--n", "3", "--exact", "--json"]);
+    let phi: Vec<&str> = report["phi"].as_array().unwrap().iter().map(|v| v.as_str().unwrap()).collect();
+    assert_eq!(phi.len(), 19);
+    assert_eq!(&phi[..6], ["0", "-1/5589", "16/5589", "0", "-256/5589", "-410/5589"]);
+    assert_eq!(report["x"][0], "-3");
+    assert_eq!(report["dphi"][6], "2/3"); // 360/540
+    // A Catmull-Clark extraordinary vertex of valence 5: 2k + 8 weights summing to 1.
+    let report = json(&["stencil", "--valence", "5", "--at", "0,0", "--json"]);
+    let weights = report["stencils"][0]["position"].as_array().unwrap();
+    assert_eq!(weights.len(), 18);
+    assert!((weights.iter().map(|w| w.as_f64().unwrap()).sum::<f64>() - 1.0).abs() < 1e-12);
+    // Off the grid, or a scheme without sub-patch matrices: status 2.
+    assert_eq!(subdiv(&["stencil", "--scheme", "four-point", "--n", "3", "--at", "1/2"]).status.code(), Some(2));
+    assert_eq!(subdiv(&["stencil", "--scheme", "doo-sabin", "--at", "0,0"]).status.code(), Some(2));
+}

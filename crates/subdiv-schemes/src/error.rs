@@ -28,6 +28,18 @@ pub enum SchemeError {
         /// The first element that has it, e.g. `edge 3-7`.
         element: String,
     },
+    /// The scheme's split has no such construction (sub-patch matrices of a dual split).
+    #[error("{scheme}: {what} are not available for the {split} split: {reason}")]
+    SplitNotSupported {
+        /// The scheme's name.
+        scheme: String,
+        /// What was asked for, e.g. `sub-patch matrices`.
+        what: &'static str,
+        /// The split, e.g. `dual`.
+        split: &'static str,
+        /// Why not.
+        reason: &'static str,
+    },
     /// The analysis cannot take this valence.
     #[error("{scheme}: valence {valence} is not supported; {reason}")]
     ValenceNotSupported {

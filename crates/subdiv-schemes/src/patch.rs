@@ -237,9 +237,9 @@ impl PatchMatrices {
     /// Computes the matrices without the cache.
     ///
     /// # Errors
-    /// [`SchemeError::FeatureNotSupported`] for dual, mid-edge and √3 splits (their patches
-    /// are not faces of the control mesh) and for boundary patches of schemes without boundary
-    /// rules; [`SchemeError::ValenceNotSupported`] below valence 3, with no faces, or when no
+    /// [`SchemeError::SplitNotSupported`] for dual, mid-edge and √3 splits (their patches
+    /// are not faces of the control mesh), [`SchemeError::FeatureNotSupported`] for boundary
+    /// patches of schemes without boundary rules; [`SchemeError::ValenceNotSupported`] below valence 3, with no faces, or when no
     /// patch radius up to 3 is closed under refinement (Kobbelt's scheme at valences other
     /// than 3 and 4: its virtual points make the support near the vertex wider than any ring).
     pub fn compute(
@@ -250,13 +250,7 @@ impl PatchMatrices {
         let triangles = match scheme.split() {
             Split::Quad => false,
             Split::Triangle => true,
-            split @ (Split::Dual | Split::Midedge | Split::Sqrt3) => {
-                return Err(SchemeError::FeatureNotSupported {
-                    scheme: scheme.name.clone(),
-                    feature: "sub-patch matrices",
-                    element: format!("the {split:?} split, whose sub-patches are not faces of the control mesh"),
-                });
-            }
+            split @ (Split::Dual | Split::Midedge | Split::Sqrt3) => return Err(split_not_supported(scheme, split)),
         };
         let (valence, reason) = match patch_type {
             PatchType::Interior { valence } => (valence, "an interior patch needs valence 3 or more"),
@@ -481,6 +475,19 @@ fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Option<[Vec<f64
     Some([(0..size).map(|i| x[(i, 0)]).collect(), (0..size).map(|i| x[(i, 1)]).collect()])
 }
 
+fn split_not_supported(scheme: &Scheme, split: Split) -> SchemeError {
+    SchemeError::SplitNotSupported {
+        scheme: scheme.name.clone(),
+        what: "sub-patch matrices",
+        split: match split {
+            Split::Dual => "dual",
+            Split::Midedge => "mid-edge",
+            _ => "√3",
+        },
+        reason: "its sub-patches are not faces of the control mesh",
+    }
+}
+
 /// Where the sub-patches of the patch starting at `start` start in `child`, the mesh the engine
 /// refined `parent` into with `scheme`, in the order of [`PatchShape::children`]: the same
 /// corner of each child face as `start` is of its face, so that the children's axes follow the
@@ -502,7 +509,7 @@ fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Option<[Vec<f64
 ///
 /// # Errors
 /// [`SchemeError::FaceNotSupported`] for faces other than quads (quad splits) or triangles
-/// (triangle splits), [`SchemeError::FeatureNotSupported`] for other splits.
+/// (triangle splits), [`SchemeError::SplitNotSupported`] for other splits.
 pub fn sub_patch_starts(
     scheme: &Scheme,
     parent: &Mesh,
@@ -514,13 +521,7 @@ pub fn sub_patch_starts(
     let (expected, per_face): (usize, &dyn Fn(FaceId) -> usize) = match scheme.split() {
         Split::Quad => (4, &|f| parent.face_size(f)),
         Split::Triangle => (3, &|_| 4),
-        split => {
-            return Err(SchemeError::FeatureNotSupported {
-                scheme: scheme.name.clone(),
-                feature: "sub-patches",
-                element: format!("the {split:?} split, whose sub-patches are not faces of the control mesh"),
-            });
-        }
+        split => return Err(split_not_supported(scheme, split)),
     };
     if size != expected {
         return Err(SchemeError::FaceNotSupported { scheme: scheme.name.clone(), face, size, expected });

@@ -104,7 +104,7 @@ fn every_sub_patch_row_is_affine() {
 fn unsupported_splits_and_valences_are_typed_errors() {
     for builtin in [Builtin::DooSabin, Builtin::Midedge, Builtin::Sqrt3] {
         let err = PatchMatrices::compute(builtin.scheme(), PatchType::Interior { valence: 5 }, EDGE_ONLY).unwrap_err();
-        assert!(matches!(err, SchemeError::FeatureNotSupported { feature: "sub-patch matrices", .. }), "{err}");
+        assert!(matches!(err, SchemeError::SplitNotSupported { what: "sub-patch matrices", .. }), "{err}");
     }
     let cc = Builtin::CatmullClark.scheme();
     let err = PatchMatrices::compute(cc, PatchType::Interior { valence: 2 }, EDGE_ONLY).unwrap_err();

@@ -1,0 +1,158 @@
+//! `subdiv stencil`: exact limit stencils of a curve scheme on the grid (1/n)ℤ, or of a surface
+//! scheme's patch at a rational (u, v).
+
+use std::io::Write;
+
+use serde_json::{Value, json};
+use subdiv::mesh::BoundaryInterpolation;
+use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
+use subdiv::stencil::curve::basis_grid;
+use subdiv::stencil::{Dyadic, Rational, surface_stencil};
+
+use crate::UserError;
+
+/// Arguments of `subdiv stencil`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct StencilArgs {
+    /// A built-in curve scheme (cubic-bspline, chaikin, four-point, six-point, sw-curve) or
+    /// surface scheme (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear).
+    #[arg(long, default_value = "catmull-clark")]
+    scheme: String,
+    /// The grid rate: curves are sampled on (1/n)ℤ, surfaces at (i/n, j/n) when `--at` is not
+    /// given.
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    n: u32,
+    /// Valence of the surface patch's corner 0 (default: the scheme's regular valence).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(3..=64))]
+    valence: Option<u32>,
+    /// One point: `X` for a curve (on the grid), `U,V` for a surface; fractions such as `1/3`.
+    #[arg(long, value_name = "U,V")]
+    at: Option<String>,
+    /// Print exact fractions (curves) instead of decimals.
+    #[arg(long)]
+    exact: bool,
+    /// Print JSON instead of text.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `p/q` or an integer, as (p, q) with q > 0.
+fn parse_fraction(text: &str) -> Result<(i64, i64), UserError> {
+    let bad = || UserError(format!("`{text}` is not a fraction p/q with q > 0"));
+    let (p, q) = match text.trim().split_once('/') {
+        Some((p, q)) => (p.trim().parse().map_err(|_| bad())?, q.trim().parse().map_err(|_| bad())?),
+        None => (text.trim().parse().map_err(|_| bad())?, 1),
+    };
+    if q <= 0 { Err(bad()) } else { Ok((p, q)) }
+}
+
+pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserError> {
+    if let Some(curve) = CurveScheme::builtin(&args.scheme) {
+        return run_curve(args, &curve, out);
+    }
+    let builtin = Builtin::from_name(&args.scheme).ok_or_else(|| {
+        let mut known: Vec<&str> = CurveScheme::BUILTIN_NAMES.to_vec();
+        known.extend(Builtin::ALL.iter().map(|b| b.name()));
+        UserError(format!("unknown scheme {:?}; known: {}", args.scheme, known.join(", ")))
+    })?;
+    run_surface(args, builtin, out)
+}
+
+fn run_curve(args: &StencilArgs, scheme: &CurveScheme, out: &mut impl Write) -> Result<(), UserError> {
+    let n = args.n;
+    let grid = basis_grid(scheme, n)?;
+    let number = |r: &Rational| if args.exact { json!(r.to_string()) } else { json!(r.to_f64()) };
+    let text = |r: &Rational| if args.exact { r.to_string() } else { format!("{:.17}", r.to_f64()) };
+    if let Some(at) = &args.at {
+        let (p, q) = parse_fraction(at)?;
+        let scaled = p * i64::from(n);
+        if scaled % q != 0 {
+            return Err(UserError(format!("x = {at} is not on the grid (1/{n})ℤ; pass --n a multiple of {q}")));
+        }
+        let stencil = grid.stencil_at(scaled / q);
+        let weights = |w: &[(i64, Rational)]| -> Value {
+            w.iter().map(|(i, r)| json!({"point": i, "weight": number(r)})).collect()
+        };
+        if args.json {
+            let report = json!({
+                "scheme": scheme.name(), "n": n, "x": at,
+                "position": weights(&stencil.position), "tangent": weights(&stencil.tangent),
+            });
+            writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+        } else {
+            writeln!(out, "{} at x = {at}: weights of the control points p_i", scheme.name())?;
+            for (label, w) in [("position", &stencil.position), ("tangent", &stencil.tangent)] {
+                let list: Vec<String> = w.iter().map(|(i, r)| format!("p{i}: {}", text(r))).collect();
+                writeln!(out, "{label:9} {}", list.join(", "))?;
+            }
+        }
+        return Ok(());
+    }
+    let x: Vec<Rational> =
+        (0..grid.phi.len()).map(|k| Rational::new(grid.first + k as i64, i64::from(n)).expect("n ≥ 1")).collect();
+    if args.json {
+        let report = json!({
+            "scheme": scheme.name(), "n": n,
+            "x": x.iter().map(number).collect::<Vec<_>>(),
+            "phi": grid.phi.iter().map(number).collect::<Vec<_>>(),
+            "dphi": grid.dphi.iter().map(number).collect::<Vec<_>>(),
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+    } else {
+        writeln!(out, "{:>12} {:>24} {:>24}", "x", "phi", "dphi")?;
+        for ((x, phi), dphi) in x.iter().zip(&grid.phi).zip(&grid.dphi) {
+            writeln!(out, "{:>12} {:>24} {:>24}", x.to_string(), text(phi), text(dphi))?;
+        }
+    }
+    Ok(())
+}
+
+fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Result<(), UserError> {
+    let scheme = builtin.scheme();
+    let valence = args.valence.map_or(scheme.regular_valence(), |k| k as usize);
+    let matrices = PatchMatrices::of(scheme, PatchType::Interior { valence }, BoundaryInterpolation::EdgeOnly)?;
+    let points: Vec<Dyadic> = match &args.at {
+        Some(at) => {
+            let (u, v) = at.split_once(',').ok_or_else(|| UserError(format!("--at {at}: expected U,V")))?;
+            let ((a, b), (c, d)) = (parse_fraction(u)?, parse_fraction(v)?);
+            vec![Dyadic::new(a * d, c * b, b * d)]
+        }
+        None => {
+            let n = i64::from(args.n);
+            let inside = |i: i64, j: i64| matrices.face_size == 4 || i + j <= n;
+            (0..=n)
+                .flat_map(|j| (0..=n).map(move |i| (i, j)))
+                .filter(|&(i, j)| inside(i, j))
+                .map(|(i, j)| Dyadic::new(i, j, n))
+                .collect()
+        }
+    };
+    let mut reports = Vec::new();
+    for point in points {
+        let s = surface_stencil(&matrices, 0, point)?;
+        let (u, v) = point.to_f64();
+        if args.json {
+            reports.push(json!({
+                "u": u, "v": v, "position": s.position, "du": s.du, "dv": s.dv,
+                "exact_derivatives": s.exact_derivatives,
+            }));
+        } else {
+            writeln!(out, "({u}, {v}):")?;
+            let list = |w: &[f64]| w.iter().map(|x| format!("{x:.12}")).collect::<Vec<_>>().join(" ");
+            writeln!(out, "  position {}", list(&s.position))?;
+            writeln!(out, "  du       {}", list(&s.du))?;
+            writeln!(out, "  dv       {}", list(&s.dv))?;
+            if !s.exact_derivatives {
+                writeln!(out, "  (at the extraordinary vertex: du, dv are tangent directions)")?;
+            }
+        }
+    }
+    if args.json {
+        let report = json!({
+            "scheme": builtin.name(), "valence": valence, "control_points": matrices.shapes[0].size,
+            "stencils": reports,
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+    }
+    Ok(())
+}
