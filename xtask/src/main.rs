@@ -6,15 +6,16 @@
 //!   `topology`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
+//! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
 
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod osd;
+mod paper;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str =
-    "usage: cargo xtask ci | cargo xtask bench [topology|refine] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine] | cargo xtask paper | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -22,6 +23,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("bench") => bench(args.get(1).map(String::as_str)),
+        Some("paper") => paper::run(),
         Some("osd-refine") => match args.get(1) {
             Some(osd) => {
                 let shared = std::env::var_os("SUBDIV_SHARED").map_or_else(|| root().join("../shared"), PathBuf::from);
