@@ -2,8 +2,8 @@
 //!
 //! - `cargo xtask ci` runs what `.ci/run` runs after installing packages: `cargo fmt --check`,
 //!   clippy with warnings denied, and the README's test command.
-//! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named, e.g.
-//!   `topology`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
+//! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named: `topology`,
+//!   `refine` or `stencil`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
@@ -15,7 +15,7 @@ mod paper;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine] | cargo xtask paper | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil] | cargo xtask paper | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -63,7 +63,7 @@ fn ci() -> Result<(), String> {
 }
 
 /// What each bench measures, for its `key=value` line: (bench target, criterion group).
-const BENCHES: &[(&str, &str)] = &[("topology", "topology"), ("refine", "refine")];
+const BENCHES: &[(&str, &str)] = &[("topology", "topology"), ("refine", "refine"), ("stencil", "stencil")];
 
 fn bench(only: Option<&str>) -> Result<(), String> {
     let selected: Vec<_> = BENCHES.iter().filter(|(name, _)| only.is_none_or(|o| o == *name)).collect();
