@@ -1,6 +1,8 @@
 //! `cargo xtask paper`: every number of paper 000 (Schaefer and Warren) that we reproduce,
 //! printed beside the paper's, with a verdict; exit status 1 if one differs.
 
+use num_bigint::BigInt;
+use num_integer::Integer;
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
 use subdiv::stencil::curve::{NonUniformCubicGrid, basis_grid};
@@ -18,30 +20,16 @@ fn show(values: &[Rational]) -> String {
 /// `1/L · {integers}` when every weight is a fraction with a denominator up to 10⁶ (checked to
 /// 1e-13), else decimals.
 fn normalised(weights: &[f64]) -> String {
-    let gcd = |mut a: i128, mut b: i128| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a.abs()
-    };
-    let exact: Option<Vec<(i128, i128)>> = weights
+    let exact: Option<Vec<Rational>> = weights
         .iter()
-        .map(|&w| {
-            let r = Rational::approximate(w, 1_000_000)?;
-            let text = r.to_string();
-            let (p, q) = text.split_once('/').unwrap_or((&text, "1"));
-            let (p, q): (i128, i128) = (p.parse().ok()?, q.parse().ok()?);
-            ((p as f64 / q as f64 - w).abs() < 1e-13).then_some((p, q))
-        })
+        .map(|&w| Rational::approximate(w, 1_000_000).filter(|r| (r.to_f64() - w).abs() < 1e-13))
         .collect();
-    match exact {
-        Some(fractions) => {
-            let lcm = fractions.iter().fold(1_i128, |l, &(_, q)| l / gcd(l, q) * q);
-            let integers: Vec<String> = fractions.iter().map(|&(p, q)| (p * (lcm / q)).to_string()).collect();
-            format!("1/{lcm} · {{{}}}", integers.join(", "))
-        }
-        None => weights.iter().map(|w| format!("{w:.10}")).collect::<Vec<_>>().join(" "),
-    }
+    let Some(fractions) = exact else {
+        return weights.iter().map(|w| format!("{w:.10}")).collect::<Vec<_>>().join(" ");
+    };
+    let lcm = fractions.iter().fold(BigInt::from(1), |l, r| l.lcm(r.denom()));
+    let integers: Vec<String> = fractions.iter().map(|r| (r.numer() * (&lcm / r.denom())).to_string()).collect();
+    format!("1/{lcm} · {{{}}}", integers.join(", "))
 }
 
 pub(crate) fn run() -> Result<(), String> {

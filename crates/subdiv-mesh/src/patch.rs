@@ -29,6 +29,42 @@ const ACROSS_BOUNDARY: u32 = 0;
 const ACROSS_OUTSIDE: u32 = 1;
 
 impl Mesh {
+    /// The rings of faces around `centre`, up to `radius`: ring 0 is `centre`, ring `r` the
+    /// other vertices of the faces touching ring `r − 1`. Vertices beyond are absent.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh, VertexId};
+    ///
+    /// let grid = Mesh::build(shapes::quad_grid(4, 4))?;
+    /// // Vertex (2, 2) of the 5 × 5 vertex grid: its faces hold the 3 × 3 block around it.
+    /// let rings = grid.face_rings(&[VertexId::new(12)], 1);
+    /// assert_eq!(rings.len(), 9);
+    /// assert_eq!(rings[&VertexId::new(6)], 1); // (1, 1), diagonally across a face
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
+    pub fn face_rings(&self, centre: &[VertexId], radius: usize) -> HashMap<VertexId, usize> {
+        let mut ring: HashMap<VertexId, usize> = centre.iter().map(|&v| (v, 0)).collect();
+        let mut current = centre.to_vec();
+        for r in 1..=radius {
+            let mut next = Vec::new();
+            for &v in &current {
+                for f in self.vertex_faces(v) {
+                    for &w in self.face_vertices(f) {
+                        ring.entry(w).or_insert_with(|| {
+                            next.push(w);
+                            r
+                        });
+                    }
+                }
+            }
+            if next.is_empty() {
+                break;
+            }
+            current = next;
+        }
+        ring
+    }
+
     /// The patch of `start`'s face: every vertex within `radius` rings of faces of it (radius
     /// 0: the face's corners; 1: the corners of every face touching one of them, the 16
     /// control points of a regular Catmull-Clark patch), in canonical order.
@@ -51,26 +87,7 @@ impl Mesh {
     pub fn patch(&self, start: HalfEdgeId, radius: usize) -> Patch {
         // Patches are small: maps keyed by the few vertices they hold, not arrays over the mesh.
         let start_face = self.face(start);
-        // Rings of vertices: 0 on the face, r on the faces touching ring r - 1.
-        let mut ring: HashMap<VertexId, usize> = HashMap::new();
-        let mut current: Vec<VertexId> = self.face_vertices(start_face).to_vec();
-        for &v in &current {
-            ring.insert(v, 0);
-        }
-        for r in 1..=radius {
-            let mut next = Vec::new();
-            for &v in &current {
-                for f in self.vertex_faces(v) {
-                    for &w in self.face_vertices(f) {
-                        ring.entry(w).or_insert_with(|| {
-                            next.push(w);
-                            r
-                        });
-                    }
-                }
-            }
-            current = next;
-        }
+        let ring = self.face_rings(self.face_vertices(start_face), radius);
         // The patch's faces touch a vertex of ring < radius (the face itself when radius is 0).
         let in_patch = |f: FaceId| {
             f == start_face || self.face_vertices(f).iter().any(|v| ring.get(v).is_some_and(|&r| r < radius))

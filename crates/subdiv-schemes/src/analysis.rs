@@ -77,9 +77,7 @@ impl LocalMatrix {
     /// # Errors
     /// [`SchemeError::Eigen`] when the eigen solver does not converge.
     pub fn eigenvalues(&self) -> Result<Vec<(f64, f64)>, SchemeError> {
-        let mut values = crate::eigen::eigenvalues(self.size, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)?;
-        crate::eigen::sort_by_modulus(&mut values);
-        Ok(values)
+        crate::eigen::eigenvalues(self.size, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)
     }
 
     /// A real basis of the eigenspace of the real eigenvalue `lambda`, `count` vectors: the
@@ -164,12 +162,12 @@ impl Canonical {
     /// `refined`, of the refined one), with each vertex's ring.
     fn neighbourhood(&self, refined: bool, radius: usize) -> Vec<(VertexId, usize)> {
         let mesh = if refined { self.refiner.mesh() } else { &self.mesh };
-        let ring = ring_distances(mesh, &self.centres[usize::from(refined)], radius);
-        let all = mesh.vertices().filter(|v| ring[v.index()] != usize::MAX);
+        let ring = mesh.face_rings(&self.centres[usize::from(refined)], radius);
+        let all = mesh.vertices().filter(|v| ring.contains_key(v));
         let key = |v: VertexId| {
             let p = mesh.position(v);
             let angle = (p.y.atan2(p.x) + 1e-6).rem_euclid(std::f64::consts::TAU);
-            (ring[v.index()], angle, p.truncate().length())
+            (ring[&v], angle, p.truncate().length())
         };
         let mut keyed: Vec<_> = all.map(|v| (key(v), v)).collect();
         keyed.sort_by(|(a, _), (b, _)| {
@@ -208,33 +206,6 @@ impl Canonical {
         }
         Ok(Some(LocalMatrix { size, radius, entries }))
     }
-}
-
-/// The ring of faces each vertex of `mesh` lies in, counted from `centre` (ring 0) up to
-/// `radius`; `usize::MAX` beyond.
-fn ring_distances(mesh: &Mesh, centre: &[VertexId], radius: usize) -> Vec<usize> {
-    let mut ring = vec![usize::MAX; mesh.vertex_count()];
-    let mut current = centre.to_vec();
-    for &v in &current {
-        ring[v.index()] = 0;
-    }
-    let mut r = 0;
-    while !current.is_empty() && r < radius {
-        r += 1;
-        let mut next = Vec::new();
-        for &v in &current {
-            for f in mesh.vertex_faces(v) {
-                for &w in mesh.face_vertices(f) {
-                    if ring[w.index()] == usize::MAX {
-                        ring[w.index()] = r;
-                        next.push(w);
-                    }
-                }
-            }
-        }
-        current = next;
-    }
-    ring
 }
 
 /// The weights of vertex `child` of the refiner's last level over the first level's vertices.
@@ -459,11 +430,11 @@ fn characteristic_map(
     }
     let fine = refiner.mesh();
     // Ring distances from the centre in the refined mesh, and how far every vertex is known.
-    let ring = ring_distances(fine, &centre(fine, canonical.centre_is_face), usize::MAX);
+    let ring = fine.face_rings(&centre(fine, canonical.centre_is_face), usize::MAX);
     let reach = fine
         .vertices()
-        .filter(|v| !known[v.index()] && ring[v.index()] != usize::MAX)
-        .map(|v| ring[v.index()].saturating_sub(1))
+        .filter(|v| !known[v.index()])
+        .filter_map(|v| ring.get(&v).map(|r| r.saturating_sub(1)))
         .min()
         .unwrap_or(usize::MAX);
     if reach == usize::MAX || reach < 4 {
@@ -475,7 +446,7 @@ fn characteristic_map(
     let (low, high) = (reach.div_ceil(4), reach);
     let faces: Vec<FaceId> = fine
         .face_ids()
-        .filter(|&f| fine.face_vertices(f).iter().all(|v| (low..=high).contains(&ring[v.index()])))
+        .filter(|&f| fine.face_vertices(f).iter().all(|v| ring.get(v).is_some_and(|r| (low..=high).contains(r))))
         .collect();
     let area = |f: FaceId| {
         let vs = fine.face_vertices(f);

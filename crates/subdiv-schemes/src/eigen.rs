@@ -2,11 +2,13 @@
 //! order).
 
 /// The eigenvalues of the `size × size` matrix with entries `get(row, column)`, as `(re, im)`,
-/// unsorted; `Err` carries the solver's message.
+/// largest modulus first (ties: larger real part first); `Err` carries the solver's message.
 pub(crate) fn eigenvalues(size: usize, get: impl Fn(usize, usize) -> f64) -> Result<Vec<(f64, f64)>, String> {
     let matrix = faer::Mat::<f64>::from_fn(size, size, get);
-    let values = matrix.eigenvalues().map_err(|e| format!("{e:?}"))?;
-    Ok(values.iter().map(|z| (z.re, z.im)).collect())
+    let mut values: Vec<(f64, f64)> =
+        matrix.eigenvalues().map_err(|e| format!("{e:?}"))?.iter().map(|z| (z.re, z.im)).collect();
+    sort_by_modulus(&mut values);
+    Ok(values)
 }
 
 /// Largest modulus first; ties: larger real part first.

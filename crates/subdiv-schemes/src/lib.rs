@@ -92,7 +92,9 @@ pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, Spectrum};
 pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError};
-pub use patch::{ChildDomain, PatchMatrices, PatchShape, PatchType, SubPatch, sub_patch_starts};
+pub use patch::{
+    ChildDomain, FoundPatch, MeshPatches, PatchMatrices, PatchShape, PatchType, SubPatch, sub_patch_starts,
+};
 pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
 pub use scheme::{
     Builtin, CreaseMask, ExtraordinaryEdgeMask, FaceMask, QuadEdgeMask, Rules, Scheme, Split, TriangleEdgeMask,

@@ -20,13 +20,13 @@
 //! axes; children 0..3 of a triangle sit at the corners of the domain `u, v ≥ 0, u + v ≤ 1` and
 //! child 3 is the middle one, turned by half a turn (see [`ChildDomain`]).
 
-use std::collections::HashMap;
+use std::collections::{HashMap, VecDeque};
 
 use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh};
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, VertexId};
 
 use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
@@ -146,9 +146,7 @@ impl SubPatch {
                 self.rows, self.columns
             )));
         }
-        let mut values = crate::eigen::eigenvalues(self.rows, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)?;
-        crate::eigen::sort_by_modulus(&mut values);
-        Ok(values)
+        crate::eigen::eigenvalues(self.rows, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)
     }
 
     /// The child's control points from the parent's.
@@ -252,14 +250,17 @@ impl PatchMatrices {
             Split::Triangle => true,
             split @ (Split::Dual | Split::Midedge | Split::Sqrt3) => return Err(split_not_supported(scheme, split)),
         };
-        let (valence, reason) = match patch_type {
-            PatchType::Interior { valence } => (valence, "an interior patch needs valence 3 or more"),
-            PatchType::Boundary { faces, .. } => {
-                (faces + 1, "a boundary patch needs one face or more, and an index below the face count")
+        let (valence, invalid) = match patch_type {
+            PatchType::Interior { valence } => {
+                (valence, (valence < 3).then_some("an interior patch needs valence 3 or more"))
             }
+            PatchType::Boundary { faces, index } => (
+                faces + 1,
+                (faces == 0 || index >= faces)
+                    .then_some("a boundary patch needs one face or more, and an index below the face count"),
+            ),
         };
-        let bad_index = matches!(patch_type, PatchType::Boundary { faces, index } if index >= faces);
-        if valence < 3 && matches!(patch_type, PatchType::Interior { .. }) || valence < 2 || bad_index {
+        if let Some(reason) = invalid {
             return Err(SchemeError::ValenceNotSupported { scheme: scheme.name.clone(), valence, reason });
         }
         for radius in 1..=MAX_RADIUS {
@@ -293,6 +294,100 @@ impl PatchMatrices {
     pub fn keeping(&self, shape: usize) -> Option<(usize, &SubPatch)> {
         self.shapes[shape].children.iter().enumerate().find(|(_, c)| c.shape == shape)
     }
+}
+
+/// The sub-patch matrices a mesh's faces need — one [`PatchMatrices`] per patch type at its
+/// vertices (interior valences, and every place in every boundary fan) — and the lookup from a
+/// face to its shape.
+#[derive(Clone, Debug)]
+pub struct MeshPatches {
+    tables: Vec<Arc<PatchMatrices>>,
+}
+
+/// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
+/// points and its matrices.
+#[derive(Clone, Debug)]
+pub struct FoundPatch {
+    /// The half-edge the patch starts at (corner 0 of its domain).
+    pub start: HalfEdgeId,
+    /// The control points, in [`Mesh::patch`] order.
+    pub vertices: Vec<VertexId>,
+    /// The matrices holding the shape.
+    pub matrices: Arc<PatchMatrices>,
+    /// The shape, an index into the matrices' shapes.
+    pub shape: usize,
+}
+
+impl MeshPatches {
+    /// The matrices for `mesh`'s faces under `scheme`, with the boundary rule refinement would
+    /// use (`options`, else the mesh's tags).
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::{refine_uniform, Builtin, MeshPatches, RefineOptions};
+    ///
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// let cube = Mesh::build(shapes::cube())?;
+    /// // After one refinement a patch can still hold two of the cube's corners; after two,
+    /// // every face has a shape.
+    /// let once = refine_uniform(&cube, cc, 1, &RefineOptions::DEFAULT)?;
+    /// let patches = MeshPatches::new(cc, &once, &RefineOptions::DEFAULT)?;
+    /// assert!(patches.find(&once, once.face_ids().next().unwrap()).is_none());
+    /// let twice = refine_uniform(&cube, cc, 2, &RefineOptions::DEFAULT)?;
+    /// let patches = MeshPatches::new(cc, &twice, &RefineOptions::DEFAULT)?;
+    /// assert!(twice.face_ids().all(|f| patches.find(&twice, f).is_some()));
+    /// // Face 0 has a corner of the cube (valence 3): 2k + 8 control points.
+    /// assert_eq!(patches.find(&twice, twice.face_ids().next().unwrap()).unwrap().vertices.len(), 14);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`PatchMatrices::of`], for the first vertex whose patch type fails.
+    pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, SchemeError> {
+        let boundary = options.boundary_for(mesh);
+        let mut types = Vec::new();
+        for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v)) {
+            let faces = mesh.vertex_faces(v).count();
+            if mesh.is_boundary_vertex(v) {
+                types.extend((0..faces).map(|index| PatchType::Boundary { faces, index }));
+            } else {
+                types.push(PatchType::Interior { valence: mesh.valence(v) });
+            }
+        }
+        let mut seen = std::collections::HashSet::new();
+        types.retain(|t| seen.insert(*t));
+        let tables = types.into_iter().map(|t| PatchMatrices::of(scheme, t, boundary)).collect::<Result<_, _>>()?;
+        Ok(Self { tables })
+    }
+
+    /// The patch of `face` in the first rotation whose shape is known, or `None` (a face whose
+    /// patch holds two irregular vertices, which a further refinement separates).
+    pub fn find(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
+        mesh.face_half_edges(face).find_map(|start| self.at(mesh, start))
+    }
+
+    /// The patch starting at `start`, if its shape is known.
+    pub fn at(&self, mesh: &Mesh, start: HalfEdgeId) -> Option<FoundPatch> {
+        let mut gathered: Option<(usize, Patch)> = None;
+        for table in &self.tables {
+            if gathered.as_ref().is_none_or(|(r, _)| *r != table.radius) {
+                gathered = Some((table.radius, mesh.patch(start, table.radius)));
+            }
+            let (_, patch) = gathered.as_ref().expect("gathered above");
+            if let Some(shape) = table.find(&patch.signature) {
+                return Some(FoundPatch { start, vertices: patch.vertices.clone(), matrices: table.clone(), shape });
+            }
+        }
+        None
+    }
+}
+
+/// A shape whose children are still to be found: where its patch lies.
+struct Pending {
+    shape: usize,
+    level: usize,
+    start: HalfEdgeId,
+    vertices: Vec<VertexId>,
 }
 
 /// The canonical mesh refined level by level, and the shapes found so far.
@@ -331,16 +426,9 @@ impl<'a> Derivation<'a> {
             .filter(|&h| mesh.origin(h).index() == 0)
             .nth(index)
             .expect("the canonical mesh has a face at its centre in every sector");
-        let root = self.meshes[0].patch(start, self.radius);
-        self.by_signature.insert(root.signature.clone(), 0);
-        self.shapes.push(PatchShape {
-            size: root.vertices.len(),
-            signature: root.signature,
-            children: Vec::new(),
-            parameters: None,
-        });
-        let mut pending = std::collections::VecDeque::from([(0, 0, start)]);
-        while let Some((shape, level, start)) = pending.pop_front() {
+        let mut pending = VecDeque::new();
+        self.register(self.meshes[0].patch(start, self.radius), 0, start, &mut pending);
+        while let Some(Pending { shape, level, start, vertices }) = pending.pop_front() {
             if level == MAX_LEVELS {
                 return Err(SchemeError::Internal(format!(
                     "{}: the sub-patch shapes do not close up within {MAX_LEVELS} levels",
@@ -348,7 +436,7 @@ impl<'a> Derivation<'a> {
                 )));
             }
             self.refine_to(level + 1)?;
-            let Some(children) = self.children(level, start, &mut pending)? else {
+            let Some(children) = self.children(level, start, &vertices, &mut pending)? else {
                 return Ok(None);
             };
             self.shapes[shape].children = children;
@@ -375,53 +463,60 @@ impl<'a> Derivation<'a> {
         Ok(())
     }
 
-    /// The sub-patches of the patch starting at `start` on `level`, registering new shapes in
-    /// `pending`; `None` if a child's row leaves the parent patch.
+    /// The shape of `patch` (starting at `start` on `level`): a known one, or a new one queued
+    /// in `pending` for its own children.
+    fn register(&mut self, patch: Patch, level: usize, start: HalfEdgeId, pending: &mut VecDeque<Pending>) -> usize {
+        if let Some(&s) = self.by_signature.get(&patch.signature) {
+            return s;
+        }
+        let s = self.shapes.len();
+        self.by_signature.insert(patch.signature.clone(), s);
+        self.shapes.push(PatchShape {
+            size: patch.vertices.len(),
+            signature: patch.signature,
+            children: Vec::new(),
+            parameters: None,
+        });
+        pending.push_back(Pending { shape: s, level, start, vertices: patch.vertices });
+        s
+    }
+
+    /// The sub-patches of the patch with vertices `parent` starting at `start` on `level`,
+    /// registering new shapes in `pending`; `None` if a child's row leaves the parent patch.
     fn children(
         &mut self,
         level: usize,
         start: HalfEdgeId,
-        pending: &mut std::collections::VecDeque<(usize, usize, HalfEdgeId)>,
+        parent: &[VertexId],
+        pending: &mut VecDeque<Pending>,
     ) -> Result<Option<Vec<SubPatch>>, SchemeError> {
         let (parent_mesh, child_mesh) = (&self.meshes[level], &self.meshes[level + 1]);
-        let parent = parent_mesh.patch(start, self.radius);
-        let mut column = vec![usize::MAX; parent_mesh.vertex_count()];
-        for (c, v) in parent.vertices.iter().enumerate() {
-            column[v.index()] = c;
-        }
+        let column: HashMap<usize, usize> = parent.iter().enumerate().map(|(c, v)| (v.index(), c)).collect();
         let starts = sub_patch_starts(self.scheme, parent_mesh, start, child_mesh)?;
         let domains = ChildDomain::of_face(parent_mesh.face_size(parent_mesh.face(start)));
         let stencils = &self.refiners[level].levels()[0];
-        let mut children = Vec::new();
+        let columns = parent.len();
+        // The rows first (they borrow the meshes), then the shapes.
+        let mut found = Vec::new();
         for (&domain, &child_start) in domains.iter().zip(&starts) {
             let patch = child_mesh.patch(child_start, self.radius);
-            let columns = parent.vertices.len();
             let mut entries = vec![0.0; patch.vertices.len() * columns];
             for (r, v) in patch.vertices.iter().enumerate() {
                 for (p, w) in stencils.row(v.index()) {
-                    match column[p] {
-                        usize::MAX if w.abs() > 1e-14 => return Ok(None),
-                        usize::MAX => {}
-                        c => entries[r * columns + c] += w,
+                    match column.get(&p) {
+                        Some(&c) => entries[r * columns + c] += w,
+                        None if w.abs() > 1e-14 => return Ok(None),
+                        None => {}
                     }
                 }
             }
-            let shape = match self.by_signature.get(&patch.signature) {
-                Some(&s) => s,
-                None => {
-                    let s = self.shapes.len();
-                    self.by_signature.insert(patch.signature.clone(), s);
-                    self.shapes.push(PatchShape {
-                        size: patch.vertices.len(),
-                        signature: patch.signature,
-                        children: Vec::new(),
-                        parameters: None,
-                    });
-                    pending.push_back((s, level + 1, child_start));
-                    s
-                }
-            };
-            children.push(SubPatch { shape, domain, rows: patch.vertices.len(), columns, entries });
+            found.push((domain, child_start, patch, entries));
+        }
+        let mut children = Vec::new();
+        for (domain, child_start, patch, entries) in found {
+            let rows = patch.vertices.len();
+            let shape = self.register(patch, level + 1, child_start, pending);
+            children.push(SubPatch { shape, domain, rows, columns, entries });
         }
         Ok(Some(children))
     }
@@ -518,9 +613,9 @@ pub fn sub_patch_starts(
 ) -> Result<Vec<HalfEdgeId>, SchemeError> {
     let face = parent.face(start);
     let size = parent.face_size(face);
-    let (expected, per_face): (usize, &dyn Fn(FaceId) -> usize) = match scheme.split() {
-        Split::Quad => (4, &|f| parent.face_size(f)),
-        Split::Triangle => (3, &|_| 4),
+    let expected = match scheme.split() {
+        Split::Quad => 4,
+        Split::Triangle => 3,
         split => return Err(split_not_supported(scheme, split)),
     };
     if size != expected {
@@ -529,8 +624,11 @@ pub fn sub_patch_starts(
     // The engine numbers children face by face: one per corner for quads, four per triangle;
     // child `j` has corner `j` of the parent at its own corner `j` (the middle triangle starts
     // at the midpoint of side 1), so the rotation of `start` carries over.
-    let first_child: usize = parent.face_ids().take(face.index()).map(per_face).sum();
-    let rotation = parent.face_half_edges(face).position(|h| h == start).expect("start lies on its face");
+    // (Half-edges are numbered face by face too, so a quad split's first child is the index
+    // of the face's first half-edge.)
+    let first_corner = parent.face_half_edges(face).next().expect("faces have corners");
+    let first_child = if expected == 3 { 4 * face.index() } else { first_corner.index() };
+    let rotation = start.index() - first_corner.index();
     let children = if size == 3 { 4 } else { size };
     Ok((0..children)
         .map(|j| {

@@ -32,7 +32,7 @@ impl RefineOptions {
     /// The defaults: everything from the mesh's tags.
     pub const DEFAULT: Self = Self { boundary: None, crease_method: None, triangle_subdivision: None };
 
-    fn boundary_for(&self, mesh: &Mesh) -> BoundaryInterpolation {
+    pub(crate) fn boundary_for(&self, mesh: &Mesh) -> BoundaryInterpolation {
         self.boundary.or(mesh.tags().boundary_interpolation).unwrap_or(BoundaryInterpolation::EdgeOnly)
     }
 

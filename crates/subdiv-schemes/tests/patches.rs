@@ -1,43 +1,15 @@
 //! The derived sub-patch matrices: their spectra, and agreement with the engine on real meshes.
 
-use std::f64::consts::PI;
-
 use subdiv_mesh::{BoundaryInterpolation, DVec3, Mesh, PolygonSoup, VertexId, shapes};
 use subdiv_schemes::{
-    Builtin, PatchMatrices, PatchType, RefineOptions, SchemeError, refine, refine_uniform, sub_patch_starts,
+    Builtin, FoundPatch, MeshPatches, PatchMatrices, PatchType, RefineOptions, SchemeError, refine, refine_uniform,
+    sub_patch_starts,
 };
 
 const EDGE_ONLY: BoundaryInterpolation = BoundaryInterpolation::EdgeOnly;
 
 fn modulus(z: &(f64, f64)) -> f64 {
     z.0.hypot(z.1)
-}
-
-/// The square matrix of the sub-patch at the extraordinary corner has eigenvalue 1 (simple)
-/// and then `closed_form(k)`, at k = 3..=64.
-fn assert_subdominant(builtin: Builtin, closed_form: impl Fn(f64) -> f64) {
-    for k in 3..=64 {
-        let m = PatchMatrices::of(builtin.scheme(), PatchType::Interior { valence: k }, EDGE_ONLY).unwrap();
-        let (_, keeping) = m.keeping(0).expect("the extraordinary child keeps the shape");
-        let values = keeping.eigenvalues().unwrap();
-        assert!((values[0].0 - 1.0).abs() < 1e-12 && values[0].1.abs() < 1e-12, "{builtin} k = {k}: {values:?}");
-        assert!(modulus(&values[1]) < 1.0 - 1e-9, "{builtin} k = {k}: 1 is not simple");
-        let expected = closed_form(k as f64);
-        assert!((modulus(&values[1]) - expected).abs() < 1e-12, "{builtin} k = {k}: {:?} vs {expected}", values[1]);
-    }
-}
-
-#[test]
-fn catmull_clark_sub_patch_matrices_have_the_closed_form_subdominant_eigenvalue() {
-    assert_subdominant(Builtin::CatmullClark, |k| {
-        let c = (2.0 * PI / k).cos();
-        (5.0 + c + (PI / k).cos() * (18.0 + 2.0 * c).sqrt()) / 16.0
-    });
-}
-
-#[test]
-fn loop_sub_patch_matrices_have_the_closed_form_subdominant_eigenvalue() {
-    assert_subdominant(Builtin::Loop, |k| 0.375 + (2.0 * PI / k).cos() / 4.0);
 }
 
 #[test]
@@ -154,34 +126,15 @@ fn assert_matrices_match_the_engine(builtin: Builtin, soup: PolygonSoup, levels:
     let refined = refine(&mesh, scheme, &RefineOptions::DEFAULT).unwrap();
     let (lo, hi) = mesh.bounding_box().unwrap();
     let tolerance = 1e-12 * (hi - lo).max_element();
-    let boundary = mesh.tags().boundary_interpolation.unwrap_or(EDGE_ONLY);
-    let mut tables: Vec<std::sync::Arc<PatchMatrices>> = Vec::new();
-    for v in mesh.vertices() {
-        let faces = mesh.vertex_faces(v).count();
-        let types = if mesh.is_boundary_vertex(v) {
-            (0..faces).map(|index| PatchType::Boundary { faces, index }).collect()
-        } else {
-            vec![PatchType::Interior { valence: mesh.valence(v) }]
-        };
-        for patch_type in types {
-            if !tables.iter().any(|t| t.patch_type == patch_type) {
-                tables.push(PatchMatrices::of(scheme, patch_type, boundary).unwrap());
-            }
-        }
-    }
-    let radius = tables[0].radius;
+    let patches = MeshPatches::new(scheme, &mesh, &RefineOptions::DEFAULT).unwrap();
     let positions = |m: &Mesh, vs: &[VertexId]| -> Vec<DVec3> { vs.iter().map(|&v| m.position(v)).collect() };
     for face in mesh.face_ids() {
-        let found = mesh.face_half_edges(face).find_map(|start| {
-            let patch = mesh.patch(start, radius);
-            let (table, shape) = tables.iter().find_map(|t| t.find(&patch.signature).map(|s| (t.clone(), s)))?;
-            Some((start, patch, table, shape))
-        });
-        let Some((start, patch, table, shape)) = found else {
+        let Some(FoundPatch { start, vertices, matrices: table, shape }) = patches.find(&mesh, face) else {
             panic!("{builtin}: face {face} has no shape in the tables");
         };
+        let radius = table.radius;
         let starts = sub_patch_starts(scheme, &mesh, start, &refined).unwrap();
-        let parent = positions(&mesh, &patch.vertices);
+        let parent = positions(&mesh, &vertices);
         for (child, &child_start) in table.shapes[shape].children.iter().zip(&starts) {
             let child_patch = refined.patch(child_start, radius);
             assert_eq!(child_patch.signature, table.shapes[child.shape].signature, "{builtin}: face {face}");

@@ -1,12 +1,16 @@
-//! The derived one-ring matrices have the subdominant eigenvalues known in closed form.
+//! The derived one-ring and sub-patch matrices have the subdominant eigenvalues known in
+//! closed form.
 
 use std::f64::consts::PI;
 
-use subdiv_schemes::{Analysis, Builtin, LocalMatrix, SchemeError, Spectrum};
+use subdiv_mesh::BoundaryInterpolation;
+use subdiv_schemes::{Analysis, Builtin, LocalMatrix, PatchMatrices, PatchType, SchemeError, Spectrum};
 
 /// The derived matrices of `builtin` pass the spectral conditions at k = 3..=64 and their
-/// subdominant eigenvalue is `closed_form(k)` to 1e-12.
+/// subdominant eigenvalue is `closed_form(k)` to 1e-12: the one-ring matrix, and the square
+/// matrix of the sub-patch at the extraordinary corner (after a simple eigenvalue 1).
 fn assert_subdominant(builtin: Builtin, closed_form: impl Fn(f64) -> f64) {
+    let modulus = |z: &(f64, f64)| z.0.hypot(z.1);
     for k in 3..=64 {
         let expected = closed_form(k as f64);
         let spectrum = Spectrum::of(builtin.scheme(), k).unwrap();
@@ -16,6 +20,14 @@ fn assert_subdominant(builtin: Builtin, closed_form: impl Fn(f64) -> f64) {
             spectrum.subdominant()
         );
         assert!(spectrum.passes(), "{builtin} k = {k}");
+
+        let patch_type = PatchType::Interior { valence: k };
+        let m = PatchMatrices::of(builtin.scheme(), patch_type, BoundaryInterpolation::EdgeOnly).unwrap();
+        let (_, keeping) = m.keeping(0).expect("the extraordinary child keeps the shape");
+        let values = keeping.eigenvalues().unwrap();
+        assert!((values[0].0 - 1.0).abs() < 1e-12 && values[0].1.abs() < 1e-12, "{builtin} k = {k}: {values:?}");
+        assert!(modulus(&values[1]) < 1.0 - 1e-9, "{builtin} k = {k}: 1 is not simple");
+        assert!((modulus(&values[1]) - expected).abs() < 1e-12, "{builtin} k = {k}: {:?} vs {expected}", values[1]);
     }
 }
 

@@ -47,6 +47,7 @@ use faer::Mat;
 use subdiv_schemes::CurveScheme;
 
 use crate::StencilError;
+use crate::linalg::normalised_left_eigenvectors;
 use crate::rational::{Rational, SolveError, SparseRow, solve_sparse};
 
 /// The largest grid rate [`BasisGrid::new`] and [`EigenGrid::new`] accept: the systems have
@@ -524,9 +525,6 @@ pub struct EigenGrid {
     pub derivative_multiplicity: usize,
 }
 
-/// Singular values below this count as zero (the matrices have entries of order 1).
-const NULL_TOLERANCE: f64 = 1e-9;
-
 impl EigenGrid {
     /// The upsampled matrix's eigenvectors for `mask` at `rate`.
     ///
@@ -569,51 +567,12 @@ impl EigenGrid {
                 .collect()
         };
         let solve = |eigenvalue: f64, rows: Vec<(Vec<f64>, f64)>, quantity: &'static str| {
-            // Left eigenvectors: the null space of Ŝᵀ − λ I.
-            let shifted = Mat::<f64>::from_fn(size, size, |i, j| s_hat[(j, i)] - if i == j { eigenvalue } else { 0.0 });
-            let svd = shifted.svd().map_err(|e| fail(quantity, format!("SVD failed: {e:?}")))?;
-            let sigma = svd.S().column_vector();
-            let null: Vec<usize> = (0..size).filter(|&i| sigma[i] < NULL_TOLERANCE).collect();
-            if null.is_empty() {
-                return Err(fail(quantity, format!("{eigenvalue} is not an eigenvalue")));
-            }
-            let v = svd.V();
-            let basis = Mat::<f64>::from_fn(size, null.len(), |i, c| v[(i, null[c])]);
-            // The normalisations on the basis: B c = b, by least squares (pseudo-inverse).
-            let b_mat = Mat::<f64>::from_fn(rows.len(), null.len(), |r, c| {
-                (0..size).map(|i| rows[r].0[i] * basis[(i, c)]).sum::<f64>()
-            });
-            let small = b_mat.thin_svd().map_err(|e| fail(quantity, format!("SVD failed: {e:?}")))?;
-            let s = small.S().column_vector();
-            let largest = (0..null.len()).map(|i| s[i]).fold(0.0, f64::max);
-            if (0..null.len()).any(|i| s[i] <= NULL_TOLERANCE * largest.max(1.0)) {
-                return Err(fail(
-                    quantity,
-                    format!(
-                        "the normalisations do not single out one vector of the {}-dimensional eigenspace",
-                        null.len()
-                    ),
-                ));
-            }
-            let (u, vv) = (small.U(), small.V());
-            let coefficients: Vec<f64> = (0..null.len())
-                .map(|c| {
-                    (0..null.len())
-                        .map(|t| vv[(c, t)] * (0..rows.len()).map(|r| u[(r, t)] * rows[r].1).sum::<f64>() / s[t])
-                        .sum()
-                })
-                .collect();
-            let ell: Vec<f64> =
-                (0..size).map(|i| (0..null.len()).map(|c| basis[(i, c)] * coefficients[c]).sum()).collect();
-            let residual = rows
-                .iter()
-                .map(|(row, b)| (row.iter().zip(&ell).map(|(x, y)| x * y).sum::<f64>() - b).abs())
-                .fold(0.0, f64::max);
-            if residual > 1e-8 {
-                return Err(fail(quantity, format!("the normalisations are not met (residual {residual:e})")));
-            }
+            let (rows, values): (Vec<Vec<f64>>, Vec<f64>) = rows.into_iter().unzip();
+            let found = normalised_left_eigenvectors(&s_hat, eigenvalue, &rows, &[values])
+                .map_err(|detail| fail(quantity, detail))?;
+            let ell = found.vectors.into_iter().next().expect("one list of values, one vector");
             // Back to grid order: value at numerator lo + k is ℓ at window index size − 1 − k.
-            Ok((ell.into_iter().rev().collect::<Vec<f64>>(), null.len()))
+            Ok::<_, StencilError>((ell.into_iter().rev().collect::<Vec<f64>>(), found.multiplicity))
         };
         let (phi, multiplicity) = solve(1.0, residue_rows(&|_| 1.0, 1.0), "positions")?;
         let mut rows = residue_rows(&|_| 1.0, 0.0);

@@ -16,6 +16,7 @@
 
 mod address;
 mod error;
+mod linalg;
 mod surface;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
 pub mod curve;

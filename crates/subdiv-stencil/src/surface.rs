@@ -2,9 +2,9 @@
 //! a rational point of a patch from the sub-patch matrices alone.
 
 use faer::Mat;
-use faer::linalg::solvers::SolveLstsq;
 use subdiv_schemes::PatchMatrices;
 
+use crate::linalg::{eigenspace, normalised_left_eigenvectors};
 use crate::{Address, Dyadic, StencilError};
 
 /// Weights over a patch's control points (in [`subdiv_mesh::Patch`] order) giving a point of
@@ -23,7 +23,8 @@ pub struct SurfaceStencil {
     pub exact_derivatives: bool,
 }
 
-/// How close to zero a residual or singular value must be to count as zero.
+/// How close two eigenvalues, or an imaginary part or a determinant and zero, must be to count
+/// as equal.
 const TOLERANCE: f64 = 1e-9;
 
 /// The stencil of `point` in the patch of shape `shape` of `matrices`.
@@ -84,17 +85,23 @@ pub fn surface_stencil(matrices: &PatchMatrices, shape: usize, point: Dyadic) ->
     }
 
     let ones = vec![1.0; size];
-    let position = left_null_vector(&m_tau, 1.0, &[(&ones, 1.0)])
-        .ok_or_else(|| eigen_error(matrices, format!("eigenvalue 1 is not simple at {point:?}")))?;
+    let fail = |detail: String| eigen_error(matrices, format!("{detail} at {point:?}"));
+    let position = normalised_left_eigenvectors(&m_tau, 1.0, std::slice::from_ref(&ones), &[vec![1.0]])
+        .map_err(|detail| fail(format!("eigenvalue 1: {detail}")))?
+        .vectors
+        .remove(0);
     let lambda = if flips % 2 == 1 { -1.0 } else { 1.0 } * 0.5_f64.powi(period.len() as i32);
     let (du, dv, exact) = match &matrices.shapes[periodic].parameters {
+        // Both derivatives from one factorisation: ∂/∂u is 1 on u and 0 on v, ∂/∂v the reverse.
         Some([u, v]) => {
-            let du = left_null_vector(&m_tau, lambda, &[(&ones, 0.0), (u, 1.0), (v, 0.0)]);
-            let dv = left_null_vector(&m_tau, lambda, &[(&ones, 0.0), (u, 0.0), (v, 1.0)]);
-            match (du, dv) {
-                (Some(du), Some(dv)) => (du, dv, true),
-                _ => return Err(eigen_error(matrices, format!("no derivative eigenvectors at {point:?}"))),
-            }
+            let rows = [ones, u.clone(), v.clone()];
+            let mut found =
+                normalised_left_eigenvectors(&m_tau, lambda, &rows, &[vec![0.0, 1.0, 0.0], vec![0.0, 0.0, 1.0]])
+                    .map_err(|detail| fail(format!("derivatives: {detail}")))?
+                    .vectors;
+            let dv = found.pop().expect("two lists of values");
+            let du = found.pop().expect("two lists of values");
+            (du, dv, true)
         }
         None => {
             let (du, dv) = irregular_tangents(matrices, &m_tau, matrices.face_size)?;
@@ -134,23 +141,6 @@ fn eigen_error(matrices: &PatchMatrices, detail: String) -> StencilError {
     StencilError::Eigen { scheme: matrices.scheme.clone(), detail }
 }
 
-/// The row vector `w` with `w · (M − λ I) = 0` and `w · c = value` for each constraint
-/// `(c, value)`, if the least-squares solution satisfies all of them.
-fn left_null_vector(m: &Mat<f64>, lambda: f64, constraints: &[(&[f64], f64)]) -> Option<Vec<f64>> {
-    let n = m.nrows();
-    let rows = n + constraints.len();
-    // Unknown w as a column: (Mᵀ − λ I) w = 0, cᵀ w = value.
-    let a = Mat::<f64>::from_fn(rows, n, |i, j| {
-        if i < n { m[(j, i)] - if i == j { lambda } else { 0.0 } } else { constraints[i - n].0[j] }
-    });
-    let b = Mat::<f64>::from_fn(rows, 1, |i, _| if i < n { 0.0 } else { constraints[i - n].1 });
-    let w = a.qr().solve_lstsq(&b);
-    let residual = (&a * &w - &b).norm_max();
-    let w: Vec<f64> = (0..n).map(|i| w[(i, 0)]).collect();
-    let unique = a.singular_values().ok()?.iter().all(|&s| s > TOLERANCE);
-    (residual < TOLERANCE && unique && w.iter().all(|x| x.is_finite())).then_some(w)
-}
-
 /// Tangent directions at an irregular fixed point: the left eigenvectors of the two largest
 /// eigenvalues after 1, made dual to the right ones (the characteristic map), and turned to
 /// the map's directions of the face's first side (for `du`) and last side (for `dv`).
@@ -167,23 +157,19 @@ fn irregular_tangents(
     if values.len() < 3 || values[1].im.abs() > TOLERANCE || values[2].im.abs() > TOLERANCE {
         return Err(fail("the subdominant eigenvalues are not real"));
     }
-    // Right and left eigenvectors of the subdominant values (one or two distinct values).
-    let null_space = |transpose: bool, lambda: f64, count: usize| -> Result<Vec<Vec<f64>>, StencilError> {
-        let shifted = Mat::<f64>::from_fn(n, n, |i, j| {
-            let x = if transpose { m[(j, i)] } else { m[(i, j)] };
-            x - if i == j { lambda } else { 0.0 }
-        });
-        let svd = shifted.svd().map_err(|e| fail(&format!("svd: {e:?}")))?;
-        let s = svd.S().column_vector();
-        let mut order: Vec<usize> = (0..n).collect();
-        order.sort_by(|&a, &b| s[a].total_cmp(&s[b]));
-        Ok(order[..count].iter().map(|&c| (0..n).map(|r| svd.V()[(r, c)]).collect()).collect())
+    // Right and left eigenvectors of the subdominant values (one double value, or two simple).
+    let space = |lambda: f64, left: bool, dimension: usize| -> Result<Vec<Vec<f64>>, StencilError> {
+        let basis = eigenspace(m, lambda, left).map_err(|e| fail(&e))?;
+        if basis.len() != dimension {
+            return Err(fail(&format!("the eigenspace of {lambda} has dimension {}, not {dimension}", basis.len())));
+        }
+        Ok(basis)
     };
     let (right, left) = if (subdominant[0] - subdominant[1]).abs() < TOLERANCE {
-        (null_space(false, subdominant[0], 2)?, null_space(true, subdominant[0], 2)?)
+        (space(subdominant[0], false, 2)?, space(subdominant[0], true, 2)?)
     } else {
-        let r = [null_space(false, subdominant[0], 1)?, null_space(false, subdominant[1], 1)?].concat();
-        let l = [null_space(true, subdominant[0], 1)?, null_space(true, subdominant[1], 1)?].concat();
+        let r = [space(subdominant[0], false, 1)?, space(subdominant[1], false, 1)?].concat();
+        let l = [space(subdominant[0], true, 1)?, space(subdominant[1], true, 1)?].concat();
         (r, l)
     };
     // Dual basis: l'_a · r_b = δ_ab.

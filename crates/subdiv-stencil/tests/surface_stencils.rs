@@ -4,46 +4,24 @@
 use std::sync::Arc;
 
 use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, PolygonSoup, shapes};
-use subdiv_schemes::{Builtin, PatchMatrices, PatchType, RefineOptions, refine, refine_uniform, sub_patch_starts};
+use subdiv_schemes::{
+    Builtin, FoundPatch, MeshPatches, PatchMatrices, RefineOptions, refine, refine_uniform, sub_patch_starts,
+};
 use subdiv_stencil::{Dyadic, SurfaceStencil, surface_stencil};
 
-/// The patch tables a mesh's faces need, and a lookup from a face's start half-edge.
-struct Tables {
-    tables: Vec<Arc<PatchMatrices>>,
-    radius: usize,
+/// The patches of a mesh under `builtin`, and a face's: its start, control-point positions,
+/// matrices and shape, in the first rotation that has a shape.
+fn patches(builtin: Builtin, mesh: &Mesh) -> MeshPatches {
+    MeshPatches::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT).unwrap()
 }
 
-impl Tables {
-    fn for_mesh(builtin: Builtin, mesh: &Mesh) -> Self {
-        let boundary = mesh.tags().boundary_interpolation.unwrap_or(BoundaryInterpolation::EdgeOnly);
-        let mut tables: Vec<Arc<PatchMatrices>> = Vec::new();
-        for v in mesh.vertices() {
-            let faces = mesh.vertex_faces(v).count();
-            let types: Vec<PatchType> = if mesh.is_boundary_vertex(v) {
-                (0..faces).map(|index| PatchType::Boundary { faces, index }).collect()
-            } else {
-                vec![PatchType::Interior { valence: mesh.valence(v) }]
-            };
-            for t in types {
-                if !tables.iter().any(|m| m.patch_type == t) {
-                    tables.push(PatchMatrices::of(builtin.scheme(), t, boundary).unwrap());
-                }
-            }
-        }
-        let radius = tables[0].radius;
-        Self { tables, radius }
-    }
+fn positions(mesh: &Mesh, found: &FoundPatch) -> Vec<DVec3> {
+    found.vertices.iter().map(|&v| mesh.position(v)).collect()
+}
 
-    /// The face's patch positions, matrices and shape, in the first rotation that has a shape.
-    fn find(&self, mesh: &Mesh, face: FaceId) -> (HalfEdgeId, Vec<DVec3>, Arc<PatchMatrices>, usize) {
-        mesh.face_half_edges(face)
-            .find_map(|h| {
-                let patch = mesh.patch(h, self.radius);
-                let (t, s) = self.tables.iter().find_map(|t| t.find(&patch.signature).map(|s| (t.clone(), s)))?;
-                Some((h, patch.vertices.iter().map(|&v| mesh.position(v)).collect(), t, s))
-            })
-            .unwrap_or_else(|| panic!("face {face} has no shape"))
-    }
+fn find(patches: &MeshPatches, mesh: &Mesh, face: FaceId) -> (HalfEdgeId, Vec<DVec3>, Arc<PatchMatrices>, usize) {
+    let found = patches.find(mesh, face).unwrap_or_else(|| panic!("face {face} has no shape"));
+    (found.start, positions(mesh, &found), found.matrices, found.shape)
 }
 
 fn apply(weights: &[f64], points: &[DVec3]) -> DVec3 {
@@ -74,9 +52,9 @@ fn regular_catmull_clark_stencils_are_bicubic_b_splines() {
         p.z = p.x * p.x + p.y * p.y;
     }
     let mesh = Mesh::build(soup).unwrap();
-    let tables = Tables::for_mesh(Builtin::CatmullClark, &mesh);
+    let patches = patches(Builtin::CatmullClark, &mesh);
     let face = FaceId::new(3 * 6 + 2); // (2, 3): its patch is clear of the boundary.
-    let (start, points, m, shape) = tables.find(&mesh, face);
+    let (start, points, m, shape) = find(&patches, &mesh, face);
     assert_eq!(start, mesh.face_half_edges(face).next().unwrap());
     let corner = mesh.position(mesh.origin(start));
     for n in [1, 2, 3, 5, 7, 12] {
@@ -126,23 +104,19 @@ fn assert_consistent_across_levels(builtin: Builtin, soup: PolygonSoup, levels: 
     let refined = refine(&mesh, scheme, &RefineOptions::DEFAULT).unwrap();
     let (lo, hi) = mesh.bounding_box().unwrap();
     let tolerance = 1e-11 * (hi - lo).max_element();
-    let coarse = Tables::for_mesh(builtin, &mesh);
-    let fine = Tables::for_mesh(builtin, &refined);
+    let coarse = patches(builtin, &mesh);
+    let fine = patches(builtin, &refined);
     for face in mesh.face_ids().step_by(face_step) {
-        let (start, points, m, shape) = coarse.find(&mesh, face);
+        let (start, points, m, shape) = find(&coarse, &mesh, face);
         // Each child's patch, matrices and shape.
         let children: Vec<_> = sub_patch_starts(scheme, &mesh, start, &refined)
             .unwrap()
             .into_iter()
             .map(|h| {
-                let patch = refined.patch(h, fine.radius);
-                let (cm, cs) = fine
-                    .tables
-                    .iter()
-                    .find_map(|t| t.find(&patch.signature).map(|s| (t.clone(), s)))
-                    .unwrap_or_else(|| panic!("{builtin}: a child of face {face} has no shape"));
-                let points: Vec<DVec3> = patch.vertices.iter().map(|&v| refined.position(v)).collect();
-                (cm, cs, points)
+                let found =
+                    fine.at(&refined, h).unwrap_or_else(|| panic!("{builtin}: a child of face {face} has no shape"));
+                let points = positions(&refined, &found);
+                (found.matrices, found.shape, points)
             })
             .collect();
         for point in self::points(m.face_size) {
@@ -207,9 +181,9 @@ fn interpolating_stencils_at_corners_are_the_vertices() {
     {
         let mesh =
             refine_uniform(&Mesh::build(soup).unwrap(), builtin.scheme(), levels, &RefineOptions::DEFAULT).unwrap();
-        let tables = Tables::for_mesh(builtin, &mesh);
+        let patches = patches(builtin, &mesh);
         for face in mesh.face_ids().step_by(7) {
-            let (start, points, m, shape) = tables.find(&mesh, face);
+            let (start, points, m, shape) = find(&patches, &mesh, face);
             let s = surface_stencil(&m, shape, Dyadic::new(0, 0, 1)).unwrap();
             assert_close(
                 apply(&s.position, &points),
@@ -228,12 +202,11 @@ fn normals_at_extraordinary_vertices_are_the_limit_of_nearby_normals() {
     for k in [3, 5, 6, 9] {
         let cc = Builtin::CatmullClark.scheme();
         let mesh = refine_uniform(&Mesh::build(shapes::pole(k)).unwrap(), cc, 1, &RefineOptions::DEFAULT).unwrap();
-        let tables = Tables::for_mesh(Builtin::CatmullClark, &mesh);
         let face = mesh.vertex_faces(subdiv_mesh::VertexId::new(0)).next().unwrap();
         let start = mesh.face_half_edges(face).find(|&h| mesh.origin(h).index() == 0).unwrap();
-        let patch = mesh.patch(start, tables.radius);
-        let points: Vec<DVec3> = patch.vertices.iter().map(|&v| mesh.position(v)).collect();
-        let (m, shape) = tables.tables.iter().find_map(|t| t.find(&patch.signature).map(|s| (t.clone(), s))).unwrap();
+        let found = patches(Builtin::CatmullClark, &mesh).at(&mesh, start).unwrap();
+        let points = positions(&mesh, &found);
+        let (m, shape) = (found.matrices, found.shape);
         let normal = |p: Dyadic| {
             let s = surface_stencil(&m, shape, p).unwrap();
             apply(&s.du, &points).cross(apply(&s.dv, &points)).normalize()

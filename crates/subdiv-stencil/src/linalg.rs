@@ -1,0 +1,75 @@
+//! The floating-point linear algebra both stencil routes share: eigenspaces by SVD, and the one
+//! vector of an eigenspace that meets given normalisations.
+
+use faer::Mat;
+
+/// Singular values below this count as zero.
+pub(crate) const NULL_TOLERANCE: f64 = 1e-9;
+
+/// The residual the normalisations may leave.
+const RESIDUAL_TOLERANCE: f64 = 1e-8;
+
+/// A basis of the eigenspace of `m` for the real eigenvalue `lambda`: right eigenvectors
+/// (`M x = λ x`), or left ones (`w M = λ w`) if `left`; the right singular vectors of the
+/// shifted matrix whose singular values are below [`NULL_TOLERANCE`].
+pub(crate) fn eigenspace(m: &Mat<f64>, lambda: f64, left: bool) -> Result<Vec<Vec<f64>>, String> {
+    let n = m.nrows();
+    let shifted = Mat::<f64>::from_fn(n, n, |i, j| {
+        let x = if left { m[(j, i)] } else { m[(i, j)] };
+        x - if i == j { lambda } else { 0.0 }
+    });
+    let svd = shifted.svd().map_err(|e| format!("SVD failed: {e:?}"))?;
+    let sigma = svd.S().column_vector();
+    let v = svd.V();
+    Ok((0..n).filter(|&c| sigma[c] < NULL_TOLERANCE).map(|c| (0..n).map(|r| v[(r, c)]).collect()).collect())
+}
+
+/// Left eigenvectors `w` of `m` for `lambda` normalised by linear conditions: solution `k` has
+/// `w · rows[r] = values[k][r]` for every `r`.
+pub(crate) struct Normalised {
+    /// One vector per list of values.
+    pub(crate) vectors: Vec<Vec<f64>>,
+    /// The eigenspace's dimension.
+    pub(crate) multiplicity: usize,
+}
+
+/// See [`Normalised`]. Errors name what failed: `lambda` is no eigenvalue, the normalisations
+/// do not single out one vector of the eigenspace, or they cannot all be met.
+pub(crate) fn normalised_left_eigenvectors(
+    m: &Mat<f64>,
+    lambda: f64,
+    rows: &[Vec<f64>],
+    values: &[Vec<f64>],
+) -> Result<Normalised, String> {
+    let basis = eigenspace(m, lambda, true)?;
+    let d = basis.len();
+    if d == 0 {
+        return Err(format!("{lambda} is not an eigenvalue"));
+    }
+    // The normalisations on the basis, B c = b, solved by the pseudo-inverse of B.
+    let b = Mat::<f64>::from_fn(rows.len(), d, |r, c| rows[r].iter().zip(&basis[c]).map(|(x, y)| x * y).sum());
+    let svd = b.thin_svd().map_err(|e| format!("SVD failed: {e:?}"))?;
+    let s = svd.S().column_vector();
+    let largest = (0..d).map(|i| s[i]).fold(0.0, f64::max);
+    if (0..d).any(|i| s[i] <= NULL_TOLERANCE * largest.max(1.0)) {
+        return Err(format!("the normalisations do not single out one vector of the {d}-dimensional eigenspace"));
+    }
+    let (u, v) = (svd.U(), svd.V());
+    let mut vectors = Vec::with_capacity(values.len());
+    for want in values {
+        let c: Vec<f64> = (0..d)
+            .map(|i| (0..d).map(|t| v[(i, t)] * (0..rows.len()).map(|r| u[(r, t)] * want[r]).sum::<f64>() / s[t]).sum())
+            .collect();
+        let w: Vec<f64> = (0..m.nrows()).map(|i| (0..d).map(|k| basis[k][i] * c[k]).sum()).collect();
+        let residual = rows
+            .iter()
+            .zip(want)
+            .map(|(row, b)| (row.iter().zip(&w).map(|(x, y)| x * y).sum::<f64>() - b).abs())
+            .fold(0.0, f64::max);
+        if residual > RESIDUAL_TOLERANCE {
+            return Err(format!("the normalisations are not met (residual {residual:e})"));
+        }
+        vectors.push(w);
+    }
+    Ok(Normalised { vectors, multiplicity: d })
+}
