@@ -1,13 +1,15 @@
 //! Surface stencils on demand: stencils (position and both tangents) per second, one thread, by
 //! periodic addresses over the derived sub-patch matrices, at the primal grid points of rate
 //! n = 7 (denominators with a 3-digit period) of a regular and an extraordinary Catmull-Clark
-//! patch and a Loop patch. Stencils/s = points / median time. Run with `cargo xtask bench
-//! stencil`. Figures are in the Stencils issue note.
+//! patch and a Loop patch — each point alone (`surface_stencil`), and the whole grid through
+//! one `StencilEvaluator` that shares work between points; then whole stencil tables (both
+//! grids, rate 16). Stencils/s = points / median time. Run with `cargo xtask bench stencil`.
+//! Figures are in the Stencils issue note.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, PatchMatrices, PatchType};
-use subdiv::stencil::{Dyadic, surface_stencil};
+use subdiv::stencil::{Dyadic, StencilEvaluator, StencilTable, surface_stencil};
 
 fn stencils(c: &mut Criterion) {
     let mut group = c.benchmark_group("stencil");
@@ -32,6 +34,27 @@ fn stencils(c: &mut Criterion) {
                 for &p in &points {
                     std::hint::black_box(surface_stencil(&matrices, 0, p).expect("inside the face"));
                 }
+            });
+        });
+        group.bench_function(format!("{name}_shared"), |b| {
+            b.iter(|| {
+                let mut evaluator = StencilEvaluator::new(&matrices);
+                for &p in &points {
+                    std::hint::black_box(evaluator.stencil(0, p).expect("inside the face"));
+                }
+            });
+        });
+        let rate = 16;
+        let table = StencilTable::compute_rates(&matrices, BoundaryInterpolation::EdgeOnly, rate..=rate)
+            .expect("built-in tables")
+            .remove(0);
+        group.throughput(Throughput::Elements(table.stored_points() as u64));
+        group.bench_function(format!("{}_table_n{rate}", name.trim_end_matches("_n7")), |b| {
+            b.iter(|| {
+                std::hint::black_box(
+                    StencilTable::compute_rates(&matrices, BoundaryInterpolation::EdgeOnly, rate..=rate)
+                        .expect("built-in tables"),
+                )
             });
         });
     }

@@ -7,15 +7,18 @@
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
+//! - `cargo xtask tables [--check]` regenerates the committed default stencil tables (or checks
+//!   that they are current).
 
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod osd;
 mod paper;
+mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil] | cargo xtask paper | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil] | cargo xtask paper | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -24,6 +27,11 @@ fn main() -> ExitCode {
         Some("ci") => ci(),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("paper") => paper::run(),
+        Some("tables") => match args.get(1).map(String::as_str) {
+            None => tables::run(false),
+            Some("--check") => tables::run(true),
+            Some(other) => Err(format!("unknown option {other:?}; usage: cargo xtask tables [--check]")),
+        },
         Some("osd-refine") => match args.get(1) {
             Some(osd) => {
                 let shared = std::env::var_os("SUBDIV_SHARED").map_or_else(|| root().join("../shared"), PathBuf::from);

@@ -85,6 +85,33 @@ impl Mesh {
     /// # Ok::<(), subdiv_mesh::MeshError>(())
     /// ```
     pub fn patch(&self, start: HalfEdgeId, radius: usize) -> Patch {
+        self.walk_patch(start, radius, false)
+    }
+
+    /// The patch of `start`'s face as its mirror image sees it: the same walk with every face
+    /// turned over, starting along the face's last side (from `start`'s origin to the previous
+    /// corner), so that the face's `u` and `v` trade places. When the signature equals
+    /// [`patch`](Self::patch)'s, the patch is symmetric under that reflection, and the two
+    /// vertex lists say which control point maps to which.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, FaceId, Mesh};
+    ///
+    /// let grid = Mesh::build(shapes::quad_grid(7, 7))?;
+    /// let start = grid.face_half_edges(FaceId::new(24)).next().unwrap();
+    /// let (patch, mirrored) = (grid.patch(start, 1), grid.mirrored_patch(start, 1));
+    /// assert_eq!(patch.signature, mirrored.signature);
+    /// // Corner 0 stays; corners 1 and 3 trade places.
+    /// assert_eq!(mirrored.vertices[..4], [patch.vertices[0], patch.vertices[3], patch.vertices[2], patch.vertices[1]]);
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
+    pub fn mirrored_patch(&self, start: HalfEdgeId, radius: usize) -> Patch {
+        self.walk_patch(self.prev(start), radius, true)
+    }
+
+    /// The walk of [`patch`](Self::patch); `mirrored` walks each face backwards, entering at
+    /// the destination of the entry half-edge (see [`mirrored_patch`](Self::mirrored_patch)).
+    fn walk_patch(&self, start: HalfEdgeId, radius: usize, mirrored: bool) -> Patch {
         // Patches are small: maps keyed by the few vertices they hold, not arrays over the mesh.
         let start_face = self.face(start);
         let ring = self.face_rings(self.face_vertices(start_face), radius);
@@ -104,7 +131,7 @@ impl Mesh {
             signature.push(size as u32);
             let mut h = entry;
             for _ in 0..size {
-                let v = self.origin(h);
+                let v = if mirrored { self.dest(h) } else { self.origin(h) };
                 let count = vertices.len() as u32;
                 let p = *place.entry(v).or_insert_with(|| {
                     vertices.push(v);
@@ -122,7 +149,7 @@ impl Mesh {
                         })
                     }
                 });
-                h = self.next(h);
+                h = if mirrored { self.prev(h) } else { self.next(h) };
             }
         }
         for &v in &vertices {

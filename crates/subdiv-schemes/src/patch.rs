@@ -173,6 +173,12 @@ pub struct PatchShape {
     /// integer coordinates such as `(−1, 2)`); `None` where an irregular vertex of the face's
     /// own domain breaks that (the extraordinary vertex's shape).
     pub parameters: Option<[Vec<f64>; 2]>,
+    /// The shape's symmetry under the reflection that swaps `u` and `v` (corner 0 stays,
+    /// corners 1 and the last trade places), if it has it: the limit surface at `(v, u)` puts
+    /// the weight of control point `k` at `(u, v)` on control point `mirror[k]` (and swaps the
+    /// two derivatives). Found by walking the patch as its mirror image
+    /// ([`Mesh::mirrored_patch`]).
+    pub mirror: Option<Vec<u32>>,
 }
 
 /// The sub-patch matrices of every shape reachable from one [`PatchType`].
@@ -469,6 +475,12 @@ impl<'a> Derivation<'a> {
         if let Some(&s) = self.by_signature.get(&patch.signature) {
             return s;
         }
+        let mirrored = self.meshes[level].mirrored_patch(start, self.radius);
+        let mirror = (mirrored.signature == patch.signature).then(|| {
+            let place: HashMap<VertexId, u32> =
+                patch.vertices.iter().enumerate().map(|(k, &v)| (v, k as u32)).collect();
+            mirrored.vertices.iter().map(|v| place[v]).collect()
+        });
         let s = self.shapes.len();
         self.by_signature.insert(patch.signature.clone(), s);
         self.shapes.push(PatchShape {
@@ -476,6 +488,7 @@ impl<'a> Derivation<'a> {
             signature: patch.signature,
             children: Vec::new(),
             parameters: None,
+            mirror,
         });
         pending.push_back(Pending { shape: s, level, start, vertices: patch.vertices });
         s

@@ -55,17 +55,8 @@ impl Address {
     /// # Errors
     /// [`StencilError::OutsideDomain`] for a point outside the domain or a denominator below 1.
     pub fn of(face_size: usize, point: Dyadic) -> Result<Self, StencilError> {
+        check_domain(face_size, point)?;
         let Dyadic { u, v, denominator: q } = point;
-        let triangle = face_size == 3;
-        let inside = q >= 1 && u >= 0 && v >= 0 && if triangle { u + v <= q } else { u <= q && v <= q };
-        if !inside || q > i64::MAX / 4 {
-            return Err(StencilError::OutsideDomain {
-                u: format!("{u}/{q}"),
-                v: format!("{v}/{q}"),
-                domain: if triangle { "u, v ≥ 0, u + v ≤ 1" } else { "[0, 1]²" },
-            });
-        }
-        let children = ChildDomain::of_face(face_size);
         let mut seen: Vec<(i64, i64)> = Vec::new();
         let mut path: Vec<u8> = Vec::new();
         let (mut a, mut b) = (u, v);
@@ -75,30 +66,54 @@ impl Address {
                 return Ok(Self { prefix: path, period });
             }
             seen.push((a, b));
-            let child = if triangle {
-                if 2 * (a + b) <= q {
-                    0
-                } else if 2 * a >= q {
-                    1
-                } else if 2 * b >= q {
-                    2
-                } else {
-                    3
-                }
-            } else {
-                match (2 * a >= q, 2 * b >= q) {
-                    (false, false) => 0,
-                    (true, false) => 1,
-                    (true, true) => 2,
-                    (false, true) => 3,
-                }
-            };
-            let ChildDomain { offset, flipped } = children[child];
-            let sign = if flipped { -1 } else { 1 };
-            (a, b) = (sign * (2 * a - i64::from(offset[0]) * q), sign * (2 * b - i64::from(offset[1]) * q));
-            path.push(child as u8);
+            let child;
+            (child, a, b) = step(face_size, a, b, q);
+            path.push(child);
         }
     }
+}
+
+/// [`StencilError::OutsideDomain`] unless `point` lies in the domain of a face of `face_size`
+/// sides, over a denominator small enough that the address arithmetic cannot overflow.
+pub(crate) fn check_domain(face_size: usize, point: Dyadic) -> Result<(), StencilError> {
+    let Dyadic { u, v, denominator: q } = point;
+    let triangle = face_size == 3;
+    let inside = q >= 1 && u >= 0 && v >= 0 && if triangle { u + v <= q } else { u <= q && v <= q };
+    if !inside || q > i64::MAX / 4 {
+        return Err(StencilError::OutsideDomain {
+            u: format!("{u}/{q}"),
+            v: format!("{v}/{q}"),
+            domain: if triangle { "u, v ≥ 0, u + v ≤ 1" } else { "[0, 1]²" },
+        });
+    }
+    Ok(())
+}
+
+/// One level of an address: the child of a face of `face_size` sides holding the point
+/// `(a, b) / q` (on a border the first in the engine's order), and the point in the child's
+/// domain, over the same denominator.
+pub(crate) fn step(face_size: usize, a: i64, b: i64, q: i64) -> (u8, i64, i64) {
+    let child = if face_size == 3 {
+        if 2 * (a + b) <= q {
+            0
+        } else if 2 * a >= q {
+            1
+        } else if 2 * b >= q {
+            2
+        } else {
+            3
+        }
+    } else {
+        match (2 * a >= q, 2 * b >= q) {
+            (false, false) => 0,
+            (true, false) => 1,
+            (true, true) => 2,
+            (false, true) => 3,
+        }
+    };
+    let ChildDomain { offset, flipped } = ChildDomain::of_face(face_size)[child];
+    let sign = if flipped { -1 } else { 1 };
+    (child as u8, sign * (2 * a - i64::from(offset[0]) * q), sign * (2 * b - i64::from(offset[1]) * q))
 }
 
 #[cfg(test)]

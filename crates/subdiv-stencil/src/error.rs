@@ -19,6 +19,44 @@ pub enum StencilError {
         /// The domain, e.g. `[0, 1]²`.
         domain: &'static str,
     },
+    /// A shape index beyond the patch matrices' shapes.
+    #[error("{scheme}: shape {shape} does not exist (the patch matrices hold {shapes} shapes)")]
+    Shape {
+        /// The scheme's name.
+        scheme: String,
+        /// The shape asked for.
+        shape: usize,
+        /// How many shapes there are.
+        shapes: usize,
+    },
+    /// Bytes given as a stencil table file that do not start with [`TABLE_MAGIC`](crate::TABLE_MAGIC).
+    #[error("not a subdiv stencil table file (it does not start with the bytes `SUBDIVST`)")]
+    TableForeign,
+    /// A stencil table file of another format version.
+    #[error(
+        "stencil table format version {found}, but this build reads version {expected}: regenerate the tables \
+         (`cargo xtask tables`)"
+    )]
+    TableVersion {
+        /// The file's version.
+        found: u32,
+        /// The version this build reads.
+        expected: u32,
+    },
+    /// A stencil table file that no longer matches the scheme or the matrices this build derives.
+    #[error("stale stencil tables: {detail}")]
+    TableStale {
+        /// What differs.
+        detail: String,
+    },
+    /// A stencil table file that is truncated or damaged.
+    #[error("corrupt stencil table file at byte {offset}: {detail}")]
+    TableCorrupt {
+        /// Where reading failed.
+        offset: usize,
+        /// What was wrong.
+        detail: String,
+    },
     /// A grid rate of zero, or one too large to address.
     #[error("rate {rate} is not supported: {reason}")]
     Rate {

@@ -12,12 +12,16 @@
 //!   eigenvector of the period's composite sub-patch matrix, carried back through the prefix.
 //!   The sub-patch matrices come from [`subdiv_schemes::PatchMatrices`], derived by the
 //!   refinement engine, so this works for every primal scheme at regular, extraordinary and
-//!   boundary patches.
+//!   boundary patches. A [`StencilEvaluator`] shares the work between the points of one patch.
+//! - **Tables** ([`StencilTable`], [`StencilTables`], [`StencilCache`]): the stencils of the
+//!   primal and dual grids a tessellator samples, per patch type and rate, in a versioned binary
+//!   format, or computed on demand.
 
 mod address;
 mod error;
 mod linalg;
 mod surface;
+mod table;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
 pub mod curve;
 mod rational;
@@ -26,4 +30,7 @@ pub use rational::Rational;
 
 pub use address::{Address, Dyadic};
 pub use error::StencilError;
-pub use surface::{SurfaceStencil, surface_stencil};
+pub use surface::{StencilEvaluator, SurfaceStencil, surface_stencil};
+pub use table::{
+    DEFAULT_TABLES, Grid, MAX_RATE, StencilCache, StencilTable, StencilTables, TABLE_MAGIC, TABLE_VERSION, TableSpec,
+};

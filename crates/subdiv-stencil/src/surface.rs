@@ -1,11 +1,14 @@
 //! Surface stencils by periodic addresses (paper 003 §4–5 joined with paper 000): the stencil of
 //! a rational point of a patch from the sub-patch matrices alone.
 
+use std::collections::HashMap;
+
 use faer::Mat;
 use subdiv_schemes::PatchMatrices;
 
+use crate::address::{check_domain, step};
 use crate::linalg::{eigenspace, normalised_left_eigenvectors};
-use crate::{Address, Dyadic, StencilError};
+use crate::{Dyadic, StencilError};
 
 /// Weights over a patch's control points (in [`subdiv_mesh::Patch`] order) giving a point of
 /// the limit surface and its two tangents.
@@ -29,15 +32,17 @@ const TOLERANCE: f64 = 1e-9;
 
 /// The stencil of `point` in the patch of shape `shape` of `matrices`.
 ///
-/// The point's [`Address`] splits into a prefix σ and a period τ; the prefix is lengthened by
-/// whole periods until the period maps a shape to itself. Then the position stencil is the left
-/// eigenvector of the period's square matrix `M_τ` for eigenvalue 1 (normalised to sum 1),
-/// carried back through the prefix's matrices. The derivative stencils are the left
-/// eigenvectors for `±2^−|τ|`, normalised on the linear functions `u` and `v` of the periodic
-/// shape ([`PatchShape::parameters`](subdiv_schemes::PatchShape::parameters)),
+/// The point's [`Address`](crate::Address) splits into a prefix σ and a period τ; the prefix is
+/// lengthened by whole periods until the period maps a shape to itself. Then the position
+/// stencil is the left eigenvector of the period's square matrix `M_τ` for eigenvalue 1
+/// (normalised to sum 1), carried back through the prefix's matrices. The derivative stencils
+/// are the left eigenvectors for `±2^−|τ|`, normalised on the linear functions `u` and `v` of
+/// the periodic shape ([`PatchShape::parameters`](subdiv_schemes::PatchShape::parameters)),
 /// times `±2^|σ|`. At a point that is its own extraordinary vertex (the period keeps an
 /// irregular shape) the tangents come from the subdominant eigenvectors instead (see
 /// [`SurfaceStencil::exact_derivatives`]).
+///
+/// For many points of one patch, a [`StencilEvaluator`] shares the work between them.
 ///
 /// ```
 /// use subdiv_mesh::BoundaryInterpolation;
@@ -53,88 +58,189 @@ const TOLERANCE: f64 = 1e-9;
 /// ```
 ///
 /// # Errors
-/// [`StencilError::OutsideDomain`] for a point outside the face, [`StencilError::Eigen`] when
-/// an eigenvector the stencil needs is not unique.
+/// [`StencilError::OutsideDomain`] for a point outside the face, [`StencilError::Shape`] for a
+/// shape the matrices do not hold, [`StencilError::Eigen`] when an eigenvector the stencil
+/// needs is not unique.
 pub fn surface_stencil(matrices: &PatchMatrices, shape: usize, point: Dyadic) -> Result<SurfaceStencil, StencilError> {
-    let Address { mut prefix, period } = Address::of(matrices.face_size, point)?;
-    // Shapes along the path; lengthen the prefix until the period returns to its shape.
-    let shape_after = |start: usize, steps: &[u8]| {
-        steps.iter().fold(start, |s, &c| matrices.shapes[s].children[usize::from(c)].shape)
-    };
-    let mut periodic = shape_after(shape, &prefix);
-    let mut rounds = 0;
-    while shape_after(periodic, &period) != periodic {
-        prefix.extend_from_slice(&period);
-        periodic = shape_after(periodic, &period);
-        rounds += 1;
-        if rounds > matrices.shapes.len() + 2 {
-            return Err(eigen_error(matrices, "the shapes along the address never become periodic".into()));
-        }
+    StencilEvaluator::new(matrices).stencil(shape, point).cloned()
+}
+
+/// Surface stencils of many points over one set of sub-patch matrices, sharing the work.
+///
+/// A point's address visits a sequence of (shape, point) states, each the point in a
+/// sub-patch's own domain; the stencil of a state is the next state's times the sub-patch
+/// matrix. The evaluator remembers the stencil of every state it has passed through, so a
+/// point whose walk meets a known state costs one vector–matrix product per new state, and a
+/// cycle of states costs one eigenvector, at one of its states, carried round the rest. The
+/// points of a grid `(i/n, j/n)` fall into few cycles, so a whole grid costs a few
+/// eigenvectors. Results depend on the order points are asked in only in the last bits; ask
+/// in a fixed order for byte-identical output.
+///
+/// ```
+/// use subdiv_mesh::BoundaryInterpolation;
+/// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
+/// use subdiv_stencil::{Dyadic, StencilEvaluator};
+///
+/// let loop_ = Builtin::Loop.scheme();
+/// let m = PatchMatrices::of(loop_, PatchType::Interior { valence: 7 }, BoundaryInterpolation::EdgeOnly)?;
+/// let mut evaluator = StencilEvaluator::new(&m);
+/// for j in 0..=5 {
+///     for i in 0..=5 - j {
+///         let s = evaluator.stencil(0, Dyadic::new(i, j, 5))?;
+///         assert!((s.position.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+///     }
+/// }
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct StencilEvaluator<'m> {
+    matrices: &'m PatchMatrices,
+    memo: HashMap<State, usize>,
+    stencils: Vec<SurfaceStencil>,
+}
+
+/// A shape and a point of its domain in lowest terms, so that one point reached over two
+/// denominators is one state.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct State {
+    shape: usize,
+    u: i64,
+    v: i64,
+    q: i64,
+}
+
+impl State {
+    fn new(shape: usize, u: i64, v: i64, q: i64) -> Self {
+        let g = gcd(gcd(u, v), q).max(1);
+        Self { shape, u: u / g, v: v / g, q: q / g }
     }
-    let size = matrices.shapes[periodic].size;
-    // M_τ: the period's composite matrix, applied first to last.
-    let mut m_tau = Mat::<f64>::identity(size, size);
-    let mut flips = 0;
-    let mut s = periodic;
-    for &c in &period {
-        let child = &matrices.shapes[s].children[usize::from(c)];
-        let a = Mat::<f64>::from_fn(child.rows(), child.columns(), |i, j| child.get(i, j));
-        m_tau = &a * &m_tau;
-        flips += usize::from(child.domain.flipped);
-        s = child.shape;
+}
+
+fn gcd(mut a: i64, mut b: i64) -> i64 {
+    (a, b) = (a.abs(), b.abs());
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
+impl<'m> StencilEvaluator<'m> {
+    /// An evaluator over `matrices`, remembering nothing yet.
+    pub fn new(matrices: &'m PatchMatrices) -> Self {
+        Self { matrices, memo: HashMap::new(), stencils: Vec::new() }
     }
 
-    let ones = vec![1.0; size];
-    let fail = |detail: String| eigen_error(matrices, format!("{detail} at {point:?}"));
-    let position = normalised_left_eigenvectors(&m_tau, 1.0, std::slice::from_ref(&ones), &[vec![1.0]])
-        .map_err(|detail| fail(format!("eigenvalue 1: {detail}")))?
-        .vectors
-        .remove(0);
-    let lambda = if flips % 2 == 1 { -1.0 } else { 1.0 } * 0.5_f64.powi(period.len() as i32);
-    let (du, dv, exact) = match &matrices.shapes[periodic].parameters {
-        // Both derivatives from one factorisation: ∂/∂u is 1 on u and 0 on v, ∂/∂v the reverse.
-        Some([u, v]) => {
-            let rows = [ones, u.clone(), v.clone()];
-            let mut found =
-                normalised_left_eigenvectors(&m_tau, lambda, &rows, &[vec![0.0, 1.0, 0.0], vec![0.0, 0.0, 1.0]])
-                    .map_err(|detail| fail(format!("derivatives: {detail}")))?
-                    .vectors;
-            let dv = found.pop().expect("two lists of values");
-            let du = found.pop().expect("two lists of values");
-            (du, dv, true)
-        }
-        None => {
-            let (du, dv) = irregular_tangents(matrices, &m_tau, matrices.face_size)?;
-            (du, dv, false)
-        }
-    };
+    /// The matrices it evaluates over.
+    pub fn matrices(&self) -> &'m PatchMatrices {
+        self.matrices
+    }
 
-    // Back through the prefix, last step first: w ← w · A.
-    let steps: Vec<(usize, u8)> = prefix
-        .iter()
-        .scan(shape, |s, &c| {
-            let here = *s;
-            *s = matrices.shapes[here].children[usize::from(c)].shape;
-            Some((here, c))
-        })
-        .collect();
-    let (mut position, mut du, mut dv) = (position, du, dv);
-    let mut scale = 1.0;
-    for &(s, c) in steps.iter().rev() {
-        let child = &matrices.shapes[s].children[usize::from(c)];
-        let back = |w: &[f64]| -> Vec<f64> {
-            (0..child.columns()).map(|j| (0..child.rows()).map(|i| w[i] * child.get(i, j)).sum()).collect()
+    /// The stencil of `point` in the patch of shape `shape`; see [`surface_stencil`].
+    ///
+    /// # Errors
+    /// As [`surface_stencil`].
+    pub fn stencil(&mut self, shape: usize, point: Dyadic) -> Result<&SurfaceStencil, StencilError> {
+        let m = self.matrices;
+        check_domain(m.face_size, point)?;
+        if shape >= m.shapes.len() {
+            return Err(StencilError::Shape { scheme: m.scheme.clone(), shape, shapes: m.shapes.len() });
+        }
+        // Walk the address until a known state, or until a state repeats.
+        let mut walk: Vec<(State, u8)> = Vec::new();
+        let mut state = State::new(shape, point.u, point.v, point.denominator);
+        let (mut next, cycle) = loop {
+            if let Some(&known) = self.memo.get(&state) {
+                break (known, None);
+            }
+            if let Some(first) = walk.iter().position(|(s, _)| *s == state) {
+                let stencil = self.periodic(&walk[first..], point)?;
+                break (self.remember(state, stencil), Some(first));
+            }
+            let (child, u, v) = step(m.face_size, state.u, state.v, state.q);
+            walk.push((state, child));
+            state = State::new(m.shapes[state.shape].children[usize::from(child)].shape, u, v, state.q);
         };
-        position = back(&position);
-        du = back(&du);
-        dv = back(&dv);
-        // u' = ±(2u − o): ∂/∂u = ±2 ∂/∂u'.
-        scale *= if child.domain.flipped { -2.0 } else { 2.0 };
+        // Back along the walk, last step first (the cycle's first state is known already).
+        for (i, &(state, child)) in walk.iter().enumerate().rev() {
+            if Some(i) != cycle {
+                let stencil = self.back(&self.stencils[next], state.shape, child);
+                next = self.remember(state, stencil);
+            } else {
+                next = self.memo[&state];
+            }
+        }
+        Ok(&self.stencils[next])
     }
-    if exact {
-        du.iter_mut().chain(dv.iter_mut()).for_each(|w| *w *= scale);
+
+    fn remember(&mut self, state: State, stencil: SurfaceStencil) -> usize {
+        self.stencils.push(stencil);
+        self.memo.insert(state, self.stencils.len() - 1);
+        self.stencils.len() - 1
     }
-    Ok(SurfaceStencil { position, du, dv, exact_derivatives: exact })
+
+    /// The stencil over `shape`'s control points from the stencil over its child `child`'s:
+    /// `w ← w · A`; derivatives also times ±2, since `u' = ±(2u − o)`.
+    fn back(&self, stencil: &SurfaceStencil, shape: usize, child: u8) -> SurfaceStencil {
+        let sub = &self.matrices.shapes[shape].children[usize::from(child)];
+        let scale = match (stencil.exact_derivatives, sub.domain.flipped) {
+            (false, _) => 1.0,
+            (true, false) => 2.0,
+            (true, true) => -2.0,
+        };
+        let columns = sub.columns();
+        let (mut position, mut du, mut dv) = (vec![0.0; columns], vec![0.0; columns], vec![0.0; columns]);
+        for r in 0..sub.rows() {
+            let (p, a, b) = (stencil.position[r], stencil.du[r] * scale, stencil.dv[r] * scale);
+            for (c, &x) in sub.row(r).iter().enumerate() {
+                position[c] += p * x;
+                du[c] += a * x;
+                dv[c] += b * x;
+            }
+        }
+        SurfaceStencil { position, du, dv, exact_derivatives: stencil.exact_derivatives }
+    }
+
+    /// The stencil at the first state of a cycle of states, from the eigenvectors of the
+    /// cycle's composite matrix `M_τ`.
+    fn periodic(&self, cycle: &[(State, u8)], point: Dyadic) -> Result<SurfaceStencil, StencilError> {
+        let matrices = self.matrices;
+        let periodic = cycle[0].0.shape;
+        let size = matrices.shapes[periodic].size;
+        // M_τ, applied first to last.
+        let mut m_tau = Mat::<f64>::identity(size, size);
+        let mut flips = 0;
+        for &(state, c) in cycle {
+            let child = &matrices.shapes[state.shape].children[usize::from(c)];
+            let a = Mat::<f64>::from_fn(child.rows(), child.columns(), |i, j| child.get(i, j));
+            m_tau = &a * &m_tau;
+            flips += usize::from(child.domain.flipped);
+        }
+        let ones = vec![1.0; size];
+        let fail = |detail: String| eigen_error(matrices, format!("{detail} at {point:?}"));
+        let position = normalised_left_eigenvectors(&m_tau, 1.0, std::slice::from_ref(&ones), &[vec![1.0]])
+            .map_err(|detail| fail(format!("eigenvalue 1: {detail}")))?
+            .vectors
+            .remove(0);
+        let lambda = if flips % 2 == 1 { -1.0 } else { 1.0 } * 0.5_f64.powi(cycle.len() as i32);
+        let stencil = match &matrices.shapes[periodic].parameters {
+            // Both derivatives from one factorisation: ∂/∂u is 1 on u and 0 on v, ∂/∂v the reverse.
+            Some([u, v]) => {
+                let rows = [ones, u.clone(), v.clone()];
+                let mut found =
+                    normalised_left_eigenvectors(&m_tau, lambda, &rows, &[vec![0.0, 1.0, 0.0], vec![0.0, 0.0, 1.0]])
+                        .map_err(|detail| fail(format!("derivatives: {detail}")))?
+                        .vectors;
+                let dv = found.pop().expect("two lists of values");
+                let du = found.pop().expect("two lists of values");
+                SurfaceStencil { position, du, dv, exact_derivatives: true }
+            }
+            None => {
+                let (du, dv) = irregular_tangents(matrices, &m_tau, matrices.face_size)?;
+                SurfaceStencil { position, du, dv, exact_derivatives: false }
+            }
+        };
+        Ok(stencil)
+    }
 }
 
 fn eigen_error(matrices: &PatchMatrices, detail: String) -> StencilError {
