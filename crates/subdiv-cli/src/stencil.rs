@@ -7,7 +7,7 @@ use serde_json::{Value, json};
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
 use subdiv::stencil::curve::basis_grid;
-use subdiv::stencil::{Dyadic, Rational, surface_stencil};
+use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator};
 
 use crate::UserError;
 
@@ -117,19 +117,12 @@ fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Re
             let ((a, b), (c, d)) = (parse_fraction(u)?, parse_fraction(v)?);
             vec![Dyadic::new(a * d, c * b, b * d)]
         }
-        None => {
-            let n = i64::from(args.n);
-            let inside = |i: i64, j: i64| matrices.face_size == 4 || i + j <= n;
-            (0..=n)
-                .flat_map(|j| (0..=n).map(move |i| (i, j)))
-                .filter(|&(i, j)| inside(i, j))
-                .map(|(i, j)| Dyadic::new(i, j, n))
-                .collect()
-        }
+        None => Grid::Primal.points(matrices.face_size, args.n),
     };
     let mut reports = Vec::new();
+    let mut evaluator = StencilEvaluator::new(&matrices);
     for point in points {
-        let s = surface_stencil(&matrices, 0, point)?;
+        let s = evaluator.stencil(0, point)?;
         let (u, v) = point.to_f64();
         if args.json {
             reports.push(json!({

@@ -30,7 +30,7 @@ pub use rational::Rational;
 
 pub use address::{Address, Dyadic};
 pub use error::StencilError;
-pub use surface::{StencilEvaluator, SurfaceStencil, surface_stencil};
+pub use surface::{EvaluatorStats, StencilEvaluator, SurfaceStencil, surface_stencil};
 pub use table::{
     DEFAULT_TABLES, Grid, MAX_RATE, StencilCache, StencilTable, StencilTables, TABLE_MAGIC, TABLE_VERSION, TableSpec,
 };

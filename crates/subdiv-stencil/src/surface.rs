@@ -97,6 +97,19 @@ pub struct StencilEvaluator<'m> {
     matrices: &'m PatchMatrices,
     memo: HashMap<State, usize>,
     stencils: Vec<SurfaceStencil>,
+    stats: EvaluatorStats,
+}
+
+/// What a [`StencilEvaluator`] has solved so far: the sizes of the systems behind its stencils.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct EvaluatorStats {
+    /// (shape, point) states whose stencils it holds.
+    pub states: usize,
+    /// Eigenproblems solved, one per cycle of states.
+    pub eigen_solves: usize,
+    /// The largest eigenproblem: the control points of a cycle's shape (the unknowns of one
+    /// left eigenvector).
+    pub largest_system: usize,
 }
 
 /// A shape and a point of its domain in lowest terms, so that one point reached over two
@@ -127,7 +140,12 @@ fn gcd(mut a: i64, mut b: i64) -> i64 {
 impl<'m> StencilEvaluator<'m> {
     /// An evaluator over `matrices`, remembering nothing yet.
     pub fn new(matrices: &'m PatchMatrices) -> Self {
-        Self { matrices, memo: HashMap::new(), stencils: Vec::new() }
+        Self { matrices, memo: HashMap::new(), stencils: Vec::new(), stats: EvaluatorStats::default() }
+    }
+
+    /// What it has solved so far.
+    pub fn stats(&self) -> EvaluatorStats {
+        EvaluatorStats { states: self.stencils.len(), ..self.stats }
     }
 
     /// The matrices it evaluates over.
@@ -154,6 +172,8 @@ impl<'m> StencilEvaluator<'m> {
             }
             if let Some(first) = walk.iter().position(|(s, _)| *s == state) {
                 let stencil = self.periodic(&walk[first..], point)?;
+                self.stats.eigen_solves += 1;
+                self.stats.largest_system = self.stats.largest_system.max(stencil.position.len());
                 break (self.remember(state, stencil), Some(first));
             }
             let (child, u, v) = step(m.face_size, state.u, state.v, state.q);
