@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, PolygonSoup, shapes};
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, PolygonSoup, VertexId, shapes};
 use subdiv_schemes::{
     Builtin, FoundPatch, MeshPatches, PatchMatrices, RefineOptions, refine, refine_uniform, sub_patch_starts,
 };
@@ -217,5 +217,111 @@ fn normals_at_extraordinary_vertices_are_the_limit_of_nearby_normals() {
         let near = normal(Dyadic::new(1, 1, 1 << 20));
         assert!(at_vertex.dot(near) > 1.0 - 1e-6, "k = {k}: {at_vertex} vs {near}");
         assert!(at_vertex.z > 0.9, "k = {k}: the dome's normal points up: {at_vertex}");
+    }
+}
+
+/// The vertex of `meshes[k]` (each mesh the refinement of the one before) at the dyadic point
+/// `point` (denominator 2^k) of the face whose patch starts at `start` in `meshes[0]`: the
+/// corner it becomes after descending k times through the children that hold it.
+fn vertex_at(builtin: Builtin, meshes: &[Mesh], start: HalfEdgeId, face_size: usize, point: Dyadic) -> VertexId {
+    let (mut h, mut a, mut b, q) = (start, point.u, point.v, point.denominator);
+    for level in 0..meshes.len() - 1 {
+        let starts = sub_patch_starts(builtin.scheme(), &meshes[level], h, &meshes[level + 1]).unwrap();
+        let domains = subdiv_schemes::ChildDomain::of_face(face_size);
+        let inside = |d: &subdiv_schemes::ChildDomain| {
+            let s = if d.flipped { -1 } else { 1 };
+            let (x, y) = (s * (2 * a - i64::from(d.offset[0]) * q), s * (2 * b - i64::from(d.offset[1]) * q));
+            let fits = x >= 0 && y >= 0 && if face_size == 3 { x + y <= q } else { x <= q && y <= q };
+            fits.then_some((x, y))
+        };
+        let (c, (x, y)) = domains.iter().enumerate().find_map(|(c, d)| inside(d).map(|p| (c, p))).unwrap();
+        (h, a, b) = (starts[c], x, y);
+    }
+    let mesh = meshes.last().unwrap();
+    let corner = match (a, b, face_size) {
+        (0, 0, _) => h,
+        (_, 0, _) => mesh.next(h),
+        (_, _, 4) if a == q => mesh.next(mesh.next(h)),
+        _ => mesh.prev(h),
+    };
+    assert!((a == 0 || a == q) && (b == 0 || b == q), "{point:?} is not dyadic at this depth");
+    mesh.origin(corner)
+}
+
+/// The limit position of an interior vertex by the classic closed-form masks: Catmull-Clark
+/// `(n²·v + 4·Σ e + Σ f) / (n (n + 5))` on quads, Loop `(1 − nχ)·v + χ·Σ e` with
+/// `χ = 1 / (n + 3 / (8β))`.
+fn limit_by_mask(builtin: Builtin, mesh: &Mesh, v: VertexId) -> DVec3 {
+    let n = mesh.valence(v) as f64;
+    let ring: DVec3 = mesh.one_ring(v).iter().map(|&w| mesh.position(w)).sum();
+    match builtin {
+        Builtin::CatmullClark => {
+            let diagonals: DVec3 = mesh
+                .vertex_faces(v)
+                .map(|f| {
+                    let corners = mesh.face_vertices(f);
+                    let i = corners.iter().position(|&c| c == v).unwrap();
+                    mesh.position(corners[(i + 2) % 4])
+                })
+                .sum();
+            (n * n * mesh.position(v) + 4.0 * ring + diagonals) / (n * (n + 5.0))
+        }
+        Builtin::Loop => {
+            let cos = (std::f64::consts::TAU / n).cos();
+            let beta = (5.0 / 8.0 - (3.0 / 8.0 + cos / 4.0).powi(2)) / n;
+            let chi = 1.0 / (n + 3.0 / (8.0 * beta));
+            (1.0 - n * chi) * mesh.position(v) + chi * ring
+        }
+        _ => unreachable!("closed-form masks for Catmull-Clark and Loop only"),
+    }
+}
+
+/// At a dyadic point (a/2^k, b/2^k) the stencil is k refinements exactly: the refined vertex
+/// itself for interpolating schemes, and the refined vertex's limit mask for approximating ones.
+#[test]
+fn stencils_at_dyadic_points_are_refinement() {
+    let cases = [
+        (Builtin::CatmullClark, shapes::cube(), 2),
+        (Builtin::CatmullClark, shapes::pole(5), 1),
+        (Builtin::Loop, shapes::icosahedron(), 2),
+        (Builtin::Butterfly, shapes::icosahedron(), 3),
+        (Builtin::Kobbelt, shapes::cube(), 3),
+    ];
+    let depth = 3;
+    for (builtin, soup, base_levels) in cases {
+        let scheme = builtin.scheme();
+        let base = refine_uniform(&Mesh::build(soup).unwrap(), scheme, base_levels, &RefineOptions::DEFAULT).unwrap();
+        let mut meshes = vec![base];
+        for _ in 0..depth {
+            meshes.push(refine(meshes.last().unwrap(), scheme, &RefineOptions::DEFAULT).unwrap());
+        }
+        let patches = patches(builtin, &meshes[0]);
+        let mut checked = 0;
+        for face in meshes[0].face_ids().step_by(5) {
+            let found = patches.find(&meshes[0], face).unwrap_or_else(|| panic!("{builtin}: face {face}"));
+            let points = positions(&meshes[0], &found);
+            let face_size = found.matrices.face_size;
+            let q = 1 << depth;
+            for (a, b) in [(1, 0), (3, 1), (5, 2), (1, 1), (2, 5), (7, 1), (0, 3)] {
+                if face_size == 3 && a + b > q {
+                    continue;
+                }
+                let point = Dyadic::new(a, b, q);
+                let s = surface_stencil(&found.matrices, found.shape, point).unwrap();
+                let vertex = vertex_at(builtin, &meshes, found.start, face_size, point);
+                let fine = meshes.last().unwrap();
+                if fine.is_boundary_vertex(vertex) && !matches!(builtin, Builtin::Butterfly | Builtin::Kobbelt) {
+                    continue; // the closed-form masks are the interior ones
+                }
+                let expected = match builtin {
+                    Builtin::Butterfly | Builtin::Kobbelt => fine.position(vertex),
+                    _ => limit_by_mask(builtin, fine, vertex),
+                };
+                let what = format!("{builtin} face {face} at {point:?}");
+                assert_close(apply(&s.position, &points), expected, 1e-13, &what);
+                checked += 1;
+            }
+        }
+        assert!(checked > 20, "{builtin}: {checked} points");
     }
 }
