@@ -7,7 +7,7 @@ use serde_json::{Value, json};
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
 use subdiv::stencil::curve::basis_grid;
-use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator};
+use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator, exact_surface_stencil};
 
 use crate::UserError;
 
@@ -28,7 +28,8 @@ pub(crate) struct StencilArgs {
     /// One point: `X` for a curve (on the grid), `U,V` for a surface; fractions such as `1/3`.
     #[arg(long, value_name = "U,V")]
     at: Option<String>,
-    /// Print exact fractions (curves) instead of decimals.
+    /// Print exact fractions instead of decimals (surfaces: schemes whose sub-patch matrices are
+    /// rational, e.g. Catmull-Clark, sw-quad, Loop at valences 3, 4 and 6).
     #[arg(long)]
     exact: bool,
     /// Print JSON instead of text.
@@ -122,21 +123,41 @@ fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Re
     let mut reports = Vec::new();
     let mut evaluator = StencilEvaluator::new(&matrices);
     for point in points {
-        let s = evaluator.stencil(0, point)?;
         let (u, v) = point.to_f64();
+        // Weights as JSON values and as text, in decimals or (--exact) fractions.
+        let (position, du, dv, exact_derivatives): (Vec<String>, Vec<String>, Vec<String>, bool) = if args.exact {
+            let s = exact_surface_stencil(&matrices, 0, point)?;
+            let text = |w: &[Rational]| w.iter().map(ToString::to_string).collect::<Vec<_>>();
+            match &s.derivatives {
+                Some([du, dv]) => (text(&s.position), text(du), text(dv), true),
+                None => (text(&s.position), Vec::new(), Vec::new(), false),
+            }
+        } else {
+            let s = evaluator.stencil(0, point)?;
+            let text = |w: &[f64]| w.iter().map(|x| format!("{x:.12}")).collect::<Vec<_>>();
+            (text(&s.position), text(&s.du), text(&s.dv), s.exact_derivatives)
+        };
         if args.json {
+            let values = |w: &[String]| -> Vec<Value> {
+                w.iter()
+                    .map(|x| if args.exact { json!(x) } else { json!(x.parse::<f64>().unwrap_or(f64::NAN)) })
+                    .collect()
+            };
             reports.push(json!({
-                "u": u, "v": v, "position": s.position, "du": s.du, "dv": s.dv,
-                "exact_derivatives": s.exact_derivatives,
+                "u": u, "v": v, "position": values(&position), "du": values(&du), "dv": values(&dv),
+                "exact_derivatives": exact_derivatives,
             }));
         } else {
             writeln!(out, "({u}, {v}):")?;
-            let list = |w: &[f64]| w.iter().map(|x| format!("{x:.12}")).collect::<Vec<_>>().join(" ");
-            writeln!(out, "  position {}", list(&s.position))?;
-            writeln!(out, "  du       {}", list(&s.du))?;
-            writeln!(out, "  dv       {}", list(&s.dv))?;
-            if !s.exact_derivatives {
-                writeln!(out, "  (at the extraordinary vertex: du, dv are tangent directions)")?;
+            writeln!(out, "  position {}", position.join(" "))?;
+            if du.is_empty() {
+                writeln!(out, "  (at the extraordinary vertex the tangents are directions, not rational in general)")?;
+            } else {
+                writeln!(out, "  du       {}", du.join(" "))?;
+                writeln!(out, "  dv       {}", dv.join(" "))?;
+                if !exact_derivatives {
+                    writeln!(out, "  (at the extraordinary vertex: du, dv are tangent directions)")?;
+                }
             }
         }
     }

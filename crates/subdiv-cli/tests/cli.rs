@@ -170,4 +170,11 @@ fn stencil_prints_the_papers_four_point_numbers() {
     // Off the grid, or a scheme without sub-patch matrices: status 2.
     assert_eq!(subdiv(&["stencil", "--scheme", "four-point", "--n", "3", "--at", "1/2"]).status.code(), Some(2));
     assert_eq!(subdiv(&["stencil", "--scheme", "doo-sabin", "--at", "0,0"]).status.code(), Some(2));
+    // Exact surface stencils: sw-quad at valence 5 (paper 000 Fig. 6), and a refusal for Loop at
+    // valence 5, whose weights involve cos(2π/5).
+    let report = json(&["stencil", "--scheme", "sw-quad", "--valence", "5", "--at", "1/3,0", "--exact", "--json"]);
+    assert_eq!(report["stencils"][0]["position"][0], "47/145");
+    let refused = subdiv(&["stencil", "--scheme", "loop", "--valence", "5", "--at", "1/3,0", "--exact"]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("no exact stencils"));
 }

@@ -19,6 +19,14 @@ pub enum StencilError {
         /// The domain, e.g. `[0, 1]²`.
         domain: &'static str,
     },
+    /// Exact stencils need rational sub-patch matrices; this scheme's are not (at this patch).
+    #[error("{scheme}: no exact stencils: {detail}")]
+    NotRational {
+        /// The scheme's name.
+        scheme: String,
+        /// Which entry failed.
+        detail: String,
+    },
     /// A shape index beyond the patch matrices' shapes.
     #[error("{scheme}: shape {shape} does not exist (the patch matrices hold {shapes} shapes)")]
     Shape {

@@ -19,6 +19,7 @@
 
 mod address;
 mod error;
+mod exact;
 mod linalg;
 mod surface;
 mod table;
@@ -30,6 +31,7 @@ pub use rational::Rational;
 
 pub use address::{Address, Dyadic};
 pub use error::StencilError;
+pub use exact::{ExactSurfaceStencil, exact_surface_stencil};
 pub use surface::{EvaluatorStats, StencilEvaluator, SurfaceStencil, surface_stencil};
 pub use table::{
     DEFAULT_TABLES, Grid, MAX_RATE, StencilCache, StencilTable, StencilTables, TABLE_MAGIC, TABLE_VERSION, TableSpec,

@@ -1,0 +1,193 @@
+//! Exact surface stencils for schemes whose sub-patch matrices are rational: the matrices read
+//! back as fractions (checked: every row sums to exactly 1), the cycle's eigenvectors solved in
+//! exact rational arithmetic, and carried back through the prefix exactly.
+
+use subdiv_schemes::{PatchMatrices, SubPatch};
+
+use crate::address::{check_domain, step};
+use crate::rational::{SparseRow, solve_sparse};
+use crate::{Dyadic, Rational, StencilError};
+
+/// Matrix entries are read back as fractions with denominators up to this.
+const MAX_DENOMINATOR: u64 = 1 << 24;
+
+/// Position and tangent weights as exact fractions (see [`exact_surface_stencil`]).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ExactSurfaceStencil {
+    /// Position weights; they sum to exactly 1.
+    pub position: Vec<Rational>,
+    /// `[∂/∂u, ∂/∂v]` weights, each summing to exactly 0; `None` at an extraordinary vertex
+    /// itself, where the parameterization has no derivative (and the tangent directions are
+    /// not rational in general).
+    pub derivatives: Option<[Vec<Rational>; 2]>,
+}
+
+/// The stencil of `point` in the patch of shape `shape`, in exact fractions: the same
+/// eigenvector problems as [`surface_stencil`](crate::surface_stencil), solved exactly.
+///
+/// ```
+/// use subdiv_mesh::BoundaryInterpolation;
+/// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
+/// use subdiv_stencil::{exact_surface_stencil, Dyadic, Rational};
+///
+/// let cc = Builtin::CatmullClark.scheme();
+/// let m = PatchMatrices::of(cc, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly)?;
+/// let s = exact_surface_stencil(&m, 0, Dyadic::new(0, 0, 1))?;
+/// // The extraordinary vertex: k/(k + 5) on itself.
+/// assert_eq!(s.position[0], Rational::new(1, 2).unwrap());
+/// assert_eq!(s.position.iter().sum::<Rational>(), Rational::one());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// [`StencilError::NotRational`] when a sub-patch matrix entry is not a fraction (Loop's
+/// weights at most valences involve cos 2π/k); otherwise as
+/// [`surface_stencil`](crate::surface_stencil).
+pub fn exact_surface_stencil(
+    matrices: &PatchMatrices,
+    shape: usize,
+    point: Dyadic,
+) -> Result<ExactSurfaceStencil, StencilError> {
+    check_domain(matrices.face_size, point)?;
+    if shape >= matrices.shapes.len() {
+        return Err(StencilError::Shape { scheme: matrices.scheme.clone(), shape, shapes: matrices.shapes.len() });
+    }
+    // The walk of (shape, point) states until one repeats.
+    let mut walk: Vec<((usize, i64, i64), u8)> = Vec::new();
+    let mut state = (shape, point.u, point.v);
+    let first = loop {
+        if let Some(first) = walk.iter().position(|(s, _)| *s == state) {
+            break first;
+        }
+        let (child, u, v) = step(matrices.face_size, state.1, state.2, point.denominator);
+        walk.push((state, child));
+        state = (matrices.shapes[state.0].children[usize::from(child)].shape, u, v);
+    };
+    let sub = |(s, c): ((usize, i64, i64), u8)| &matrices.shapes[s.0].children[usize::from(c)];
+    let exact: Vec<Vec<Vec<Rational>>> =
+        walk.iter().map(|&w| exact_matrix(matrices, sub(w))).collect::<Result<_, _>>()?;
+
+    // M_τ over the cycle, applied first to last.
+    let periodic = walk[first].0.0;
+    let size = matrices.shapes[periodic].size;
+    let mut m: Vec<Vec<Rational>> =
+        (0..size).map(|i| (0..size).map(|j| Rational::from_integer(i64::from(i == j))).collect()).collect();
+    let mut flips = 0;
+    for (k, w) in walk.iter().enumerate().skip(first) {
+        m = multiply(&exact[k], &m);
+        flips += usize::from(sub(*w).domain.flipped);
+    }
+    let fail = |what: &str, detail: String| StencilError::Eigen {
+        scheme: matrices.scheme.clone(),
+        detail: format!("exact {what} at {point:?}: {detail}"),
+    };
+    let ones = vec![Rational::one(); size];
+    let mut position =
+        left_eigenvector(&m, &Rational::one(), &[(&ones, Rational::one())]).map_err(|e| fail("positions", e))?;
+    let period = walk.len() - first;
+    let lambda = Rational::new(if flips % 2 == 1 { -1 } else { 1 }, num_bigint::BigInt::from(1) << period)
+        .expect("a nonzero denominator");
+    let mut derivatives = match &matrices.shapes[periodic].parameters {
+        Some([u, v]) => {
+            // The parameters come from a least-squares solve: looser.
+            let u = exact_vector(matrices, u, 1e-11)?;
+            let v = exact_vector(matrices, v, 1e-11)?;
+            let (zero, one) = (Rational::zero(), Rational::one());
+            let du = left_eigenvector(&m, &lambda, &[(&ones, zero.clone()), (&u, one.clone()), (&v, zero.clone())])
+                .map_err(|e| fail("∂/∂u", e))?;
+            let dv = left_eigenvector(&m, &lambda, &[(&ones, zero.clone()), (&u, zero), (&v, one)])
+                .map_err(|e| fail("∂/∂v", e))?;
+            Some([du, dv])
+        }
+        None => None,
+    };
+    // Back through the prefix, last step first: w ← w · A (derivatives ×±2).
+    let two = Rational::from_integer(2);
+    for k in (0..first).rev() {
+        position = times(&position, &exact[k]);
+        let scale = if sub(walk[k]).domain.flipped { -&two } else { two.clone() };
+        if let Some([du, dv]) = &mut derivatives {
+            *du = times(du, &exact[k]).iter().map(|x| x * &scale).collect();
+            *dv = times(dv, &exact[k]).iter().map(|x| x * &scale).collect();
+        }
+    }
+    Ok(ExactSurfaceStencil { position, derivatives })
+}
+
+/// The sub-patch matrix in fractions, or [`StencilError::NotRational`].
+fn exact_matrix(matrices: &PatchMatrices, child: &SubPatch) -> Result<Vec<Vec<Rational>>, StencilError> {
+    (0..child.rows())
+        .map(|r| {
+            // The engine's arithmetic leaves the entries within an ulp or two of their fractions.
+            let row = exact_vector(matrices, child.row(r), 1e-15)?;
+            if row.iter().sum::<Rational>() != Rational::one() {
+                return Err(StencilError::NotRational {
+                    scheme: matrices.scheme.clone(),
+                    detail: format!("a sub-patch row read back as fractions sums to {}", row.iter().sum::<Rational>()),
+                });
+            }
+            Ok(row)
+        })
+        .collect()
+}
+
+/// `values` as fractions with denominators up to [`MAX_DENOMINATOR`], each within `tolerance`
+/// (relative, at least absolute) of its value.
+fn exact_vector(matrices: &PatchMatrices, values: &[f64], tolerance: f64) -> Result<Vec<Rational>, StencilError> {
+    values
+        .iter()
+        .map(|&x| {
+            Rational::approximate(x, MAX_DENOMINATOR)
+                .filter(|r| (r.to_f64() - x).abs() <= tolerance * x.abs().max(1.0))
+                .ok_or_else(|| StencilError::NotRational {
+                    scheme: matrices.scheme.clone(),
+                    detail: format!("{x:e} (in its sub-patch matrices) is not a fraction with denominator ≤ 2^24"),
+                })
+        })
+        .collect()
+}
+
+/// `a · b` for square-or-rectangular matrices in fractions.
+fn multiply(a: &[Vec<Rational>], b: &[Vec<Rational>]) -> Vec<Vec<Rational>> {
+    a.iter().map(|row| times(row, b)).collect()
+}
+
+/// The row vector `w` times the matrix `a`.
+fn times(w: &[Rational], a: &[Vec<Rational>]) -> Vec<Rational> {
+    let columns = a.first().map_or(0, Vec::len);
+    let mut out = vec![Rational::zero(); columns];
+    for (x, row) in w.iter().zip(a) {
+        if x.is_zero() {
+            continue;
+        }
+        for (o, y) in out.iter_mut().zip(row) {
+            if !y.is_zero() {
+                *o = &*o + &(x * y);
+            }
+        }
+    }
+    out
+}
+
+/// The left eigenvector `w` of `m` for `lambda` with `w · row = value` for each normalisation,
+/// solved exactly: `w (M − λI) = 0` with the normalisations appended.
+fn left_eigenvector(
+    m: &[Vec<Rational>],
+    lambda: &Rational,
+    normalisations: &[(&Vec<Rational>, Rational)],
+) -> Result<Vec<Rational>, String> {
+    let n = m.len();
+    let mut equations: Vec<(SparseRow, Rational)> = (0..n)
+        .map(|j| {
+            let row: SparseRow = (0..n)
+                .map(|i| (i, if i == j { &m[i][j] - lambda } else { m[i][j].clone() }))
+                .filter(|(_, x)| !x.is_zero())
+                .collect();
+            (row, Rational::zero())
+        })
+        .collect();
+    for (row, value) in normalisations {
+        equations.push((row.iter().cloned().enumerate().filter(|(_, x)| !x.is_zero()).collect(), value.clone()));
+    }
+    solve_sparse(n, equations).map_err(|e| e.to_string())
+}
