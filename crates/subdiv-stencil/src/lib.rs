@@ -16,6 +16,7 @@
 
 mod address;
 mod error;
+pub mod grid;
 mod linalg;
 mod surface;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
