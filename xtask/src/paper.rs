@@ -6,6 +6,7 @@ use num_integer::Integer;
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
 use subdiv::stencil::curve::{NonUniformCubicGrid, basis_grid};
+use subdiv::stencil::grid::{SurfaceBasisGrid, SurfaceMask};
 use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator, surface_stencil};
 
 /// `values / denominator` as exact fractions.
@@ -91,8 +92,24 @@ pub(crate) fn run() -> Result<(), String> {
         println!("  ({u}/3, {v}/3): {}", normalised(&s.position));
     }
     println!();
-    println!("§5.1 √3 edge-midpoint stencil (normalisation 2256): not reproduced yet; √3 has no sub-patch");
-    println!("matrices (its two-step sub-patches are not faces of the control mesh).");
+    // Route 1: √3 taken two steps at a time is ternary on the triangular lattice; the midpoint of
+    // the edge (0, 0)–(1, 0) is (1/2, 0), residue (1, 0) on the grid (1/2)Z².
+    let sqrt3 = SurfaceMask::from_scheme(Builtin::Sqrt3.scheme()).map_err(|e| e.to_string())?;
+    let grid = SurfaceBasisGrid::at_residues(&sqrt3, 2, &[[1, 0]]).map_err(|e| e.to_string())?;
+    let s = grid.stencil_at([1, 0]).ok_or("the midpoint's residue is computed")?;
+    let common = s.position.iter().fold(BigInt::from(1), |l, w| l.lcm(w.denom()));
+    println!("§5.1 √3 edge-midpoint stencil (Fig. 4; its weights are not in our copy, only the normalisation)");
+    println!("  control points at lattice (i, j) (the edge from (0, 0) to (1, 0); (0, 1) and (1, −1) its");
+    println!("  triangles' third corners), weights over the common denominator:");
+    for (c, w) in s.control.iter().zip(&s.position) {
+        println!("    ({:>2}, {:>2}): {w:>8} = {:>4}/{common}", c[0], c[1], w.numer() * (&common / w.denom()));
+    }
+    let equal = common == BigInt::from(2256);
+    differ += usize::from(!equal);
+    println!(
+        "  ours:  common denominator {common}\n  paper: implicit normalization of 2256\n  {}\n",
+        if equal { "equal" } else { "DIFFERENT" }
+    );
     if differ > 0 { Err(format!("{differ} reproduced numbers differ from the paper")) } else { Ok(()) }
 }
 

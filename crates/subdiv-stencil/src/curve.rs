@@ -48,7 +48,7 @@ use subdiv_schemes::CurveScheme;
 
 use crate::StencilError;
 use crate::linalg::normalised_left_eigenvectors;
-use crate::rational::{Rational, SolveError, SparseRow, solve_sparse};
+use crate::rational::{Rational, SolveError, SparseRow, exact_weight, solve_sparse};
 
 /// The largest grid rate [`BasisGrid::new`] and [`EigenGrid::new`] accept: the systems have
 /// about `rate × support width` unknowns.
@@ -157,9 +157,7 @@ impl ExactMask {
     pub fn from_scheme(scheme: &CurveScheme) -> Result<Self, StencilError> {
         let mut weights = Vec::with_capacity(scheme.mask().len());
         for (index, &value) in scheme.mask().iter().enumerate() {
-            let close = Rational::approximate(value, Self::MAX_DENOMINATOR)
-                .filter(|r| (r.to_f64() - value).abs() < 1e-15 * f64::max(1.0, value.abs()));
-            let Some(exact) = close else {
+            let Some(exact) = exact_weight(value, Self::MAX_DENOMINATOR) else {
                 return Err(StencilError::CurveMaskNotRational {
                     scheme: scheme.name().to_owned(),
                     index,

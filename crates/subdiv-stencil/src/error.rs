@@ -148,4 +148,28 @@ pub enum StencilError {
         /// What went wrong.
         detail: String,
     },
+    // ---- surface route 1 (grid.rs) ---------------------------------------------------------
+    /// The regular rules of a surface scheme do not give an exact scaling relation: a weight
+    /// that is not a small fraction, a refined point off the dilated lattice, a rule that does
+    /// not sum to exactly 1.
+    #[error("surface scaling relation of `{scheme}`: {reason}")]
+    SurfaceMask {
+        /// The scheme's name.
+        scheme: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// The scaling-relation system of a surface scheme on a regular grid (with its
+    /// normalisations) has no unique exact solution.
+    #[error("surface scaling relations of `{scheme}` on the grid (1/{rate})Z², {quantity}: {detail}")]
+    SurfaceScalingSystem {
+        /// The scheme's name.
+        scheme: String,
+        /// The grid rate.
+        rate: u32,
+        /// `positions`, `derivatives ∂/∂u` or `derivatives ∂/∂v`.
+        quantity: &'static str,
+        /// What went wrong: inconsistency, or the rank.
+        detail: String,
+    },
 }

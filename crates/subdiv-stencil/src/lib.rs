@@ -20,6 +20,7 @@
 mod address;
 mod error;
 mod exact;
+pub mod grid;
 mod linalg;
 mod surface;
 mod table;

@@ -319,6 +319,14 @@ impl<'a> Sum<&'a Rational> for Rational {
     }
 }
 
+/// The weight of a scheme's `f64` rule recovered as an exact fraction: the nearest rational
+/// with denominator at most `max_denominator`, accepted only when it is within
+/// `1e-15 · max(1, |value|)` of the float (the rule was a small fraction, rounded once).
+pub(crate) fn exact_weight(value: f64, max_denominator: u64) -> Option<Rational> {
+    Rational::approximate(value, max_denominator)
+        .filter(|r| (r.to_f64() - value).abs() < 1e-15 * f64::max(1.0, value.abs()))
+}
+
 /// A sparse row: `(column, coefficient)` in increasing column order, no zero coefficients.
 pub(crate) type SparseRow = Vec<(usize, Rational)>;
 

@@ -229,11 +229,13 @@ impl<'m> StencilEvaluator<'m> {
         // M_τ, applied first to last.
         let mut m_tau = Mat::<f64>::identity(size, size);
         let mut flips = 0;
+        let mut steps = Vec::with_capacity(cycle.len());
         for &(state, c) in cycle {
             let child = &matrices.shapes[state.shape].children[usize::from(c)];
             let a = Mat::<f64>::from_fn(child.rows(), child.columns(), |i, j| child.get(i, j));
             m_tau = &a * &m_tau;
             flips += usize::from(child.domain.flipped);
+            steps.push(child);
         }
         let ones = vec![1.0; size];
         let fail = |detail: String| eigen_error(matrices, format!("{detail} at {point:?}"));
@@ -243,6 +245,11 @@ impl<'m> StencilEvaluator<'m> {
             .remove(0);
         let lambda = if flips % 2 == 1 { -1.0 } else { 1.0 } * 0.5_f64.powi(cycle.len() as i32);
         let stencil = match &matrices.shapes[periodic].parameters {
+            Some([u, v]) if cycle.len() > 1 => {
+                let (du, dv) =
+                    periodic_derivatives(&steps, u, v).map_err(|detail| fail(format!("derivatives: {detail}")))?;
+                SurfaceStencil { position, du, dv, exact_derivatives: true }
+            }
             // Both derivatives from one factorisation: ∂/∂u is 1 on u and 0 on v, ∂/∂v the reverse.
             Some([u, v]) => {
                 let rows = [ones, u.clone(), v.clone()];
@@ -261,6 +268,75 @@ impl<'m> StencilEvaluator<'m> {
         };
         Ok(stencil)
     }
+}
+
+/// The derivative stencils over a periodic shape whose period has several steps: the left
+/// eigenvectors of `M_τ` for `±2^−|τ|`, found without forming `M_τ`'s tiny eigenvalue. On the
+/// vectors that sum to zero (which `w ↦ w·M_τ` keeps, as `M_τ` maps constants to constants)
+/// the map `w ↦ ±2^|τ| w·M_τ`, applied one sub-patch matrix at a time as `w ← ±2 w·A`, has
+/// the derivative pair as its dominant eigenvalue 1 and the rest at most `2^−|τ|`; so a few
+/// rounds converge, each step is well conditioned, and the eigenvector does not lose the
+/// `|τ|` bits that an SVD of `M_τ ∓ 2^−|τ|` loses. Normalised on the linear functions `u`
+/// and `v` of the shape.
+fn periodic_derivatives(
+    steps: &[&subdiv_schemes::SubPatch],
+    u: &[f64],
+    v: &[f64],
+) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let size = u.len();
+    // w·M_τ with M_τ = A_last ⋯ A_first: the last step first.
+    let round = |w: &[f64]| -> Vec<f64> {
+        let mut w = w.to_vec();
+        for child in steps.iter().rev() {
+            let sign = if child.domain.flipped { -2.0 } else { 2.0 };
+            w = (0..child.columns())
+                .map(|j| sign * (0..child.rows()).map(|i| w[i] * child.get(i, j)).sum::<f64>())
+                .collect();
+            // Back onto the sum-zero vectors at every step: rounding must not feed the
+            // position direction, which the remaining steps would grow by up to 2^|τ|.
+            let mean = w.iter().sum::<f64>() / w.len() as f64;
+            w.iter_mut().for_each(|x| *x -= mean);
+        }
+        w
+    };
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let rounds = 64 / steps.len() + 2;
+    // Two starting vectors with components on both derivatives: the linear functions,
+    // centred (the stencils reproduce them, so they are far from orthogonal to the pair).
+    let centre = |p: &[f64]| {
+        let mean = p.iter().sum::<f64>() / size as f64;
+        p.iter().map(|x| x - mean).collect::<Vec<f64>>()
+    };
+    let mut basis = [centre(u), centre(v)];
+    for w in &mut basis {
+        for _ in 0..rounds {
+            let next = round(w);
+            let norm = next.iter().map(|x| x.abs()).fold(0.0, f64::max);
+            if norm == 0.0 {
+                return Err("the iteration vanished".into());
+            }
+            *w = next.iter().map(|x| x / norm).collect();
+        }
+    }
+    // du = α w₁ + β w₂ with du·u = 1, du·v = 0; dv likewise.
+    let g = [[dot(&basis[0], u), dot(&basis[1], u)], [dot(&basis[0], v), dot(&basis[1], v)]];
+    let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
+    if det.abs() < TOLERANCE {
+        return Err("the derivative eigenvectors do not span the linear functions".into());
+    }
+    let combine = |t: [f64; 2]| -> Vec<f64> {
+        let alpha = (g[1][1] * t[0] - g[0][1] * t[1]) / det;
+        let beta = (g[0][0] * t[1] - g[1][0] * t[0]) / det;
+        (0..size).map(|i| alpha * basis[0][i] + beta * basis[1][i]).collect()
+    };
+    let (du, dv) = (combine([1.0, 0.0]), combine([0.0, 1.0]));
+    for w in [&du, &dv] {
+        let residual = round(w).iter().zip(w).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        if residual > 1e-9 * w.iter().map(|x| x.abs()).fold(1.0, f64::max) {
+            return Err(format!("the derivative iteration did not converge (residual {residual:e})"));
+        }
+    }
+    Ok((du, dv))
 }
 
 fn eigen_error(matrices: &PatchMatrices, detail: String) -> StencilError {
