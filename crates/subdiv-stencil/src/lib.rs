@@ -17,6 +17,7 @@
 mod address;
 mod error;
 mod linalg;
+mod mesh_eval;
 mod surface;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
 pub mod curve;
@@ -26,4 +27,7 @@ pub use rational::Rational;
 
 pub use address::{Address, Dyadic};
 pub use error::StencilError;
+pub use mesh_eval::{
+    FaceDomain, GridParameter, LimitEvaluator, LimitPoint, MAX_DENOMINATOR_BITS, PatchFrame, dyadic_from_f64,
+};
 pub use surface::{SurfaceStencil, surface_stencil};
