@@ -708,4 +708,49 @@ mod tests {
         assert!(dyadic_from_f64(f64::NAN, 0.0).is_none());
         assert!(dyadic_from_f64(0.0, 1e30).is_none());
     }
+
+    #[test]
+    fn other_primal_schemes_meet_their_known_values() {
+        // Bilinear: its eigenvalue 1 is not simple, so the periodic-address stencils do not
+        // exist; a typed error, not a panic.
+        let torus = Mesh::build(shapes::quad_torus(6, 4)).unwrap();
+        let eval = LimitEvaluator::new(Builtin::Bilinear.scheme(), &torus, &RefineOptions::DEFAULT).unwrap();
+        assert!(matches!(eval.eval(FaceId::new(0), 0.5, 0.25), Err(StencilError::Eigen { .. })));
+        // Interpolating schemes pass through the cage's vertices: butterfly on the icosahedron,
+        // Kobbelt on the cube (valence 3).
+        for (scheme, soup) in [(Builtin::Butterfly, shapes::icosahedron()), (Builtin::Kobbelt, shapes::cube())] {
+            let mesh = Mesh::build(soup).unwrap();
+            let eval = LimitEvaluator::new(scheme.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+            for f in mesh.face_ids() {
+                let p = eval.eval(f, 0.0, 0.0).unwrap().position;
+                assert!((p - mesh.position(mesh.face_vertices(f)[0])).length() < 1e-12, "{scheme:?} {f}");
+            }
+        }
+    }
+
+    #[test]
+    fn creases_holes_and_bad_points_are_typed_errors() {
+        let cc = Builtin::CatmullClark.scheme();
+        let mut soup = shapes::cube();
+        soup.tags
+            .creases
+            .push(subdiv_mesh::CreaseTag { vertices: [0, 2].map(subdiv_mesh::VertexId::new), sharpness: 2.0 });
+        let mesh = Mesh::build(soup).unwrap();
+        let error = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap_err();
+        assert!(matches!(error, StencilError::FeatureNotSupported { .. }), "{error}");
+
+        let mut soup = shapes::cube();
+        soup.tags.holes.push(FaceId::new(1));
+        let mesh = Mesh::build(soup).unwrap();
+        let eval = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap();
+        assert!(eval.grid(FaceId::new(1), 2).unwrap().is_empty());
+        assert_eq!(eval.eval(FaceId::new(1), 0.5, 0.5), Err(StencilError::NoSurface { face: 1 }));
+        assert_eq!(eval.grid(FaceId::new(0), 2).unwrap().len(), 9);
+        assert_eq!(eval.eval(FaceId::new(6), 0.0, 0.0), Err(StencilError::FaceOutOfRange { face: 6, faces: 6 }));
+        assert!(matches!(eval.eval(FaceId::new(0), 1.0, 1.5), Err(StencilError::OutsideFace { face: 0, .. })));
+        assert!(matches!(eval.eval(FaceId::new(0), f64::INFINITY, 0.0), Err(StencilError::OutsideFace { .. })));
+
+        let doo_sabin = LimitEvaluator::new(Builtin::DooSabin.scheme(), &mesh, &RefineOptions::DEFAULT);
+        assert!(matches!(doo_sabin, Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported { .. }))));
+    }
 }
