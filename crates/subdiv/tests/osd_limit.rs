@@ -25,7 +25,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use subdiv::DVec3;
-use subdiv::mesh::FaceId;
+use subdiv::mesh::{BoundaryInterpolation, FaceId};
 use subdiv::schemes::{Builtin, RefineOptions};
 use subdiv::stencil::{Dyadic, FaceDomain, LimitEvaluator, LimitPoint};
 
@@ -81,10 +81,25 @@ struct Max {
     derivative: f64,
 }
 
-fn compare_mesh(osd_limit: &Path, path: &Path, scheme: Builtin, grids: &[u32], report: &mut String) {
-    let name = path.file_stem().unwrap().to_string_lossy().into_owned();
+fn compare_mesh(
+    osd_limit: &Path,
+    path: &Path,
+    scheme: Builtin,
+    boundary: Option<BoundaryInterpolation>,
+    grids: &[u32],
+    report: &mut String,
+) {
+    let stem = path.file_stem().unwrap().to_string_lossy().into_owned();
     let mesh = subdiv::io::load_mesh(path, &Default::default()).unwrap();
-    let eval = LimitEvaluator::new(scheme.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+    let options = RefineOptions { boundary, ..RefineOptions::DEFAULT };
+    let eval = LimitEvaluator::new(scheme.scheme(), &mesh, &options).unwrap();
+    let boundary_args: Vec<&str> = match boundary {
+        None => vec![],
+        Some(BoundaryInterpolation::None) => vec!["--boundary", "none"],
+        Some(BoundaryInterpolation::EdgeAndCorner) => vec!["--boundary", "edge-and-corner"],
+        Some(BoundaryInterpolation::EdgeOnly) => vec!["--boundary", "edge-only"],
+    };
+    let name = format!("{stem}{}", boundary_args.get(1).map_or(String::new(), |b| format!(" --boundary {b}")));
     let (lo, hi) = mesh.bounding_box().unwrap();
     let tolerance = 1e-12 * (hi - lo).length();
     let osd_scheme = if scheme == Builtin::Loop { "loop" } else { "catmark" };
@@ -92,7 +107,8 @@ fn compare_mesh(osd_limit: &Path, path: &Path, scheme: Builtin, grids: &[u32], r
     // The grids, row for row.
     let (mut away, mut at_ev, mut ev_points, mut worst_angle) = (Max::default(), 0.0_f64, 0, 0.0_f64);
     for &n in grids {
-        let theirs = run_osd(osd_limit, path, osd_scheme, &["--grid", &n.to_string()]);
+        let n_text = n.to_string();
+        let theirs = run_osd(osd_limit, path, osd_scheme, &[&["--grid", n_text.as_str()], &boundary_args[..]].concat());
         let ours: Vec<(usize, _, LimitPoint)> = mesh
             .face_ids()
             .flat_map(|f| eval.grid(f, n).unwrap().into_iter().map(move |(g, p)| (f.index(), g, p)))
@@ -136,7 +152,7 @@ fn compare_mesh(osd_limit: &Path, path: &Path, scheme: Builtin, grids: &[u32], r
 
     // Probes converging to every EV corner of every (sub-)face.
     let mut probes: Vec<(usize, FaceId, Dyadic)> = Vec::new();
-    for f in mesh.face_ids() {
+    for f in mesh.face_ids().filter(|&f| eval.has_surface(f).unwrap()) {
         let domain = eval.domain(f).unwrap();
         let subs = match domain {
             FaceDomain::SubFaces { size, .. } => size,
@@ -167,7 +183,8 @@ fn compare_mesh(osd_limit: &Path, path: &Path, scheme: Builtin, grids: &[u32], r
         writeln!(text, "{}, {u:?} {v:?}", f.index()).unwrap();
     }
     std::fs::write(&samples, text).unwrap();
-    let theirs = run_osd(osd_limit, path, osd_scheme, &["--samples", samples.to_str().unwrap()]);
+    let theirs =
+        run_osd(osd_limit, path, osd_scheme, &[&["--samples", samples.to_str().unwrap()], &boundary_args[..]].concat());
     assert_eq!(theirs.len(), probes.len(), "{name}: one row per probe");
     let mut by_k = vec![(0.0_f64, 0.0_f64); 15];
     for ((k, f, point), o) in probes.iter().zip(&theirs) {
@@ -197,19 +214,22 @@ fn limit_evaluation_equals_opensubdiv_bfr() {
     let shared = subdiv_testkit::shared_dir().expect("the shared folder is needed for the comparison");
     let meshes = shared.join("peers/osd/meshes");
     let mut report = String::new();
-    for (mesh, scheme, grids) in [
-        ("cube", Builtin::CatmullClark, &[4, 5, 7][..]),
-        ("torus", Builtin::CatmullClark, &[5]),
-        ("valence56", Builtin::CatmullClark, &[4, 5, 7]),
-        ("ngon_prism", Builtin::CatmullClark, &[4, 5, 7]),
-        ("grid_open", Builtin::CatmullClark, &[4, 7]),
-        ("icosahedron", Builtin::Loop, &[4, 5, 7]),
-        ("octahedron", Builtin::Loop, &[4, 5, 7]),
-        ("torus_tri", Builtin::Loop, &[5]),
+    let (cc, lp) = (Builtin::CatmullClark, Builtin::Loop);
+    for (mesh, scheme, boundary, grids) in [
+        ("cube", cc, None, &[4, 5, 7][..]),
+        ("torus", cc, None, &[5]),
+        ("valence56", cc, None, &[4, 5, 7]),
+        ("ngon_prism", cc, None, &[4, 5, 7]),
+        ("grid_open", cc, None, &[4, 7]),
+        ("grid_open", cc, Some(BoundaryInterpolation::EdgeAndCorner), &[5]),
+        ("grid_open", cc, Some(BoundaryInterpolation::None), &[5]),
+        ("icosahedron", lp, None, &[4, 5, 7]),
+        ("octahedron", lp, None, &[4, 5, 7]),
+        ("torus_tri", lp, None, &[5]),
     ] {
         let path = meshes.join(format!("{mesh}.obj"));
         assert!(path.is_file(), "{} is missing", path.display());
-        compare_mesh(&osd_limit, &path, scheme, grids, &mut report);
+        compare_mesh(&osd_limit, &path, scheme, boundary, grids, &mut report);
     }
     eprint!("{report}");
 }
