@@ -3,7 +3,9 @@
 use std::path::Path;
 
 use subdiv::io::{IoError, ObjFile, ObjLines};
-use subdiv::mesh::{MeshError, PolygonSoup};
+use subdiv::mesh::{BuildOptions, Mesh, MeshError, PolygonSoup, shapes};
+
+use crate::UserError;
 
 /// A soup and what is needed to point at its lines in error messages.
 pub(crate) struct LoadedMesh {
@@ -25,6 +27,18 @@ impl LoadedMesh {
         } else {
             Ok(Self { name, soup: subdiv::io::load(path)?, lines: None })
         }
+    }
+
+    /// The file at `path`, or the built-in model when there is none, built into a mesh (the
+    /// first broken rule as the error, with its file and line).
+    pub(crate) fn read_and_build(path: Option<&Path>) -> Result<(Self, Mesh), UserError> {
+        let loaded = match path {
+            Some(path) => Self::read(path)?,
+            None => Self::built_in(shapes::default_model()),
+        };
+        let mesh = Mesh::build_with(loaded.soup.clone(), &BuildOptions::default())
+            .map_err(|error| UserError(loaded.locate(&error)))?;
+        Ok((loaded, mesh))
     }
 
     /// The built-in model.

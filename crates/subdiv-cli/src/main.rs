@@ -7,6 +7,7 @@
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod analyze;
+mod eval;
 mod info;
 mod input;
 mod refine;
@@ -42,6 +43,9 @@ enum Command {
     /// Exact limit stencils: a curve scheme's basis function and derivative on (1/n)ℤ, or a
     /// surface patch's position and tangent weights at rational (u, v).
     Stencil(stencil::StencilArgs),
+    /// Exact limit positions and derivatives at face parameters (a grid on every face, or
+    /// `face u v` samples), as CSV in OpenSubdiv's Bfr parameterization (osd_limit's columns).
+    Eval(eval::EvalArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -64,6 +68,7 @@ fn main() -> ExitCode {
         Command::Analyze(args) => analyze::run(args, &mut out),
         Command::Scheme(args) => scheme_arg::print(args, &mut out),
         Command::Stencil(args) => stencil::run(args, &mut out),
+        Command::Eval(args) => eval::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

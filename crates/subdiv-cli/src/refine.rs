@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use subdiv::mesh::{BuildOptions, FaceId, Mesh, PolygonSoup, shapes};
+use subdiv::mesh::{FaceId, Mesh, PolygonSoup};
 use subdiv::schemes::{RefineOptions, Refiner};
 
 use crate::UserError;
@@ -27,12 +27,7 @@ pub(crate) struct RefineArgs {
 }
 
 pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserError> {
-    let loaded = match &args.mesh {
-        Some(path) => LoadedMesh::read(path)?,
-        None => LoadedMesh::built_in(shapes::default_model()),
-    };
-    let mesh = Mesh::build_with(loaded.soup.clone(), &BuildOptions::default())
-        .map_err(|error| UserError(loaded.locate(&error)))?;
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
     let scheme = args.scheme.resolve()?;
     let levels = args.levels as usize;
     let start = Instant::now();

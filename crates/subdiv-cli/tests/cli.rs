@@ -178,3 +178,57 @@ fn stencil_prints_the_papers_four_point_numbers() {
     assert_eq!(refused.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&refused.stderr).contains("no exact stencils"));
 }
+
+#[test]
+fn eval_writes_osd_limit_csv_and_rejects_bad_samples() {
+    // The built-in model: 60 quads, (N + 1)² rows each, in osd_limit's columns.
+    let output = subdiv(&["eval", "--grid", "2"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let text = String::from_utf8(output.stdout).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz"));
+    let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+    assert_eq!(rows.len(), 60 * 9);
+    assert!(rows.iter().all(|r| r.len() == 12));
+    // Row order: face outer, then v, then u.
+    assert_eq!(&rows[1][..3], [0.0, 0.5, 0.0]);
+    assert_eq!(&rows[9][..3], [1.0, 0.0, 0.0]);
+
+    // Samples: commas or spaces, comments; the same point as the grid's, to the bit.
+    let dir = tempfile::tempdir().unwrap();
+    let samples = dir.path().join("samples.txt");
+    std::fs::write(&samples, "# face u v\n1, 0 0\n\n1 0.5 0.0  # trailing comment\n").unwrap();
+    let out = dir.path().join("points.csv");
+    let output = subdiv(&["eval", "--samples", samples.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let written = std::fs::read_to_string(&out).unwrap();
+    let grid_rows: Vec<&str> = text.lines().skip(1).collect();
+    assert_eq!(written.lines().skip(1).collect::<Vec<_>>(), [grid_rows[9], grid_rows[10]]);
+
+    // Bad lines: status 2, one line naming the file, the line and the rule; no output file.
+    for (content, expect) in [
+        ("0 0 0\n0 0.5\n", "samples.txt:2: expected `face u v`"),
+        ("0 0 0\n# ok\n0 x 0\n", "samples.txt:3: expected `face u v`"),
+        ("60 0 0\n", "samples.txt:1: face 60 does not exist: the mesh has 60 faces"),
+        ("0 1.5 0\n", "samples.txt:1: face 0: parameter (1.5, 0.0) is outside its domain [0, 1]²"),
+        ("0 nan 0\n", "samples.txt:1: face 0: parameter (NaN, 0.0) is outside its domain"),
+    ] {
+        std::fs::write(&samples, content).unwrap();
+        let rejected = dir.path().join("rejected.csv");
+        let output = subdiv(&["eval", "--samples", samples.to_str().unwrap(), "-o", rejected.to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{content:?}: {stderr}");
+        assert_eq!(stderr.lines().count(), 1, "{content:?}: {stderr}");
+        assert!(stderr.contains(expect), "{content:?}: expected {expect:?} in {stderr:?}");
+        assert!(!rejected.exists() && output.stdout.is_empty(), "{content:?}: nothing written");
+    }
+    // A scheme without sub-patch matrices, and a mesh a scheme cannot take: typed errors.
+    let output = subdiv(&["eval", "--scheme", "doo-sabin", "--grid", "1"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&output.stderr).contains("sub-patch matrices are not available for the dual split")
+    );
+    let output = subdiv(&["eval", "--scheme", "loop", "--grid", "1"]);
+    assert_eq!(output.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&output.stderr).contains("loop takes only 3-sided faces"));
+}

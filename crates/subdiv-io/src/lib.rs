@@ -81,6 +81,31 @@ pub fn load(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
     }
 }
 
+/// Writes `path` atomically through `write`: to `<path>.tmp` beside it, synced, then renamed
+/// over `path`, so a failure (in `write` too) leaves no half-written file and `path` as it was.
+/// For outputs other than meshes, e.g. the CSV of `subdiv eval`.
+///
+/// ```
+/// let dir = tempfile::tempdir()?;
+/// let path = dir.path().join("out.csv");
+/// subdiv_io::write_atomic(&path, |w| w.write_all(b"face,u,v\n"))?;
+/// assert_eq!(std::fs::read_to_string(&path)?, "face,u,v\n");
+/// // A failing writer leaves the previous file alone.
+/// let failed = subdiv_io::write_atomic(&path, |_| Err(std::io::Error::other("no")));
+/// assert!(failed.is_err());
+/// assert_eq!(std::fs::read_to_string(&path)?, "face,u,v\n");
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// [`IoError::Io`] naming `path` when creating, writing, syncing or renaming fails.
+pub fn write_atomic(
+    path: impl AsRef<Path>,
+    write: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> Result<(), IoError> {
+    atomic::write_file(path.as_ref(), |w| write(w))
+}
+
 /// Reads the mesh file at `path` (as [`load`]) and builds its half-edge mesh.
 ///
 /// # Errors

@@ -82,6 +82,57 @@ pub enum StencilError {
         /// What went wrong, with the address.
         detail: String,
     },
+    // ---- limit evaluation of a mesh (mesh_eval.rs) ---------------------------------------
+    /// A face index the mesh does not have.
+    #[error("face {face} does not exist: the mesh has {faces} faces (0 to {faces} - 1)")]
+    FaceOutOfRange {
+        /// The face asked for.
+        face: usize,
+        /// The mesh's face count.
+        faces: usize,
+    },
+    /// A parameter outside the face's domain (or not a finite number).
+    #[error("face {face}: parameter ({u}, {v}) is outside its domain {domain}")]
+    OutsideFace {
+        /// The face.
+        face: usize,
+        /// The first parameter, as given.
+        u: String,
+        /// The second parameter, as given.
+        v: String,
+        /// The domain in words.
+        domain: String,
+    },
+    /// The face has no limit surface: a hole (tagged, or made by the boundary rule `none`).
+    #[error("face {face} has no limit surface: it is a hole (a `t hole` tag, or boundary interpolation none)")]
+    NoSurface {
+        /// The face.
+        face: usize,
+    },
+    /// A mesh feature the sub-patch matrices do not model, so evaluation would be wrong.
+    #[error(
+        "limit evaluation with {scheme}: {feature} are not supported yet (the sub-patch matrices are derived for \
+         smooth meshes with boundaries), but the mesh has them ({element})"
+    )]
+    FeatureNotSupported {
+        /// The scheme's name.
+        scheme: String,
+        /// What, e.g. `creases (edge sharpness)`.
+        feature: &'static str,
+        /// The first element that has it, e.g. `edge 3-7`.
+        element: String,
+    },
+    /// A face whose patch has no known shape after several refinements: a bug, please report.
+    #[error("internal error, please report: face {face} finds no patch shape within {levels} levels of refinement")]
+    NoPatch {
+        /// The face of the mesh.
+        face: usize,
+        /// Levels tried.
+        levels: usize,
+    },
+    /// A broken internal invariant: a bug, please report.
+    #[error("internal error, please report: {0}")]
+    Internal(String),
     // ---- curve stencils (curve.rs, rational.rs) -------------------------------------------
     /// A curve scheme's mask weight is not a rational with a small denominator, so the exact
     /// curve stencils cannot use it.

@@ -22,6 +22,7 @@ mod error;
 mod exact;
 pub mod grid;
 mod linalg;
+mod mesh_eval;
 mod surface;
 mod table;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
@@ -33,6 +34,9 @@ pub use rational::Rational;
 pub use address::{Address, Dyadic};
 pub use error::StencilError;
 pub use exact::{ExactSurfaceStencil, exact_surface_stencil};
+pub use mesh_eval::{
+    FaceDomain, GridParameter, LimitEvaluator, LimitPoint, MAX_DENOMINATOR_BITS, PatchFrame, dyadic_from_f64,
+};
 pub use surface::{EvaluatorStats, StencilEvaluator, SurfaceStencil, surface_stencil};
 pub use table::{
     DEFAULT_TABLES, Grid, MAX_RATE, StencilCache, StencilTable, StencilTables, TABLE_MAGIC, TABLE_VERSION, TableSpec,

@@ -46,6 +46,10 @@ pub(crate) fn normalised_left_eigenvectors(
     if d == 0 {
         return Err(format!("{lambda} is not an eigenvalue"));
     }
+    if d > rows.len() {
+        // Fewer normalisations than dimensions (the bilinear scheme's eigenvalue 1 is not simple).
+        return Err(format!("the normalisations do not single out one vector of the {d}-dimensional eigenspace"));
+    }
     // The normalisations on the basis, B c = b, solved by the pseudo-inverse of B.
     let b = Mat::<f64>::from_fn(rows.len(), d, |r, c| rows[r].iter().zip(&basis[c]).map(|(x, y)| x * y).sum());
     let svd = b.thin_svd().map_err(|e| format!("SVD failed: {e:?}"))?;

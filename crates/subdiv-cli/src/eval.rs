@@ -1,0 +1,169 @@
+//! `subdiv eval`: exact limit positions and derivatives at face parameters, as CSV in the
+//! columns, parameterization and row order of OpenSubdiv's `osd_limit` (the peer harness).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use subdiv::mesh::{BoundaryInterpolation, FaceId};
+use subdiv::schemes::RefineOptions;
+use subdiv::stencil::{LimitEvaluator, LimitPoint, dyadic_from_f64};
+
+use crate::UserError;
+use crate::input::LoadedMesh;
+use crate::scheme_arg::SchemeArgs;
+
+/// Arguments of `subdiv eval`.
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("points").required(true).args(["grid", "samples"])))]
+pub(crate) struct EvalArgs {
+    /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
+    mesh: Option<PathBuf>,
+    #[command(flatten)]
+    scheme: SchemeArgs,
+    /// Every face at the grid (i/N, j/N): quads (N+1)² points, j outer, i inner; triangles of
+    /// triangle schemes i + j ≤ N; other faces of quad schemes the (N+1)² grid of every
+    /// sub-face, as OpenSubdiv's Bfr lays them out.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    grid: Option<u32>,
+    /// Points from a file: one `face u v` per line (Bfr parameters; commas or spaces; `#`
+    /// starts a comment). f64 parameters are used exactly (rounded to a multiple of 2^-60 only
+    /// when they have more binary digits).
+    #[arg(long, value_name = "FILE")]
+    samples: Option<PathBuf>,
+    /// Boundary interpolation; default: the file's `interpolateboundary` tag, else edge-only.
+    #[arg(long, value_enum)]
+    boundary: Option<Boundary>,
+    /// Output CSV file (written atomically); standard output when omitted.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+}
+
+/// `--boundary`, in OpenSubdiv's words.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum Boundary {
+    EdgeOnly,
+    EdgeAndCorner,
+    None,
+}
+
+/// One output row: the face, its parameters as printed, and the limit point.
+type Row = (usize, f64, f64, LimitPoint);
+
+pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError> {
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
+    let scheme = args.scheme.resolve()?;
+    let options = RefineOptions {
+        boundary: args.boundary.map(|b| match b {
+            Boundary::EdgeOnly => BoundaryInterpolation::EdgeOnly,
+            Boundary::EdgeAndCorner => BoundaryInterpolation::EdgeAndCorner,
+            Boundary::None => BoundaryInterpolation::None,
+        }),
+        ..RefineOptions::DEFAULT
+    };
+    let start = Instant::now();
+    let evaluator = LimitEvaluator::new(&scheme, &mesh, &options)
+        .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
+    let mut skipped = 0;
+    let rows = match (args.grid, &args.samples) {
+        (Some(n), _) => {
+            let mut rows = Vec::new();
+            for face in mesh.face_ids() {
+                let points = evaluator.grid(face, n).map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
+                skipped += usize::from(points.is_empty());
+                rows.extend(points.into_iter().map(|(g, p)| (face.index(), g.u, g.v, p)));
+            }
+            rows
+        }
+        (None, Some(path)) => {
+            let samples = read_samples(path, &evaluator)?;
+            let mut rows = Vec::with_capacity(samples.len());
+            for (line, face, u, v) in samples {
+                if !evaluator.has_surface(face)? {
+                    skipped += 1;
+                    continue;
+                }
+                let point = evaluator
+                    .eval(face, u, v)
+                    .map_err(|error| UserError(format!("{}:{line}: {error}", path.display())))?;
+                rows.push((face.index(), u, v, point));
+            }
+            rows
+        }
+        (None, None) => return Err(UserError("give --grid N or --samples FILE".to_string())),
+    };
+    let seconds = start.elapsed().as_secs_f64();
+    // Everything is evaluated before anything is written, so a failure writes nothing.
+    let write = |w: &mut dyn Write| write_csv(w, &rows);
+    match &args.output {
+        Some(path) => subdiv::io::write_atomic(path, write)?,
+        None => write(out)?,
+    }
+    let mut stderr = std::io::stderr();
+    let at_vertices = rows.iter().filter(|r| !r.3.exact_derivatives).count();
+    let _ = writeln!(
+        stderr,
+        "subdiv eval: {} with {}: {} points in {seconds:.3} s ({:.0} points/s)",
+        loaded.name,
+        scheme,
+        rows.len(),
+        rows.len() as f64 / seconds.max(1e-9),
+    );
+    if at_vertices > 0 {
+        let _ = writeln!(
+            stderr,
+            "subdiv eval: {at_vertices} points lie on extraordinary vertices: their du, dv are tangent directions \
+             (the parameterization has no derivative there; du x dv is the normal)"
+        );
+    }
+    if skipped > 0 {
+        let _ = writeln!(stderr, "subdiv eval: {skipped} points or faces without limit surface (holes) skipped");
+    }
+    Ok(())
+}
+
+/// The samples of `path`: `(line, face, u, v)`, each checked against its face's domain.
+fn read_samples(path: &Path, evaluator: &LimitEvaluator) -> Result<Vec<(usize, FaceId, f64, f64)>, UserError> {
+    let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+    let mut samples = Vec::new();
+    for (index, raw) in text.lines().enumerate() {
+        let line = index + 1;
+        let at = |message: String| UserError(format!("{}:{line}: {message}", path.display()));
+        let content = raw.split('#').next().unwrap_or_default();
+        let fields: Vec<&str> = content.split([',', ' ', '\t']).filter(|s| !s.is_empty()).collect();
+        if fields.is_empty() {
+            continue;
+        }
+        let bad = || at(format!("expected `face u v` (a face index and two numbers), got `{}`", raw.trim()));
+        let [face, u, v] = fields[..] else { return Err(bad()) };
+        let face: u32 = face.parse().map_err(|_| bad())?;
+        let (u, v): (f64, f64) = (u.parse().map_err(|_| bad())?, v.parse().map_err(|_| bad())?);
+        let face = FaceId::new(face);
+        let point = dyadic_from_f64(u, v);
+        let checked = match point {
+            Some(point) => evaluator.check(face, point),
+            None => evaluator.eval(face, u, v).map(|_| ()),
+        };
+        match checked {
+            Ok(()) | Err(subdiv::stencil::StencilError::NoSurface { .. }) => {}
+            Err(error) => return Err(at(error.to_string())),
+        }
+        samples.push((line, face, u, v));
+    }
+    Ok(samples)
+}
+
+/// `osd_limit`'s CSV: `face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz`, shortest round-trip f64s.
+fn write_csv(w: &mut dyn Write, rows: &[Row]) -> std::io::Result<()> {
+    let mut w = std::io::BufWriter::new(w);
+    writeln!(w, "face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz")?;
+    for (face, u, v, p) in rows {
+        let (x, du, dv) = (p.position, p.du, p.dv);
+        writeln!(
+            w,
+            "{face},{u:?},{v:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
+            x.x, x.y, x.z, du.x, du.y, du.z, dv.x, dv.y, dv.z
+        )?;
+    }
+    w.flush()
+}

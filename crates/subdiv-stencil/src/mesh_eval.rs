@@ -1,0 +1,756 @@
+//! The limit surface of a whole mesh at any face's rational (or f64) parameter, in OpenSubdiv's
+//! `Bfr` parameterization, from exact surface stencils.
+//!
+//! A face whose patch has a shape in the scheme's [`PatchMatrices`] is evaluated directly: its
+//! point is carried into the patch's frame (the patch may start at another corner of the face)
+//! and weighted by [`surface_stencil`]. A face without one — an N-gon under a quad split, or a
+//! face whose patch holds two irregular vertices — is refined once and the point descends into
+//! the child face that holds it, as often as needed. The maps between a face's parameters, its
+//! children's and its patch's are integer affine maps, so a rational point stays exact all the
+//! way down.
+//!
+//! Children follow the refinement engine's (and OpenSubdiv's `Far`) numbering: the children of
+//! face `f` are consecutive; a quad's child `j` sits at corner `j` of the domain with the
+//! parent's axes ([`ChildDomain::of_face`]); a triangle's children 0..2 sit at its corners and
+//! child 3 is the middle one, turned by half a turn; an N-gon's child `j` is `Bfr`'s sub-face `j`
+//! (it starts at corner `j`, so its own parameters are the normalized sub-face coordinates).
+
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, PoisonError};
+
+use subdiv_mesh::{DVec3, FaceId, Mesh};
+use subdiv_schemes::{ChildDomain, FoundPatch, MeshPatches, PatchMatrices, RefineOptions, Refiner, Scheme, Split};
+
+use crate::{Address, Dyadic, StencilError, SurfaceStencil, surface_stencil};
+
+/// Refinement levels after which every face's patch must have a shape.
+const MAX_LEVELS: usize = 8;
+
+/// The largest denominator exponent of an f64 parameter used exactly: `2^60` stays below the
+/// bound of [`Address::of`](crate::Address::of) (`i64::MAX / 4`) after the doublings of a descent.
+pub const MAX_DENOMINATOR_BITS: u32 = 60;
+
+/// A point of the limit surface with its derivatives in the face's `Bfr` parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LimitPoint {
+    /// The position.
+    pub position: DVec3,
+    /// ∂/∂u.
+    pub du: DVec3,
+    /// ∂/∂v.
+    pub dv: DVec3,
+    /// Whether `du` and `dv` are the parameter derivatives. `false` at an extraordinary vertex
+    /// itself, where the parameterization has none: there they are tangent directions whose
+    /// cross product points along the normal (see [`SurfaceStencil::exact_derivatives`]).
+    pub exact_derivatives: bool,
+}
+
+/// One point of a face's `--grid N` sampling, in OpenSubdiv's order.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridParameter {
+    /// The exact parameter.
+    pub point: Dyadic,
+    /// The parameter in f64, rounded as OpenSubdiv's `osd_limit` rounds it (for N-gons:
+    /// `origin + (i / N) / 2`), so that output columns agree to the bit.
+    pub u: f64,
+    /// See [`u`](Self::u).
+    pub v: f64,
+}
+
+/// The parameter domain of a face, as `Bfr` lays it out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FaceDomain {
+    /// The unit square (quads under a quad split).
+    Quad,
+    /// The triangle `u, v ≥ 0, u + v ≤ 1` (triangles under a triangle split).
+    Triangle,
+    /// An N-gon under a quad split (triangles included): `size` quad sub-faces, sub-face `s`
+    /// the lower-left half `[0, ½]²` of the unit tile at `(s mod columns, s div columns)`, where
+    /// `columns = ⌈√size⌉` (`Bfr::Parameterization::QUAD_SUBFACES`).
+    SubFaces {
+        /// The face's number of sides.
+        size: usize,
+        /// Tiles per row.
+        columns: usize,
+    },
+}
+
+impl FaceDomain {
+    /// The domain of a face of `size` sides under `split`; `None` for a split without
+    /// sub-patch matrices, or a triangle split's non-triangle.
+    pub fn of(split: Split, size: usize) -> Option<Self> {
+        match (split, size) {
+            (Split::Quad, 4) => Some(Self::Quad),
+            (Split::Quad, _) => Some(Self::SubFaces { size, columns: (1..).find(|c| c * c >= size).unwrap_or(size) }),
+            (Split::Triangle, 3) => Some(Self::Triangle),
+            _ => None,
+        }
+    }
+
+    /// Whether `p` lies in the domain.
+    pub fn contains(self, p: Dyadic) -> bool {
+        let Dyadic { u, v, denominator: q } = p;
+        if q < 1 || u < 0 || v < 0 {
+            return false;
+        }
+        match self {
+            Self::Quad => u <= q && v <= q,
+            Self::Triangle => u <= q - v,
+            Self::SubFaces { size, columns } => {
+                let (tu, tv) = (u / q, v / q);
+                let tile =
+                    usize::try_from(tv).ok().and_then(|tv| tv.checked_mul(columns)).zip(usize::try_from(tu).ok());
+                tile.is_some_and(|(row, column)| column < columns && row + column < size)
+                    && 2 * (u - tu * q) <= q
+                    && 2 * (v - tv * q) <= q
+            }
+        }
+    }
+
+    /// The domain in words, for error messages.
+    pub fn describe(self) -> String {
+        match self {
+            Self::Quad => "[0, 1]²".to_string(),
+            Self::Triangle => "u, v ≥ 0, u + v ≤ 1".to_string(),
+            Self::SubFaces { size, columns } => format!(
+                "the {size} sub-face tiles of a {size}-gon: (s mod {columns} + a/2, s div {columns} + b/2) \
+                 for sub-face s < {size} and a, b in [0, 1]"
+            ),
+        }
+    }
+
+    /// The child of a face with this domain that holds `p`, and `p` in the child's parameters,
+    /// with the factor `f` of the step's derivatives (`∂/∂u = f · ∂/∂u_child`, likewise `v`):
+    /// 2, or −2 for the middle triangle. On a border between children the first in the
+    /// engine's order that holds the point wins (either gives the same value). `p` must be
+    /// [contained](Self::contains).
+    pub fn child_of(self, p: Dyadic) -> (usize, Dyadic, f64) {
+        let Dyadic { u, v, denominator: q } = p;
+        match self {
+            Self::Quad | Self::Triangle => {
+                let size = if self == Self::Triangle { 3 } else { 4 };
+                // The address's first step: the same choice on borders as the stencils make.
+                let child = Address::of(size, p)
+                    .ok()
+                    .and_then(|a| a.prefix.first().or(a.period.first()).copied())
+                    .map_or(0, usize::from);
+                let domain = ChildDomain::of_face(size)[child];
+                let sign = if domain.flipped { -1 } else { 1 };
+                let at = |x: i64, o: u8| sign * (2 * x - i64::from(o) * q);
+                (
+                    child,
+                    Dyadic::new(at(u, domain.offset[0]), at(v, domain.offset[1]), q),
+                    if domain.flipped { -2.0 } else { 2.0 },
+                )
+            }
+            Self::SubFaces { columns, .. } => {
+                let (tu, tv) = (u / q, v / q);
+                let sub = tv as usize * columns + tu as usize;
+                (sub, Dyadic::new(2 * (u - tu * q), 2 * (v - tv * q), q), 2.0)
+            }
+        }
+    }
+
+    /// The `Bfr` parameter of normalized sub-face coordinates `(a, b)` of sub-face `sub`
+    /// (quads and triangles: the point itself).
+    pub fn from_sub_face(self, sub: usize, a: Dyadic) -> Dyadic {
+        match self {
+            Self::Quad | Self::Triangle => a,
+            Self::SubFaces { columns, .. } => {
+                let q = 2 * a.denominator;
+                let (tu, tv) = ((sub % columns) as i64, (sub / columns) as i64);
+                Dyadic::new(tu * q + a.u, tv * q + a.v, q)
+            }
+        }
+    }
+
+    /// The points of `osd_limit --grid n` on a face of this domain, in its order: quads
+    /// `(i/n, j/n)`, `j` outer; triangles the same with `i + j ≤ n`; N-gons, for each sub-face,
+    /// the `(n + 1)²` grid of normalized sub-face coordinates.
+    pub fn grid(self, n: u32) -> Vec<GridParameter> {
+        let n = i64::from(n.max(1));
+        let nf = n as f64;
+        let square = || (0..=n).flat_map(move |j| (0..=n).map(move |i| (i, j)));
+        let plain =
+            |(i, j): (i64, i64)| GridParameter { point: Dyadic::new(i, j, n), u: i as f64 / nf, v: j as f64 / nf };
+        match self {
+            Self::Quad => square().map(plain).collect(),
+            Self::Triangle => square().filter(|&(i, j)| i + j <= n).map(plain).collect(),
+            Self::SubFaces { size, columns } => (0..size)
+                .flat_map(|s| square().map(move |ij| (s, ij)))
+                .map(|(s, (i, j))| GridParameter {
+                    point: self.from_sub_face(s, Dyadic::new(i, j, n)),
+                    u: (s % columns) as f64 + i as f64 / nf * 0.5,
+                    v: (s / columns) as f64 + j as f64 / nf * 0.5,
+                })
+                .collect(),
+        }
+    }
+}
+
+/// A face's frame in the frame of its patch, which starts at corner `rotation` of the face:
+/// the face's parameters are `origin + s·e1 + t·e2` in the patch's `(s, t)`, with integer
+/// vectors of determinant 1.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PatchFrame {
+    origin: [i64; 2],
+    e1: [i64; 2],
+    e2: [i64; 2],
+}
+
+impl PatchFrame {
+    /// The frame of a patch starting at corner `rotation` of a quad (`face_size` 4) or a
+    /// triangle (3): its first side runs from corner `rotation` to the next corner, its last
+    /// side to the previous one.
+    pub fn new(face_size: usize, rotation: usize) -> Self {
+        const QUAD: [[i64; 2]; 4] = [[0, 0], [1, 0], [1, 1], [0, 1]];
+        const TRIANGLE: [[i64; 2]; 3] = [[0, 0], [1, 0], [0, 1]];
+        let corners: &[[i64; 2]] = if face_size == 3 { &TRIANGLE } else { &QUAD };
+        let n = corners.len();
+        let c = |k: usize| corners[k % n];
+        let (o, next, previous) = (c(rotation), c(rotation + 1), c(rotation + n - 1));
+        Self { origin: o, e1: [next[0] - o[0], next[1] - o[1]], e2: [previous[0] - o[0], previous[1] - o[1]] }
+    }
+
+    /// The determinant of `[e1 e2]` (1: the patch keeps the face's orientation).
+    fn determinant(self) -> i64 {
+        self.e1[0] * self.e2[1] - self.e2[0] * self.e1[1]
+    }
+
+    /// The face's point `p` in the patch's parameters.
+    pub fn to_patch(self, p: Dyadic) -> Dyadic {
+        let q = p.denominator;
+        let (x, y) = (p.u - self.origin[0] * q, p.v - self.origin[1] * q);
+        // [e1 e2]⁻¹ = adj / det, det = ±1.
+        let d = self.determinant();
+        Dyadic::new(d * (self.e2[1] * x - self.e2[0] * y), d * (self.e1[0] * y - self.e1[1] * x), q)
+    }
+
+    /// The patch's point in the face's parameters.
+    pub fn to_face(self, p: Dyadic) -> Dyadic {
+        let q = p.denominator;
+        let at = |k: usize| self.origin[k] * q + p.u * self.e1[k] + p.v * self.e2[k];
+        Dyadic::new(at(0), at(1), q)
+    }
+
+    /// `J` with `(∂/∂u, ∂/∂v) = J · (∂/∂s, ∂/∂t)`: the inverse transpose of `[e1 e2]`.
+    pub fn derivative_map(self) -> [[f64; 2]; 2] {
+        let d = self.determinant() as f64;
+        // ([e1 e2]⁻¹)ᵀ = (adj / det)ᵀ.
+        [[d * self.e2[1] as f64, -d * self.e1[1] as f64], [-d * self.e2[0] as f64, d * self.e1[0] as f64]]
+    }
+}
+
+/// `p` with its fraction reduced, so equal points share a memo entry.
+fn reduced(p: Dyadic) -> Dyadic {
+    let gcd = |mut a: i64, mut b: i64| {
+        while b != 0 {
+            (a, b) = (b, a % b);
+        }
+        a.abs()
+    };
+    let g = gcd(gcd(p.u, p.v), p.denominator).max(1);
+    Dyadic::new(p.u / g, p.v / g, p.denominator / g)
+}
+
+/// The f64 parameters `(u, v)` as one exact fraction over `2^k`, `k ≤` [`MAX_DENOMINATOR_BITS`];
+/// a value with more binary digits after the point (below `2^−60` in its last place) is rounded
+/// to the nearest multiple of `2^−60`, which moves the point by less than `1e−18`. `None` for a
+/// non-finite value or one beyond `±2^20` (outside every face's domain).
+pub fn dyadic_from_f64(u: f64, v: f64) -> Option<Dyadic> {
+    const LIMIT: f64 = (1u64 << 20) as f64;
+    if !(u.abs() <= LIMIT && v.abs() <= LIMIT) {
+        return None;
+    }
+    let bits = |x: f64| (0..=MAX_DENOMINATOR_BITS).find(|&k| (x * (1u64 << k) as f64).fract() == 0.0);
+    let k = bits(u).zip(bits(v)).map_or(MAX_DENOMINATOR_BITS, |(a, b)| a.max(b));
+    let scale = (1u64 << k) as f64;
+    // Exact when the value has at most k binary digits after the point; rounded otherwise.
+    Some(reduced(Dyadic::new((u * scale).round() as i64, (v * scale).round() as i64, 1i64 << k)))
+}
+
+/// How a face of one level is evaluated.
+#[derive(Clone, Debug)]
+enum Resolution {
+    /// Through its patch.
+    Patch(FoundPatch),
+    /// Through its children on the next level.
+    Children,
+    /// Not at all: a hole (tagged, or made by the boundary rule `none`).
+    Hole,
+}
+
+/// One level of the refined mesh and how its faces of interest are evaluated.
+#[derive(Debug)]
+struct Level {
+    mesh: Mesh,
+    /// The faces whose points can reach this level (every face on level 0).
+    faces: HashMap<FaceId, Resolution>,
+}
+
+type MemoKey = (usize, usize, Dyadic);
+
+/// The limit surface of a mesh under a primal scheme, at any face's parameter in OpenSubdiv's
+/// `Bfr` parameterization: quads `(0, 0)` at corner 0, `u` toward corner 1, `v` toward corner 3;
+/// triangles of triangle schemes `(0, 0)`, `(1, 0)`, `(0, 1)` at corners 0, 1, 2; other faces
+/// of quad schemes as `Bfr`'s tiled quad sub-faces ([`FaceDomain::SubFaces`]).
+///
+/// Positions and derivatives are exact up to f64 rounding (no approximation near extraordinary
+/// vertices). Stencils are memoised by (sub-patch matrices, shape, point), so faces of equal
+/// shape share them: all regular faces of a torus sampled on a grid cost one set of stencils.
+///
+/// ```
+/// use subdiv_mesh::{shapes, FaceId, Mesh};
+/// use subdiv_schemes::{Builtin, RefineOptions};
+/// use subdiv_stencil::{Dyadic, LimitEvaluator};
+///
+/// let cube = Mesh::build(shapes::cube())?;
+/// let eval = LimitEvaluator::new(Builtin::CatmullClark.scheme(), &cube, &RefineOptions::DEFAULT)?;
+/// // Face centres, exact (1/2, 1/2) or as f64: by symmetry all as far from the cube's centre.
+/// let a = eval.eval_exact(FaceId::new(0), Dyadic::new(1, 1, 2))?;
+/// let b = eval.eval(FaceId::new(3), 0.5, 0.5)?;
+/// assert!((a.position.length() - b.position.length()).abs() < 1e-14);
+/// // The derivatives there are exact; their cross product is the outward normal.
+/// assert!(a.exact_derivatives && a.du.cross(a.dv).dot(a.position) > 0.0);
+/// // Corner 0 of every face is an extraordinary vertex (valence 3): tangent directions only.
+/// assert!(!eval.eval(FaceId::new(0), 0.0, 0.0)?.exact_derivatives);
+/// // A --grid 2 face has 9 points.
+/// assert_eq!(eval.grid(FaceId::new(0), 2)?.len(), 9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct LimitEvaluator {
+    split: Split,
+    levels: Vec<Level>,
+    memo: Mutex<HashMap<MemoKey, Arc<SurfaceStencil>>>,
+}
+
+impl LimitEvaluator {
+    /// Prepares `mesh` under `scheme` with the boundary rule and options of refinement
+    /// (`options`, else the mesh's tags): finds every face's patch, refining the mesh as often
+    /// as faces without a patch shape need (an N-gon once; the cube's faces twice).
+    ///
+    /// # Errors
+    /// [`StencilError::Scheme`] for a scheme without sub-patch matrices (dual, mid-edge, √3:
+    /// `SplitNotSupported`; Kobbelt next to valences other than 3, 4: `ValenceNotSupported`), a
+    /// face the scheme does not take, or boundaries a scheme has no rules for;
+    /// [`StencilError::FeatureNotSupported`] for creases and corners (sharpness tags), which the
+    /// sub-patch matrices do not model; [`StencilError::NoPatch`] if a face finds no patch
+    /// within 8 levels (an internal error).
+    pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, StencilError> {
+        let patch_size = match scheme.split() {
+            Split::Quad => 4,
+            Split::Triangle => 3,
+            // MeshPatches says why not.
+            _ => {
+                MeshPatches::new(scheme, mesh, options)?;
+                4
+            }
+        };
+        Self::check_features(scheme, mesh)?;
+        // Level 0 with the boundary rule applied (boundary edges sharp, holes of `none`).
+        let base = Refiner::new(mesh, scheme, 0, options)?.into_mesh();
+        let mut levels = Vec::new();
+        let mut wanted: Vec<FaceId> = base.face_ids().collect();
+        let mut current = base;
+        loop {
+            let patches = MeshPatches::new(scheme, &current, options)?;
+            let mut faces = HashMap::with_capacity(wanted.len());
+            let mut next = Vec::new();
+            for &f in &wanted {
+                let resolution = if current.is_hole(f) {
+                    Resolution::Hole
+                } else if let Some(found) =
+                    (current.face_size(f) == patch_size).then(|| patches.find(&current, f)).flatten()
+                {
+                    Resolution::Patch(found)
+                } else {
+                    next.extend(children(&current, scheme.split(), f));
+                    Resolution::Children
+                };
+                faces.insert(f, resolution);
+            }
+            if next.is_empty() {
+                levels.push(Level { mesh: current, faces });
+                break;
+            }
+            if levels.len() + 1 == MAX_LEVELS {
+                let face = levels.first().map_or_else(|| wanted[0], |_| next[0]);
+                return Err(StencilError::NoPatch { face: face.index(), levels: MAX_LEVELS });
+            }
+            let refined = Refiner::new(&current, scheme, 1, options)?.into_mesh();
+            levels.push(Level { mesh: current, faces });
+            current = refined;
+            wanted = next;
+        }
+        Ok(Self { split: scheme.split(), levels, memo: Mutex::default() })
+    }
+
+    /// Creases and corners change the surface in ways the sub-patch matrices (derived on smooth
+    /// canonical meshes with boundaries) do not know.
+    fn check_features(scheme: &Scheme, mesh: &Mesh) -> Result<(), StencilError> {
+        let unsupported = |feature: &'static str, element: String| StencilError::FeatureNotSupported {
+            scheme: scheme.name().to_string(),
+            feature,
+            element,
+        };
+        if let Some(e) = mesh.edges().find(|&e| !mesh.is_boundary_edge(e) && mesh.edge_sharpness(e) > 0.0) {
+            let [a, b] = mesh.edge_vertices(e);
+            return Err(unsupported("creases (edge sharpness)", format!("edge {a}-{b}")));
+        }
+        if let Some(v) = mesh.vertices().find(|&v| mesh.vertex_sharpness(v) > 0.0) {
+            return Err(unsupported("corners (vertex sharpness)", format!("{v}")));
+        }
+        Ok(())
+    }
+
+    /// The number of faces of the mesh.
+    pub fn face_count(&self) -> usize {
+        self.levels[0].mesh.face_count()
+    }
+
+    /// Whether `face` has a limit surface (it is not a hole).
+    ///
+    /// # Errors
+    /// [`StencilError::FaceOutOfRange`] for a face the mesh does not have.
+    pub fn has_surface(&self, face: FaceId) -> Result<bool, StencilError> {
+        Ok(!matches!(self.resolution(face)?, Resolution::Hole))
+    }
+
+    /// The domain of `face`.
+    ///
+    /// # Errors
+    /// [`StencilError::FaceOutOfRange`] for a face the mesh does not have.
+    pub fn domain(&self, face: FaceId) -> Result<FaceDomain, StencilError> {
+        self.resolution(face)?;
+        let size = self.levels[0].mesh.face_size(face);
+        // `new` accepted the split, and refinement accepted every face's size.
+        Ok(FaceDomain::of(self.split, size).unwrap_or(FaceDomain::Quad))
+    }
+
+    fn resolution(&self, face: FaceId) -> Result<&Resolution, StencilError> {
+        self.levels[0]
+            .faces
+            .get(&face)
+            .ok_or(StencilError::FaceOutOfRange { face: face.index(), faces: self.face_count() })
+    }
+
+    /// Checks that `point` is a parameter of `face` with a surface, as [`eval_exact`](Self::eval_exact)
+    /// would, without evaluating.
+    ///
+    /// # Errors
+    /// As [`eval_exact`](Self::eval_exact), for input errors.
+    pub fn check(&self, face: FaceId, point: Dyadic) -> Result<(), StencilError> {
+        let domain = self.domain(face)?;
+        if !domain.contains(point) {
+            let (u, v) = point.to_f64();
+            return Err(StencilError::OutsideFace {
+                face: face.index(),
+                u: format!("{u:?}"),
+                v: format!("{v:?}"),
+                domain: domain.describe(),
+            });
+        }
+        if !self.has_surface(face)? {
+            return Err(StencilError::NoSurface { face: face.index() });
+        }
+        Ok(())
+    }
+
+    /// The limit point of `face` at f64 parameters, used exactly (see [`dyadic_from_f64`]).
+    ///
+    /// # Errors
+    /// As [`eval_exact`](Self::eval_exact); [`StencilError::OutsideFace`] also for a non-finite
+    /// parameter.
+    pub fn eval(&self, face: FaceId, u: f64, v: f64) -> Result<LimitPoint, StencilError> {
+        let point = dyadic_from_f64(u, v).ok_or_else(|| StencilError::OutsideFace {
+            face: face.index(),
+            u: format!("{u:?}"),
+            v: format!("{v:?}"),
+            domain: self.domain(face).map_or_else(|_| String::new(), FaceDomain::describe),
+        })?;
+        self.eval_exact(face, point)
+    }
+
+    /// The limit point of `face` at the rational parameter `point`.
+    ///
+    /// # Errors
+    /// [`StencilError::FaceOutOfRange`], [`StencilError::OutsideFace`] for a point outside the
+    /// face's domain, [`StencilError::NoSurface`] for a hole, [`StencilError::Eigen`] if a
+    /// stencil's eigenvector is not unique.
+    pub fn eval_exact(&self, face: FaceId, point: Dyadic) -> Result<LimitPoint, StencilError> {
+        self.check(face, point)?;
+        let mut domain = self.domain(face)?;
+        let (mut f, mut p) = (face, reduced(point));
+        // (∂/∂u, ∂/∂v) of the face = j · (the same of the current level's face or patch).
+        let mut j = [[1.0, 0.0], [0.0, 1.0]];
+        for level in &self.levels {
+            let resolution = level.faces.get(&f).ok_or_else(|| internal(face, "a child face was not prepared"))?;
+            match resolution {
+                Resolution::Hole => return Err(StencilError::NoSurface { face: face.index() }),
+                Resolution::Children => {
+                    let (child, at, factor) = domain.child_of(p);
+                    f = FaceId::new((first_child(&level.mesh, self.split, f) + child) as u32);
+                    p = at;
+                    j = [[j[0][0] * factor, j[0][1] * factor], [j[1][0] * factor, j[1][1] * factor]];
+                    domain = if self.split == Split::Triangle { FaceDomain::Triangle } else { FaceDomain::Quad };
+                }
+                Resolution::Patch(found) => {
+                    let mesh = &level.mesh;
+                    let first = mesh.face_half_edges(f).next().expect("faces have corners");
+                    let frame = PatchFrame::new(mesh.face_size(f), found.start.index() - first.index());
+                    let s = self.stencil(&found.matrices, found.shape, reduced(frame.to_patch(p)))?;
+                    let apply = |w: &[f64]| -> DVec3 {
+                        w.iter().zip(&found.vertices).map(|(&w, &v)| w * mesh.position(v)).sum()
+                    };
+                    let (ds, dt) = (apply(&s.du), apply(&s.dv));
+                    let r = frame.derivative_map();
+                    let m = |row: [f64; 2]| [row[0] * r[0][0] + row[1] * r[1][0], row[0] * r[0][1] + row[1] * r[1][1]];
+                    let (ju, jv) = (m(j[0]), m(j[1]));
+                    return Ok(LimitPoint {
+                        position: apply(&s.position),
+                        du: ju[0] * ds + ju[1] * dt,
+                        dv: jv[0] * ds + jv[1] * dt,
+                        exact_derivatives: s.exact_derivatives,
+                    });
+                }
+            }
+        }
+        Err(internal(face, "the descent ran past the last prepared level"))
+    }
+
+    /// The points of `osd_limit --grid n` on `face` ([`FaceDomain::grid`]) with their limit
+    /// points; empty for a hole.
+    ///
+    /// # Errors
+    /// [`StencilError::FaceOutOfRange`], [`StencilError::Rate`] for `n = 0`, and as
+    /// [`eval_exact`](Self::eval_exact).
+    pub fn grid(&self, face: FaceId, n: u32) -> Result<Vec<(GridParameter, LimitPoint)>, StencilError> {
+        if n == 0 {
+            return Err(StencilError::Rate { rate: 0, reason: "a grid needs at least one step per side" });
+        }
+        if !self.has_surface(face)? {
+            return Ok(Vec::new());
+        }
+        self.domain(face)?.grid(n).into_iter().map(|g| Ok((g, self.eval_exact(face, g.point)?))).collect()
+    }
+
+    /// The memoised stencil of `shape` of `matrices` at `point`.
+    fn stencil(
+        &self,
+        matrices: &Arc<PatchMatrices>,
+        shape: usize,
+        point: Dyadic,
+    ) -> Result<Arc<SurfaceStencil>, StencilError> {
+        // The matrices are shared per process and kept alive by the levels' patches, so the
+        // address identifies them.
+        let key = (Arc::as_ptr(matrices) as usize, shape, point);
+        let lock = || self.memo.lock().unwrap_or_else(PoisonError::into_inner);
+        if let Some(found) = lock().get(&key) {
+            return Ok(found.clone());
+        }
+        let computed = Arc::new(surface_stencil(matrices, shape, point)?);
+        Ok(lock().entry(key).or_insert(computed).clone())
+    }
+}
+
+fn internal(face: FaceId, detail: &str) -> StencilError {
+    StencilError::Internal(format!("limit evaluation of {face}: {detail}"))
+}
+
+/// The first child face of `face` in the engine's numbering: quad splits make one child per
+/// corner (so the children of the faces before take as many faces as their half-edges),
+/// triangle splits four per triangle.
+fn first_child(mesh: &Mesh, split: Split, face: FaceId) -> usize {
+    if split == Split::Triangle {
+        4 * face.index()
+    } else {
+        mesh.face_half_edges(face).next().expect("faces have corners").index()
+    }
+}
+
+/// The child faces of `face`.
+fn children(mesh: &Mesh, split: Split, face: FaceId) -> impl Iterator<Item = FaceId> {
+    let count = if split == Split::Triangle { 4 } else { mesh.face_size(face) };
+    let first = first_child(mesh, split, face);
+    (first..first + count).map(|c| FaceId::new(c as u32))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use subdiv_mesh::shapes;
+    use subdiv_schemes::{Builtin, refine};
+
+    #[test]
+    fn patch_frames_round_trip_and_keep_orientation() {
+        for (size, rotations) in [(4, 4), (3, 3)] {
+            for r in 0..rotations {
+                let frame = PatchFrame::new(size, r);
+                assert_eq!(frame.determinant(), 1, "size {size}, rotation {r}");
+                // The patch's corner 0 is the face's corner r.
+                let corner0 = frame.to_face(Dyadic::new(0, 0, 1));
+                let corners: [[i64; 2]; 4] = [[0, 0], [1, 0], [1, 1], [0, 1]];
+                let tri: [[i64; 2]; 3] = [[0, 0], [1, 0], [0, 1]];
+                let expect = if size == 4 { corners[r] } else { tri[r] };
+                assert_eq!([corner0.u, corner0.v], expect);
+                for (u, v) in [(1, 2), (3, 0), (0, 5), (2, 2)] {
+                    let p = Dyadic::new(u, v, 7);
+                    if size == 3 && u + v > 7 {
+                        continue;
+                    }
+                    assert_eq!(frame.to_face(frame.to_patch(p)), p);
+                }
+            }
+        }
+        // Rotation 1 of a quad: s runs along v, t against u.
+        let frame = PatchFrame::new(4, 1);
+        assert_eq!(frame.to_patch(Dyadic::new(1, 3, 4)), Dyadic::new(3, 3, 4));
+        // A linear function f = a·u + b·v: ∂f/∂s = b, ∂f/∂t = −a; the map gives back (a, b).
+        let (a, b) = (2.0, 5.0);
+        let j = frame.derivative_map();
+        let (ds, dt) = (b, -a);
+        assert_eq!([j[0][0] * ds + j[0][1] * dt, j[1][0] * ds + j[1][1] * dt], [a, b]);
+        // The same on a triangle at rotation 2: s = from corner 2 (0, 1) toward corner 0.
+        let frame = PatchFrame::new(3, 2);
+        let f = |p: Dyadic| a * p.u as f64 + b * p.v as f64;
+        let origin = f(frame.to_face(Dyadic::new(0, 0, 1)));
+        let (ds, dt) =
+            (f(frame.to_face(Dyadic::new(1, 0, 1))) - origin, f(frame.to_face(Dyadic::new(0, 1, 1))) - origin);
+        let j = frame.derivative_map();
+        assert_eq!([j[0][0] * ds + j[0][1] * dt, j[1][0] * ds + j[1][1] * dt], [a, b]);
+    }
+
+    #[test]
+    fn sub_face_tiles_follow_bfr() {
+        // A pentagon: 3 tiles per row; sub-face 4 at tile (1, 1).
+        let d = FaceDomain::of(Split::Quad, 5).unwrap();
+        assert_eq!(d, FaceDomain::SubFaces { size: 5, columns: 3 });
+        let p = d.from_sub_face(4, Dyadic::new(1, 3, 4));
+        assert_eq!(p.to_f64(), (1.125, 1.375));
+        assert!(d.contains(p));
+        assert_eq!(d.child_of(p), (4, Dyadic::new(2, 6, 8), 2.0));
+        // The upper half of a tile and tiles past the last sub-face are outside.
+        assert!(!d.contains(Dyadic::new(3, 1, 4)));
+        assert!(!d.contains(Dyadic::new(5, 4, 2)));
+        assert!(!d.contains(Dyadic::new(6, 0, 2)));
+        // A triangle under a quad split: 2 columns, sub-face 2 at (0, 1).
+        let t = FaceDomain::of(Split::Quad, 3).unwrap();
+        assert_eq!(t.child_of(Dyadic::new(1, 5, 4)), (2, Dyadic::new(2, 2, 4), 2.0));
+        // The grid in osd_limit's order: sub-face outer, then j, then i.
+        let g = t.grid(2);
+        assert_eq!(g.len(), 27);
+        assert_eq!((g[1].u, g[1].v), (0.25, 0.0));
+        assert_eq!((g[9].u, g[9].v), (1.0, 0.0));
+        assert_eq!((g[26].u, g[26].v), (0.5, 1.5));
+    }
+
+    #[test]
+    fn children_of_quads_and_triangles_follow_child_domains() {
+        let q = FaceDomain::Quad;
+        assert_eq!(q.child_of(Dyadic::new(3, 1, 4)), (1, Dyadic::new(2, 2, 4), 2.0));
+        assert_eq!(q.child_of(Dyadic::new(1, 3, 4)), (3, Dyadic::new(2, 2, 4), 2.0));
+        let t = FaceDomain::Triangle;
+        // The middle triangle's centroid stays its centroid, turned.
+        assert_eq!(t.child_of(Dyadic::new(1, 1, 3)), (3, Dyadic::new(1, 1, 3), -2.0));
+        assert_eq!(t.child_of(Dyadic::new(1, 5, 8)), (2, Dyadic::new(2, 2, 8), 2.0));
+        assert_eq!(t.grid(3).len(), 10);
+    }
+
+    /// The engine's child faces sit where the maps say: a quad's child `j` has the parent's
+    /// corner `j` at its own corner `j` (same axes), an N-gon's child `j` starts at corner `j`
+    /// (Bfr's sub-face `j`), a triangle's child `j < 3` keeps corner `j` at position `j`.
+    #[test]
+    fn child_faces_match_the_maps() {
+        let mesh = Mesh::build(shapes::ngon_prism(5)).unwrap();
+        let bilinear = Builtin::Bilinear.scheme();
+        let refined = refine(&mesh, bilinear, &RefineOptions::DEFAULT).unwrap();
+        for f in mesh.face_ids() {
+            let corners = mesh.face_vertices(f);
+            let n = corners.len();
+            let domain = FaceDomain::of(Split::Quad, n).unwrap();
+            for (j, child) in children(&mesh, Split::Quad, f).enumerate() {
+                let cv = refined.face_vertices(child);
+                if n == 4 {
+                    // Child j's corner j is the parent's corner j.
+                    assert_eq!(cv[j], corners[j]);
+                    // Its domain corner j is the parent's corner j in the parent's domain.
+                    let c = [[0, 0], [1, 0], [1, 1], [0, 1]][j];
+                    let at = Dyadic::new(c[0], c[1], 1);
+                    assert_eq!(domain.child_of(at).0, j);
+                } else {
+                    // Sub-face j starts at corner j.
+                    assert_eq!(cv[0], corners[j]);
+                    let at = domain.from_sub_face(j, Dyadic::new(0, 0, 1));
+                    assert_eq!(domain.child_of(at), (j, Dyadic::new(0, 0, 2), 2.0));
+                }
+            }
+        }
+        // Triangles under Loop: children 0..2 keep corner j at position j.
+        let tri = Mesh::build(shapes::icosahedron()).unwrap();
+        let refined = refine(&tri, Builtin::Loop.scheme(), &RefineOptions::DEFAULT).unwrap();
+        for f in tri.face_ids() {
+            for (j, child) in children(&tri, Split::Triangle, f).take(3).enumerate() {
+                assert_eq!(refined.face_vertices(child)[j], tri.face_vertices(f)[j]);
+            }
+        }
+    }
+
+    #[test]
+    fn f64_parameters_are_used_exactly_when_they_fit() {
+        assert_eq!(dyadic_from_f64(0.5, 0.25), Some(Dyadic::new(2, 1, 4)));
+        let p = dyadic_from_f64(0.1, 0.0).unwrap();
+        assert_eq!(p.to_f64(), (0.1, 0.0));
+        // Below 2^-60 in the last place: rounded to the nearest multiple of 2^-60.
+        let tiny = dyadic_from_f64(3.0 * 0.5_f64.powi(61), 0.75).unwrap();
+        assert_eq!(tiny, Dyadic::new(1, 3 << 57, 1 << 59));
+        assert_eq!(dyadic_from_f64(1e-20, 0.75), Some(Dyadic::new(0, 3, 4)));
+        assert!(dyadic_from_f64(f64::NAN, 0.0).is_none());
+        assert!(dyadic_from_f64(0.0, 1e30).is_none());
+    }
+
+    #[test]
+    fn other_primal_schemes_meet_their_known_values() {
+        // Bilinear: its eigenvalue 1 is not simple, so the periodic-address stencils do not
+        // exist; a typed error, not a panic.
+        let torus = Mesh::build(shapes::quad_torus(6, 4)).unwrap();
+        let eval = LimitEvaluator::new(Builtin::Bilinear.scheme(), &torus, &RefineOptions::DEFAULT).unwrap();
+        assert!(matches!(eval.eval(FaceId::new(0), 0.5, 0.25), Err(StencilError::Eigen { .. })));
+        // Interpolating schemes pass through the cage's vertices: butterfly on the icosahedron,
+        // Kobbelt on the cube (valence 3).
+        for (scheme, soup) in [(Builtin::Butterfly, shapes::icosahedron()), (Builtin::Kobbelt, shapes::cube())] {
+            let mesh = Mesh::build(soup).unwrap();
+            let eval = LimitEvaluator::new(scheme.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+            for f in mesh.face_ids() {
+                let p = eval.eval(f, 0.0, 0.0).unwrap().position;
+                assert!((p - mesh.position(mesh.face_vertices(f)[0])).length() < 1e-12, "{scheme:?} {f}");
+            }
+        }
+    }
+
+    #[test]
+    fn creases_holes_and_bad_points_are_typed_errors() {
+        let cc = Builtin::CatmullClark.scheme();
+        let mut soup = shapes::cube();
+        soup.tags
+            .creases
+            .push(subdiv_mesh::CreaseTag { vertices: [0, 2].map(subdiv_mesh::VertexId::new), sharpness: 2.0 });
+        let mesh = Mesh::build(soup).unwrap();
+        let error = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap_err();
+        assert!(matches!(error, StencilError::FeatureNotSupported { .. }), "{error}");
+
+        let mut soup = shapes::cube();
+        soup.tags.holes.push(FaceId::new(1));
+        let mesh = Mesh::build(soup).unwrap();
+        let eval = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap();
+        assert!(eval.grid(FaceId::new(1), 2).unwrap().is_empty());
+        assert_eq!(eval.eval(FaceId::new(1), 0.5, 0.5), Err(StencilError::NoSurface { face: 1 }));
+        assert_eq!(eval.grid(FaceId::new(0), 2).unwrap().len(), 9);
+        assert_eq!(eval.eval(FaceId::new(6), 0.0, 0.0), Err(StencilError::FaceOutOfRange { face: 6, faces: 6 }));
+        assert!(matches!(eval.eval(FaceId::new(0), 1.0, 1.5), Err(StencilError::OutsideFace { face: 0, .. })));
+        assert!(matches!(eval.eval(FaceId::new(0), f64::INFINITY, 0.0), Err(StencilError::OutsideFace { .. })));
+
+        let doo_sabin = LimitEvaluator::new(Builtin::DooSabin.scheme(), &mesh, &RefineOptions::DEFAULT);
+        assert!(matches!(doo_sabin, Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported { .. }))));
+    }
+}
