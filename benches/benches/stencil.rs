@@ -38,7 +38,7 @@ fn stencils(c: &mut Criterion) {
         });
         group.bench_function(format!("{name}_shared"), |b| {
             b.iter(|| {
-                let mut evaluator = StencilEvaluator::new(&matrices);
+                let mut evaluator = StencilEvaluator::new(&*matrices);
                 for &p in &points {
                     std::hint::black_box(evaluator.stencil(0, p).expect("inside the face"));
                 }

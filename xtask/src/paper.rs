@@ -121,7 +121,7 @@ fn system_sizes() -> Result<(), String> {
     let sw_quad = Builtin::SwQuad.scheme();
     let m = PatchMatrices::of(sw_quad, PatchType::Interior { valence: 6 }, BoundaryInterpolation::EdgeOnly)
         .map_err(|e| e.to_string())?;
-    let mut evaluator = StencilEvaluator::new(&m);
+    let mut evaluator = StencilEvaluator::new(&*m);
     for grid in Grid::ALL {
         for p in grid.points(4, 3) {
             evaluator.stencil(0, p).map_err(|e| e.to_string())?;

@@ -98,11 +98,7 @@ fn compare(path: &PathBuf, bytes: &[u8], fresh: &StencilTables, scheme: &subdiv:
 }
 
 fn write_atomically(path: &PathBuf, bytes: &[u8]) -> Result<(), String> {
-    let dir = path.parent().expect("a file in a folder");
-    std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let temporary = path.with_extension("stencils.tmp");
-    std::fs::write(&temporary, bytes).map_err(|e| format!("{}: {e}", temporary.display()))?;
-    std::fs::rename(&temporary, path).map_err(|e| format!("{}: {e}", path.display()))?;
+    subdiv::io::write_atomic(path, |w| w.write_all(bytes)).map_err(|e| e.to_string())?;
     println!("tables wrote={}", path.display());
     Ok(())
 }

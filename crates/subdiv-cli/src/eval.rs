@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use subdiv::mesh::{BoundaryInterpolation, FaceId};
 use subdiv::schemes::RefineOptions;
-use subdiv::stencil::{LimitEvaluator, LimitPoint, dyadic_from_f64};
+use subdiv::stencil::{LimitEvaluator, LimitPoint, StencilError};
 
 use crate::UserError;
 use crate::input::LoadedMesh;
@@ -76,17 +76,15 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
             rows
         }
         (None, Some(path)) => {
-            let samples = read_samples(path, &evaluator)?;
+            let samples = read_samples(path)?;
             let mut rows = Vec::with_capacity(samples.len());
             for (line, face, u, v) in samples {
-                if !evaluator.has_surface(face)? {
-                    skipped += 1;
-                    continue;
+                match evaluator.eval(face, u, v) {
+                    Ok(point) => rows.push((face.index(), u, v, point)),
+                    // Checked after the point's domain: a hole skips only valid samples.
+                    Err(StencilError::NoSurface { .. }) => skipped += 1,
+                    Err(error) => return Err(UserError(format!("{}:{line}: {error}", path.display()))),
                 }
-                let point = evaluator
-                    .eval(face, u, v)
-                    .map_err(|error| UserError(format!("{}:{line}: {error}", path.display())))?;
-                rows.push((face.index(), u, v, point));
             }
             rows
         }
@@ -122,33 +120,28 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
     Ok(())
 }
 
-/// The samples of `path`: `(line, face, u, v)`, each checked against its face's domain.
-fn read_samples(path: &Path, evaluator: &LimitEvaluator) -> Result<Vec<(usize, FaceId, f64, f64)>, UserError> {
+/// The samples of `path`: `(line, face, u, v)`.
+fn read_samples(path: &Path) -> Result<Vec<(usize, FaceId, f64, f64)>, UserError> {
     let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
     let mut samples = Vec::new();
     for (index, raw) in text.lines().enumerate() {
         let line = index + 1;
-        let at = |message: String| UserError(format!("{}:{line}: {message}", path.display()));
         let content = raw.split('#').next().unwrap_or_default();
         let fields: Vec<&str> = content.split([',', ' ', '\t']).filter(|s| !s.is_empty()).collect();
         if fields.is_empty() {
             continue;
         }
-        let bad = || at(format!("expected `face u v` (a face index and two numbers), got `{}`", raw.trim()));
+        let bad = || {
+            UserError(format!(
+                "{}:{line}: expected `face u v` (a face index and two numbers), got `{}`",
+                path.display(),
+                raw.trim()
+            ))
+        };
         let [face, u, v] = fields[..] else { return Err(bad()) };
         let face: u32 = face.parse().map_err(|_| bad())?;
         let (u, v): (f64, f64) = (u.parse().map_err(|_| bad())?, v.parse().map_err(|_| bad())?);
-        let face = FaceId::new(face);
-        let point = dyadic_from_f64(u, v);
-        let checked = match point {
-            Some(point) => evaluator.check(face, point),
-            None => evaluator.eval(face, u, v).map(|_| ()),
-        };
-        match checked {
-            Ok(()) | Err(subdiv::stencil::StencilError::NoSurface { .. }) => {}
-            Err(error) => return Err(at(error.to_string())),
-        }
-        samples.push((line, face, u, v));
+        samples.push((line, FaceId::new(face), u, v));
     }
     Ok(samples)
 }

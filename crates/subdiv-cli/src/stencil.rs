@@ -121,7 +121,7 @@ fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Re
         None => Grid::Primal.points(matrices.face_size, args.n),
     };
     let mut reports = Vec::new();
-    let mut evaluator = StencilEvaluator::new(&matrices);
+    let mut evaluator = StencilEvaluator::new(&*matrices);
     for point in points {
         let (u, v) = point.to_f64();
         // Weights as JSON values and as text, in decimals or (--exact) fractions.

@@ -596,6 +596,34 @@ fn split_not_supported(scheme: &Scheme, split: Split) -> SchemeError {
     }
 }
 
+/// The indices of the faces that refining `parent` under a primal `split` makes from `face`, in
+/// the engine's (and OpenSubdiv's `Far`) numbering: children are numbered face by face, one per
+/// corner for quad splits (N-gons included) and four per triangle for triangle splits (the
+/// three corner children, then the middle one). `None` for other splits.
+///
+/// ```
+/// use subdiv_mesh::{shapes, FaceId, Mesh};
+/// use subdiv_schemes::{child_faces, Split};
+///
+/// let prism = Mesh::build(shapes::ngon_prism(5))?;
+/// // The two pentagonal caps come first: 5 + 5 children before face 2's 4.
+/// assert_eq!(child_faces(Split::Quad, &prism, FaceId::new(2)), Some(10..14));
+/// assert_eq!(child_faces(Split::Triangle, &prism, FaceId::new(2)), Some(8..12));
+/// assert_eq!(child_faces(Split::Dual, &prism, FaceId::new(2)), None);
+/// # Ok::<(), subdiv_mesh::MeshError>(())
+/// ```
+pub fn child_faces(split: Split, parent: &Mesh, face: FaceId) -> Option<std::ops::Range<usize>> {
+    match split {
+        Split::Triangle => Some(4 * face.index()..4 * face.index() + 4),
+        // Half-edges are numbered face by face too: a face's first child is its first half-edge.
+        Split::Quad => {
+            let first = parent.face_half_edges(face).next().expect("faces have corners").index();
+            Some(first..first + parent.face_size(face))
+        }
+        Split::Dual | Split::Midedge | Split::Sqrt3 => None,
+    }
+}
+
 /// Where the sub-patches of the patch starting at `start` start in `child`, the mesh the engine
 /// refined `parent` into with `scheme`, in the order of [`PatchShape::children`]: the same
 /// corner of each child face as `start` is of its face, so that the children's axes follow the
@@ -634,19 +662,15 @@ pub fn sub_patch_starts(
     if size != expected {
         return Err(SchemeError::FaceNotSupported { scheme: scheme.name.clone(), face, size, expected });
     }
-    // The engine numbers children face by face: one per corner for quads, four per triangle;
-    // child `j` has corner `j` of the parent at its own corner `j` (the middle triangle starts
+    // Child `j` has corner `j` of the parent at its own corner `j` (the middle triangle starts
     // at the midpoint of side 1), so the rotation of `start` carries over.
-    // (Half-edges are numbered face by face too, so a quad split's first child is the index
-    // of the face's first half-edge.)
     let first_corner = parent.face_half_edges(face).next().expect("faces have corners");
-    let first_child = if expected == 3 { 4 * face.index() } else { first_corner.index() };
     let rotation = start.index() - first_corner.index();
-    let children = if size == 3 { 4 } else { size };
-    Ok((0..children)
+    let children = child_faces(scheme.split(), parent, face).expect("a primal split");
+    Ok((0..children.len())
         .map(|j| {
             let corner = if j < size { (j + rotation) % size } else { j };
-            let child_face = FaceId::new((first_child + corner) as u32);
+            let child_face = FaceId::new((children.start + corner) as u32);
             child.face_half_edges(child_face).nth(rotation).expect("children have as many corners as the parent")
         })
         .collect())

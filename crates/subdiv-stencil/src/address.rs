@@ -1,5 +1,6 @@
 //! Periodic addresses: which sub-patch a rational parameter falls in at every level.
 
+use num_integer::Integer;
 use subdiv_schemes::ChildDomain;
 
 use crate::StencilError;
@@ -16,7 +17,7 @@ pub struct Address {
 }
 
 /// A rational point of a face's domain over a common denominator.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Dyadic {
     /// `u · denominator`.
     pub u: i64,
@@ -30,6 +31,19 @@ impl Dyadic {
     /// The point `(u / denominator, v / denominator)`.
     pub fn new(u: i64, v: i64, denominator: i64) -> Self {
         Self { u, v, denominator }
+    }
+
+    /// The same point in lowest terms.
+    ///
+    /// ```
+    /// use subdiv_stencil::Dyadic;
+    ///
+    /// assert_eq!(Dyadic::new(2, 6, 8).reduced(), Dyadic::new(1, 3, 4));
+    /// assert_eq!(Dyadic::new(0, 0, 5).reduced(), Dyadic::new(0, 0, 1));
+    /// ```
+    pub fn reduced(self) -> Self {
+        let g = self.u.gcd(&self.v).gcd(&self.denominator).max(1);
+        Self { u: self.u / g, v: self.v / g, denominator: self.denominator / g }
     }
 
     /// The point in f64.

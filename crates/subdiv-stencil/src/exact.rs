@@ -4,8 +4,8 @@
 
 use subdiv_schemes::{PatchMatrices, SubPatch};
 
-use crate::address::{check_domain, step};
-use crate::rational::{SparseRow, solve_sparse};
+use crate::rational::{SparseRow, fraction_within, solve_sparse};
+use crate::surface::{State, WalkEnd, address_walk, check_request, periodic_derivatives};
 use crate::{Dyadic, Rational, StencilError};
 
 /// Matrix entries are read back as fractions with denominators up to this.
@@ -48,27 +48,15 @@ pub fn exact_surface_stencil(
     shape: usize,
     point: Dyadic,
 ) -> Result<ExactSurfaceStencil, StencilError> {
-    check_domain(matrices.face_size, point)?;
-    if shape >= matrices.shapes.len() {
-        return Err(StencilError::Shape { scheme: matrices.scheme.clone(), shape, shapes: matrices.shapes.len() });
-    }
-    // The walk of (shape, point) states until one repeats.
-    let mut walk: Vec<((usize, i64, i64), u8)> = Vec::new();
-    let mut state = (shape, point.u, point.v);
-    let first = loop {
-        if let Some(first) = walk.iter().position(|(s, _)| *s == state) {
-            break first;
-        }
-        let (child, u, v) = step(matrices.face_size, state.1, state.2, point.denominator);
-        walk.push((state, child));
-        state = (matrices.shapes[state.0].children[usize::from(child)].shape, u, v);
-    };
-    let sub = |(s, c): ((usize, i64, i64), u8)| &matrices.shapes[s.0].children[usize::from(c)];
+    check_request(matrices, shape, point)?;
+    let (walk, end) = address_walk(matrices, shape, point, |_| false);
+    let WalkEnd::Cycle(first) = end else { unreachable!("a walk that knows no state ends in a cycle") };
+    let sub = |(s, c): (State, u8)| &matrices.shapes[s.shape].children[usize::from(c)];
     let exact: Vec<Vec<Vec<Rational>>> =
         walk.iter().map(|&w| exact_matrix(matrices, sub(w))).collect::<Result<_, _>>()?;
 
     // M_τ over the cycle, applied first to last.
-    let periodic = walk[first].0.0;
+    let periodic = walk[first].0.shape;
     let size = matrices.shapes[periodic].size;
     let mut m: Vec<Vec<Rational>> =
         (0..size).map(|i| (0..size).map(|j| Rational::from_integer(i64::from(i == j))).collect()).collect();
@@ -87,8 +75,14 @@ pub fn exact_surface_stencil(
     let period = walk.len() - first;
     let lambda = Rational::new(if flips % 2 == 1 { -1 } else { 1 }, num_bigint::BigInt::from(1) << period)
         .expect("a nonzero denominator");
+    // Whether the surface has parameter derivatives at the cycle's point: the same test as the
+    // floating-point route's (the derivative pair must dominate the cycle's spectrum).
+    let steps: Vec<&SubPatch> = walk[first..].iter().map(|&w| sub(w)).collect();
+    let differentiable = |u: &[f64], v: &[f64]| -> Result<bool, StencilError> {
+        Ok(periodic_derivatives(&steps, u, v).map_err(|e| fail("derivatives", e))?.is_some())
+    };
     let mut derivatives = match &matrices.shapes[periodic].parameters {
-        Some([u, v]) => {
+        Some([u, v]) if differentiable(u, v)? => {
             // The parameters come from a least-squares solve: looser.
             let u = exact_vector(matrices, u, 1e-11)?;
             let v = exact_vector(matrices, v, 1e-11)?;
@@ -99,7 +93,7 @@ pub fn exact_surface_stencil(
                 .map_err(|e| fail("∂/∂v", e))?;
             Some([du, dv])
         }
-        None => None,
+        _ => None,
     };
     // Back through the prefix, last step first: w ← w · A (derivatives ×±2).
     let two = Rational::from_integer(2);
@@ -137,12 +131,10 @@ fn exact_vector(matrices: &PatchMatrices, values: &[f64], tolerance: f64) -> Res
     values
         .iter()
         .map(|&x| {
-            Rational::approximate(x, MAX_DENOMINATOR)
-                .filter(|r| (r.to_f64() - x).abs() <= tolerance * x.abs().max(1.0))
-                .ok_or_else(|| StencilError::NotRational {
-                    scheme: matrices.scheme.clone(),
-                    detail: format!("{x:e} (in its sub-patch matrices) is not a fraction with denominator ≤ 2^24"),
-                })
+            fraction_within(x, MAX_DENOMINATOR, tolerance).ok_or_else(|| StencilError::NotRational {
+                scheme: matrices.scheme.clone(),
+                detail: format!("{x:e} (in its sub-patch matrices) is not a fraction with denominator ≤ 2^24"),
+            })
         })
         .collect()
 }

@@ -48,6 +48,7 @@ use num_traits::{One, Zero};
 use subdiv_mesh::{BoundaryInterpolation, DVec3, Mesh, PolygonSoup, VertexId};
 use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, SchemeError, Split};
 
+use crate::address::check_domain;
 use crate::rational::{Rational, SparseRow, exact_weight, solve_sparse};
 use crate::{Dyadic, StencilError, SurfaceStencil};
 
@@ -836,18 +837,9 @@ impl Builder<'_> {
 /// [`PatchMatrices::of`] (√3 has no sub-patch matrices: use [`SurfaceBasisGrid::stencil_at`]),
 /// and [`StencilError::SurfaceMask`] if the patch's parameters are not lattice points.
 pub fn regular_patch_stencil(scheme: &Scheme, point: Dyadic) -> Result<ExactStencil, StencilError> {
-    let Dyadic { u, v, denominator: q } = point;
-    let triangle = scheme.regular_valence() == 6;
-    let inside = q >= 1 && u >= 0 && v >= 0 && if triangle { u + v <= q } else { u <= q && v <= q };
-    if !inside {
-        return Err(StencilError::OutsideDomain {
-            u: format!("{u}/{q}"),
-            v: format!("{v}/{q}"),
-            domain: if triangle { "u, v ≥ 0, u + v ≤ 1" } else { "[0, 1]²" },
-        });
-    }
-    let g = gcd(gcd(u, v), q).max(1);
-    let (point, rate) = ([u / g, v / g], q / g);
+    check_domain(if scheme.regular_valence() == 6 { 3 } else { 4 }, point)?;
+    let Dyadic { u, v, denominator: rate } = point.reduced();
+    let point = [u, v];
     let rate = u32::try_from(rate)
         .map_err(|_| StencilError::Rate { rate: rate.unsigned_abs(), reason: "above grid::MAX_RATE" })?;
     let mask = SurfaceMask::of(scheme)?;
@@ -866,12 +858,4 @@ pub fn regular_patch_stencil(scheme: &Scheme, point: Dyadic) -> Result<ExactSten
         .ok_or_else(not_lattice)?;
     let grid = SurfaceBasisGrid::at_residues(&mask, rate, &[point])?;
     Ok(grid.stencil_over(point, &control).expect("the point's residue is computed"))
-}
-
-fn gcd(a: i64, b: i64) -> i64 {
-    let (mut a, mut b) = (a.abs(), b.abs());
-    while b != 0 {
-        (a, b) = (b, a % b);
-    }
-    a
 }

@@ -19,9 +19,12 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use subdiv_mesh::{DVec3, FaceId, Mesh};
-use subdiv_schemes::{ChildDomain, FoundPatch, MeshPatches, PatchMatrices, RefineOptions, Refiner, Scheme, Split};
+use subdiv_schemes::{
+    ChildDomain, FoundPatch, MeshPatches, PatchMatrices, RefineOptions, Refiner, Scheme, Split, child_faces,
+};
 
-use crate::{Address, Dyadic, StencilError, SurfaceStencil, surface_stencil};
+use crate::address::step;
+use crate::{Dyadic, Grid, StencilError, StencilEvaluator, SurfaceStencil};
 
 /// Refinement levels after which every face's patch must have a shape.
 const MAX_LEVELS: usize = 8;
@@ -128,20 +131,11 @@ impl FaceDomain {
         let Dyadic { u, v, denominator: q } = p;
         match self {
             Self::Quad | Self::Triangle => {
-                let size = if self == Self::Triangle { 3 } else { 4 };
                 // The address's first step: the same choice on borders as the stencils make.
-                let child = Address::of(size, p)
-                    .ok()
-                    .and_then(|a| a.prefix.first().or(a.period.first()).copied())
-                    .map_or(0, usize::from);
-                let domain = ChildDomain::of_face(size)[child];
-                let sign = if domain.flipped { -1 } else { 1 };
-                let at = |x: i64, o: u8| sign * (2 * x - i64::from(o) * q);
-                (
-                    child,
-                    Dyadic::new(at(u, domain.offset[0]), at(v, domain.offset[1]), q),
-                    if domain.flipped { -2.0 } else { 2.0 },
-                )
+                let size = if self == Self::Triangle { 3 } else { 4 };
+                let (child, a, b) = step(size, u, v, q);
+                let flipped = ChildDomain::of_face(size)[usize::from(child)].flipped;
+                (usize::from(child), Dyadic::new(a, b, q), if flipped { -2.0 } else { 2.0 })
             }
             Self::SubFaces { columns, .. } => {
                 let (tu, tv) = (u / q, v / q);
@@ -168,22 +162,27 @@ impl FaceDomain {
     /// `(i/n, j/n)`, `j` outer; triangles the same with `i + j ≤ n`; N-gons, for each sub-face,
     /// the `(n + 1)²` grid of normalized sub-face coordinates.
     pub fn grid(self, n: u32) -> Vec<GridParameter> {
-        let n = i64::from(n.max(1));
-        let nf = n as f64;
-        let square = || (0..=n).flat_map(move |j| (0..=n).map(move |i| (i, j)));
-        let plain =
-            |(i, j): (i64, i64)| GridParameter { point: Dyadic::new(i, j, n), u: i as f64 / nf, v: j as f64 / nf };
+        let exact = |point: Dyadic| {
+            let (u, v) = point.to_f64();
+            GridParameter { point, u, v }
+        };
         match self {
-            Self::Quad => square().map(plain).collect(),
-            Self::Triangle => square().filter(|&(i, j)| i + j <= n).map(plain).collect(),
-            Self::SubFaces { size, columns } => (0..size)
-                .flat_map(|s| square().map(move |ij| (s, ij)))
-                .map(|(s, (i, j))| GridParameter {
-                    point: self.from_sub_face(s, Dyadic::new(i, j, n)),
-                    u: (s % columns) as f64 + i as f64 / nf * 0.5,
-                    v: (s / columns) as f64 + j as f64 / nf * 0.5,
-                })
-                .collect(),
+            Self::Quad => Grid::Primal.points(4, n).into_iter().map(exact).collect(),
+            Self::Triangle => Grid::Primal.points(3, n).into_iter().map(exact).collect(),
+            Self::SubFaces { size, columns } => {
+                let square = Grid::Primal.points(4, n);
+                (0..size)
+                    .flat_map(|s| square.iter().map(move |&ab| (s, ab)))
+                    .map(|(s, ab)| {
+                        let (a, b) = ab.to_f64();
+                        GridParameter {
+                            point: self.from_sub_face(s, ab),
+                            u: (s % columns) as f64 + a * 0.5,
+                            v: (s / columns) as f64 + b * 0.5,
+                        }
+                    })
+                    .collect()
+            }
         }
     }
 }
@@ -241,18 +240,6 @@ impl PatchFrame {
     }
 }
 
-/// `p` with its fraction reduced, so equal points share a memo entry.
-fn reduced(p: Dyadic) -> Dyadic {
-    let gcd = |mut a: i64, mut b: i64| {
-        while b != 0 {
-            (a, b) = (b, a % b);
-        }
-        a.abs()
-    };
-    let g = gcd(gcd(p.u, p.v), p.denominator).max(1);
-    Dyadic::new(p.u / g, p.v / g, p.denominator / g)
-}
-
 /// The f64 parameters `(u, v)` as one exact fraction over `2^k`, `k ≤` [`MAX_DENOMINATOR_BITS`];
 /// a value with more binary digits after the point (below `2^−60` in its last place) is rounded
 /// to the nearest multiple of `2^−60`, which moves the point by less than `1e−18`. `None` for a
@@ -266,7 +253,7 @@ pub fn dyadic_from_f64(u: f64, v: f64) -> Option<Dyadic> {
     let k = bits(u).zip(bits(v)).map_or(MAX_DENOMINATOR_BITS, |(a, b)| a.max(b));
     let scale = (1u64 << k) as f64;
     // Exact when the value has at most k binary digits after the point; rounded otherwise.
-    Some(reduced(Dyadic::new((u * scale).round() as i64, (v * scale).round() as i64, 1i64 << k)))
+    Some(Dyadic::new((u * scale).round() as i64, (v * scale).round() as i64, 1i64 << k).reduced())
 }
 
 /// How a face of one level is evaluated.
@@ -288,16 +275,15 @@ struct Level {
     faces: HashMap<FaceId, Resolution>,
 }
 
-type MemoKey = (usize, usize, Dyadic);
-
 /// The limit surface of a mesh under a primal scheme, at any face's parameter in OpenSubdiv's
 /// `Bfr` parameterization: quads `(0, 0)` at corner 0, `u` toward corner 1, `v` toward corner 3;
 /// triangles of triangle schemes `(0, 0)`, `(1, 0)`, `(0, 1)` at corners 0, 1, 2; other faces
 /// of quad schemes as `Bfr`'s tiled quad sub-faces ([`FaceDomain::SubFaces`]).
 ///
 /// Positions and derivatives are exact up to f64 rounding (no approximation near extraordinary
-/// vertices). Stencils are memoised by (sub-patch matrices, shape, point), so faces of equal
-/// shape share them: all regular faces of a torus sampled on a grid cost one set of stencils.
+/// vertices). Each set of sub-patch matrices has one [`StencilEvaluator`], so faces of equal
+/// shape share their stencils (all regular faces of a torus sampled on a grid cost one set) and
+/// points share the work of their addresses.
 ///
 /// ```
 /// use subdiv_mesh::{shapes, FaceId, Mesh};
@@ -322,7 +308,8 @@ type MemoKey = (usize, usize, Dyadic);
 pub struct LimitEvaluator {
     split: Split,
     levels: Vec<Level>,
-    memo: Mutex<HashMap<MemoKey, Arc<SurfaceStencil>>>,
+    /// One stencil evaluator per set of sub-patch matrices, by the matrices' address.
+    evaluators: Mutex<HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>>,
 }
 
 impl LimitEvaluator {
@@ -365,7 +352,7 @@ impl LimitEvaluator {
                 {
                     Resolution::Patch(found)
                 } else {
-                    next.extend(children(&current, scheme.split(), f));
+                    next.extend(children(&current, scheme.split(), f).map(|c| FaceId::new(c as u32)));
                     Resolution::Children
                 };
                 faces.insert(f, resolution);
@@ -383,7 +370,7 @@ impl LimitEvaluator {
             current = refined;
             wanted = next;
         }
-        Ok(Self { split: scheme.split(), levels, memo: Mutex::default() })
+        Ok(Self { split: scheme.split(), levels, evaluators: Mutex::default() })
     }
 
     /// Creases and corners change the surface in ways the sub-patch matrices (derived on smooth
@@ -481,7 +468,7 @@ impl LimitEvaluator {
     pub fn eval_exact(&self, face: FaceId, point: Dyadic) -> Result<LimitPoint, StencilError> {
         self.check(face, point)?;
         let mut domain = self.domain(face)?;
-        let (mut f, mut p) = (face, reduced(point));
+        let (mut f, mut p) = (face, point.reduced());
         // (∂/∂u, ∂/∂v) of the face = j · (the same of the current level's face or patch).
         let mut j = [[1.0, 0.0], [0.0, 1.0]];
         for level in &self.levels {
@@ -490,7 +477,7 @@ impl LimitEvaluator {
                 Resolution::Hole => return Err(StencilError::NoSurface { face: face.index() }),
                 Resolution::Children => {
                     let (child, at, factor) = domain.child_of(p);
-                    f = FaceId::new((first_child(&level.mesh, self.split, f) + child) as u32);
+                    f = FaceId::new((children(&level.mesh, self.split, f).start + child) as u32);
                     p = at;
                     j = [[j[0][0] * factor, j[0][1] * factor], [j[1][0] * factor, j[1][1] * factor]];
                     domain = if self.split == Split::Triangle { FaceDomain::Triangle } else { FaceDomain::Quad };
@@ -499,19 +486,21 @@ impl LimitEvaluator {
                     let mesh = &level.mesh;
                     let first = mesh.face_half_edges(f).next().expect("faces have corners");
                     let frame = PatchFrame::new(mesh.face_size(f), found.start.index() - first.index());
-                    let s = self.stencil(&found.matrices, found.shape, reduced(frame.to_patch(p)))?;
                     let apply = |w: &[f64]| -> DVec3 {
                         w.iter().zip(&found.vertices).map(|(&w, &v)| w * mesh.position(v)).sum()
                     };
-                    let (ds, dt) = (apply(&s.du), apply(&s.dv));
+                    let (position, ds, dt, exact_derivatives) =
+                        self.with_stencil(&found.matrices, found.shape, frame.to_patch(p), |s| {
+                            (apply(&s.position), apply(&s.du), apply(&s.dv), s.exact_derivatives)
+                        })?;
                     let r = frame.derivative_map();
                     let m = |row: [f64; 2]| [row[0] * r[0][0] + row[1] * r[1][0], row[0] * r[0][1] + row[1] * r[1][1]];
                     let (ju, jv) = (m(j[0]), m(j[1]));
                     return Ok(LimitPoint {
-                        position: apply(&s.position),
+                        position,
                         du: ju[0] * ds + ju[1] * dt,
                         dv: jv[0] * ds + jv[1] * dt,
-                        exact_derivatives: s.exact_derivatives,
+                        exact_derivatives,
                     });
                 }
             }
@@ -535,22 +524,22 @@ impl LimitEvaluator {
         self.domain(face)?.grid(n).into_iter().map(|g| Ok((g, self.eval_exact(face, g.point)?))).collect()
     }
 
-    /// The memoised stencil of `shape` of `matrices` at `point`.
-    fn stencil(
+    /// `f` of the stencil of `shape` of `matrices` at `point`, from the evaluator of those
+    /// matrices, which shares work between points (and whose results do not depend on their
+    /// order). Evaluations through one `LimitEvaluator` take turns on its lock.
+    fn with_stencil<R>(
         &self,
         matrices: &Arc<PatchMatrices>,
         shape: usize,
         point: Dyadic,
-    ) -> Result<Arc<SurfaceStencil>, StencilError> {
-        // The matrices are shared per process and kept alive by the levels' patches, so the
-        // address identifies them.
-        let key = (Arc::as_ptr(matrices) as usize, shape, point);
-        let lock = || self.memo.lock().unwrap_or_else(PoisonError::into_inner);
-        if let Some(found) = lock().get(&key) {
-            return Ok(found.clone());
-        }
-        let computed = Arc::new(surface_stencil(matrices, shape, point)?);
-        Ok(lock().entry(key).or_insert(computed).clone())
+        f: impl FnOnce(&SurfaceStencil) -> R,
+    ) -> Result<R, StencilError> {
+        // The matrices are shared per process and kept alive by the evaluators, so the address
+        // identifies them.
+        let mut evaluators = self.evaluators.lock().unwrap_or_else(PoisonError::into_inner);
+        let evaluator =
+            evaluators.entry(Arc::as_ptr(matrices) as usize).or_insert_with(|| StencilEvaluator::new(matrices.clone()));
+        Ok(f(evaluator.stencil(shape, point)?))
     }
 }
 
@@ -558,22 +547,9 @@ fn internal(face: FaceId, detail: &str) -> StencilError {
     StencilError::Internal(format!("limit evaluation of {face}: {detail}"))
 }
 
-/// The first child face of `face` in the engine's numbering: quad splits make one child per
-/// corner (so the children of the faces before take as many faces as their half-edges),
-/// triangle splits four per triangle.
-fn first_child(mesh: &Mesh, split: Split, face: FaceId) -> usize {
-    if split == Split::Triangle {
-        4 * face.index()
-    } else {
-        mesh.face_half_edges(face).next().expect("faces have corners").index()
-    }
-}
-
-/// The child faces of `face`.
-fn children(mesh: &Mesh, split: Split, face: FaceId) -> impl Iterator<Item = FaceId> {
-    let count = if split == Split::Triangle { 4 } else { mesh.face_size(face) };
-    let first = first_child(mesh, split, face);
-    (first..first + count).map(|c| FaceId::new(c as u32))
+/// The child faces of `face` ([`child_faces`]; `split` is a primal one here).
+fn children(mesh: &Mesh, split: Split, face: FaceId) -> std::ops::Range<usize> {
+    child_faces(split, mesh, face).unwrap_or(0..0)
 }
 
 #[cfg(test)]
@@ -670,7 +646,7 @@ mod tests {
             let n = corners.len();
             let domain = FaceDomain::of(Split::Quad, n).unwrap();
             for (j, child) in children(&mesh, Split::Quad, f).enumerate() {
-                let cv = refined.face_vertices(child);
+                let cv = refined.face_vertices(FaceId::new(child as u32));
                 if n == 4 {
                     // Child j's corner j is the parent's corner j.
                     assert_eq!(cv[j], corners[j]);
@@ -691,7 +667,7 @@ mod tests {
         let refined = refine(&tri, Builtin::Loop.scheme(), &RefineOptions::DEFAULT).unwrap();
         for f in tri.face_ids() {
             for (j, child) in children(&tri, Split::Triangle, f).take(3).enumerate() {
-                assert_eq!(refined.face_vertices(child)[j], tri.face_vertices(f)[j]);
+                assert_eq!(refined.face_vertices(FaceId::new(child as u32))[j], tri.face_vertices(f)[j]);
             }
         }
     }
@@ -711,11 +687,19 @@ mod tests {
 
     #[test]
     fn other_primal_schemes_meet_their_known_values() {
-        // Bilinear: its eigenvalue 1 is not simple, so the periodic-address stencils do not
-        // exist; a typed error, not a panic.
+        // Bilinear: the face's bilinear interpolant, with its derivatives.
         let torus = Mesh::build(shapes::quad_torus(6, 4)).unwrap();
         let eval = LimitEvaluator::new(Builtin::Bilinear.scheme(), &torus, &RefineOptions::DEFAULT).unwrap();
-        assert!(matches!(eval.eval(FaceId::new(0), 0.5, 0.25), Err(StencilError::Eigen { .. })));
+        let c: Vec<DVec3> = torus.face_vertices(FaceId::new(0)).iter().map(|&v| torus.position(v)).collect();
+        let (u, v) = (0.5, 0.25);
+        let got = eval.eval(FaceId::new(0), u, v).unwrap();
+        let want = c[0] * (1.0 - u) * (1.0 - v) + c[1] * u * (1.0 - v) + c[2] * u * v + c[3] * (1.0 - u) * v;
+        let du = (c[1] - c[0]) * (1.0 - v) + (c[2] - c[3]) * v;
+        let dv = (c[3] - c[0]) * (1.0 - u) + (c[2] - c[1]) * u;
+        assert!(got.exact_derivatives);
+        for (a, b) in [(got.position, want), (got.du, du), (got.dv, dv)] {
+            assert!((a - b).length() < 1e-12, "bilinear: {a} vs {b}");
+        }
         // Interpolating schemes pass through the cage's vertices: butterfly on the icosahedron,
         // Kobbelt on the cube (valence 3).
         for (scheme, soup) in [(Builtin::Butterfly, shapes::icosahedron()), (Builtin::Kobbelt, shapes::cube())] {

@@ -323,8 +323,14 @@ impl<'a> Sum<&'a Rational> for Rational {
 /// with denominator at most `max_denominator`, accepted only when it is within
 /// `1e-15 · max(1, |value|)` of the float (the rule was a small fraction, rounded once).
 pub(crate) fn exact_weight(value: f64, max_denominator: u64) -> Option<Rational> {
+    fraction_within(value, max_denominator, 1e-15)
+}
+
+/// The nearest rational to `value` with denominator at most `max_denominator`, if it is within
+/// `tolerance · max(1, |value|)` of it.
+pub(crate) fn fraction_within(value: f64, max_denominator: u64, tolerance: f64) -> Option<Rational> {
     Rational::approximate(value, max_denominator)
-        .filter(|r| (r.to_f64() - value).abs() < 1e-15 * f64::max(1.0, value.abs()))
+        .filter(|r| (r.to_f64() - value).abs() < tolerance * f64::max(1.0, value.abs()))
 }
 
 /// A sparse row: `(column, coefficient)` in increasing column order, no zero coefficients.

@@ -35,6 +35,9 @@ fn every_grid_point_equals_the_direct_stencil() {
         let scheme = builtin.scheme();
         let matrices = PatchMatrices::of(scheme, patch_type, EDGE_ONLY).unwrap();
         assert_eq!(matrices.shapes[0].mirror.is_some(), symmetric, "{builtin} {patch_type:?}");
+        let points: Vec<_> = (0..matrices.shapes[0].size)
+            .map(|k| subdiv_mesh::DVec3::new(k as f64, (k * k) as f64 / 7.0, (k % 3) as f64))
+            .collect();
         for table in StencilTable::compute_rates(&matrices, EDGE_ONLY, 1..=6).unwrap() {
             let mut stored = 0;
             for grid in Grid::ALL {
@@ -43,11 +46,14 @@ fn every_grid_point_equals_the_direct_stencil() {
                     let point = table.point(grid, i);
                     let direct = surface_stencil(&matrices, 0, point).unwrap();
                     let what = format!("{builtin} {patch_type:?} rate {} {grid:?} {point:?}", table.rate());
-                    assert_close(&table.stencil(grid, i), &direct, &what);
+                    if symmetric && point.u < point.v {
+                        // Read through the mirror: the mirror image's stencil, permuted.
+                        assert_close(&table.stencil(grid, i), &direct, &what);
+                    } else {
+                        // The evaluator's results do not depend on the order of the points.
+                        assert_eq!(table.stencil(grid, i), direct, "{what}");
+                    }
                     // `apply` is the stencil applied, mirrored points included.
-                    let points: Vec<_> = (0..table.control_points())
-                        .map(|k| subdiv_mesh::DVec3::new(k as f64, (k * k) as f64 / 7.0, (k % 3) as f64))
-                        .collect();
                     let [p, du, dv] = table.apply(grid, i, &points);
                     let dot = |w: &[f64]| w.iter().zip(&points).map(|(w, x)| *x * *w).sum::<subdiv_mesh::DVec3>();
                     for (got, want) in [(p, dot(&direct.position)), (du, dot(&direct.du)), (dv, dot(&direct.dv))] {
