@@ -9,6 +9,7 @@
 mod analyze;
 mod info;
 mod input;
+mod plot;
 mod refine;
 mod scheme_arg;
 mod stencil;
@@ -42,6 +43,9 @@ enum Command {
     /// Exact limit stencils: a curve scheme's basis function and derivative on (1/n)ℤ, or a
     /// surface patch's position and tangent weights at rational (u, v).
     Stencil(stencil::StencilArgs),
+    /// Plot a curve scheme's basis function φ (or φ′) on (1/n)ℤ as a PNG (paper 000, Figs. 2
+    /// and 3).
+    PlotBasis(plot::PlotArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -64,6 +68,7 @@ fn main() -> ExitCode {
         Command::Analyze(args) => analyze::run(args, &mut out),
         Command::Scheme(args) => scheme_arg::print(args, &mut out),
         Command::Stencil(args) => stencil::run(args, &mut out),
+        Command::PlotBasis(args) => plot::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

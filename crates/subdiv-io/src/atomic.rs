@@ -12,10 +12,7 @@ use crate::IoError;
 ///
 /// A plain sibling file rather than a `tempfile` one: the output then gets the permissions a
 /// newly created file normally gets (the umask's), not `tempfile`'s private 0600.
-pub(crate) fn write_file(
-    path: &Path,
-    write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>,
-) -> Result<(), IoError> {
+pub fn write_file(path: &Path, write: impl FnOnce(&mut BufWriter<File>) -> io::Result<()>) -> Result<(), IoError> {
     let mut tmp = path.as_os_str().to_owned();
     tmp.push(".tmp");
     let tmp = PathBuf::from(tmp);

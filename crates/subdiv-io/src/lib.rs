@@ -47,6 +47,7 @@ use std::path::Path;
 
 use subdiv_mesh::{BuildOptions, Mesh, PolygonSoup};
 
+pub use crate::atomic::write_file;
 pub use crate::error::IoError;
 pub use crate::gltf::{GlbMesh, encode_glb, load_gltf, parse_gltf, write_glb};
 pub use crate::obj::{ObjFile, ObjLines, load_obj, read_obj, write_obj, write_obj_to};
