@@ -10,6 +10,7 @@ mod analyze;
 mod eval;
 mod info;
 mod input;
+mod plot;
 mod refine;
 mod scheme_arg;
 mod stencil;
@@ -46,6 +47,9 @@ enum Command {
     /// Exact limit positions and derivatives at face parameters (a grid on every face, or
     /// `face u v` samples), as CSV in OpenSubdiv's Bfr parameterization (osd_limit's columns).
     Eval(eval::EvalArgs),
+    /// Plot a curve scheme's basis function φ (or φ′) on (1/n)ℤ as a PNG (paper 000, Figs. 2
+    /// and 3).
+    PlotBasis(plot::PlotArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -69,6 +73,7 @@ fn main() -> ExitCode {
         Command::Scheme(args) => scheme_arg::print(args, &mut out),
         Command::Stencil(args) => stencil::run(args, &mut out),
         Command::Eval(args) => eval::run(args, &mut out),
+        Command::PlotBasis(args) => plot::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

@@ -232,3 +232,40 @@ fn eval_writes_osd_limit_csv_and_rejects_bad_samples() {
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("loop takes only 3-sided faces"));
 }
+
+#[test]
+fn plot_basis_writes_the_four_point_basis_function() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("phi.png");
+    let p = path.to_str().unwrap();
+    let output =
+        subdiv(&["plot-basis", "--scheme", "four-point", "--n", "21", "-o", p, "--width", "320", "--height", "200"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let bytes = std::fs::read(&path).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let image = image::load_from_memory_with_format(&bytes, image::ImageFormat::Png).unwrap().to_rgb8();
+    assert_eq!(image.dimensions(), (320, 200));
+    assert!(!dir.path().join("phi.png.tmp").exists());
+    // φ peaks at x = 0, the middle of the support [−3, 3]: dark pixels near the top there.
+    let dark = |x: u32, y: u32| image.get_pixel(x, y).0.iter().map(|&c| u32::from(c)).sum::<u32>() < 300;
+    let (left, right, top) = (320 / 12, 320 - 320 / 24, 200 / 16);
+    let middle = (left + right) / 2;
+    let peak = (middle - 3..=middle + 3).any(|x| (top..top + 30).any(|y| dark(x, y)));
+    assert!(peak, "no dark pixel where φ(0) = 1 is drawn");
+    // Not blank elsewhere either: the curve crosses the columns between.
+    let columns = (left + 4..right - 4).filter(|&x| (0..200).any(|y| dark(x, y))).count();
+    assert!(columns > (right - left - 8) as usize * 9 / 10, "{columns} columns with ink");
+
+    let output = subdiv(&["plot-basis", "--scheme", "four-point", "--n", "31", "--derivative", "-o", p]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let image = image::open(&path).unwrap();
+    assert_eq!((image.width(), image.height()), (800, 500));
+
+    for scheme in ["loop", "no-such-scheme"] {
+        let output = subdiv(&["plot-basis", "--scheme", scheme, "-o", p]);
+        assert_eq!(output.status.code(), Some(2), "{scheme}");
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(stderr.lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(scheme), "{stderr}");
+    }
+}

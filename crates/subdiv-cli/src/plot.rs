@@ -1,0 +1,227 @@
+//! `subdiv plot-basis`: a curve scheme's basis function φ (or φ′) on (1/n)ℤ as a PNG, paper
+//! 000's Figures 2 (four-point, n = 21) and 3 (its derivative, n = 31) for any curve scheme.
+
+use std::fmt;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use image::{ImageFormat, Rgb, RgbImage};
+use subdiv::schemes::{Builtin, CurveScheme};
+use subdiv::stencil::curve::basis_grid;
+
+use crate::UserError;
+
+/// Arguments of `subdiv plot-basis`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct PlotArgs {
+    /// A built-in curve scheme: cubic-bspline, chaikin, four-point, six-point, sw-curve.
+    #[arg(long)]
+    scheme: String,
+    /// The grid rate: samples at k/n over the support.
+    #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=1024))]
+    n: u32,
+    /// Plot the derivative φ′ instead of φ.
+    #[arg(long)]
+    derivative: bool,
+    /// The PNG to write (through a temporary file, then renamed).
+    #[arg(short = 'o', long = "output", value_name = "OUT.png")]
+    output: PathBuf,
+    /// Image width in pixels.
+    #[arg(long, default_value_t = 800, value_parser = clap::value_parser!(u32).range(64..=8192))]
+    width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 500, value_parser = clap::value_parser!(u32).range(64..=8192))]
+    height: u32,
+}
+
+/// Why `plot-basis` cannot plot the scheme asked for.
+#[derive(Debug)]
+enum PlotError {
+    /// A surface scheme: its basis function is bivariate.
+    SurfaceScheme(String),
+    /// No built-in scheme has this name.
+    UnknownScheme(String),
+}
+
+impl fmt::Display for PlotError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let curves = CurveScheme::BUILTIN_NAMES.join(", ");
+        match self {
+            Self::SurfaceScheme(name) => {
+                write!(f, "plot-basis draws curve schemes ({curves}); `{name}` is a surface scheme")
+            }
+            Self::UnknownScheme(name) => write!(f, "unknown curve scheme {name:?}; known: {curves}"),
+        }
+    }
+}
+
+const WHITE: Rgb<u8> = Rgb([255, 255, 255]);
+const AXIS: Rgb<u8> = Rgb([0, 0, 0]);
+const ZERO: Rgb<u8> = Rgb([170, 170, 170]);
+const LINE: Rgb<u8> = Rgb([40, 90, 200]);
+const DOT: Rgb<u8> = Rgb([10, 20, 60]);
+
+/// A small rasteriser: lines, dots and ticks on an RGB image, clipped to it.
+struct Canvas {
+    image: RgbImage,
+}
+
+impl Canvas {
+    fn put(&mut self, x: i64, y: i64, colour: Rgb<u8>) {
+        if let (Ok(x), Ok(y)) = (u32::try_from(x), u32::try_from(y))
+            && x < self.image.width()
+            && y < self.image.height()
+        {
+            self.image.put_pixel(x, y, colour);
+        }
+    }
+
+    /// A line `width` pixels thick (Bresenham, with a square brush).
+    fn line(&mut self, (x0, y0): (i64, i64), (x1, y1): (i64, i64), width: i64, colour: Rgb<u8>) {
+        let (dx, dy) = ((x1 - x0).abs(), -(y1 - y0).abs());
+        let (sx, sy) = (if x0 < x1 { 1 } else { -1 }, if y0 < y1 { 1 } else { -1 });
+        let (mut x, mut y, mut err) = (x0, y0, dx + dy);
+        let half = width / 2;
+        loop {
+            for i in -half..width - half {
+                for j in -half..width - half {
+                    self.put(x + i, y + j, colour);
+                }
+            }
+            if x == x1 && y == y1 {
+                break;
+            }
+            let e2 = 2 * err;
+            if e2 >= dy {
+                err += dy;
+                x += sx;
+            }
+            if e2 <= dx {
+                err += dx;
+                y += sy;
+            }
+        }
+    }
+
+    /// A filled disc.
+    fn dot(&mut self, (cx, cy): (i64, i64), radius: i64, colour: Rgb<u8>) {
+        for i in -radius..=radius {
+            for j in -radius..=radius {
+                if i * i + j * j <= radius * radius {
+                    self.put(cx + i, cy + j, colour);
+                }
+            }
+        }
+    }
+}
+
+/// A tick spacing of 1, 2 or 5 times a power of ten giving about `count` ticks over `span`.
+fn tick_step(span: f64, count: f64) -> f64 {
+    let raw = span / count;
+    let power = 10f64.powf(raw.log10().floor());
+    [1.0, 2.0, 5.0, 10.0].into_iter().map(|m| m * power).find(|&s| s >= raw).unwrap_or(10.0 * power)
+}
+
+/// Draws the samples `(x, y)` as a line through dots, with axes, ticks and the zero line.
+fn plot(samples: &[(f64, f64)], width: u32, height: u32) -> RgbImage {
+    let mut canvas = Canvas { image: RgbImage::from_pixel(width, height, WHITE) };
+    let (w, h) = (i64::from(width), i64::from(height));
+    let (left, right, top, bottom) = (w / 12, w - w / 24, h / 16, h - h / 10);
+    let x_lo = samples.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
+    let x_hi = samples.iter().map(|s| s.0).fold(f64::NEG_INFINITY, f64::max);
+    let y_lo = samples.iter().map(|s| s.1).fold(0.0, f64::min);
+    let y_hi = samples.iter().map(|s| s.1).fold(0.0, f64::max);
+    let pad = 0.08 * (y_hi - y_lo).max(1e-12);
+    let (y_lo, y_hi) = (y_lo - pad, y_hi + pad);
+    let (x_lo, x_hi) = if x_hi > x_lo { (x_lo, x_hi) } else { (x_lo - 1.0, x_hi + 1.0) };
+    let px = |x: f64| left + ((x - x_lo) / (x_hi - x_lo) * (right - left) as f64).round() as i64;
+    let py = |y: f64| bottom - ((y - y_lo) / (y_hi - y_lo) * (bottom - top) as f64).round() as i64;
+
+    // The zero line, then the axes (left and bottom) with ticks.
+    canvas.line((left, py(0.0)), (right, py(0.0)), 1, ZERO);
+    canvas.line((left, top), (left, bottom), 2, AXIS);
+    canvas.line((left, bottom), (right, bottom), 2, AXIS);
+    let tick = (h / 60).max(3);
+    let step = tick_step(x_hi - x_lo, 8.0);
+    let mut x = (x_lo / step).ceil() * step;
+    while x <= x_hi + 1e-9 {
+        canvas.line((px(x), bottom), (px(x), bottom + tick), 1, AXIS);
+        x += step;
+    }
+    let step = tick_step(y_hi - y_lo, 6.0);
+    let mut y = (y_lo / step).ceil() * step;
+    while y <= y_hi + 1e-9 {
+        canvas.line((left - tick, py(y)), (left, py(y)), 1, AXIS);
+        y += step;
+    }
+
+    let points: Vec<(i64, i64)> = samples.iter().map(|&(x, y)| (px(x), py(y))).collect();
+    let thick = (w / 400).max(2);
+    for pair in points.windows(2) {
+        canvas.line(pair[0], pair[1], thick, LINE);
+    }
+    for &p in &points {
+        canvas.dot(p, thick + 1, DOT);
+    }
+    canvas.image
+}
+
+/// Encodes the PNG and writes it atomically ([`subdiv::io::write_atomic`]: `<path>.tmp`, synced,
+/// renamed), so a failure leaves `path` as it was.
+fn write_png(path: &Path, image: &RgbImage) -> Result<(), UserError> {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write_to(&mut bytes, ImageFormat::Png).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+    subdiv::io::write_atomic(path, |writer| writer.write_all(bytes.get_ref()))?;
+    Ok(())
+}
+
+/// `subdiv plot-basis --scheme S --n N [--derivative] -o OUT.png`.
+pub(crate) fn run(args: &PlotArgs, out: &mut impl Write) -> Result<(), UserError> {
+    let Some(curve) = CurveScheme::builtin(&args.scheme) else {
+        let error = if Builtin::from_name(&args.scheme).is_some() {
+            PlotError::SurfaceScheme(args.scheme.clone())
+        } else {
+            PlotError::UnknownScheme(args.scheme.clone())
+        };
+        return Err(UserError(error.to_string()));
+    };
+    let grid = basis_grid(&curve, args.n)?;
+    let values = if args.derivative { grid.dphi_f64() } else { grid.phi_f64() };
+    let n = f64::from(args.n);
+    let samples: Vec<(f64, f64)> =
+        values.iter().enumerate().map(|(k, &y)| ((grid.first + k as i64) as f64 / n, y)).collect();
+    write_png(&args.output, &plot(&samples, args.width, args.height))?;
+    let what = if args.derivative { "φ′" } else { "φ" };
+    writeln!(
+        out,
+        "{}: {what} of {} at {} points of (1/{})Z, {}×{} pixels",
+        args.output.display(),
+        curve.name(),
+        samples.len(),
+        args.n,
+        args.width,
+        args.height
+    )?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ticks_are_round_numbers() {
+        assert_eq!(tick_step(6.0, 8.0), 1.0);
+        assert_eq!(tick_step(1.2, 6.0), 0.2);
+        assert_eq!(tick_step(0.03, 6.0), 0.005);
+    }
+
+    #[test]
+    fn lines_reach_both_ends_and_clip() {
+        let mut canvas = Canvas { image: RgbImage::from_pixel(10, 10, WHITE) };
+        canvas.line((-5, 2), (9, 2), 1, AXIS);
+        assert_eq!(canvas.image.get_pixel(0, 2), &AXIS);
+        assert_eq!(canvas.image.get_pixel(9, 2), &AXIS);
+        assert_eq!(canvas.image.get_pixel(5, 3), &WHITE);
+    }
+}
