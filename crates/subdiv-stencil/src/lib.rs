@@ -35,7 +35,8 @@ pub use address::{Address, Dyadic};
 pub use error::StencilError;
 pub use exact::{ExactSurfaceStencil, exact_surface_stencil};
 pub use mesh_eval::{
-    FaceDomain, GridParameter, LimitEvaluator, LimitPoint, MAX_DENOMINATOR_BITS, PatchFrame, dyadic_from_f64,
+    FaceDomain, GridParameter, LimitEvaluator, LimitPoint, MAX_DENOMINATOR_BITS, PatchFrame, PatchLevels, Resolved,
+    dyadic_from_f64,
 };
 pub use surface::{EvaluatorStats, StencilEvaluator, SurfaceStencil, surface_stencil};
 pub use table::{

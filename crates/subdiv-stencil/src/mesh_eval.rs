@@ -232,6 +232,16 @@ impl PatchFrame {
         Dyadic::new(at(0), at(1), q)
     }
 
+    /// The rows of `j · J` ([`derivative_map`](Self::derivative_map)): with `j` taking a
+    /// face's derivatives to this face's (`(∂/∂u, ∂/∂v)` of the input face `= j ·` those of
+    /// this face), the rows give the input face's `∂/∂u` and `∂/∂v` as combinations of the
+    /// patch's `(∂/∂s, ∂/∂t)`.
+    pub fn chain(self, j: [[f64; 2]; 2]) -> ([f64; 2], [f64; 2]) {
+        let r = self.derivative_map();
+        let m = |row: [f64; 2]| [row[0] * r[0][0] + row[1] * r[1][0], row[0] * r[0][1] + row[1] * r[1][1]];
+        (m(j[0]), m(j[1]))
+    }
+
     /// `J` with `(∂/∂u, ∂/∂v) = J · (∂/∂s, ∂/∂t)`: the inverse transpose of `[e1 e2]`.
     pub fn derivative_map(self) -> [[f64; 2]; 2] {
         let d = self.determinant() as f64;
@@ -256,7 +266,7 @@ pub fn dyadic_from_f64(u: f64, v: f64) -> Option<Dyadic> {
     Some(Dyadic::new((u * scale).round() as i64, (v * scale).round() as i64, 1i64 << k).reduced())
 }
 
-/// How a face of one level is evaluated.
+/// How a face of one level of [`PatchLevels`] is evaluated.
 #[derive(Clone, Debug)]
 enum Resolution {
     /// Through its patch.
@@ -275,44 +285,57 @@ struct Level {
     faces: HashMap<FaceId, Resolution>,
 }
 
-/// The limit surface of a mesh under a primal scheme, at any face's parameter in OpenSubdiv's
-/// `Bfr` parameterization: quads `(0, 0)` at corner 0, `u` toward corner 1, `v` toward corner 3;
-/// triangles of triangle schemes `(0, 0)`, `(1, 0)`, `(0, 1)` at corners 0, 1, 2; other faces
-/// of quad schemes as `Bfr`'s tiled quad sub-faces ([`FaceDomain::SubFaces`]).
+/// How a face of one level of [`PatchLevels`] reaches the limit surface.
+#[derive(Clone, Debug)]
+pub enum Resolved<'a> {
+    /// Through its patch, which starts at corner `frame` of the face.
+    Patch {
+        /// The level's mesh (the patch's control points are its vertices).
+        mesh: &'a Mesh,
+        /// The patch, its shape and its matrices.
+        patch: &'a FoundPatch,
+        /// The face's frame in the patch's.
+        frame: PatchFrame,
+    },
+    /// Through its children on the next level: the face's point `p` lies in child
+    /// `domain.child_of(p).0`, which is face `children.start + that` of the next level.
+    Children {
+        /// The children's face numbers on the next level.
+        children: std::ops::Range<usize>,
+        /// The face's domain, which says how its points map to its children's.
+        domain: FaceDomain,
+    },
+    /// Not at all: the face is a hole.
+    Hole,
+}
+
+/// A mesh's faces and, for each, the patch (with its sub-patch matrices) that evaluates it,
+/// on the level of refinement where it has one: a face whose patch has a shape in the scheme's
+/// [`PatchMatrices`] is resolved on level 0; a face without one — an N-gon under a quad split,
+/// or a face whose patch holds two irregular vertices — is refined, and its children are
+/// resolved on the next level, as often as needed.
 ///
-/// Positions and derivatives are exact up to f64 rounding (no approximation near extraordinary
-/// vertices). Each set of sub-patch matrices has one [`StencilEvaluator`], so faces of equal
-/// shape share their stencils (all regular faces of a torus sampled on a grid cost one set) and
-/// points share the work of their addresses.
+/// This is the part of [`LimitEvaluator`] that does not depend on how a patch is evaluated:
+/// exact stencils there, eigenbases in `subdiv-eval`, quadtrees in `subdiv-tess`.
 ///
 /// ```
 /// use subdiv_mesh::{shapes, FaceId, Mesh};
 /// use subdiv_schemes::{Builtin, RefineOptions};
-/// use subdiv_stencil::{Dyadic, LimitEvaluator};
+/// use subdiv_stencil::{PatchLevels, Resolved};
 ///
 /// let cube = Mesh::build(shapes::cube())?;
-/// let eval = LimitEvaluator::new(Builtin::CatmullClark.scheme(), &cube, &RefineOptions::DEFAULT)?;
-/// // Face centres, exact (1/2, 1/2) or as f64: by symmetry all as far from the cube's centre.
-/// let a = eval.eval_exact(FaceId::new(0), Dyadic::new(1, 1, 2))?;
-/// let b = eval.eval(FaceId::new(3), 0.5, 0.5)?;
-/// assert!((a.position.length() - b.position.length()).abs() < 1e-14);
-/// // The derivatives there are exact; their cross product is the outward normal.
-/// assert!(a.exact_derivatives && a.du.cross(a.dv).dot(a.position) > 0.0);
-/// // Corner 0 of every face is an extraordinary vertex (valence 3): tangent directions only.
-/// assert!(!eval.eval(FaceId::new(0), 0.0, 0.0)?.exact_derivatives);
-/// // A --grid 2 face has 9 points.
-/// assert_eq!(eval.grid(FaceId::new(0), 2)?.len(), 9);
+/// let levels = PatchLevels::new(Builtin::CatmullClark.scheme(), &cube, &RefineOptions::DEFAULT)?;
+/// // Every corner of the cube has valence 3: its faces are resolved by their children.
+/// assert!(matches!(levels.resolve(0, FaceId::new(0)), Some(Resolved::Children { .. })));
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 #[derive(Debug)]
-pub struct LimitEvaluator {
+pub struct PatchLevels {
     split: Split,
     levels: Vec<Level>,
-    /// One stencil evaluator per set of sub-patch matrices, by the matrices' address.
-    evaluators: Mutex<HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>>,
 }
 
-impl LimitEvaluator {
+impl PatchLevels {
     /// Prepares `mesh` under `scheme` with the boundary rule and options of refinement
     /// (`options`, else the mesh's tags): finds every face's patch, refining the mesh as often
     /// as faces without a patch shape need (an N-gon once; the cube's faces twice).
@@ -370,7 +393,7 @@ impl LimitEvaluator {
             current = refined;
             wanted = next;
         }
-        Ok(Self { split: scheme.split(), levels, evaluators: Mutex::default() })
+        Ok(Self { split: scheme.split(), levels })
     }
 
     /// Creases and corners change the surface in ways the sub-patch matrices (derived on smooth
@@ -391,9 +414,55 @@ impl LimitEvaluator {
         Ok(())
     }
 
-    /// The number of faces of the mesh.
+    /// The scheme's split.
+    pub fn split(&self) -> Split {
+        self.split
+    }
+
+    /// The number of levels (1 when every face has a patch on the mesh itself).
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// The mesh of `level`: level 0 is the input with the boundary rule applied (same faces,
+    /// same vertices), level `l + 1` is level `l` refined once.
+    ///
+    /// # Panics
+    /// If `level >= level_count()`.
+    pub fn mesh(&self, level: usize) -> &Mesh {
+        &self.levels[level].mesh
+    }
+
+    /// The number of faces of the input mesh.
     pub fn face_count(&self) -> usize {
         self.levels[0].mesh.face_count()
+    }
+
+    /// How `face` of `level` reaches the surface; `None` for a face that no point of the input
+    /// reaches on that level (or a level or face out of range).
+    pub fn resolve(&self, level: usize, face: FaceId) -> Option<Resolved<'_>> {
+        let l = self.levels.get(level)?;
+        Some(match l.faces.get(&face)? {
+            Resolution::Hole => Resolved::Hole,
+            Resolution::Children => Resolved::Children {
+                children: children(&l.mesh, self.split, face),
+                domain: if level == 0 {
+                    FaceDomain::of(self.split, l.mesh.face_size(face)).unwrap_or(FaceDomain::Quad)
+                } else if self.split == Split::Triangle {
+                    FaceDomain::Triangle
+                } else {
+                    FaceDomain::Quad
+                },
+            },
+            Resolution::Patch(found) => {
+                let first = l.mesh.face_half_edges(face).next().expect("faces have corners");
+                Resolved::Patch {
+                    mesh: &l.mesh,
+                    patch: found,
+                    frame: PatchFrame::new(l.mesh.face_size(face), found.start.index() - first.index()),
+                }
+            }
+        })
     }
 
     /// Whether `face` has a limit surface (it is not a hole).
@@ -404,7 +473,7 @@ impl LimitEvaluator {
         Ok(!matches!(self.resolution(face)?, Resolution::Hole))
     }
 
-    /// The domain of `face`.
+    /// The domain of `face` of the input mesh.
     ///
     /// # Errors
     /// [`StencilError::FaceOutOfRange`] for a face the mesh does not have.
@@ -422,11 +491,11 @@ impl LimitEvaluator {
             .ok_or(StencilError::FaceOutOfRange { face: face.index(), faces: self.face_count() })
     }
 
-    /// Checks that `point` is a parameter of `face` with a surface, as [`eval_exact`](Self::eval_exact)
-    /// would, without evaluating.
+    /// Checks that `point` is a parameter of `face` with a surface.
     ///
     /// # Errors
-    /// As [`eval_exact`](Self::eval_exact), for input errors.
+    /// [`StencilError::FaceOutOfRange`], [`StencilError::OutsideFace`] for a point outside the
+    /// face's domain, [`StencilError::NoSurface`] for a hole.
     pub fn check(&self, face: FaceId, point: Dyadic) -> Result<(), StencilError> {
         let domain = self.domain(face)?;
         if !domain.contains(point) {
@@ -442,6 +511,88 @@ impl LimitEvaluator {
             return Err(StencilError::NoSurface { face: face.index() });
         }
         Ok(())
+    }
+}
+
+/// The limit surface of a mesh under a primal scheme, at any face's parameter in OpenSubdiv's
+/// `Bfr` parameterization: quads `(0, 0)` at corner 0, `u` toward corner 1, `v` toward corner 3;
+/// triangles of triangle schemes `(0, 0)`, `(1, 0)`, `(0, 1)` at corners 0, 1, 2; other faces
+/// of quad schemes as `Bfr`'s tiled quad sub-faces ([`FaceDomain::SubFaces`]).
+///
+/// Positions and derivatives are exact up to f64 rounding (no approximation near extraordinary
+/// vertices). Each set of sub-patch matrices has one [`StencilEvaluator`], so faces of equal
+/// shape share their stencils (all regular faces of a torus sampled on a grid cost one set) and
+/// points share the work of their addresses.
+///
+/// ```
+/// use subdiv_mesh::{shapes, FaceId, Mesh};
+/// use subdiv_schemes::{Builtin, RefineOptions};
+/// use subdiv_stencil::{Dyadic, LimitEvaluator};
+///
+/// let cube = Mesh::build(shapes::cube())?;
+/// let eval = LimitEvaluator::new(Builtin::CatmullClark.scheme(), &cube, &RefineOptions::DEFAULT)?;
+/// // Face centres, exact (1/2, 1/2) or as f64: by symmetry all as far from the cube's centre.
+/// let a = eval.eval_exact(FaceId::new(0), Dyadic::new(1, 1, 2))?;
+/// let b = eval.eval(FaceId::new(3), 0.5, 0.5)?;
+/// assert!((a.position.length() - b.position.length()).abs() < 1e-14);
+/// // The derivatives there are exact; their cross product is the outward normal.
+/// assert!(a.exact_derivatives && a.du.cross(a.dv).dot(a.position) > 0.0);
+/// // Corner 0 of every face is an extraordinary vertex (valence 3): tangent directions only.
+/// assert!(!eval.eval(FaceId::new(0), 0.0, 0.0)?.exact_derivatives);
+/// // A --grid 2 face has 9 points.
+/// assert_eq!(eval.grid(FaceId::new(0), 2)?.len(), 9);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct LimitEvaluator {
+    patches: PatchLevels,
+    /// One stencil evaluator per set of sub-patch matrices, by the matrices' address.
+    evaluators: Mutex<HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>>,
+}
+
+impl LimitEvaluator {
+    /// Prepares `mesh` under `scheme` with the boundary rule and options of refinement
+    /// (`options`, else the mesh's tags): see [`PatchLevels::new`].
+    ///
+    /// # Errors
+    /// As [`PatchLevels::new`].
+    pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, StencilError> {
+        Ok(Self { patches: PatchLevels::new(scheme, mesh, options)?, evaluators: Mutex::default() })
+    }
+
+    /// The faces' patches, level by level.
+    pub fn patches(&self) -> &PatchLevels {
+        &self.patches
+    }
+
+    /// The number of faces of the mesh.
+    pub fn face_count(&self) -> usize {
+        self.patches.face_count()
+    }
+
+    /// Whether `face` has a limit surface (it is not a hole).
+    ///
+    /// # Errors
+    /// [`StencilError::FaceOutOfRange`] for a face the mesh does not have.
+    pub fn has_surface(&self, face: FaceId) -> Result<bool, StencilError> {
+        self.patches.has_surface(face)
+    }
+
+    /// The domain of `face`.
+    ///
+    /// # Errors
+    /// [`StencilError::FaceOutOfRange`] for a face the mesh does not have.
+    pub fn domain(&self, face: FaceId) -> Result<FaceDomain, StencilError> {
+        self.patches.domain(face)
+    }
+
+    /// Checks that `point` is a parameter of `face` with a surface, as [`eval_exact`](Self::eval_exact)
+    /// would, without evaluating.
+    ///
+    /// # Errors
+    /// As [`eval_exact`](Self::eval_exact), for input errors.
+    pub fn check(&self, face: FaceId, point: Dyadic) -> Result<(), StencilError> {
+        self.patches.check(face, point)
     }
 
     /// The limit point of `face` at f64 parameters, used exactly (see [`dyadic_from_f64`]).
@@ -467,25 +618,21 @@ impl LimitEvaluator {
     /// stencil's eigenvector is not unique.
     pub fn eval_exact(&self, face: FaceId, point: Dyadic) -> Result<LimitPoint, StencilError> {
         self.check(face, point)?;
-        let mut domain = self.domain(face)?;
         let (mut f, mut p) = (face, point.reduced());
         // (∂/∂u, ∂/∂v) of the face = j · (the same of the current level's face or patch).
         let mut j = [[1.0, 0.0], [0.0, 1.0]];
-        for level in &self.levels {
-            let resolution = level.faces.get(&f).ok_or_else(|| internal(face, "a child face was not prepared"))?;
-            match resolution {
-                Resolution::Hole => return Err(StencilError::NoSurface { face: face.index() }),
-                Resolution::Children => {
+        for level in 0..self.patches.level_count() {
+            let resolved =
+                self.patches.resolve(level, f).ok_or_else(|| internal(face, "a child face was not prepared"))?;
+            match resolved {
+                Resolved::Hole => return Err(StencilError::NoSurface { face: face.index() }),
+                Resolved::Children { children, domain } => {
                     let (child, at, factor) = domain.child_of(p);
-                    f = FaceId::new((children(&level.mesh, self.split, f).start + child) as u32);
+                    f = FaceId::new((children.start + child) as u32);
                     p = at;
                     j = [[j[0][0] * factor, j[0][1] * factor], [j[1][0] * factor, j[1][1] * factor]];
-                    domain = if self.split == Split::Triangle { FaceDomain::Triangle } else { FaceDomain::Quad };
                 }
-                Resolution::Patch(found) => {
-                    let mesh = &level.mesh;
-                    let first = mesh.face_half_edges(f).next().expect("faces have corners");
-                    let frame = PatchFrame::new(mesh.face_size(f), found.start.index() - first.index());
+                Resolved::Patch { mesh, patch: found, frame } => {
                     let apply = |w: &[f64]| -> DVec3 {
                         w.iter().zip(&found.vertices).map(|(&w, &v)| w * mesh.position(v)).sum()
                     };
@@ -493,9 +640,7 @@ impl LimitEvaluator {
                         self.with_stencil(&found.matrices, found.shape, frame.to_patch(p), |s| {
                             (apply(&s.position), apply(&s.du), apply(&s.dv), s.exact_derivatives)
                         })?;
-                    let r = frame.derivative_map();
-                    let m = |row: [f64; 2]| [row[0] * r[0][0] + row[1] * r[1][0], row[0] * r[0][1] + row[1] * r[1][1]];
-                    let (ju, jv) = (m(j[0]), m(j[1]));
+                    let (ju, jv) = frame.chain(j);
                     return Ok(LimitPoint {
                         position,
                         du: ju[0] * ds + ju[1] * dt,
