@@ -27,9 +27,9 @@ const TOLERANCES: [f64; 3] = [1e-2, 1e-3, 1e-4];
 pub(crate) fn run(samples: u32) -> Result<(), String> {
     let scheme = Builtin::CatmullClark.scheme();
     println!(
-        "| model | faces | ε / bbox | A polygons | triangles | depth L | U polygons (depth L) | A/U | seconds | worst distance / ε ({samples}² samples per face) |"
+        "| model | faces | ε / bbox | A polygons | triangles | depth L | U (depth L) | A/U | depth L' | U' (depth L') | A/U' | EV leaves | seconds | worst distance / ε ({samples}² samples per face) |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for model in MODELS {
         let path = subdiv_testkit::shared_mesh(model).ok_or("the shared corpus is missing (set SUBDIV_SHARED)")?;
         let mesh = load_mesh(&path, &Default::default()).map_err(|e| e.to_string())?;
@@ -47,6 +47,7 @@ pub(crate) fn run(samples: u32) -> Result<(), String> {
                 .map_err(|e| format!("{model}: {e}"))?;
             let seconds = start.elapsed().as_secs_f64();
             let uniform = tess.uniform_polygon_count(stats.max_depth);
+            let regular = tess.uniform_polygon_count(stats.max_regular_depth);
             let worst = reference.as_ref().map_or_else(
                 || "-".to_string(),
                 |s| {
@@ -56,19 +57,24 @@ pub(crate) fn run(samples: u32) -> Result<(), String> {
                 },
             );
             println!(
-                "| {model} | {} | {r:e} | {} | {} | {} | {uniform} | {:.3} | {seconds:.3} | {worst} |",
+                "| {model} | {} | {r:e} | {} | {} | {} | {uniform} | {:.2e} | {} | {regular} | {:.3} | {} | {seconds:.3} | {worst} |",
                 mesh.face_count(),
                 out.polygon_count(),
                 out.triangles.len(),
                 stats.max_depth,
                 out.polygon_count() as f64 / uniform as f64,
+                stats.max_regular_depth,
+                out.polygon_count() as f64 / regular as f64,
+                stats.extraordinary_leaves,
             );
         }
     }
     println!(
         "\nU: every node at the adaptive tree's deepest level L (N-gon sub-faces at L − 1). A node whose ancestor \
          passed may in principle fail the test, so the uniform depth meeting ε is ≥ L: U is a lower bound and A/U \
-         an upper bound of the true ratio. Worst distance: max over samples p of |S(p) − T(p)|, S from \
+         an upper bound of the true ratio. L is set by the extraordinary corners, whose hull bound shrinks only \
+         like λ^d; L' and U' ignore the corner leaves (the depth the polynomial pieces need), the fairer comparison \
+         with a uniform tessellation that treats the corners apart, as the paper's m_ε does. Worst distance: max over samples p of |S(p) − T(p)|, S from \
          LimitEvaluator (exact stencils), T the triangle containing p; an odd grid, since dyadic samples are \
          quadtree vertices."
     );

@@ -166,6 +166,9 @@ impl std::fmt::Debug for Tessellator {
 pub struct TessStats {
     /// The deepest leaf, counted from its input face.
     pub max_depth: u32,
+    /// The deepest leaf away from extraordinary corners, counted from its input face: the
+    /// depth the polynomial pieces need (the corners' hull bound shrinks only like λ^d).
+    pub max_regular_depth: u32,
     /// Leaves at an extraordinary corner.
     pub extraordinary_leaves: usize,
 }
@@ -354,11 +357,15 @@ impl Tessellator {
                 }
             }
         }
-        stats.extraordinary_leaves = forest
-            .iter()
-            .zip(&self.roots)
-            .map(|(leaves, root)| leaves.iter().filter(|l| self.at_extraordinary(*root, l)).count())
-            .sum();
+        for (leaves, root) in forest.iter().zip(&self.roots) {
+            for leaf in leaves {
+                if self.at_extraordinary(*root, leaf) {
+                    stats.extraordinary_leaves += 1;
+                } else {
+                    stats.max_regular_depth = stats.max_regular_depth.max(leaf.depth + root.depth());
+                }
+            }
+        }
         Ok((out, stats))
     }
 
