@@ -57,7 +57,7 @@ pub(crate) fn run(samples: u32) -> Result<(), String> {
                 },
             );
             println!(
-                "| {model} | {} | {r:e} | {} | {} | {} | {uniform} | {:.2e} | {} | {regular} | {:.3} | {} | {seconds:.3} | {worst} |",
+                "| {model} | {} | {r:e} | {} | {} | {} | {uniform} | {:.2e} | {} | {regular} | {:.2e} | {} | {seconds:.3} | {worst} |",
                 mesh.face_count(),
                 out.polygon_count(),
                 out.triangles.len(),
@@ -72,9 +72,10 @@ pub(crate) fn run(samples: u32) -> Result<(), String> {
     println!(
         "\nU: every node at the adaptive tree's deepest level L (N-gon sub-faces at L − 1). A node whose ancestor \
          passed may in principle fail the test, so the uniform depth meeting ε is ≥ L: U is a lower bound and A/U \
-         an upper bound of the true ratio. L is set by the extraordinary corners, whose hull bound shrinks only \
-         like λ^d; L' and U' ignore the corner leaves (the depth the polynomial pieces need), the fairer comparison \
-         with a uniform tessellation that treats the corners apart, as the paper's m_ε does. Worst distance: max over samples p of |S(p) − T(p)|, S from \
+         an upper bound of the true ratio. L' and U': the same without the leaves at extraordinary corners. \
+         L' = L shows that the depth near an extraordinary vertex is not an artefact of the corner's hull bound: \
+         the parametric distance includes the in-plane distortion of the characteristic map, which shrinks like \
+         λ^d, not 4^−d, so the polynomial pieces next to the corner need the same depth. Worst distance: max over samples p of |S(p) − T(p)|, S from \
          LimitEvaluator (exact stencils), T the triangle containing p; an odd grid, since dyadic samples are \
          quadtree vertices."
     );

@@ -167,7 +167,7 @@ pub struct TessStats {
     /// The deepest leaf, counted from its input face.
     pub max_depth: u32,
     /// The deepest leaf away from extraordinary corners, counted from its input face: the
-    /// depth the polynomial pieces need (the corners' hull bound shrinks only like λ^d).
+    /// depth the polynomial pieces need.
     pub max_regular_depth: u32,
     /// Leaves at an extraordinary corner.
     pub extraordinary_leaves: usize,
