@@ -46,7 +46,8 @@ pub struct TessOptions {
     /// The flatness every output triangle meets. Default: `Relative(1e-3)`.
     pub tolerance: Tolerance,
     /// The deepest level a node may reach, counted from the input face (an N-gon's sub-faces
-    /// are level 1); at most [`DEPTH_LIMIT`]. Default: 16.
+    /// are level 1); at most [`DEPTH_LIMIT`]. Default: 24 (leaves next to extraordinary vertices
+    /// go deep: the parametric distance there shrinks only like λ^d).
     pub max_depth: u32,
     /// The most polygons the output may have. Default: 20 million.
     pub max_polygons: usize,
@@ -54,7 +55,7 @@ pub struct TessOptions {
 
 impl TessOptions {
     /// The defaults.
-    pub const DEFAULT: Self = Self { tolerance: Tolerance::Relative(1e-3), max_depth: 16, max_polygons: 20_000_000 };
+    pub const DEFAULT: Self = Self { tolerance: Tolerance::Relative(1e-3), max_depth: 24, max_polygons: 20_000_000 };
 
     /// These options with `tolerance`.
     pub fn with_tolerance(self, tolerance: Tolerance) -> Self {
