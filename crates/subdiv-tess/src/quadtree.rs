@@ -281,7 +281,8 @@ impl Tessellator {
             .map(|&root| {
                 let mut leaves = Vec::new();
                 let piece = self.root_piece(root)?;
-                let budget = Budget { epsilon, max_depth: max_depth - root.depth(), count: &count, options };
+                let budget =
+                    Budget { epsilon, max_depth: max_depth.saturating_sub(root.depth()), count: &count, options };
                 self.build(root, piece, Leaf { depth: 0, x: 0, y: 0 }, &budget, &mut leaves)?;
                 Ok(leaves)
             })
