@@ -14,6 +14,7 @@ mod plot;
 mod refine;
 mod scheme_arg;
 mod stencil;
+mod tessellate;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -50,6 +51,9 @@ enum Command {
     /// Plot a curve scheme's basis function φ (or φ′) on (1/n)ℤ as a PNG (paper 000, Figs. 2
     /// and 3).
     PlotBasis(plot::PlotArgs),
+    /// Tessellate the limit surface so that every triangle lies within a tolerance of it
+    /// (error-driven quadtree, watertight), written as GLB or OBJ.
+    Tessellate(tessellate::TessellateArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -74,6 +78,7 @@ fn main() -> ExitCode {
         Command::Stencil(args) => stencil::run(args, &mut out),
         Command::Eval(args) => eval::run(args, &mut out),
         Command::PlotBasis(args) => plot::run(args, &mut out),
+        Command::Tessellate(args) => tessellate::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

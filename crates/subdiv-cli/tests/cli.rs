@@ -269,3 +269,46 @@ fn plot_basis_writes_the_four_point_basis_function() {
         assert!(stderr.contains(scheme), "{stderr}");
     }
 }
+
+#[test]
+fn tessellate_writes_a_watertight_glb_and_obj() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("star.glb");
+    let out = subdiv(&["tessellate", "--tolerance", "0.01", "--relative", "-o", glb.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let summary = String::from_utf8_lossy(&out.stderr);
+    assert!(summary.contains("triangles") && summary.contains("60 faces"), "{summary}");
+    let back = subdiv::io::load_mesh(&glb, &Default::default()).unwrap();
+    assert!(back.face_count() > 0 && back.boundary_edge_count() == 0);
+
+    let obj = dir.path().join("cube.obj");
+    let cube = dir.path().join("in.obj");
+    subdiv::io::write_obj(&cube, &subdiv::mesh::shapes::cube()).unwrap();
+    let out = subdiv(&[
+        "tessellate",
+        cube.to_str().unwrap(),
+        "--tolerance",
+        "0.01",
+        "--polygons",
+        "-o",
+        obj.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // Polygons share edges exactly: the OBJ builds into a closed manifold mesh of the cube's genus.
+    let mesh = subdiv::io::load_mesh(&obj, &Default::default());
+    let mesh = mesh.unwrap();
+    assert_eq!(mesh.boundary_edge_count(), 0);
+    assert_eq!(mesh.genus(), Some(0));
+}
+
+#[test]
+fn tessellate_rejects_bad_tolerances_and_schemes() {
+    for t in ["0", "-1", "NaN", "inf"] {
+        let out = subdiv(&["tessellate", "--tolerance", t]);
+        assert_eq!(out.status.code(), Some(2), "{t}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    let out = subdiv(&["tessellate", "--tolerance", "0.1", "--scheme", "loop"]);
+    assert_eq!(out.status.code(), Some(2));
+    let out = subdiv(&["tessellate", "--tolerance", "0.1", "-o", "x.png"]);
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -2,8 +2,9 @@
 //!
 //! This facade re-exports the workspace's crates under one name: half-edge topology ([`mesh`]),
 //! mesh files ([`io`]), refinement with OpenSubdiv's rules ([`schemes`]) and exact limit
-//! stencils at rational parameters ([`stencil`]). Evaluation, tessellation and the GPU backend
-//! arrive as their own crates and are re-exported here.
+//! stencils at rational parameters ([`stencil`]) and tessellation with a guaranteed distance
+//! bound ([`tess`]). Evaluation and the GPU backend arrive as their own crates and are
+//! re-exported here.
 //!
 //! ```
 //! use subdiv::mesh::{shapes, Mesh, RegularValence};
@@ -18,5 +19,6 @@ pub use subdiv_io as io;
 pub use subdiv_mesh as mesh;
 pub use subdiv_schemes as schemes;
 pub use subdiv_stencil as stencil;
+pub use subdiv_tess as tess;
 
 pub use subdiv_mesh::{DVec3, Mesh, MeshError, PolygonSoup};

@@ -1,0 +1,55 @@
+//! The crate's one error type.
+
+use subdiv_stencil::StencilError;
+
+/// Why a tessellation failed.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum TessError {
+    /// The tolerance is not a positive finite number.
+    #[error("tolerance {value} is not a positive finite number")]
+    Tolerance {
+        /// The value as given.
+        value: String,
+    },
+    /// The scheme is not one the quadtree's bounds hold for.
+    #[error("scheme {scheme}: {reason}")]
+    Scheme {
+        /// The scheme's name.
+        scheme: String,
+        /// The rule broken.
+        reason: String,
+    },
+    /// The mesh has a feature the tessellator does not handle.
+    #[error("{element}: {feature} not supported by the quadtree tessellator")]
+    Unsupported {
+        /// The feature.
+        feature: &'static str,
+        /// Where it is (an edge, a vertex, a face).
+        element: String,
+    },
+    /// Preparing the surface (patches, stencils) failed.
+    #[error(transparent)]
+    Surface(#[from] StencilError),
+    /// A face needed more levels than allowed ([`TessOptions::max_depth`](crate::TessOptions)).
+    #[error("face {face}: not flat to ε = {epsilon:e} at depth {depth} (the limit); raise the tolerance")]
+    DepthLimit {
+        /// The input face.
+        face: usize,
+        /// The depth reached.
+        depth: u32,
+        /// The absolute tolerance.
+        epsilon: f64,
+    },
+    /// The output would exceed [`TessOptions::max_polygons`](crate::TessOptions).
+    #[error("more than {limit} polygons needed for ε = {epsilon:e}; raise the tolerance")]
+    TooManyPolygons {
+        /// The limit.
+        limit: usize,
+        /// The absolute tolerance.
+        epsilon: f64,
+    },
+    /// An internal invariant failed: please report.
+    #[error("internal error (please report): {0}")]
+    Internal(String),
+}

@@ -1,0 +1,750 @@
+//! Error-driven quadtree tessellation of Catmull-Clark surfaces (paper 002 §2, §5).
+//!
+//! Each input face is a quadtree root (an N-gon: one root per `Bfr` quad sub-face). A node is a
+//! dyadic square of its root's domain and holds the surface over it as one of three *pieces*:
+//! a face of a refinement level that has no patch yet ([`PatchLevels`] `Children`: always
+//! split), the control points of the extraordinary corner's sub-patch (flat when their hull is
+//! small, [`flatness::extraordinary_is_flat`]), or a bicubic Bézier patch
+//! ([`flatness::regular_is_flat`]). Children come from the sub-patch matrices (exact
+//! subdivision) and de Casteljau. Nodes split at their midpoints until flat.
+//!
+//! Every leaf corner is a parameter point with one **global vertex id** (a mesh vertex, a
+//! dyadic point of a mesh edge counted from its lower-numbered vertex, a point of an N-gon's
+//! spoke or its centre, or a point inside a face), so neighbouring faces and sub-faces share
+//! their vertices. A leaf's polygon lists its corners and, by **polyline replacement**, every
+//! vertex a finer neighbour put on its edges: an edge's midpoint is a vertex iff the node of the
+//! same size across the edge was split (its children all have it as a corner), so a bisection
+//! that stops at the first missing midpoint finds them all. Polygons therefore share their edges
+//! exactly: no T-junctions, no cracks. Triangles are fans around the leaf's centre point, the
+//! triangulation [`flatness`] bounds.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::DVec3;
+use hashbrown::HashMap;
+use rayon::prelude::*;
+use subdiv_mesh::{FaceId, HalfEdgeId, Mesh};
+use subdiv_schemes::{PatchMatrices, Scheme, Split};
+use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, surface_stencil};
+
+use crate::bezier::Bicubic;
+use crate::flatness::{self, Tolerance};
+use crate::{SurfaceParameter, TessError, TessMesh};
+
+/// Bits of the fixed denominator of root coordinates: a node of depth `d` has corners at
+/// multiples of `2^(FULL_BITS − d)`.
+const FULL_BITS: u32 = 40;
+/// `2^FULL_BITS`: the root's side.
+const FULL: i64 = 1 << FULL_BITS;
+/// The largest [`TessOptions::max_depth`] accepted (sub-face coordinates halve once more).
+pub const DEPTH_LIMIT: u32 = 30;
+
+/// Options of [`Tessellator::tessellate`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TessOptions {
+    /// The flatness every output triangle meets. Default: `Relative(1e-3)`.
+    pub tolerance: Tolerance,
+    /// The deepest level a node may reach, counted from the input face (an N-gon's sub-faces
+    /// are level 1); at most [`DEPTH_LIMIT`]. Default: 24 (leaves next to extraordinary vertices
+    /// go deep: the parametric distance there shrinks only like λ^d).
+    pub max_depth: u32,
+    /// The most polygons the output may have. Default: 20 million.
+    pub max_polygons: usize,
+}
+
+impl TessOptions {
+    /// The defaults.
+    pub const DEFAULT: Self = Self { tolerance: Tolerance::Relative(1e-3), max_depth: 24, max_polygons: 20_000_000 };
+
+    /// These options with `tolerance`.
+    pub fn with_tolerance(self, tolerance: Tolerance) -> Self {
+        Self { tolerance, ..self }
+    }
+}
+
+impl Default for TessOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// How a patch shape is tessellated.
+#[derive(Clone, Debug)]
+enum ShapeKind {
+    /// A bicubic B-spline patch: `grid[j * 4 + i]` is the control point at `(i − 1, j − 1)`.
+    Regular { grid: [usize; 16] },
+    /// The extraordinary vertex at corner 0: the child kept at the corner, and the vertex's
+    /// limit position and tangent-direction stencils.
+    Extraordinary { position: Vec<f64>, du: Vec<f64>, dv: Vec<f64> },
+}
+
+/// A set of sub-patch matrices and one of its shapes, identified by address.
+type ShapeKey = (usize, usize);
+
+/// The surface over a node.
+#[derive(Clone)]
+enum Piece {
+    /// A face of refinement level `level` that reaches its patch through its children.
+    Face { level: usize, face: FaceId },
+    /// The sub-patch at the extraordinary corner, in the patch's frame.
+    Extraordinary { matrices: Arc<PatchMatrices>, shape: usize, points: Vec<DVec3>, frame: PatchFrame },
+    /// A polynomial piece, in the node's own coordinates (boxed: 384 bytes).
+    Regular(Box<Bicubic>),
+}
+
+/// A quadtree root: an input face, or one quad sub-face of an N-gon.
+#[derive(Clone, Copy, Debug)]
+struct Root {
+    face: FaceId,
+    /// `(sub-face, size, columns)` of an N-gon.
+    sub: Option<(usize, usize, usize)>,
+}
+
+impl Root {
+    /// The depth of the root counted from its input face.
+    fn depth(self) -> u32 {
+        u32::from(self.sub.is_some())
+    }
+}
+
+/// A leaf: the square `[x, x + 2^−depth] × [y, …]` of its root, `x, y` over [`FULL`].
+#[derive(Clone, Copy, Debug)]
+struct Leaf {
+    depth: u32,
+    x: i64,
+    y: i64,
+}
+
+/// A parameter point of the input mesh, canonical: equal points have equal keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum VertexKey {
+    /// A vertex of the mesh.
+    Vertex(u32),
+    /// A point of a mesh edge at `t / FULL` from its lower-numbered vertex.
+    Edge { edge: u32, t: i64 },
+    /// A point of an N-gon's spoke `s` (from the midpoint of its side `s` to its centre).
+    Spoke { face: u32, spoke: u32, t: i64 },
+    /// An N-gon's centre.
+    Centre(u32),
+    /// A point inside a face or sub-face.
+    Inner { face: u32, sub: u32, x: i64, y: i64 },
+}
+
+/// The quadtree tessellator of one mesh: the mesh's patches, prepared once and reused by every
+/// [`tessellate`](Self::tessellate) call.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{Tessellator, TessOptions, Tolerance};
+///
+/// let cube = Mesh::build(shapes::cube())?;
+/// let tess = Tessellator::new(Builtin::CatmullClark.scheme(), &cube)?;
+/// let out = tess.tessellate(&TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2)))?;
+/// // Closed and watertight: V − E + F of the triangles is the cube's Euler characteristic.
+/// let edges = out.triangles.len() * 3 / 2;
+/// assert_eq!(out.positions.len() as i64 - edges as i64 + out.triangles.len() as i64, 2);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct Tessellator {
+    levels: PatchLevels,
+    shapes: HashMap<ShapeKey, ShapeKind>,
+    roots: Vec<Root>,
+    /// Per input face, its corners' half-edges.
+    corners: Vec<Vec<HalfEdgeId>>,
+    diagonal: f64,
+}
+
+impl std::fmt::Debug for Tessellator {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Tessellator").field("roots", &self.roots.len()).field("shapes", &self.shapes.len()).finish()
+    }
+}
+
+/// Statistics of one tessellation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TessStats {
+    /// The deepest leaf, counted from its input face.
+    pub max_depth: u32,
+    /// The deepest leaf away from extraordinary corners, counted from its input face: the
+    /// depth the polynomial pieces need.
+    pub max_regular_depth: u32,
+    /// Leaves at an extraordinary corner.
+    pub extraordinary_leaves: usize,
+}
+
+impl Tessellator {
+    /// Prepares `mesh` under `scheme`, which must be Catmull-Clark (checked on its matrices:
+    /// regular patches are bicubic B-splines, every sub-patch matrix is a convex combination).
+    ///
+    /// # Errors
+    /// [`TessError::Scheme`] for a scheme other than a primal quad split or whose patches are
+    /// not as above; [`TessError::Unsupported`] for boundaries and holes;
+    /// [`TessError::Surface`] for creases and corners and as [`PatchLevels::new`].
+    pub fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
+        if scheme.split() != Split::Quad {
+            return Err(TessError::Scheme {
+                scheme: scheme.name().to_string(),
+                reason: "the quadtree tessellator needs a primal quad split (Catmull-Clark)".into(),
+            });
+        }
+        if let Some(e) = mesh.edges().find(|&e| mesh.is_boundary_edge(e)) {
+            let [a, b] = mesh.edge_vertices(e);
+            return Err(TessError::Unsupported { feature: "boundaries", element: format!("edge {a}-{b}") });
+        }
+        if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {
+            return Err(TessError::Unsupported { feature: "holes", element: format!("{f}") });
+        }
+        let levels = PatchLevels::new(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?;
+        let mut roots = Vec::new();
+        for face in mesh.face_ids() {
+            match levels.domain(face)? {
+                FaceDomain::SubFaces { size, columns } => {
+                    roots.extend((0..size).map(|s| Root { face, sub: Some((s, size, columns)) }));
+                }
+                _ => roots.push(Root { face, sub: None }),
+            }
+        }
+        let corners = mesh.face_ids().map(|f| mesh.face_half_edges(f).collect()).collect();
+        let diagonal = mesh.bounding_box().map_or(0.0, |(lo, hi)| lo.distance(hi));
+        let mut tess = Self { levels, shapes: HashMap::new(), roots, corners, diagonal };
+        tess.classify_shapes(scheme)?;
+        Ok(tess)
+    }
+
+    /// The diagonal of the control mesh's bounding box (what relative tolerances scale).
+    pub fn diagonal(&self) -> f64 {
+        self.diagonal
+    }
+
+    /// Finds every patch shape the roots reach and checks the properties the bounds rest on.
+    fn classify_shapes(&mut self, scheme: &Scheme) -> Result<(), TessError> {
+        let mut stack: Vec<(usize, FaceId)> = Vec::new();
+        for root in &self.roots {
+            match root.sub {
+                Some((s, ..)) => {
+                    if let Some(Resolved::Children { children, .. }) = self.levels.resolve(0, root.face) {
+                        stack.push((1, FaceId::new((children.start + s) as u32)));
+                    }
+                }
+                None => stack.push((0, root.face)),
+            }
+        }
+        let bad = |reason: String| TessError::Scheme { scheme: scheme.name().to_string(), reason };
+        while let Some((level, face)) = stack.pop() {
+            match self.levels.resolve(level, face) {
+                Some(Resolved::Children { children, .. }) => {
+                    stack.extend(children.map(|c| (level + 1, FaceId::new(c as u32))));
+                }
+                Some(Resolved::Patch { patch, .. }) => {
+                    let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
+                    if !self.shapes.contains_key(&key) {
+                        classify(&patch.matrices, patch.shape, &mut self.shapes).map_err(bad)?;
+                    }
+                }
+                Some(Resolved::Hole) => {
+                    return Err(TessError::Unsupported { feature: "holes", element: format!("{face}") });
+                }
+                None => return Err(TessError::Internal(format!("level {level} {face} was not prepared"))),
+            }
+        }
+        Ok(())
+    }
+
+    /// The polygons of the uniform tessellation at `depth` (counted from the input faces): what
+    /// a uniform quadtree that is as deep as the adaptive one's deepest leaf outputs.
+    pub fn uniform_polygon_count(&self, depth: u32) -> u64 {
+        self.roots.iter().map(|r| 4u64.saturating_pow(depth.saturating_sub(r.depth()))).sum()
+    }
+
+    /// Tessellates the surface so that every output triangle is within the tolerance of it
+    /// (parametric distance, see [`flatness`]).
+    ///
+    /// # Errors
+    /// [`TessError::Tolerance`], [`TessError::DepthLimit`], [`TessError::TooManyPolygons`].
+    pub fn tessellate(&self, options: &TessOptions) -> Result<TessMesh, TessError> {
+        self.tessellate_with_stats(options).map(|(mesh, _)| mesh)
+    }
+
+    /// [`tessellate`](Self::tessellate), with statistics.
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate).
+    pub fn tessellate_with_stats(&self, options: &TessOptions) -> Result<(TessMesh, TessStats), TessError> {
+        let epsilon = options.tolerance.absolute(self.diagonal)?;
+        let max_depth = options.max_depth.min(DEPTH_LIMIT);
+        let count = AtomicUsize::new(0);
+        let forest: Vec<Vec<Leaf>> = self
+            .roots
+            .par_iter()
+            .map(|&root| {
+                let mut leaves = Vec::new();
+                let piece = self.root_piece(root)?;
+                let budget =
+                    Budget { epsilon, max_depth: max_depth.saturating_sub(root.depth()), count: &count, options };
+                self.build(root, piece, Leaf { depth: 0, x: 0, y: 0 }, &budget, &mut leaves)?;
+                Ok(leaves)
+            })
+            .collect::<Result<_, TessError>>()?;
+        let mut stats = TessStats::default();
+        for (root, leaves) in self.roots.iter().zip(&forest) {
+            for leaf in leaves {
+                stats.max_depth = stats.max_depth.max(leaf.depth + root.depth());
+            }
+        }
+
+        // Global ids, in root and leaf order (deterministic whatever the thread count).
+        let mut ids: HashMap<VertexKey, u32> = HashMap::new();
+        let mut creators: Vec<(usize, i64, i64)> = Vec::new();
+        let mut centres: Vec<Vec<u32>> = Vec::with_capacity(forest.len());
+        for (r, (root, leaves)) in self.roots.iter().zip(&forest).enumerate() {
+            let mut root_centres = Vec::with_capacity(leaves.len());
+            for leaf in leaves {
+                let h = FULL >> leaf.depth;
+                for (x, y) in [(leaf.x, leaf.y), (leaf.x + h, leaf.y), (leaf.x + h, leaf.y + h), (leaf.x, leaf.y + h)] {
+                    let key = self.key(*root, x, y);
+                    ids.entry(key).or_insert_with(|| {
+                        creators.push((r, x, y));
+                        (creators.len() - 1) as u32
+                    });
+                }
+                creators.push((r, leaf.x + h / 2, leaf.y + h / 2));
+                root_centres.push((creators.len() - 1) as u32);
+            }
+            centres.push(root_centres);
+        }
+        if u32::try_from(creators.len()).is_err() {
+            return Err(TessError::TooManyPolygons { limit: options.max_polygons, epsilon });
+        }
+
+        // Every vertex evaluated once, exactly.
+        let evaluated: Vec<(DVec3, DVec3, SurfaceParameter)> = creators
+            .par_iter()
+            .map(|&(r, x, y)| {
+                let root = self.roots[r];
+                let (position, normal) = self.eval(root, x, y)?;
+                let (u, v) = bfr(root, x, y);
+                Ok((position, normal, SurfaceParameter { face: root.face, u, v }))
+            })
+            .collect::<Result<_, TessError>>()?;
+        let mut out = TessMesh::default();
+        for (p, n, s) in evaluated {
+            out.positions.push(p);
+            out.normals.push(n);
+            out.parameters.push(s);
+        }
+
+        // Polygons with their hanging vertices, and their fans.
+        let rings: Vec<Vec<Ring>> = self
+            .roots
+            .par_iter()
+            .zip(&forest)
+            .map(|(&root, leaves)| leaves.iter().map(|leaf| self.ring(root, leaf, &ids)).collect())
+            .collect();
+        out.polygon_offsets.push(0);
+        for (r, root) in self.roots.iter().enumerate() {
+            for ((ring, params), (&centre, leaf)) in rings[r].iter().zip(centres[r].iter().zip(&forest[r])) {
+                out.polygon_vertices.extend(ring);
+                out.polygon_offsets.push(out.polygon_vertices.len() as u32);
+                out.polygon_faces.push(root.face);
+                let h = FULL >> leaf.depth;
+                let c = bfr(*root, leaf.x + h / 2, leaf.y + h / 2);
+                for k in 0..ring.len() {
+                    let l = (k + 1) % ring.len();
+                    out.triangles.push([centre, ring[k], ring[l]]);
+                    out.triangle_faces.push(root.face);
+                    let (a, b) = (bfr(*root, params[k].0, params[k].1), bfr(*root, params[l].0, params[l].1));
+                    out.triangle_parameters.push([[c.0, c.1], [a.0, a.1], [b.0, b.1]]);
+                }
+            }
+        }
+        for (leaves, root) in forest.iter().zip(&self.roots) {
+            for leaf in leaves {
+                if self.at_extraordinary(*root, leaf) {
+                    stats.extraordinary_leaves += 1;
+                } else {
+                    stats.max_regular_depth = stats.max_regular_depth.max(leaf.depth + root.depth());
+                }
+            }
+        }
+        Ok((out, stats))
+    }
+
+    /// Whether a leaf's piece is the extraordinary corner's.
+    fn at_extraordinary(&self, root: Root, leaf: &Leaf) -> bool {
+        let Ok(mut piece) = self.root_piece(root) else { return false };
+        let (mut x, mut y) = (leaf.x, leaf.y);
+        for _ in 0..leaf.depth {
+            if matches!(piece, Piece::Regular(_)) {
+                return false;
+            }
+            let (qx, qy) = (usize::from(2 * x >= FULL), usize::from(2 * y >= FULL));
+            x = 2 * x - qx as i64 * FULL;
+            y = 2 * y - qy as i64 * FULL;
+            match self.quarter(&piece, qx, qy) {
+                Ok(p) => piece = p,
+                Err(_) => return false,
+            }
+        }
+        matches!(piece, Piece::Extraordinary { .. })
+    }
+
+    /// The piece of a root.
+    fn root_piece(&self, root: Root) -> Result<Piece, TessError> {
+        match root.sub {
+            None => self.piece(0, root.face),
+            Some((s, ..)) => match self.levels.resolve(0, root.face) {
+                Some(Resolved::Children { children, .. }) => self.piece(1, FaceId::new((children.start + s) as u32)),
+                _ => Err(TessError::Internal(format!("{} has no sub-faces", root.face))),
+            },
+        }
+    }
+
+    /// The piece of face `face` of `level`, in the face's coordinates.
+    fn piece(&self, level: usize, face: FaceId) -> Result<Piece, TessError> {
+        match self.levels.resolve(level, face) {
+            Some(Resolved::Children { .. }) => Ok(Piece::Face { level, face }),
+            Some(Resolved::Patch { mesh, patch, frame }) => {
+                let points: Vec<DVec3> = patch.vertices.iter().map(|&v| mesh.position(v)).collect();
+                let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
+                match self.shapes.get(&key) {
+                    Some(ShapeKind::Regular { grid }) => {
+                        Ok(Piece::Regular(Box::new(bezier_in_frame(grid, &points, frame))))
+                    }
+                    Some(ShapeKind::Extraordinary { .. }) => {
+                        Ok(Piece::Extraordinary { matrices: patch.matrices.clone(), shape: patch.shape, points, frame })
+                    }
+                    None => Err(TessError::Internal(format!("shape of level {level} {face} not classified"))),
+                }
+            }
+            Some(Resolved::Hole) => Err(TessError::Unsupported { feature: "holes", element: format!("{face}") }),
+            None => Err(TessError::Internal(format!("level {level} {face} was not prepared"))),
+        }
+    }
+
+    /// The quarter `(qx, qy)` of a piece, in the quarter's own coordinates.
+    fn quarter(&self, piece: &Piece, qx: usize, qy: usize) -> Result<Piece, TessError> {
+        match piece {
+            Piece::Regular(b) => Ok(Piece::Regular(Box::new(b.quarter(qx, qy)))),
+            Piece::Face { level, face } => match self.levels.resolve(*level, *face) {
+                Some(Resolved::Children { children, domain }) => {
+                    let (child, ..) = domain.child_of(Dyadic::new(2 * qx as i64 + 1, 2 * qy as i64 + 1, 4));
+                    self.piece(level + 1, FaceId::new((children.start + child) as u32))
+                }
+                _ => Err(TessError::Internal(format!("level {level} {face} has no children"))),
+            },
+            Piece::Extraordinary { matrices, shape, points, frame } => {
+                let centre = frame.to_patch(Dyadic::new(2 * qx as i64 + 1, 2 * qy as i64 + 1, 4));
+                let offset = [u8::from(centre.u > 2), u8::from(centre.v > 2)];
+                let sub = matrices.shapes[*shape]
+                    .children
+                    .iter()
+                    .find(|c| c.domain.offset == offset && !c.domain.flipped)
+                    .ok_or_else(|| TessError::Internal(format!("no child at {offset:?}")))?;
+                let child = sub.apply(points);
+                match self.shapes.get(&(Arc::as_ptr(matrices) as usize, sub.shape)) {
+                    Some(ShapeKind::Regular { grid }) => {
+                        Ok(Piece::Regular(Box::new(bezier_in_frame(grid, &child, *frame))))
+                    }
+                    Some(ShapeKind::Extraordinary { .. }) => Ok(Piece::Extraordinary {
+                        matrices: matrices.clone(),
+                        shape: sub.shape,
+                        points: child,
+                        frame: *frame,
+                    }),
+                    None => Err(TessError::Internal("child shape not classified".into())),
+                }
+            }
+        }
+    }
+
+    /// Splits `piece` (the node `node` of `root`) until flat, appending the leaves.
+    fn build(
+        &self,
+        root: Root,
+        piece: Piece,
+        node: Leaf,
+        budget: &Budget<'_>,
+        leaves: &mut Vec<Leaf>,
+    ) -> Result<(), TessError> {
+        let flat = match &piece {
+            Piece::Face { .. } => false,
+            Piece::Extraordinary { points, .. } => flatness::extraordinary_is_flat(points, budget.epsilon),
+            Piece::Regular(b) => flatness::regular_is_flat(b, budget.epsilon),
+        };
+        if flat {
+            if budget.count.fetch_add(1, Ordering::Relaxed) >= budget.options.max_polygons {
+                return Err(TessError::TooManyPolygons { limit: budget.options.max_polygons, epsilon: budget.epsilon });
+            }
+            leaves.push(node);
+            return Ok(());
+        }
+        if node.depth >= budget.max_depth {
+            return Err(TessError::DepthLimit {
+                face: root.face.index(),
+                depth: node.depth + root.depth(),
+                epsilon: budget.epsilon,
+            });
+        }
+        let h = FULL >> (node.depth + 1);
+        // Counter-clockwise order of the quarters keeps leaf order (and ids) deterministic.
+        for (qx, qy) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
+            let child = Leaf { depth: node.depth + 1, x: node.x + qx as i64 * h, y: node.y + qy as i64 * h };
+            self.build(root, self.quarter(&piece, qx, qy)?, child, budget, leaves)?;
+        }
+        Ok(())
+    }
+
+    /// The limit position and unit normal at root point `(x, y)` (over [`FULL`]).
+    fn eval(&self, root: Root, x: i64, y: i64) -> Result<(DVec3, DVec3), TessError> {
+        let mut piece = self.root_piece(root)?;
+        let (mut x, mut y) = (x, y);
+        loop {
+            let (qx, qy) = match &piece {
+                Piece::Regular(b) => {
+                    let (p, du, dv) = b.eval_with_derivatives(x as f64 / FULL as f64, y as f64 / FULL as f64);
+                    return Ok((p, du.cross(dv).normalize_or_zero()));
+                }
+                Piece::Face { .. } => (usize::from(2 * x >= FULL), usize::from(2 * y >= FULL)),
+                Piece::Extraordinary { matrices, shape, points, frame } => {
+                    let corner = frame.to_face(Dyadic::new(0, 0, 1));
+                    let (cx, cy) = (corner.u * FULL, corner.v * FULL);
+                    if (x, y) == (cx, cy) {
+                        let key = (Arc::as_ptr(matrices) as usize, *shape);
+                        let Some(ShapeKind::Extraordinary { position, du, dv }) = self.shapes.get(&key) else {
+                            return Err(TessError::Internal("extraordinary shape not classified".into()));
+                        };
+                        let apply = |w: &[f64]| -> DVec3 { w.iter().zip(points).map(|(&w, &p)| w * p).sum() };
+                        // The patch frame keeps the face's orientation (determinant 1).
+                        return Ok((apply(position), apply(du).cross(apply(dv)).normalize_or_zero()));
+                    }
+                    // On a border between quarters, take the one away from the corner: the point
+                    // then reaches a polynomial piece.
+                    let pick = |t: i64, c: i64| match (2 * t).cmp(&FULL) {
+                        std::cmp::Ordering::Less => 0,
+                        std::cmp::Ordering::Greater => 1,
+                        std::cmp::Ordering::Equal => usize::from(c == 0),
+                    };
+                    (pick(x, cx), pick(y, cy))
+                }
+            };
+            x = 2 * x - qx as i64 * FULL;
+            y = 2 * y - qy as i64 * FULL;
+            piece = self.quarter(&piece, qx, qy)?;
+        }
+    }
+
+    /// The canonical key of root point `(x, y)`.
+    fn key(&self, root: Root, x: i64, y: i64) -> VertexKey {
+        let face = root.face;
+        let mesh = self.levels.mesh(0);
+        let corners = &self.corners[face.index()];
+        let n = corners.len();
+        let vertex = |k: usize| VertexKey::Vertex(mesh.origin(corners[k % n]).index() as u32);
+        // A point of side k (corner k to k + 1) at t / FULL from corner k.
+        let on_side = |k: usize, t: i64| {
+            let h = corners[k % n];
+            let e = mesh.edge(h);
+            let forward = mesh.edge_vertices(e)[0] == mesh.origin(h);
+            VertexKey::Edge { edge: e.index() as u32, t: if forward { t } else { FULL - t } }
+        };
+        let inner = |sub: usize| VertexKey::Inner { face: face.index() as u32, sub: sub as u32, x, y };
+        match root.sub {
+            None => match (x, y) {
+                (0, 0) => vertex(0),
+                (FULL, 0) => vertex(1),
+                (FULL, FULL) => vertex(2),
+                (0, FULL) => vertex(3),
+                (_, 0) => on_side(0, x),
+                (FULL, _) => on_side(1, y),
+                (_, FULL) => on_side(2, FULL - x),
+                (0, _) => on_side(3, FULL - y),
+                _ => inner(0),
+            },
+            Some((s, ..)) => match (x, y) {
+                (0, 0) => vertex(s),
+                (_, 0) => on_side(s, x / 2),
+                (0, _) => on_side(s + n - 1, FULL - y / 2),
+                (FULL, FULL) => VertexKey::Centre(face.index() as u32),
+                (FULL, _) => VertexKey::Spoke { face: face.index() as u32, spoke: s as u32, t: y },
+                (_, FULL) => VertexKey::Spoke { face: face.index() as u32, spoke: ((s + n - 1) % n) as u32, t: x },
+                _ => inner(s),
+            },
+        }
+    }
+
+    /// A leaf's polygon: its corners and the hanging vertices on its edges, counter-clockwise,
+    /// with their root coordinates.
+    fn ring(&self, root: Root, leaf: &Leaf, ids: &HashMap<VertexKey, u32>) -> Ring {
+        let h = FULL >> leaf.depth;
+        let c = [(leaf.x, leaf.y), (leaf.x + h, leaf.y), (leaf.x + h, leaf.y + h), (leaf.x, leaf.y + h)];
+        let mut ring = Vec::with_capacity(8);
+        let mut params = Vec::with_capacity(8);
+        for k in 0..4 {
+            let (a, b) = (c[k], c[(k + 1) % 4]);
+            ring.push(ids[&self.key(root, a.0, a.1)]);
+            params.push(a);
+            self.hanging(root, a, b, ids, &mut ring, &mut params);
+        }
+        (ring, params)
+    }
+
+    /// The vertices strictly inside segment `a → b`, in order: its midpoint is one iff some
+    /// vertex is (see the module docs).
+    fn hanging(
+        &self,
+        root: Root,
+        a: (i64, i64),
+        b: (i64, i64),
+        ids: &HashMap<VertexKey, u32>,
+        ring: &mut Vec<u32>,
+        params: &mut Vec<(i64, i64)>,
+    ) {
+        if (a.0 - b.0).abs() + (a.1 - b.1).abs() < 2 {
+            return;
+        }
+        let m = ((a.0 + b.0) / 2, (a.1 + b.1) / 2);
+        if let Some(&id) = ids.get(&self.key(root, m.0, m.1)) {
+            self.hanging(root, a, m, ids, ring, params);
+            ring.push(id);
+            params.push(m);
+            self.hanging(root, m, b, ids, ring, params);
+        }
+    }
+}
+
+/// A leaf's polygon: vertex ids and their root coordinates.
+type Ring = (Vec<u32>, Vec<(i64, i64)>);
+
+/// What a root's recursion may spend.
+struct Budget<'a> {
+    epsilon: f64,
+    max_depth: u32,
+    count: &'a AtomicUsize,
+    options: &'a TessOptions,
+}
+
+/// The `Bfr` parameters of root point `(x, y)`.
+fn bfr(root: Root, x: i64, y: i64) -> (f64, f64) {
+    let (a, b) = (x as f64 / FULL as f64, y as f64 / FULL as f64);
+    match root.sub {
+        None => (a, b),
+        Some((s, _, columns)) => ((s % columns) as f64 + 0.5 * a, (s / columns) as f64 + 0.5 * b),
+    }
+}
+
+/// The Bézier net, in the face's coordinates, of a regular patch whose B-spline control points
+/// `points` are ordered by `grid` in the patch's frame.
+fn bezier_in_frame(grid: &[usize; 16], points: &[DVec3], frame: PatchFrame) -> Bicubic {
+    let ordered: [[DVec3; 4]; 4] = std::array::from_fn(|j| std::array::from_fn(|i| points[grid[j * 4 + i]]));
+    let patch = Bicubic::from_bspline(&ordered);
+    // The frame is a turn of the unit square: face control point (i, j) is the patch's at
+    // to_patch(i/3, j/3).
+    let net = std::array::from_fn(|j| {
+        std::array::from_fn(|i| {
+            let p = frame.to_patch(Dyadic::new(i as i64, j as i64, 3));
+            patch.net[p.v as usize][p.u as usize]
+        })
+    });
+    Bicubic { net }
+}
+
+/// Classifies `shape` of `matrices` and every shape it reaches, checking what the bounds need.
+fn classify(matrices: &Arc<PatchMatrices>, shape: usize, out: &mut HashMap<ShapeKey, ShapeKind>) -> Result<(), String> {
+    let key = (Arc::as_ptr(matrices) as usize, shape);
+    if out.contains_key(&key) {
+        return Ok(());
+    }
+    let s = &matrices.shapes[shape];
+    if let Some(grid) = regular_grid(s.size, s.parameters.as_ref()) {
+        check_bicubic(matrices, shape, &grid)?;
+        out.insert(key, ShapeKind::Regular { grid });
+        for child in &s.children {
+            classify(matrices, child.shape, out)?;
+        }
+        return Ok(());
+    }
+    let (_, keep) = matrices
+        .keeping(shape)
+        .ok_or_else(|| format!("patch shape {shape} is neither regular nor keeps an extraordinary corner"))?;
+    if keep.domain.offset != [0, 0] {
+        return Err(format!("patch shape {shape} keeps its shape away from corner 0"));
+    }
+    for child in &s.children {
+        for r in 0..child.rows() {
+            let row = child.row(r);
+            if row.iter().any(|&w| w < 0.0) || (row.iter().sum::<f64>() - 1.0).abs() > 1e-12 {
+                return Err(format!("sub-patch matrices of shape {shape} are not convex combinations"));
+            }
+        }
+    }
+    let stencil = surface_stencil(matrices, shape, Dyadic::new(0, 0, 1)).map_err(|e| e.to_string())?;
+    out.insert(key, ShapeKind::Extraordinary { position: stencil.position, du: stencil.du, dv: stencil.dv });
+    for child in &s.children {
+        if child.shape != shape {
+            classify(matrices, child.shape, out)?;
+            if !matches!(out.get(&(key.0, child.shape)), Some(ShapeKind::Regular { .. })) {
+                return Err(format!("a child of extraordinary shape {shape} is neither regular nor the shape itself"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The 4 × 4 grid order of a 16-point shape whose control points sit at the integer
+/// parameters `−1..=2` (a regular B-spline patch), if it is one.
+fn regular_grid(size: usize, parameters: Option<&[Vec<f64>; 2]>) -> Option<[usize; 16]> {
+    let [us, vs] = parameters?;
+    if size != 16 || us.len() != 16 || vs.len() != 16 {
+        return None;
+    }
+    let mut grid = [usize::MAX; 16];
+    for (k, (&u, &v)) in us.iter().zip(vs).enumerate() {
+        // The parameters are read back from the matrices: integers up to rounding.
+        let (i, j) = ((u + 1.0).round(), (v + 1.0).round());
+        if (u + 1.0 - i).abs() > 1e-9
+            || (v + 1.0 - j).abs() > 1e-9
+            || !(0.0..4.0).contains(&i)
+            || !(0.0..4.0).contains(&j)
+        {
+            return None;
+        }
+        let slot = &mut grid[j as usize * 4 + i as usize];
+        if *slot != usize::MAX {
+            return None;
+        }
+        *slot = k;
+    }
+    Some(grid)
+}
+
+/// Checks that the regular shape's children are the quarters of the bicubic B-spline patch,
+/// on every basis function: what makes the pieces polynomials of bidegree 3.
+fn check_bicubic(matrices: &PatchMatrices, shape: usize, grid: &[usize; 16]) -> Result<(), String> {
+    let s = &matrices.shapes[shape];
+    for child in &s.children {
+        let Some(child_grid) =
+            regular_grid(matrices.shapes[child.shape].size, matrices.shapes[child.shape].parameters.as_ref())
+        else {
+            return Err(format!("a child of regular shape {shape} is not regular"));
+        };
+        let [qx, qy] = child.domain.offset.map(usize::from);
+        for k in 0..16 {
+            let basis: Vec<DVec3> = (0..16).map(|m| if m == k { DVec3::X } else { DVec3::ZERO }).collect();
+            let parent =
+                Bicubic::from_bspline(&std::array::from_fn(|j| std::array::from_fn(|i| basis[grid[j * 4 + i]])));
+            let points = child.apply(&basis);
+            let mine =
+                Bicubic::from_bspline(&std::array::from_fn(|j| std::array::from_fn(|i| points[child_grid[j * 4 + i]])));
+            let expected = parent.quarter(qx, qy);
+            let diff = mine.net.iter().flatten().zip(expected.net.iter().flatten()).map(|(a, b)| (*a - *b).length());
+            if diff.fold(0.0, f64::max) > 1e-12 {
+                return Err(
+                    "its regular patches are not bicubic B-splines (the quadtree's bounds need Catmull-Clark)".into()
+                );
+            }
+        }
+    }
+    Ok(())
+}
