@@ -40,6 +40,12 @@ pub struct LimitPoint2 {
 /// How one input face is evaluated.
 #[derive(Debug)]
 enum Route {
+    /// A face that is its own patch (most faces): no descent, one lookup.
+    Patch {
+        surface: u32,
+        frame: Frame,
+    },
+    /// A face resolved through its children (N-gons, faces with two extraordinary vertices).
     Eigen {
         node: u32,
         domain: FaceDomain,
@@ -56,7 +62,7 @@ enum Route {
 enum Node {
     /// A patch: the face's `(u, v)` is `origin + s·e1 + t·e2`; `to_patch` is `[e1 e2]⁻¹`,
     /// `derivatives` the rows of `(∂/∂u, ∂/∂v)` over `(∂/∂s, ∂/∂t)`.
-    Patch { surface: u32, origin: [f64; 2], to_patch: [[f64; 2]; 2], derivatives: [[f64; 2]; 2] },
+    Patch { surface: u32, frame: Frame },
     /// Refined: the children are consecutive nodes from `first`.
     Children { first: u32, triangle: bool },
 }
@@ -100,7 +106,13 @@ impl EigenEvaluator {
                 let (nodes, surfaces) = (tree.nodes.len(), tree.surfaces.len());
                 let node = tree.push_placeholder();
                 match tree.build(stencil.patches(), 0, face, node) {
-                    Ok(()) => Route::Eigen { node, domain: stencil.domain(face)? },
+                    Ok(()) => match (&tree.nodes[node as usize], stencil.domain(face)?) {
+                        (&Node::Patch { surface, frame }, FaceDomain::Quad | FaceDomain::Triangle) => {
+                            tree.nodes.truncate(nodes);
+                            Route::Patch { surface, frame }
+                        }
+                        (_, domain) => Route::Eigen { node, domain },
+                    },
                     Err(reason) => {
                         tree.nodes.truncate(nodes);
                         tree.surfaces.truncate(surfaces);
@@ -135,7 +147,7 @@ impl EigenEvaluator {
     /// [`StencilError::FaceOutOfRange`] (wrapped).
     pub fn uses_eigenbasis(&self, face: FaceId) -> Result<Result<(), Option<String>>, EvalError> {
         Ok(match self.route(face)? {
-            Route::Eigen { .. } => Ok(()),
+            Route::Patch { .. } | Route::Eigen { .. } => Ok(()),
             Route::Stencil { reason } => Err(Some(reason.clone().unwrap_or_else(|| "method stencil".to_string()))),
             Route::Hole => Err(None),
         })
@@ -157,6 +169,13 @@ impl EigenEvaluator {
     #[inline]
     pub fn eval(&self, face: FaceId, u: f64, v: f64) -> Result<LimitPoint, EvalError> {
         match self.route(face)? {
+            Route::Patch { surface, frame } => {
+                let surface = &self.surfaces[*surface as usize];
+                let domain = if surface.triangle() { FaceDomain::Triangle } else { FaceDomain::Quad };
+                self.check(face, domain, u, v)?;
+                let (s, t) = frame.to_patch(u, v);
+                Ok(limit_point(surface.eval_unchecked(s, t), 1.0, frame.derivatives))
+            }
             Route::Eigen { node, domain } => {
                 self.check(face, *domain, u, v)?;
                 let (surface, s, t, f, r) = self.descend(*node, *domain, u, v);
@@ -174,10 +193,23 @@ impl EigenEvaluator {
     /// As [`eval`](Self::eval); [`EvalError::NoSecondDerivatives`] for a face evaluated by
     /// stencils.
     pub fn eval_second(&self, face: FaceId, u: f64, v: f64) -> Result<LimitPoint2, EvalError> {
-        match self.route(face)? {
+        let found = match self.route(face)? {
+            Route::Patch { surface, frame } => {
+                let surface = &self.surfaces[*surface as usize];
+                let domain = if surface.triangle() { FaceDomain::Triangle } else { FaceDomain::Quad };
+                self.check(face, domain, u, v)?;
+                let (s, t) = frame.to_patch(u, v);
+                Some((surface, s, t, 1.0, frame.derivatives))
+            }
             Route::Eigen { node, domain } => {
                 self.check(face, *domain, u, v)?;
-                let (surface, s, t, f, r) = self.descend(*node, *domain, u, v);
+                Some(self.descend(*node, *domain, u, v))
+            }
+            _ => None,
+        };
+        match self.route(face)? {
+            Route::Patch { .. } | Route::Eigen { .. } => {
+                let (surface, s, t, f, r) = found.expect("found above for patches");
                 let PatchPoint2 { first, dss, dst, dtt } = surface.eval_second_unchecked(s, t);
                 let g = f * f;
                 let [a, b] = r;
@@ -235,10 +267,9 @@ impl EigenEvaluator {
         };
         loop {
             match &self.nodes[node as usize] {
-                Node::Patch { surface, origin, to_patch: m, derivatives } => {
-                    let (x, y) = (u - origin[0], v - origin[1]);
-                    let (s, t) = (m[0][0] * x + m[0][1] * y, m[1][0] * x + m[1][1] * y);
-                    return (&self.surfaces[*surface as usize], s, t, f, *derivatives);
+                Node::Patch { surface, frame } => {
+                    let (s, t) = frame.to_patch(u, v);
+                    return (&self.surfaces[*surface as usize], s, t, f, frame.derivatives);
                 }
                 Node::Children { first, triangle } => {
                     let (child, cu, cv, factor) = match sub_faces.take() {
@@ -254,6 +285,23 @@ impl EigenEvaluator {
                 }
             }
         }
+    }
+}
+
+/// A patch's frame in its face: the face's `(u, v)` is `origin + s·e1 + t·e2`; `to_patch` is
+/// `[e1 e2]⁻¹`, `derivatives` the rows of `(∂/∂u, ∂/∂v)` over `(∂/∂s, ∂/∂t)`.
+#[derive(Clone, Copy, Debug)]
+struct Frame {
+    origin: [f64; 2],
+    to_patch: [[f64; 2]; 2],
+    derivatives: [[f64; 2]; 2],
+}
+
+impl Frame {
+    #[inline(always)]
+    fn to_patch(&self, u: f64, v: f64) -> (f64, f64) {
+        let (x, y, m) = (u - self.origin[0], v - self.origin[1], &self.to_patch);
+        (m[0][0] * x + m[0][1] * y, m[1][0] * x + m[1][1] * y)
     }
 }
 
@@ -301,9 +349,7 @@ impl Tree {
                 let to_patch = [[e2[1] / det, -e2[0] / det], [-e1[1] / det, e1[0] / det]];
                 self.nodes[slot as usize] = Node::Patch {
                     surface: self.surfaces.len() as u32,
-                    origin: o,
-                    to_patch,
-                    derivatives: frame.derivative_map(),
+                    frame: Frame { origin: o, to_patch, derivatives: frame.derivative_map() },
                 };
                 self.surfaces.push(surface);
                 Ok(())
@@ -372,7 +418,7 @@ fn limit_point(p: PatchPoint, f: f64, r: [[f64; 2]; 2]) -> LimitPoint {
 /// Describes, for reports, how many faces each route takes.
 impl std::fmt::Display for EigenEvaluator {
     fn fmt(&self, out: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let eigen = self.routes.iter().filter(|r| matches!(r, Route::Eigen { .. })).count();
+        let eigen = self.routes.iter().filter(|r| matches!(r, Route::Patch { .. } | Route::Eigen { .. })).count();
         let stencil = self.routes.iter().filter(|r| matches!(r, Route::Stencil { .. })).count();
         let mut s = String::new();
         let _ = write!(s, "{eigen} faces by eigenbasis, {stencil} by exact stencils ({} patches)", self.surfaces.len());

@@ -80,7 +80,8 @@ pub struct PatchSurface {
 
 #[derive(Clone, Debug)]
 enum Data {
-    Regular(Box<[DVec3]>),
+    /// Inline, so that a face's coefficients are one load away from its surface.
+    Regular([DVec3; 16]),
     Extraordinary(Box<ExtraordinarySurface>),
 }
 
@@ -116,7 +117,13 @@ fn pow2(e: usize) -> f64 {
 impl PatchSurface {
     pub(crate) fn new(basis: Arc<EigenBasis>, points: &[DVec3]) -> Self {
         let data = match &basis.kind {
-            Kind::Regular => Data::Regular(basis.power.coefficients(points).into_boxed_slice()),
+            Kind::Regular => {
+                let mut c = [DVec3::ZERO; 16];
+                for (slot, x) in c.iter_mut().zip(basis.power.coefficients(points)) {
+                    *slot = x;
+                }
+                Data::Regular(c)
+            }
             Kind::Extraordinary(e) => Data::Extraordinary(Box::new(ExtraordinarySurface::new(e, points))),
         };
         Self { basis, data }
@@ -147,7 +154,7 @@ impl PatchSurface {
         Ok(self.eval_second_unchecked(s, t))
     }
 
-    fn triangle(&self) -> bool {
+    pub(crate) fn triangle(&self) -> bool {
         self.basis.power.kind == PolyKind::Quartic
     }
 
@@ -175,7 +182,7 @@ impl PatchSurface {
         let kind = self.basis.power.kind;
         match &self.data {
             Data::Regular(c) => {
-                let [position, ds, dt] = eval1(kind, c, s, t);
+                let [position, ds, dt] = eval1(kind, &c[..kind.monomials()], s, t);
                 PatchPoint { position, ds, dt, exact_derivatives: true }
             }
             Data::Extraordinary(x) => {
@@ -224,7 +231,7 @@ impl PatchSurface {
             dtt: g * p[5],
         };
         match &self.data {
-            Data::Regular(c) => with(eval2(kind, c, s, t), DVec3::ZERO, 1.0, 1.0),
+            Data::Regular(c) => with(eval2(kind, &c[..kind.monomials()], s, t), DVec3::ZERO, 1.0, 1.0),
             Data::Extraordinary(x) => {
                 let Some(at) = self.locate(s, t) else {
                     return PatchPoint2 {
