@@ -173,7 +173,7 @@ impl EigenEvaluator {
                 let surface = &self.surfaces[*surface as usize];
                 let domain = if surface.triangle() { FaceDomain::Triangle } else { FaceDomain::Quad };
                 self.check(face, domain, u, v)?;
-                let (s, t) = frame.to_patch(u, v);
+                let (s, t) = frame.patch_point(u, v);
                 Ok(limit_point(surface.eval_unchecked(s, t), 1.0, frame.derivatives))
             }
             Route::Eigen { node, domain } => {
@@ -198,7 +198,7 @@ impl EigenEvaluator {
                 let surface = &self.surfaces[*surface as usize];
                 let domain = if surface.triangle() { FaceDomain::Triangle } else { FaceDomain::Quad };
                 self.check(face, domain, u, v)?;
-                let (s, t) = frame.to_patch(u, v);
+                let (s, t) = frame.patch_point(u, v);
                 Some((surface, s, t, 1.0, frame.derivatives))
             }
             Route::Eigen { node, domain } => {
@@ -268,7 +268,7 @@ impl EigenEvaluator {
         loop {
             match &self.nodes[node as usize] {
                 Node::Patch { surface, frame } => {
-                    let (s, t) = frame.to_patch(u, v);
+                    let (s, t) = frame.patch_point(u, v);
                     return (&self.surfaces[*surface as usize], s, t, f, frame.derivatives);
                 }
                 Node::Children { first, triangle } => {
@@ -299,7 +299,7 @@ struct Frame {
 
 impl Frame {
     #[inline(always)]
-    fn to_patch(&self, u: f64, v: f64) -> (f64, f64) {
+    fn patch_point(self, u: f64, v: f64) -> (f64, f64) {
         let (x, y, m) = (u - self.origin[0], v - self.origin[1], &self.to_patch);
         (m[0][0] * x + m[0][1] * y, m[1][0] * x + m[1][1] * y)
     }

@@ -78,6 +78,9 @@ pub struct PatchSurface {
     data: Data,
 }
 
+// The regular variant is the common one and is kept inline on purpose (one load less per
+// point); extraordinary faces are few.
+#[allow(clippy::large_enum_variant)]
 #[derive(Clone, Debug)]
 enum Data {
     /// Inline, so that a face's coefficients are one load away from its surface.
