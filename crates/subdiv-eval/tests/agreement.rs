@@ -204,3 +204,24 @@ fn user_errors_are_typed() {
     assert!(matches!(subdiv_eval::EigenBasis::interior(cc, 65), Err(EvalError::Valence { valence: 65, .. })));
     assert!(subdiv_eval::EigenBasis::interior(cc, 2).is_err());
 }
+
+/// Valences 3 to 64 of both schemes have an eigenbasis whose kept part passed the
+/// semisimplicity checks (Auto would otherwise fall back to stencils silently).
+#[test]
+fn every_valence_has_a_semisimple_kept_spectrum() {
+    for scheme in [Builtin::CatmullClark, Builtin::Loop] {
+        // All of 3..=64 in release: `cargo run --release -p subdiv-eval --example spectrum $(seq 3 64)`.
+        for k in (3..=12).chain([16, 23, 32, 64]) {
+            let basis = subdiv_eval::EigenBasis::interior(scheme.scheme(), k).unwrap();
+            let regular = if scheme == Builtin::Loop { 6 } else { 4 };
+            if k == regular {
+                assert!(basis.is_regular());
+                continue;
+            }
+            let s = basis.spectrum().unwrap();
+            assert_eq!(basis.valence(), Some(k));
+            assert!(s.reconstruction < 1e-9 && s.biorthogonality < 1e-8, "{scheme:?} {k}: {s:?}");
+            assert!(s.subdominant > 0.2 && s.subdominant < 1.0, "{scheme:?} {k}: {}", s.subdominant);
+        }
+    }
+}
