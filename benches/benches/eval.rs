@@ -2,7 +2,7 @@
 //! one thread, with first derivatives (`_d1`) and with second derivatives too (`_d2`): on one
 //! regular Catmull-Clark patch, one valence-5 Catmull-Clark patch, one valence-7 Loop patch
 //! (`PatchSurface`, the per-face object), and over whole meshes through `EigenEvaluator`
-//! (random face, random point): a 64 × 64 quad torus and OpenSubdiv's `catmark_righthanded` from the
+//! (random face, random point; and the same points grouped by face, `_by_face`): a 64 × 64 quad torus and OpenSubdiv's `catmark_righthanded` from the
 //! shared corpus (`SUBDIV_SHARED`, default `../shared`; skipped when absent). Points/s = points
 //! / median time. Run with `cargo xtask bench eval`.
 
@@ -82,6 +82,16 @@ fn patches(c: &mut Criterion) {
         group.bench_function(format!("{name}_d1"), |b| {
             b.iter(|| {
                 for &(f, u, v) in &samples {
+                    std::hint::black_box(eval.eval(f, u, v).expect("inside"));
+                }
+            });
+        });
+        // The same points grouped by face, faces in order, as a tessellator asks for them.
+        let mut by_face = samples.clone();
+        by_face.sort_by_key(|&(f, ..)| f.index());
+        group.bench_function(format!("{name}_by_face_d1"), |b| {
+            b.iter(|| {
+                for &(f, u, v) in &by_face {
                     std::hint::black_box(eval.eval(f, u, v).expect("inside"));
                 }
             });

@@ -156,7 +156,7 @@ impl EigenEvaluator {
     fn route(&self, face: FaceId) -> Result<&Route, EvalError> {
         self.routes
             .get(face.index())
-            .ok_or(EvalError::Stencil(StencilError::FaceOutOfRange { face: face.index(), faces: self.routes.len() }))
+            .ok_or_else(|| StencilError::FaceOutOfRange { face: face.index(), faces: self.routes.len() }.into())
     }
 
     /// The limit point of `face` at `(u, v)` with first derivatives.
