@@ -223,6 +223,76 @@ fn eval1_rows<const R: usize>(c: &[DVec3], s: f64, t: f64, row: impl Fn(usize) -
     [p, ps, pt]
 }
 
+/// A point padded to four lanes, so that Horner steps compile to two 2-wide SIMD operations
+/// (SSE2, the baseline) instead of three scalar ones.
+pub(crate) type Lanes = [f64; 4];
+
+/// `a · x + b`, lane by lane.
+#[inline(always)]
+fn lanes_step(a: Lanes, x: f64, b: Lanes) -> Lanes {
+    [a[0] * x + b[0], a[1] * x + b[1], a[2] * x + b[2], a[3] * x + b[3]]
+}
+
+/// A point as [`Lanes`].
+#[inline(always)]
+pub(crate) fn lanes(p: DVec3) -> Lanes {
+    [p.x, p.y, p.z, 0.0]
+}
+
+/// [`eval1`] on coefficients in [`Lanes`]: the hot path.
+#[inline]
+pub(crate) fn eval1_lanes(kind: PolyKind, c: &[Lanes], s: f64, t: f64) -> [DVec3; 3] {
+    let out = match kind {
+        PolyKind::Bicubic => eval1_lanes_rows::<4>(c, s, t, |a| (4 * a, 4)),
+        PolyKind::Quartic => eval1_lanes_rows::<5>(c, s, t, |a| (QUARTIC_ROWS[a], 5 - a)),
+    };
+    out.map(|l| DVec3::new(l[0], l[1], l[2]))
+}
+
+#[inline(always)]
+fn eval1_lanes_rows<const R: usize>(c: &[Lanes], s: f64, t: f64, row: impl Fn(usize) -> (usize, usize)) -> [Lanes; 3] {
+    let zero = [0.0; 4];
+    let (mut p, mut ps, mut pt) = (zero, zero, zero);
+    for a in (0..R).rev() {
+        let (first, count) = row(a);
+        let coefficients = &c[first..first + count];
+        let mut q = coefficients[count - 1];
+        let mut dq = zero;
+        for &x in coefficients[..count - 1].iter().rev() {
+            dq = lanes_step(dq, t, q);
+            q = lanes_step(q, t, x);
+        }
+        ps = lanes_step(ps, s, p);
+        p = lanes_step(p, s, q);
+        pt = lanes_step(pt, s, dq);
+    }
+    [p, ps, pt]
+}
+
+/// [`eval2`] on coefficients in [`Lanes`].
+pub(crate) fn eval2_lanes(kind: PolyKind, c: &[Lanes], s: f64, t: f64) -> [DVec3; 6] {
+    let zero = [0.0; 4];
+    let mut out = [zero; 6];
+    for a in (0..=kind.degree_s()).rev() {
+        let (first, count) = kind.row(a);
+        let coefficients = &c[first..first + count];
+        let (mut q, mut dq, mut ddq) = (coefficients[count - 1], zero, zero);
+        for &x in coefficients[..count - 1].iter().rev() {
+            ddq = lanes_step(ddq, t, dq.map(|d| 2.0 * d));
+            dq = lanes_step(dq, t, q);
+            q = lanes_step(q, t, x);
+        }
+        let [p, ps, pt, pss, pst, ptt] = &mut out;
+        *pss = lanes_step(*pss, s, ps.map(|d| 2.0 * d));
+        *ps = lanes_step(*ps, s, *p);
+        *p = lanes_step(*p, s, q);
+        *pst = lanes_step(*pst, s, *pt);
+        *pt = lanes_step(*pt, s, dq);
+        *ptt = lanes_step(*ptt, s, ddq);
+    }
+    out.map(|l| DVec3::new(l[0], l[1], l[2]))
+}
+
 /// Position, first and second derivatives `[p, ps, pt, pss, pst, ptt]` at `(s, t)`.
 pub(crate) fn eval2(kind: PolyKind, c: &[DVec3], s: f64, t: f64) -> [DVec3; 6] {
     let mut out = [DVec3::ZERO; 6];
@@ -262,6 +332,9 @@ mod tests {
             let m = monomials(kind, s, t);
             let want: [DVec3; 3] = std::array::from_fn(|k| (0..kind.monomials()).map(|i| m[i][k] * c[i]).sum());
             let got = eval1(kind, &c, s, t);
+            let l: Vec<Lanes> = c.iter().map(|&p| lanes(p)).collect();
+            assert_eq!(eval1_lanes(kind, &l, s, t), got);
+            assert_eq!(eval2_lanes(kind, &l, s, t), eval2(kind, &c, s, t));
             let second = eval2(kind, &c, s, t);
             // Second derivatives against central differences of the first.
             let h = 1e-5;

@@ -9,7 +9,7 @@ use subdiv_stencil::StencilError;
 
 use crate::EvalError;
 use crate::basis::{DIRECT_LEVELS, EigenBasis, Extraordinary, Kind};
-use crate::poly::{PolyKind, eval1, eval2};
+use crate::poly::{Lanes, PolyKind, eval1, eval1_lanes, eval2, eval2_lanes, lanes};
 
 /// Levels of sub-patches around the extraordinary vertex whose coefficients each face keeps
 /// (a uniformly random point lands deeper with probability `4^−8`); deeper ones are computed
@@ -84,7 +84,7 @@ pub struct PatchSurface {
 #[derive(Clone, Debug)]
 enum Data {
     /// Inline, so that a face's coefficients are one load away from its surface.
-    Regular([DVec3; 16]),
+    Regular([Lanes; 16]),
     Extraordinary(Box<ExtraordinarySurface>),
 }
 
@@ -93,7 +93,7 @@ struct ExtraordinarySurface {
     limit: DVec3,
     tangents: [DVec3; 2],
     /// Coefficients less the limit, level `j < STORED_LEVELS`, child `b`: at `(3j + b)·n`.
-    levels: Box<[DVec3]>,
+    levels: Box<[Lanes]>,
     /// `A^STORED_LEVELS · (C − limit)`.
     deep_start: Box<[DVec3]>,
     /// `y_i · (C − limit)` per kept eigenvalue but 1, as (re, im).
@@ -121,9 +121,9 @@ impl PatchSurface {
     pub(crate) fn new(basis: Arc<EigenBasis>, points: &[DVec3]) -> Self {
         let data = match &basis.kind {
             Kind::Regular => {
-                let mut c = [DVec3::ZERO; 16];
+                let mut c = [[0.0; 4]; 16];
                 for (slot, x) in c.iter_mut().zip(basis.power.coefficients(points)) {
-                    *slot = x;
+                    *slot = lanes(x);
                 }
                 Data::Regular(c)
             }
@@ -185,7 +185,7 @@ impl PatchSurface {
         let kind = self.basis.power.kind;
         match &self.data {
             Data::Regular(c) => {
-                let [position, ds, dt] = eval1(kind, &c[..kind.monomials()], s, t);
+                let [position, ds, dt] = eval1_lanes(kind, &c[..kind.monomials()], s, t);
                 PatchPoint { position, ds, dt, exact_derivatives: true }
             }
             Data::Extraordinary(x) => {
@@ -200,7 +200,7 @@ impl PatchSurface {
                 let n = kind.monomials();
                 if at.level < STORED_LEVELS {
                     let start = (3 * at.level + at.child) * n;
-                    let [p, pu, pv] = eval1(kind, &x.levels[start..start + n], at.u, at.v);
+                    let [p, pu, pv] = eval1_lanes(kind, &x.levels[start..start + n], at.u, at.v);
                     let f = at.sign * pow2(at.level + 1);
                     return PatchPoint { position: x.limit + p, ds: f * pu, dt: f * pv, exact_derivatives: true };
                 }
@@ -234,7 +234,7 @@ impl PatchSurface {
             dtt: g * p[5],
         };
         match &self.data {
-            Data::Regular(c) => with(eval2(kind, &c[..kind.monomials()], s, t), DVec3::ZERO, 1.0, 1.0),
+            Data::Regular(c) => with(eval2_lanes(kind, &c[..kind.monomials()], s, t), DVec3::ZERO, 1.0, 1.0),
             Data::Extraordinary(x) => {
                 let Some(at) = self.locate(s, t) else {
                     return PatchPoint2 {
@@ -248,7 +248,7 @@ impl PatchSurface {
                 let f = at.sign * pow2(at.level + 1);
                 if at.level < STORED_LEVELS {
                     let start = (3 * at.level + at.child) * n;
-                    return with(eval2(kind, &x.levels[start..start + n], at.u, at.v), x.limit, f, f * f);
+                    return with(eval2_lanes(kind, &x.levels[start..start + n], at.u, at.v), x.limit, f, f * f);
                 }
                 let e = self.extraordinary();
                 let mut c = [DVec3::ZERO; 16];
@@ -326,7 +326,7 @@ impl ExtraordinarySurface {
                     child
                         .to_power
                         .chunks_exact(size)
-                        .map(|row| row.iter().zip(&d).map(|(&w, &p)| w * p).sum::<DVec3>()),
+                        .map(|row| lanes(row.iter().zip(&d).map(|(&w, &p)| w * p).sum::<DVec3>())),
                 );
             }
             d = multiply(&e.a, &d);
