@@ -3,7 +3,7 @@
 //! - `cargo xtask ci` runs what `.ci/run` runs after installing packages: `cargo fmt --check`,
 //!   clippy with warnings denied, and the README's test command.
 //! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named: `topology`,
-//!   `refine` or `stencil`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
+//!   `refine`, `stencil` or `eval`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
@@ -22,7 +22,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil] | cargo xtask paper | cargo xtask adaptive [--samples N] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask paper | cargo xtask adaptive [--samples N] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -80,7 +80,8 @@ fn ci() -> Result<(), String> {
 }
 
 /// What each bench measures, for its `key=value` line: (bench target, criterion group).
-const BENCHES: &[(&str, &str)] = &[("topology", "topology"), ("refine", "refine"), ("stencil", "stencil")];
+const BENCHES: &[(&str, &str)] =
+    &[("topology", "topology"), ("refine", "refine"), ("stencil", "stencil"), ("eval", "eval")];
 
 fn bench(only: Option<&str>) -> Result<(), String> {
     let selected: Vec<_> = BENCHES.iter().filter(|(name, _)| only.is_none_or(|o| o == *name)).collect();
@@ -108,7 +109,16 @@ fn report(group: &str) -> Result<(), String> {
         let estimates: serde_json::Value = serde_json::from_str(&text).map_err(|e| e.to_string())?;
         let median_ns = estimates["median"]["point_estimate"].as_f64().ok_or("estimates.json has no median")?;
         let name = id.file_name().unwrap_or_default().to_string_lossy();
-        println!("bench={group} id={name} median_s={:.6} threads=1", median_ns * 1e-9);
+        let line = format!("bench={group} id={name} median_s={:.6} threads=1", median_ns * 1e-9);
+        // Benches that set a throughput in elements report it per second too.
+        let bench = std::fs::read_to_string(id.join("new/benchmark.json")).ok();
+        let elements = bench
+            .and_then(|t| serde_json::from_str::<serde_json::Value>(&t).ok())
+            .and_then(|b| b["throughput"]["Elements"].as_f64());
+        match elements {
+            Some(n) => println!("{line} elements_per_s={:.0}", n / (median_ns * 1e-9)),
+            None => println!("{line}"),
+        }
     }
     Ok(())
 }

@@ -5,9 +5,10 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use subdiv::eval::{EigenEvaluator, EvalError, Method};
 use subdiv::mesh::{BoundaryInterpolation, FaceId};
 use subdiv::schemes::RefineOptions;
-use subdiv::stencil::{LimitEvaluator, LimitPoint, StencilError};
+use subdiv::stencil::{LimitPoint, StencilError};
 
 use crate::UserError;
 use crate::input::LoadedMesh;
@@ -34,6 +35,11 @@ pub(crate) struct EvalArgs {
     /// Boundary interpolation; default: the file's `interpolateboundary` tag, else edge-only.
     #[arg(long, value_enum)]
     boundary: Option<Boundary>,
+    /// Evaluation method: `eigen` (eigenbasis, Stam / Lai-Cheng; faces it cannot take are
+    /// errors), `stencil` (exact stencils) or `auto` (eigenbasis where the face's patches are
+    /// interior Catmull-Clark or Loop-like ones, exact stencils elsewhere).
+    #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
+    method: MethodArg,
     /// Output CSV file (written atomically); standard output when omitted.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -45,6 +51,14 @@ enum Boundary {
     EdgeOnly,
     EdgeAndCorner,
     None,
+}
+
+/// `--method`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum MethodArg {
+    Eigen,
+    Stencil,
+    Auto,
 }
 
 /// One output row: the face, its parameters as printed, and the limit point.
@@ -62,16 +76,35 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
         ..RefineOptions::DEFAULT
     };
     let start = Instant::now();
-    let evaluator = LimitEvaluator::new(&scheme, &mesh, &options)
+    let method = match args.method {
+        MethodArg::Eigen => Method::Eigen,
+        MethodArg::Stencil => Method::Stencil,
+        MethodArg::Auto => Method::Auto,
+    };
+    let evaluator = EigenEvaluator::new(&scheme, &mesh, &options, method)
         .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
     let mut skipped = 0;
     let rows = match (args.grid, &args.samples) {
         (Some(n), _) => {
             let mut rows = Vec::new();
+            let named = |error: EvalError| UserError(format!("{}: {error}", loaded.name));
+            let exact = evaluator.stencil();
             for face in mesh.face_ids() {
-                let points = evaluator.grid(face, n).map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
-                skipped += usize::from(points.is_empty());
-                rows.extend(points.into_iter().map(|(g, p)| (face.index(), g.u, g.v, p)));
+                if method == Method::Stencil {
+                    // Exact rational grid points, as before there was a choice.
+                    let points = exact.grid(face, n).map_err(|e| named(e.into()))?;
+                    skipped += usize::from(points.is_empty());
+                    rows.extend(points.into_iter().map(|(g, p)| (face.index(), g.u, g.v, p)));
+                    continue;
+                }
+                if !exact.has_surface(face).map_err(|e| named(e.into()))? {
+                    skipped += 1;
+                    continue;
+                }
+                // The eigenbasis takes the f64 parameters printed.
+                for g in exact.domain(face).map_err(|e| named(e.into()))?.grid(n) {
+                    rows.push((face.index(), g.u, g.v, evaluator.eval(face, g.u, g.v).map_err(named)?));
+                }
             }
             rows
         }
@@ -82,7 +115,7 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
                 match evaluator.eval(face, u, v) {
                     Ok(point) => rows.push((face.index(), u, v, point)),
                     // Checked after the point's domain: a hole skips only valid samples.
-                    Err(StencilError::NoSurface { .. }) => skipped += 1,
+                    Err(EvalError::Stencil(StencilError::NoSurface { .. })) => skipped += 1,
                     Err(error) => return Err(UserError(format!("{}:{line}: {error}", path.display()))),
                 }
             }

@@ -2,9 +2,9 @@
 //!
 //! This facade re-exports the workspace's crates under one name: half-edge topology ([`mesh`]),
 //! mesh files ([`io`]), refinement with OpenSubdiv's rules ([`schemes`]) and exact limit
-//! stencils at rational parameters ([`stencil`]) and tessellation with a guaranteed distance
-//! bound ([`tess`]). Evaluation and the GPU backend arrive as their own crates and are
-//! re-exported here.
+//! stencils at rational parameters ([`stencil`]), eigenbasis evaluation of Catmull-Clark and
+//! Loop at any real parameter ([`eval`]) and tessellation with a guaranteed distance bound
+//! ([`tess`]). The GPU backend arrives as its own crate and is re-exported here.
 //!
 //! ```
 //! use subdiv::mesh::{shapes, Mesh, RegularValence};
@@ -15,6 +15,7 @@
 //! # Ok::<(), subdiv::mesh::MeshError>(())
 //! ```
 
+pub use subdiv_eval as eval;
 pub use subdiv_io as io;
 pub use subdiv_mesh as mesh;
 pub use subdiv_schemes as schemes;

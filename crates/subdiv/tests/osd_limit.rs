@@ -14,6 +14,10 @@
 //!   k = 1..14, show how far Bfr's Gregory patches (within 2^-10 of an EV at approximation
 //!   level 10) are from the exact surface: printed, and only sanity-checked (1e-3).
 //!
+//! The eigenbasis route ([`EigenEvaluator`], `Method::Auto`: eigenbasis on interior patches,
+//! exact stencils on boundary ones) is held to the same bounds at the same points, given the
+//! printed f64 parameters.
+//!
 //! `osd_limit` is named by `SUBDIV_OSD_LIMIT` (`.ci/run` builds it outside the repository); when
 //! the variable is unset the test says so and does not run; when it is set, the program and the
 //! shared meshes must exist.
@@ -25,6 +29,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use subdiv::DVec3;
+use subdiv::eval::{EigenEvaluator, Method};
 use subdiv::mesh::{BoundaryInterpolation, FaceId};
 use subdiv::schemes::{Builtin, RefineOptions};
 use subdiv::stencil::{Dyadic, FaceDomain, LimitEvaluator, LimitPoint};
@@ -93,6 +98,8 @@ fn compare_mesh(
     let mesh = subdiv::io::load_mesh(path, &Default::default()).unwrap();
     let options = RefineOptions { boundary, ..RefineOptions::DEFAULT };
     let eval = LimitEvaluator::new(scheme.scheme(), &mesh, &options).unwrap();
+    let eigen = EigenEvaluator::new(scheme.scheme(), &mesh, &options, Method::Auto).unwrap();
+    let mut eigen_away = Max::default();
     let boundary_args: Vec<&str> = match boundary {
         None => vec![],
         Some(BoundaryInterpolation::None) => vec!["--boundary", "none"],
@@ -119,6 +126,18 @@ fn compare_mesh(
             assert_eq!((*face, g.u, g.v), (o.face, o.u, o.v), "{place}: rows in osd_limit's order");
             let dp = (p.position - o.p).length();
             assert!(dp <= tolerance, "{place}: position differs by {dp:e}");
+            let e = eigen.eval(FaceId::new(*face as u32), g.u, g.v).unwrap();
+            let de = (e.position - o.p).length();
+            assert!(de <= tolerance, "{place}: eigenbasis position differs by {de:e}");
+            assert_eq!(e.exact_derivatives, p.exact_derivatives, "{place}: eigenbasis");
+            if e.exact_derivatives {
+                let dd = (e.du - o.du).length().max((e.dv - o.dv).length());
+                assert!(dd <= tolerance, "{place}: eigenbasis derivatives differ by {dd:e}");
+                eigen_away.position = eigen_away.position.max(de);
+                eigen_away.derivative = eigen_away.derivative.max(dd);
+            } else if let Some(angle) = normal_angle(&e, o) {
+                assert!(angle <= 1e-5, "{place}: eigenbasis normals differ by {angle:e} rad");
+            }
             if p.exact_derivatives {
                 let dd = (p.du - o.du).length().max((p.dv - o.dv).length());
                 assert!(dd <= tolerance, "{place}: derivatives differ by {dd:e}");
@@ -145,8 +164,9 @@ fn compare_mesh(
     writeln!(
         report,
         "{name} ({osd_scheme}, grids {grids:?}): away from EVs max |Δp| {:.1e}, |Δd| {:.1e}; at {ev_points} EV points \
-         max |Δp| {at_ev:.1e}, normal angle {worst_angle:.1e} rad (tolerance {tolerance:.1e})",
-        away.position, away.derivative
+         max |Δp| {at_ev:.1e}, normal angle {worst_angle:.1e} rad (tolerance {tolerance:.1e}); eigenbasis away \
+         from EVs max |Δp| {:.1e}, |Δd| {:.1e} ({eigen})",
+        away.position, away.derivative, eigen_away.position, eigen_away.derivative
     )
     .unwrap();
 
@@ -196,6 +216,9 @@ fn compare_mesh(
         if *k <= 9 {
             let dd = (p.du - o.du).length().max((p.dv - o.dv).length());
             assert!(dp <= tolerance && dd <= tolerance, "{place}: |Δp| {dp:e}, |Δd| {dd:e} (Bfr is exact here)");
+            let e = eigen.eval(*f, o.u, o.v).unwrap();
+            let (de, dd) = ((e.position - o.p).length(), (e.du - o.du).length().max((e.dv - o.dv).length()));
+            assert!(de <= tolerance && dd <= tolerance, "{place}: eigenbasis |Δp| {de:e}, |Δd| {dd:e}");
         }
         by_k[*k].0 = by_k[*k].0.max(dp);
         by_k[*k].1 = by_k[*k].1.max(angle);
