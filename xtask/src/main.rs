@@ -7,7 +7,7 @@
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
-//! - `cargo xtask adaptive [--samples N]` prints paper 002's Table 1 for the quadtree
+//! - `cargo xtask adaptive [--samples N] [--all]` prints paper 002's Table 1 for the quadtree
 //!   tessellator (adaptive against uniform polygons, with the measured worst distance / ε on an
 //!   N × N grid per face, default 67; 0 skips it). Run it in release.
 //! - `cargo xtask tables [--check]` regenerates the committed default stencil tables (or checks
@@ -22,7 +22,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask paper | cargo xtask adaptive [--samples N] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask paper | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -31,11 +31,26 @@ fn main() -> ExitCode {
         Some("ci") => ci(),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("paper") => paper::run(),
-        Some("adaptive") => match (args.get(1).map(String::as_str), args.get(2).map(|n| n.parse::<u32>())) {
-            (None, _) => adaptive::run(67),
-            (Some("--samples"), Some(Ok(n))) => adaptive::run(n),
-            _ => Err("usage: cargo xtask adaptive [--samples N]".to_string()),
-        },
+        Some("adaptive") => {
+            let mut samples = 67;
+            let mut all = false;
+            let mut rest = args[1..].iter();
+            let mut bad = None;
+            while let Some(a) = rest.next() {
+                match (a.as_str(), rest.clone().next().map(|n| n.parse::<u32>())) {
+                    ("--all", _) => all = true,
+                    ("--samples", Some(Ok(n))) => {
+                        samples = n;
+                        rest.next();
+                    }
+                    _ => bad = Some(a.clone()),
+                }
+            }
+            match bad {
+                None => adaptive::run(samples, all),
+                Some(a) => Err(format!("unknown option {a:?}; usage: cargo xtask adaptive [--samples N] [--all]")),
+            }
+        }
         Some("tables") => match args.get(1).map(String::as_str) {
             None => tables::run(false),
             Some("--check") => tables::run(true),

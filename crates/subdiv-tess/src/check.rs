@@ -45,6 +45,12 @@ impl LimitSamples {
         Ok(Self { faces, cell: 0.5 / f64::from(n) })
     }
 
+    /// Samples computed elsewhere (another evaluator of the same parameterization): per face,
+    /// `(u, v, position)` on the `--grid n` of that face.
+    pub fn from_samples(faces: Vec<Vec<(f64, f64, DVec3)>>, n: u32) -> Self {
+        Self { faces, cell: 0.5 / f64::from(n.max(1)) }
+    }
+
     /// The parametric distance of `tess`'s triangles to the samples: each sample against every
     /// triangle of its face whose parameter triangle contains it.
     pub fn measure(&self, tess: &TessMesh) -> Measured {
