@@ -90,6 +90,11 @@ enum Data {
 
 #[derive(Clone, Debug)]
 struct ExtraordinarySurface {
+    /// Per quadrant code of a first-ring point (`s ≥ ½`, `t ≥ ½` as bits): its child and map,
+    /// copied from the basis so that locating a point reads nothing behind another pointer.
+    steps: [Step; 4],
+    /// Whether the domain is a triangle (the ring key is `s + t`, not `max(s, t)`).
+    triangle: bool,
     limit: DVec3,
     tangents: [DVec3; 2],
     /// Coefficients less the limit, level `j < STORED_LEVELS`, child `b`: at `(3j + b)·n`.
@@ -98,6 +103,15 @@ struct ExtraordinarySurface {
     deep_start: Box<[DVec3]>,
     /// `y_i · (C − limit)` per kept eigenvalue but 1, as (re, im).
     modes: Box<[(DVec3, DVec3)]>,
+}
+
+/// One entry of [`ExtraordinarySurface::steps`]: the child's parameters are
+/// `sign · (2·(s, t) − offset)` ([`ChildDomain::to_child`](subdiv_schemes::ChildDomain::to_child)).
+#[derive(Clone, Copy, Debug)]
+struct Step {
+    child: usize,
+    offset: [f64; 2],
+    sign: f64,
 }
 
 /// Where a point lies among the rings of sub-patches.
@@ -127,7 +141,11 @@ impl PatchSurface {
                 }
                 Data::Regular(c)
             }
-            Kind::Extraordinary(e) => Data::Extraordinary(Box::new(ExtraordinarySurface::new(e, points))),
+            Kind::Extraordinary(e) => Data::Extraordinary(Box::new(ExtraordinarySurface::new(
+                e,
+                points,
+                basis.power.kind == PolyKind::Quartic,
+            ))),
         };
         Self { basis, data }
     }
@@ -189,7 +207,7 @@ impl PatchSurface {
                 PatchPoint { position, ds, dt, exact_derivatives: true }
             }
             Data::Extraordinary(x) => {
-                let Some(at) = self.locate(s, t) else {
+                let Some(at) = x.locate(s, t) else {
                     return PatchPoint {
                         position: x.limit,
                         ds: x.tangents[0],
@@ -236,7 +254,7 @@ impl PatchSurface {
         match &self.data {
             Data::Regular(c) => with(eval2_lanes(kind, &c[..kind.monomials()], s, t), DVec3::ZERO, 1.0, 1.0),
             Data::Extraordinary(x) => {
-                let Some(at) = self.locate(s, t) else {
+                let Some(at) = x.locate(s, t) else {
                     return PatchPoint2 {
                         first: self.eval_unchecked(s, t),
                         dss: DVec3::ZERO,
@@ -271,13 +289,15 @@ impl PatchSurface {
             Kind::Regular => unreachable!("extraordinary data comes from an extraordinary basis"),
         }
     }
+}
 
+impl ExtraordinarySurface {
     /// The ring, sub-patch and child parameters of `(s, t)`; `None` at the vertex. The ring
     /// comes from the exponent of `max(s, t)` (quads) or `s + t` (triangles): scaled by
     /// `2^level` the point lies in the first ring, `[½, 1]`.
     #[inline(always)]
     fn locate(&self, s: f64, t: f64) -> Option<Located> {
-        let key = if self.triangle() { s + t } else { s.max(t) };
+        let key = if self.triangle { s + t } else { s.max(t) };
         if key <= 0.0 {
             return None;
         }
@@ -287,24 +307,28 @@ impl PatchSurface {
             0 => 1022 + 64 - biased(key * pow2(64)),
             e => 1022usize.saturating_sub(e),
         };
+        // One multiplication (exact: a power of two) but for keys below 2^-1000.
         let (mut s, mut t) = (s, t);
         let mut rest = level;
-        while rest > 0 {
+        loop {
             let step = rest.min(1000);
             (s, t) = (s * pow2(step), t * pow2(step));
             rest -= step;
+            if rest == 0 {
+                break;
+            }
         }
-        let code = usize::from(s >= 0.5) | usize::from(t >= 0.5) << 1;
-        let e = self.extraordinary();
-        let child = usize::from(e.lookup[code]);
-        let domain = e.children[child].domain;
-        let (u, v) = domain.to_child(s, t);
-        Some(Located { level, child, u, v, sign: if domain.flipped { -1.0 } else { 1.0 } })
+        let step = self.steps[usize::from(s >= 0.5) | usize::from(t >= 0.5) << 1];
+        Some(Located {
+            level,
+            child: step.child,
+            u: step.sign * (2.0 * s - step.offset[0]),
+            v: step.sign * (2.0 * t - step.offset[1]),
+            sign: step.sign,
+        })
     }
-}
 
-impl ExtraordinarySurface {
-    fn new(e: &Extraordinary, points: &[DVec3]) -> Self {
+    fn new(e: &Extraordinary, points: &[DVec3], triangle: bool) -> Self {
         let size = points.len();
         let limit: DVec3 = e.limit.iter().zip(points).map(|(&w, &p)| w * p).sum();
         let apply = |w: &[f64]| -> DVec3 { w.iter().zip(points).map(|(&w, &p)| w * p).sum() };
@@ -331,7 +355,20 @@ impl ExtraordinarySurface {
             }
             d = multiply(&e.a, &d);
         }
-        Self { limit, tangents, levels: levels.into_boxed_slice(), deep_start: d.into_boxed_slice(), modes }
+        let steps = e.lookup.map(|child| {
+            let child = usize::from(child);
+            let domain = e.children[child].domain;
+            Step { child, offset: domain.offset.map(f64::from), sign: if domain.flipped { -1.0 } else { 1.0 } }
+        });
+        Self {
+            steps,
+            triangle,
+            limit,
+            tangents,
+            levels: levels.into_boxed_slice(),
+            deep_start: d.into_boxed_slice(),
+            modes,
+        }
     }
 
     /// The coefficients (less the limit) at `level` in `[STORED_LEVELS, DIRECT_LEVELS)`, by
