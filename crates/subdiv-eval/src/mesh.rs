@@ -3,7 +3,7 @@
 use std::fmt::Write as _;
 
 use subdiv_mesh::{DVec3, FaceId, Mesh};
-use subdiv_schemes::{ChildDomain, RefineOptions, Scheme};
+use subdiv_schemes::{RefineOptions, Scheme};
 use subdiv_stencil::{Dyadic, FaceDomain, LimitEvaluator, LimitPoint, PatchLevels, Resolved, StencilError};
 
 use crate::surface::{PatchPoint, PatchPoint2};
@@ -193,48 +193,41 @@ impl EigenEvaluator {
     /// As [`eval`](Self::eval); [`EvalError::NoSecondDerivatives`] for a face evaluated by
     /// stencils.
     pub fn eval_second(&self, face: FaceId, u: f64, v: f64) -> Result<LimitPoint2, EvalError> {
-        let found = match self.route(face)? {
+        let (surface, s, t, f, r) = match self.route(face)? {
             Route::Patch { surface, frame } => {
                 let surface = &self.surfaces[*surface as usize];
                 let domain = if surface.triangle() { FaceDomain::Triangle } else { FaceDomain::Quad };
                 self.check(face, domain, u, v)?;
                 let (s, t) = frame.patch_point(u, v);
-                Some((surface, s, t, 1.0, frame.derivatives))
+                (surface, s, t, 1.0, frame.derivatives)
             }
             Route::Eigen { node, domain } => {
                 self.check(face, *domain, u, v)?;
-                Some(self.descend(*node, *domain, u, v))
-            }
-            _ => None,
-        };
-        match self.route(face)? {
-            Route::Patch { .. } | Route::Eigen { .. } => {
-                let (surface, s, t, f, r) = found.expect("found above for patches");
-                let PatchPoint2 { first, dss, dst, dtt } = surface.eval_second_unchecked(s, t);
-                let g = f * f;
-                let [a, b] = r;
-                Ok(LimitPoint2 {
-                    first: limit_point(first, f, r),
-                    duu: g * (a[0] * a[0] * dss + 2.0 * a[0] * a[1] * dst + a[1] * a[1] * dtt),
-                    duv: g * (a[0] * b[0] * dss + (a[0] * b[1] + a[1] * b[0]) * dst + a[1] * b[1] * dtt),
-                    dvv: g * (b[0] * b[0] * dss + 2.0 * b[0] * b[1] * dst + b[1] * b[1] * dtt),
-                })
+                self.descend(*node, *domain, u, v)
             }
             Route::Stencil { reason } => {
                 // Input errors first, as eval would report them.
                 self.by_stencil(face, reason, u, v)?;
-                Err(EvalError::NoSecondDerivatives {
+                return Err(EvalError::NoSecondDerivatives {
                     face: face.index(),
                     reason: reason.clone().unwrap_or_else(|| "method stencil".to_string()),
-                })
+                });
             }
-            Route::Hole => Err(StencilError::NoSurface { face: face.index() }.into()),
-        }
+            Route::Hole => return Err(StencilError::NoSurface { face: face.index() }.into()),
+        };
+        let PatchPoint2 { first, dss, dst, dtt } = surface.eval_second_unchecked(s, t);
+        let g = f * f;
+        let [a, b] = r;
+        Ok(LimitPoint2 {
+            first: limit_point(first, f, r),
+            duu: g * (a[0] * a[0] * dss + 2.0 * a[0] * a[1] * dst + a[1] * a[1] * dtt),
+            duv: g * (a[0] * b[0] * dss + (a[0] * b[1] + a[1] * b[0]) * dst + a[1] * b[1] * dtt),
+            dvv: g * (b[0] * b[0] * dss + 2.0 * b[0] * b[1] * dst + b[1] * b[1] * dtt),
+        })
     }
 
     fn by_stencil(&self, face: FaceId, reason: &Option<String>, u: f64, v: f64) -> Result<LimitPoint, EvalError> {
         if self.method == Method::Eigen {
-            self.stencil.domain(face)?;
             let domain = self.stencil.domain(face)?;
             self.check(face, domain, u, v)?;
             let reason = reason.clone().unwrap_or_default();
@@ -244,7 +237,7 @@ impl EigenEvaluator {
     }
 
     fn check(&self, face: FaceId, domain: FaceDomain, u: f64, v: f64) -> Result<(), EvalError> {
-        if contains(domain, u, v) {
+        if domain.contains_f64(u, v) {
             return Ok(());
         }
         Err(StencilError::OutsideFace {
@@ -260,11 +253,7 @@ impl EigenEvaluator {
     /// descent's derivatives and the frame's derivative rows.
     #[inline(always)]
     fn descend(&self, node: u32, domain: FaceDomain, u: f64, v: f64) -> (&PatchSurface, f64, f64, f64, [[f64; 2]; 2]) {
-        let (mut node, mut u, mut v, mut f) = (node, u, v, 1.0);
-        let mut sub_faces = match domain {
-            FaceDomain::SubFaces { columns, .. } => Some(columns),
-            _ => None,
-        };
+        let (mut node, mut u, mut v, mut f, mut domain) = (node, u, v, 1.0, domain);
         loop {
             match &self.nodes[node as usize] {
                 Node::Patch { surface, frame } => {
@@ -272,16 +261,10 @@ impl EigenEvaluator {
                     return (&self.surfaces[*surface as usize], s, t, f, frame.derivatives);
                 }
                 Node::Children { first, triangle } => {
-                    let (child, cu, cv, factor) = match sub_faces.take() {
-                        Some(columns) => {
-                            let (tu, tv) = (u.floor().max(0.0), v.floor().max(0.0));
-                            let sub = tv as usize * columns + tu as usize;
-                            (sub, 2.0 * (u - tu), 2.0 * (v - tv), 2.0)
-                        }
-                        None => child_of(*triangle, u, v),
-                    };
+                    let (child, cu, cv, factor) = domain.child_of_f64(u, v);
                     node = first + child as u32;
                     (u, v, f) = (cu, cv, f * factor);
+                    domain = if *triangle { FaceDomain::Triangle } else { FaceDomain::Quad };
                 }
             }
         }
@@ -354,52 +337,6 @@ impl Tree {
                 self.surfaces.push(surface);
                 Ok(())
             }
-        }
-    }
-}
-
-/// The child of a quad or triangle holding `(u, v)` (the first in the engine's order on a
-/// border), the point in its parameters, and the derivative factor (−2 for the turned middle
-/// triangle).
-#[inline(always)]
-fn child_of(triangle: bool, u: f64, v: f64) -> (usize, f64, f64, f64) {
-    let child = if triangle {
-        if u + v <= 0.5 {
-            0
-        } else if u >= 0.5 {
-            1
-        } else if v >= 0.5 {
-            2
-        } else {
-            3
-        }
-    } else {
-        match (u <= 0.5, v <= 0.5) {
-            (true, true) => 0,
-            (false, true) => 1,
-            (false, false) => 2,
-            (true, false) => 3,
-        }
-    };
-    let domain: ChildDomain = ChildDomain::of_face(if triangle { 3 } else { 4 })[child];
-    let (cu, cv) = domain.to_child(u, v);
-    (child, cu, cv, if domain.flipped { -2.0 } else { 2.0 })
-}
-
-/// Whether `(u, v)` lies in `domain` (false for non-finite values).
-fn contains(domain: FaceDomain, u: f64, v: f64) -> bool {
-    if !(u >= 0.0 && v >= 0.0 && u.is_finite() && v.is_finite()) {
-        return false;
-    }
-    match domain {
-        FaceDomain::Quad => u <= 1.0 && v <= 1.0,
-        FaceDomain::Triangle => u + v <= 1.0,
-        FaceDomain::SubFaces { size, columns } => {
-            let (tu, tv) = (u.floor(), v.floor());
-            tu < columns as f64
-                && tv * (columns as f64) + tu < size as f64
-                && 2.0 * (u - tu) <= 1.0
-                && 2.0 * (v - tv) <= 1.0
         }
     }
 }

@@ -110,6 +110,24 @@ impl FaceDomain {
         }
     }
 
+    /// [`contains`](Self::contains) for f64 parameters (false for non-finite values).
+    pub fn contains_f64(self, u: f64, v: f64) -> bool {
+        if !(u >= 0.0 && v >= 0.0 && u.is_finite() && v.is_finite()) {
+            return false;
+        }
+        match self {
+            Self::Quad => u <= 1.0 && v <= 1.0,
+            Self::Triangle => u + v <= 1.0,
+            Self::SubFaces { size, columns } => {
+                let (tu, tv) = (u.floor(), v.floor());
+                tu < columns as f64
+                    && tv * (columns as f64) + tu < size as f64
+                    && 2.0 * (u - tu) <= 1.0
+                    && 2.0 * (v - tv) <= 1.0
+            }
+        }
+    }
+
     /// The domain in words, for error messages.
     pub fn describe(self) -> String {
         match self {
@@ -141,6 +159,45 @@ impl FaceDomain {
                 let (tu, tv) = (u / q, v / q);
                 let sub = tv as usize * columns + tu as usize;
                 (sub, Dyadic::new(2 * (u - tu * q), 2 * (v - tv * q), q), 2.0)
+            }
+        }
+    }
+
+    /// [`child_of`](Self::child_of) for f64 parameters, for evaluators that do not need exact
+    /// points: the child holding `(u, v)` (on a border, the first in the engine's order, as the
+    /// exact address's first step chooses), the point in its parameters, and the derivative
+    /// factor.
+    #[inline]
+    pub fn child_of_f64(self, u: f64, v: f64) -> (usize, f64, f64, f64) {
+        match self {
+            Self::Quad | Self::Triangle => {
+                let triangle = self == Self::Triangle;
+                let child = if triangle {
+                    if u + v <= 0.5 {
+                        0
+                    } else if u >= 0.5 {
+                        1
+                    } else if v >= 0.5 {
+                        2
+                    } else {
+                        3
+                    }
+                } else {
+                    match (u <= 0.5, v <= 0.5) {
+                        (true, true) => 0,
+                        (false, true) => 1,
+                        (false, false) => 2,
+                        (true, false) => 3,
+                    }
+                };
+                let domain = ChildDomain::of_face(if triangle { 3 } else { 4 })[child];
+                let (cu, cv) = domain.to_child(u, v);
+                (child, cu, cv, if domain.flipped { -2.0 } else { 2.0 })
+            }
+            Self::SubFaces { columns, .. } => {
+                let (tu, tv) = (u.floor().max(0.0), v.floor().max(0.0));
+                let sub = tv as usize * columns + tu as usize;
+                (sub, 2.0 * (u - tu), 2.0 * (v - tv), 2.0)
             }
         }
     }
