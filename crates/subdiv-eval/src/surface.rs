@@ -125,6 +125,12 @@ struct Located {
     sign: f64,
 }
 
+/// The biased exponent field of `x` (0 for zero and subnormals, 1023 for `[1, 2)`).
+#[inline(always)]
+fn biased_exponent(x: f64) -> usize {
+    ((x.to_bits() >> 52) & 0x7ff) as usize
+}
+
 /// `2^e` for `0 ≤ e ≤ 1023`, from its bits.
 #[inline(always)]
 fn pow2(e: usize) -> f64 {
@@ -301,31 +307,53 @@ impl ExtraordinarySurface {
         if key <= 0.0 {
             return None;
         }
-        let biased = |x: f64| ((x.to_bits() >> 52) & 0x7ff) as usize;
-        let level = match biased(key) {
+        let e = biased_exponent(key);
+        if e <= 22 {
+            return Some(self.locate_deep(s, t, key));
+        }
+        // `key · 2^level ∈ [½, 1]`: the level from the exponent alone. The quadrant test
+        // `s · 2^level ≥ ½` is `s`'s exponent reaching `key`'s (capped at ½'s for level 0),
+        // in integers, so that the table read does not wait for a multiplication.
+        let level = 1022usize.saturating_sub(e);
+        let floor = e.min(1022);
+        let code = usize::from(biased_exponent(s) >= floor) | usize::from(biased_exponent(t) >= floor) << 1;
+        // Exact: a power of two (level ≤ 1000), computed beside the table read.
+        let scale = pow2(level + 1);
+        let (s, t) = (s * scale, t * scale);
+        let step = self.steps[code];
+        Some(Located {
+            level,
+            child: step.child,
+            u: step.sign * (s - step.offset[0]),
+            v: step.sign * (t - step.offset[1]),
+            sign: step.sign,
+        })
+    }
+
+    /// [`locate`](Self::locate) for keys below `2^−1000` (subnormal ones included), scaled in
+    /// steps that each stay exact.
+    #[cold]
+    fn locate_deep(&self, s: f64, t: f64, key: f64) -> Located {
+        let level = match biased_exponent(key) {
             // Subnormal: scale into the normal range first.
-            0 => 1022 + 64 - biased(key * pow2(64)),
-            e => 1022usize.saturating_sub(e),
+            0 => 1022 + 64 - biased_exponent(key * pow2(64)),
+            e => 1022 - e,
         };
-        // One multiplication (exact: a power of two) but for keys below 2^-1000.
         let (mut s, mut t) = (s, t);
         let mut rest = level;
-        loop {
+        while rest > 0 {
             let step = rest.min(1000);
             (s, t) = (s * pow2(step), t * pow2(step));
             rest -= step;
-            if rest == 0 {
-                break;
-            }
         }
         let step = self.steps[usize::from(s >= 0.5) | usize::from(t >= 0.5) << 1];
-        Some(Located {
+        Located {
             level,
             child: step.child,
             u: step.sign * (2.0 * s - step.offset[0]),
             v: step.sign * (2.0 * t - step.offset[1]),
             sign: step.sign,
-        })
+        }
     }
 
     fn new(e: &Extraordinary, points: &[DVec3], triangle: bool) -> Self {
