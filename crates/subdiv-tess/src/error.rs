@@ -49,6 +49,12 @@ pub enum TessError {
         /// The absolute tolerance.
         epsilon: f64,
     },
+    /// A screen-space rate policy with a degenerate camera or viewport.
+    #[error("screen-space rates: {reason}")]
+    Camera {
+        /// The rule broken.
+        reason: String,
+    },
     /// An internal invariant failed: please report.
     #[error("internal error (please report): {0}")]
     Internal(String),

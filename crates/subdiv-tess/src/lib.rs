@@ -32,6 +32,7 @@ mod error;
 pub mod flatness;
 mod mesh;
 pub mod quadtree;
+pub mod rates;
 
 pub use error::TessError;
 pub use flatness::Tolerance;

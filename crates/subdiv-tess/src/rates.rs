@@ -1,0 +1,201 @@
+//! Per-face tessellation rates: uniform, or from the screen (paper 000 §6, paper 003 §7.5).
+//!
+//! The dual-grid tessellator takes any rate per face, independent of its neighbours, so a
+//! policy only has to say how finely each face should be cut; it never has to agree with the
+//! faces around it.
+
+use glam::DVec3;
+use subdiv_mesh::Mesh;
+
+use crate::TessError;
+
+/// A pinhole camera: where it is, what it looks at, which way is up, and its vertical field of
+/// view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// The eye.
+    pub eye: DVec3,
+    /// The point looked at (the centre of the image).
+    pub target: DVec3,
+    /// Up: any vector not parallel to the view direction (made orthogonal to it).
+    pub up: DVec3,
+    /// The vertical field of view, in degrees, in `(0, 180)`.
+    pub fovy_degrees: f64,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target` with `up` and a 45° vertical field of view.
+    pub fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Self {
+        Self { eye, target, up, fovy_degrees: 45.0 }
+    }
+
+    /// The camera with another vertical field of view.
+    #[must_use]
+    pub fn with_fovy_degrees(self, fovy_degrees: f64) -> Self {
+        Self { fovy_degrees, ..self }
+    }
+
+    /// The view frame (right, up, forward) and the focal length in pixels for an image
+    /// `height` pixels high.
+    fn frame(&self, height: u32) -> Result<([DVec3; 3], f64), TessError> {
+        let bad = |reason: String| Err(TessError::Camera { reason });
+        if ![self.eye, self.target, self.up].iter().all(|v| v.is_finite()) {
+            return bad("eye, target and up must be finite".to_string());
+        }
+        if !(self.fovy_degrees > 0.0 && self.fovy_degrees < 180.0) {
+            return bad(format!("the field of view {}° is not in (0°, 180°)", self.fovy_degrees));
+        }
+        let forward = (self.target - self.eye).normalize_or_zero();
+        if forward == DVec3::ZERO {
+            return bad("the eye and the target are the same point".to_string());
+        }
+        let right = forward.cross(self.up).normalize_or_zero();
+        if right == DVec3::ZERO {
+            return bad("up is parallel to the view direction".to_string());
+        }
+        let up = right.cross(forward);
+        let focal = 0.5 * f64::from(height) / (0.5 * self.fovy_degrees.to_radians()).tan();
+        Ok(([right, up, forward], focal))
+    }
+}
+
+/// Screen-space rates: each face cut so that its output edges are about `pixels_per_edge`
+/// pixels long on the screen.
+///
+/// A face's rate is its longest projected control-mesh edge in pixels divided by
+/// `pixels_per_edge`, rounded up and clamped to `1..=max_rate` (paper 000 §6: "projecting each
+/// quad … computing its maximal edge length and dividing by the maximal number of pixels").
+/// Each face decides alone: the dual-grid stitching needs no agreement along edges (paper 003
+/// §7.5 needs equal edge rates because its tessellation shares edge points). Points behind the
+/// eye count as if on a near plane at `1e−6 ×` the eye–target distance, so faces that cross
+/// it get the finest rate and faces wholly behind it the coarsest.
+///
+/// ```
+/// use glam::DVec3;
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_tess::rates::{Camera, ScreenSpace};
+///
+/// let mesh = Mesh::build(shapes::quad_torus(16, 8))?;
+/// let camera = Camera::look_at(DVec3::new(0.0, -6.0, 2.0), DVec3::ZERO, DVec3::Z);
+/// let near = ScreenSpace::new(camera, [1920, 1080], 4.0).face_rates(&mesh)?;
+/// let far = ScreenSpace::new(Camera { eye: 4.0 * camera.eye, ..camera }, [1920, 1080], 4.0).face_rates(&mesh)?;
+/// assert!(near.iter().sum::<u32>() > far.iter().sum::<u32>());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenSpace {
+    /// The camera.
+    pub camera: Camera,
+    /// The image size in pixels, `[width, height]`.
+    pub viewport: [u32; 2],
+    /// The wanted length of an output edge, in pixels (> 0).
+    pub pixels_per_edge: f64,
+    /// The largest rate given to a face.
+    pub max_rate: u32,
+}
+
+impl ScreenSpace {
+    /// Rates for `camera` on a `viewport` with edges of `pixels_per_edge` pixels, at most
+    /// [`DEFAULT_MAX_RATE`].
+    pub fn new(camera: Camera, viewport: [u32; 2], pixels_per_edge: f64) -> Self {
+        Self { camera, viewport, pixels_per_edge, max_rate: DEFAULT_MAX_RATE }
+    }
+
+    /// The rate of every face of `mesh`, in face order.
+    ///
+    /// # Errors
+    /// [`TessError::Camera`] for a degenerate camera (eye on the target, up along the view,
+    /// field of view outside `(0°, 180°)`, non-finite values) or viewport (a zero side), a
+    /// `pixels_per_edge` that is not a positive finite number, or a `max_rate` of 0.
+    pub fn face_rates(&self, mesh: &Mesh) -> Result<Vec<u32>, TessError> {
+        let [width, height] = self.viewport;
+        if width == 0 || height == 0 {
+            return Err(TessError::Camera { reason: format!("the viewport {width}×{height} is empty") });
+        }
+        if !(self.pixels_per_edge.is_finite() && self.pixels_per_edge > 0.0) {
+            return Err(TessError::Camera {
+                reason: format!("pixels per edge {} is not a positive finite number", self.pixels_per_edge),
+            });
+        }
+        if self.max_rate == 0 {
+            return Err(TessError::Camera { reason: "the largest rate must be at least 1".to_string() });
+        }
+        let ([right, up, forward], focal) = self.camera.frame(height)?;
+        let near = 1e-6 * (self.camera.target - self.camera.eye).length();
+        let project = |p: DVec3| {
+            let d = p - self.camera.eye;
+            let z = d.dot(forward);
+            (glam::DVec2::new(d.dot(right), d.dot(up)) * (focal / z.max(near)), z > near)
+        };
+        let projected: Vec<_> = mesh.vertices().map(|v| project(mesh.position(v))).collect();
+        Ok(mesh
+            .face_ids()
+            .map(|f| {
+                let corners: Vec<_> = mesh.face_vertices(f).iter().map(|v| projected[v.index()]).collect();
+                if corners.iter().all(|&(_, in_front)| !in_front) {
+                    return 1;
+                }
+                let longest = (0..corners.len())
+                    .map(|i| corners[i].0.distance(corners[(i + 1) % corners.len()].0))
+                    .fold(0.0, f64::max);
+                // Rounding noise (tan 45° < 1 by an ulp) must not push an exact ratio up a rate.
+                let rate = (longest / self.pixels_per_edge * (1.0 - 1e-12)).ceil();
+                // `as` saturates; NaN cannot occur (finite inputs, near > 0).
+                (rate as u32).clamp(1, self.max_rate)
+            })
+            .collect())
+    }
+}
+
+/// The largest rate the policies give unless told otherwise.
+pub const DEFAULT_MAX_RATE: u32 = 64;
+
+#[cfg(test)]
+mod tests {
+    use subdiv_mesh::shapes;
+
+    use super::*;
+
+    fn square() -> Mesh {
+        Mesh::build(shapes::quad_grid(1, 1)).expect("grid")
+    }
+
+    /// A unit square 10 units in front of a 90° camera on a 1000-pixel-high image spans
+    /// 1000 / 2 / 10 = 50 pixels per unit: 50 / 5 = 10 segments.
+    #[test]
+    fn rate_is_projected_edge_over_pixels() {
+        let mesh = square();
+        let corner = mesh.position(mesh.vertices().next().expect("a vertex"));
+        let (lo, hi) =
+            mesh.vertices().map(|v| mesh.position(v)).fold((corner, corner), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let centre = 0.5 * (lo + hi);
+        let side = (hi - lo).max_element();
+        let camera = Camera::look_at(centre + DVec3::Z * 10.0 * side, centre, DVec3::Y).with_fovy_degrees(90.0);
+        let rates = ScreenSpace::new(camera, [1000, 1000], 5.0).face_rates(&mesh).expect("valid");
+        assert_eq!(rates, [10]);
+        let clamped = ScreenSpace { max_rate: 4, ..ScreenSpace::new(camera, [1000, 1000], 5.0) };
+        assert_eq!(clamped.face_rates(&mesh).expect("valid"), [4]);
+        // Behind the eye: the coarsest rate.
+        let behind = Camera::look_at(centre + DVec3::Z * side, centre + DVec3::Z * 2.0 * side, DVec3::Y);
+        assert_eq!(ScreenSpace::new(behind, [1000, 1000], 5.0).face_rates(&mesh).expect("valid"), [1]);
+    }
+
+    #[test]
+    fn degenerate_cameras_are_typed_errors() {
+        let mesh = square();
+        let good = Camera::look_at(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, DVec3::Y);
+        let cases = [
+            ScreenSpace::new(Camera { target: good.eye, ..good }, [100, 100], 2.0),
+            ScreenSpace::new(Camera { up: DVec3::Z, ..good }, [100, 100], 2.0),
+            ScreenSpace::new(good.with_fovy_degrees(180.0), [100, 100], 2.0),
+            ScreenSpace::new(Camera { eye: DVec3::NAN, ..good }, [100, 100], 2.0),
+            ScreenSpace::new(good, [0, 100], 2.0),
+            ScreenSpace::new(good, [100, 100], 0.0),
+            ScreenSpace::new(good, [100, 100], f64::INFINITY),
+            ScreenSpace { max_rate: 0, ..ScreenSpace::new(good, [100, 100], 2.0) },
+        ];
+        for case in cases {
+            assert!(matches!(case.face_rates(&mesh), Err(TessError::Camera { .. })), "{case:?}");
+        }
+    }
+}
