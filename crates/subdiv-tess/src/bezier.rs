@@ -107,6 +107,29 @@ impl Bicubic {
         [self.net[0][0], self.net[0][3], self.net[3][3], self.net[3][0]]
     }
 
+    /// Upper bounds of `‖∂²S/∂x²‖`, `‖∂²S/∂x∂y‖` and `‖∂²S/∂y²‖` over the patch: the largest
+    /// norms of their Bernstein coefficients (each second derivative is a tensor Bernstein
+    /// polynomial — degrees (1, 3), (2, 2), (3, 1) — whose coefficients are scaled second
+    /// differences of the net, and it lies in their convex hull).
+    pub fn second_derivative_bounds(&self) -> [f64; 3] {
+        let n = &self.net;
+        let mut out = [0.0f64; 3];
+        for j in 0..4 {
+            for i in 0..4 {
+                if i < 2 {
+                    out[0] = out[0].max((6.0 * (n[j][i + 2] - 2.0 * n[j][i + 1] + n[j][i])).length());
+                }
+                if i < 3 && j < 3 {
+                    out[1] = out[1].max((9.0 * (n[j + 1][i + 1] - n[j + 1][i] - n[j][i + 1] + n[j][i])).length());
+                }
+                if j < 2 {
+                    out[2] = out[2].max((6.0 * (n[j + 2][i] - 2.0 * n[j + 1][i] + n[j][i])).length());
+                }
+            }
+        }
+        out
+    }
+
     /// The largest absolute coordinate of the net: the scale of its floating-point rounding.
     pub fn magnitude(&self) -> f64 {
         self.net.iter().flatten().map(|p| p.abs().max_element()).fold(0.0, f64::max)
@@ -116,6 +139,31 @@ impl Bicubic {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The bounds are never below second differences sampled on a fine grid.
+    #[test]
+    fn second_derivative_bounds_hold() {
+        let b = sample();
+        let bounds = b.second_derivative_bounds();
+        let h = 1e-4;
+        for j in 1..20 {
+            for i in 1..20 {
+                let (x, y) = (f64::from(i) / 20.0, f64::from(j) / 20.0);
+                let xx = (b.eval(x + h, y) - 2.0 * b.eval(x, y) + b.eval(x - h, y)) / (h * h);
+                let xy = (b.eval(x + h, y + h) - b.eval(x + h, y - h) - b.eval(x - h, y + h) + b.eval(x - h, y - h))
+                    / (4.0 * h * h);
+                let yy = (b.eval(x, y + h) - 2.0 * b.eval(x, y) + b.eval(x, y - h)) / (h * h);
+                for (k, d) in [xx, xy, yy].iter().enumerate() {
+                    assert!(
+                        d.length() <= bounds[k] * (1.0 + 1e-5) + 1e-6,
+                        "{k} at ({x}, {y}): {} > {}",
+                        d.length(),
+                        bounds[k]
+                    );
+                }
+            }
+        }
+    }
 
     fn sample() -> Bicubic {
         let mut net = [[DVec3::ZERO; 4]; 4];

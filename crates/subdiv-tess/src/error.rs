@@ -55,6 +55,18 @@ pub enum TessError {
         /// The rule broken.
         reason: String,
     },
+    /// A face needs a finer rate than allowed to meet a tolerance.
+    #[error(
+        "face {face}: the tolerance needs rate {needed}, above the largest allowed ({max_rate}); raise the tolerance or the largest rate"
+    )]
+    RateLimit {
+        /// The input face.
+        face: usize,
+        /// The rate it needs (or a description when it is beyond any allowed one).
+        needed: String,
+        /// The largest rate allowed.
+        max_rate: u32,
+    },
     /// An internal invariant failed: please report.
     #[error("internal error (please report): {0}")]
     Internal(String),

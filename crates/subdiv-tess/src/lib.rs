@@ -37,4 +37,4 @@ pub mod rates;
 pub use error::TessError;
 pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessMesh};
-pub use quadtree::{TessOptions, TessStats, Tessellator};
+pub use quadtree::{FaceCurvature, TessOptions, TessStats, Tessellator};

@@ -162,6 +162,21 @@ impl std::fmt::Debug for Tessellator {
     }
 }
 
+/// What [`Tessellator::face_curvature`] bounds: a face's second derivatives away from its
+/// extraordinary corners, and the size of the surface next to them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceCurvature {
+    /// An upper bound of `‖S_uu‖ + ‖S_uv‖ + ‖S_vv‖` over the face less the squares of side
+    /// `2^−corner_depth` at its extraordinary corners, in units where the face's sides are 1
+    /// long (an N-gon's sub-faces are ½ wide, as they meet their neighbours). It bounds
+    /// `‖D²S[d, d]‖` for every unit direction `d`.
+    pub second: f64,
+    /// The largest diameter of the control-point hull of the pieces at the face's
+    /// extraordinary corners at that depth (0 without such corners): the surface within
+    /// `2^−corner_depth` of such a corner lies in the hull (convex sub-patch matrices).
+    pub corner_hull: f64,
+}
+
 /// Statistics of one tessellation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct TessStats {
@@ -248,6 +263,52 @@ impl Tessellator {
                 }
                 None => return Err(TessError::Internal(format!("level {level} {face} was not prepared"))),
             }
+        }
+        Ok(())
+    }
+
+    /// Bounds of `face`'s surface from its polynomial pieces, for choosing dual-grid rates to a
+    /// tolerance ([`crate::rates::ErrorRates`]): see [`FaceCurvature`].
+    ///
+    /// # Errors
+    /// [`TessError::Internal`] for a face the mesh does not have or whose pieces are missing.
+    pub fn face_curvature(&self, face: FaceId, corner_depth: u32) -> Result<FaceCurvature, TessError> {
+        let first = self.roots.partition_point(|r| r.face < face);
+        let roots = &self.roots[first..self.roots.partition_point(|r| r.face <= face)];
+        if roots.is_empty() {
+            return Err(TessError::Internal(format!("{face} is not a face of the mesh")));
+        }
+        let mut out = FaceCurvature { second: 0.0, corner_hull: 0.0 };
+        for &root in roots {
+            self.curvature_walk(self.root_piece(root)?, root.depth(), corner_depth, &mut out)?;
+        }
+        Ok(out)
+    }
+
+    /// [`face_curvature`](Self::face_curvature) over `piece`, a node `depth` levels below its
+    /// input face.
+    fn curvature_walk(
+        &self,
+        piece: Piece,
+        depth: u32,
+        corner_depth: u32,
+        out: &mut FaceCurvature,
+    ) -> Result<(), TessError> {
+        match &piece {
+            Piece::Regular(b) => {
+                // Derivatives in the input face's units: a node of depth d is 2^−d wide.
+                let scale = 4f64.powi(depth as i32);
+                out.second = out.second.max(scale * b.second_derivative_bounds().iter().sum::<f64>());
+                return Ok(());
+            }
+            Piece::Extraordinary { points, .. } if depth >= corner_depth => {
+                out.corner_hull = out.corner_hull.max(crate::flatness::hull_diameter(points));
+                return Ok(());
+            }
+            _ => {}
+        }
+        for (qx, qy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+            self.curvature_walk(self.quarter(&piece, qx, qy)?, depth + 1, corner_depth, out)?;
         }
         Ok(())
     }

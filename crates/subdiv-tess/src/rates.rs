@@ -1,13 +1,15 @@
-//! Per-face tessellation rates: uniform, or from the screen (paper 000 §6, paper 003 §7.5).
+//! Per-face tessellation rates: from the screen (paper 000 §6, paper 003 §7.5) or to a
+//! tolerance.
 //!
 //! The dual-grid tessellator takes any rate per face, independent of its neighbours, so a
 //! policy only has to say how finely each face should be cut; it never has to agree with the
-//! faces around it.
+//! faces around it (a uniform rate is `vec![n; faces]`).
 
 use glam::DVec3;
-use subdiv_mesh::Mesh;
+use subdiv_mesh::{FaceId, Mesh};
 
-use crate::TessError;
+use crate::flatness::{Tolerance, rounding_slack};
+use crate::{TessError, Tessellator};
 
 /// A pinhole camera: where it is, what it looks at, which way is up, and its vertical field of
 /// view.
@@ -150,6 +152,119 @@ impl ScreenSpace {
 /// The largest rate the policies give unless told otherwise.
 pub const DEFAULT_MAX_RATE: u32 = 64;
 
+/// Rates to a tolerance: the smallest rate per face for which the dual-grid tessellation is
+/// provably within `ε` of the surface — every limit point at distance ≤ `ε` from the output.
+///
+/// # The bound
+/// The dual-grid output has three kinds of triangles: cells of one face's grid, triangles of a
+/// strip between two faces, and the polygon around a mesh vertex. Each has its corners at
+/// parameter points `p_i` that lie, in one flat chart (one face, two faces across their edge,
+/// or the four faces around a regular vertex), within `h = √2 / n` of each other, `n` the
+/// smallest rate among the faces involved (cells: the diagonal `√2/n`; strips: the rows are
+/// `½/n_f + ½/n_g` apart and merged in parameter order; regular vertex polygons: corner points
+/// at `½/n_f` from the vertex on each side). Where the surface is C² with `‖D²S[d, d]‖ ≤ M`,
+/// Taylor's theorem with integral remainder at each corner gives, for the point `p` with
+/// barycentric weights `λ_i`,
+///
+/// `‖S(p) − Σ λ_i S(p_i)‖ ≤ ½ M Σ λ_i ‖p − p_i‖² ≤ ½ M h² = M / n²`,
+///
+/// so a face with rate `n ≥ √(M/ε)` keeps its own triangles, and those it shares with coarser
+/// neighbours' rates, within `ε` — provided `M` bounds every face that a triangle touches:
+/// each face takes the largest `M` ([`Tessellator::face_curvature`]) of the faces sharing a
+/// vertex with it. Near an extraordinary vertex `M` is taken over the face less the corner
+/// square of side `2^−D`, `2^−D ≤ ½ / max_rate`, which no cell or strip triangle enters.
+///
+/// The polygon around an extraordinary vertex is not in any flat chart. Its corners are the
+/// faces' dual points nearest the vertex, at `½/n_f`; with `2^−d ≥ ½/n` for every rate `n`
+/// around it, the surface it stands for and its corners lie, face by face, in the hull of the
+/// corner piece of depth `d` (the sub-patch matrices are convex), so every such surface point
+/// is within that hull's diameter of the polygon's corner in its face. Each face takes the
+/// smallest `d` whose hull diameter is ≤ `ε` at every face around, and the rate `2^{d−1}`.
+///
+/// A `rounding_slack` of `1e−12 ×` the model's size is kept from `ε` for the f64 arithmetic.
+/// The bounds come from the quadtree tessellator's pieces, so this policy takes what it takes:
+/// closed Catmull-Clark meshes.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{Tessellator, Tolerance};
+/// use subdiv_tess::rates::ErrorRates;
+///
+/// let mesh = Mesh::build(shapes::quad_torus(16, 8))?;
+/// let bounds = Tessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
+/// let coarse = ErrorRates::new(Tolerance::Relative(1e-2)).face_rates(&bounds, &mesh)?;
+/// let fine = ErrorRates::new(Tolerance::Relative(1e-3)).face_rates(&bounds, &mesh)?;
+/// assert!(coarse.iter().zip(&fine).all(|(c, f)| c <= f) && fine.iter().max() > coarse.iter().max());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ErrorRates {
+    /// How close the output must be.
+    pub tolerance: Tolerance,
+    /// The largest rate allowed: a face that needs more is an error.
+    pub max_rate: u32,
+}
+
+impl ErrorRates {
+    /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`].
+    pub fn new(tolerance: Tolerance) -> Self {
+        Self { tolerance, max_rate: DEFAULT_MAX_RATE }
+    }
+
+    /// The rate of every face of `mesh`, with `bounds` the quadtree tessellator of the same
+    /// mesh (its pieces give the bounds).
+    ///
+    /// # Errors
+    /// [`TessError::Tolerance`] for a tolerance that is not a positive finite number,
+    /// [`TessError::RateLimit`] when a face needs more than `max_rate`, and the errors of
+    /// [`Tessellator::face_curvature`].
+    pub fn face_rates(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<Vec<u32>, TessError> {
+        let epsilon = self.tolerance.absolute(bounds.diagonal())?;
+        let magnitude = mesh.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let budget = epsilon - rounding_slack(magnitude);
+        let max_rate = self.max_rate.max(1);
+        // 2^−D ≤ ½ / max_rate: no cell or strip triangle comes closer to a corner.
+        let depth_limit = (2 * max_rate).next_power_of_two().trailing_zeros();
+        let faces: Vec<FaceId> = mesh.face_ids().collect();
+        let curvature = faces.iter().map(|&f| bounds.face_curvature(f, depth_limit)).collect::<Result<Vec<_>, _>>()?;
+        // Per face, the depth its extraordinary corners need (0: none).
+        let mut corner_depth = vec![0u32; faces.len()];
+        for (k, &f) in faces.iter().enumerate() {
+            if curvature[k].corner_hull == 0.0 {
+                continue;
+            }
+            corner_depth[k] = (1..=depth_limit)
+                .map(|d| bounds.face_curvature(f, d).map(|c| (d, c.corner_hull)))
+                .find(|r| r.as_ref().map_or(true, |&(_, hull)| hull <= budget))
+                .transpose()?
+                .map(|(d, _)| d)
+                .ok_or_else(|| TessError::RateLimit {
+                    face: f.index(),
+                    needed: format!("more than {max_rate} (its extraordinary corner is not within ε at that rate)"),
+                    max_rate,
+                })?;
+        }
+        faces
+            .iter()
+            .map(|&f| {
+                // Every face sharing a vertex with f (f included).
+                let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
+                let (second, depth) = around.fold((0.0f64, 0u32), |(m, d), g| {
+                    (m.max(curvature[g.index()].second), d.max(corner_depth[g.index()]))
+                });
+                let smooth = (second / budget).sqrt().ceil();
+                let corner = if depth > 0 { f64::from(1u32 << (depth - 1)) } else { 1.0 };
+                let needed = smooth.max(corner).max(1.0);
+                if needed > f64::from(max_rate) {
+                    return Err(TessError::RateLimit { face: f.index(), needed: format!("{needed}"), max_rate });
+                }
+                Ok(needed as u32)
+            })
+            .collect()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use subdiv_mesh::shapes;
@@ -178,6 +293,26 @@ mod tests {
         // Behind the eye: the coarsest rate.
         let behind = Camera::look_at(centre + DVec3::Z * side, centre + DVec3::Z * 2.0 * side, DVec3::Y);
         assert_eq!(ScreenSpace::new(behind, [1000, 1000], 5.0).face_rates(&mesh).expect("valid"), [1]);
+    }
+
+    /// On a regular torus the rate grows like `1/√ε`; at the cube's valence-3 corners the hull
+    /// bound sets the rate, and a tolerance beyond reach is a typed error naming a face.
+    #[test]
+    fn error_rates_follow_the_bounds() {
+        let cc = subdiv_schemes::Builtin::CatmullClark.scheme();
+        let torus = Mesh::build(shapes::quad_torus(16, 8)).expect("torus");
+        let bounds = Tessellator::new(cc, &torus).expect("closed");
+        let rate = |r: f64| ErrorRates::new(Tolerance::Relative(r)).face_rates(&bounds, &torus).expect("reachable");
+        let (coarse, fine) = (rate(1e-2), rate(1e-4));
+        let ratio = f64::from(*fine.iter().max().expect("faces")) / f64::from(*coarse.iter().max().expect("faces"));
+        assert!((8.0..=12.0).contains(&ratio), "rates {coarse:?} → {fine:?}");
+        let cube = Mesh::build(shapes::cube()).expect("cube");
+        let bounds = Tessellator::new(cc, &cube).expect("closed");
+        assert!(ErrorRates::new(Tolerance::Relative(3e-2)).face_rates(&bounds, &cube).is_ok());
+        let err = ErrorRates { max_rate: 8, ..ErrorRates::new(Tolerance::Relative(1e-3)) }.face_rates(&bounds, &cube);
+        assert!(matches!(err, Err(TessError::RateLimit { max_rate: 8, .. })), "{err:?}");
+        let bad = ErrorRates::new(Tolerance::Absolute(-1.0)).face_rates(&bounds, &cube);
+        assert!(matches!(bad, Err(TessError::Tolerance { .. })), "{bad:?}");
     }
 
     #[test]
