@@ -28,11 +28,13 @@
 
 pub mod bezier;
 pub mod check;
+pub mod dual;
 mod error;
 pub mod flatness;
 mod mesh;
 pub mod quadtree;
 
+pub use dual::{DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE};
 pub use error::TessError;
 pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessMesh};
