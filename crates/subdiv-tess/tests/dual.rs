@@ -348,7 +348,9 @@ fn shared_meshes_are_on_the_limit_surface_and_watertight() {
         ("opensubdiv/catmark_cube.obj", Builtin::CatmullClark),
         ("keenan/spot_control_mesh.obj", Builtin::CatmullClark),
         ("opensubdiv/loop_cube.obj", Builtin::Loop),
-        ("opensubdiv/catmark_edgeonly.obj", Builtin::CatmullClark),
+        ("opensubdiv/catmark_hole_test1.obj", Builtin::CatmullClark),
+        ("opensubdiv/catmark_quadstrips.obj", Builtin::CatmullClark),
+        ("opensubdiv/catmark_nonquads.obj", Builtin::CatmullClark),
     ] {
         let Some(path) = subdiv_testkit::shared_mesh(file) else { return };
         let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
