@@ -180,9 +180,8 @@ fn open_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
         assert!(places.iter().all(|p| p.0 == places[0].0), "corners of one input loop on several output loops");
         // In order along the loop: cyclically increasing positions.
         let len = output_loops[places[0].0].len();
-        let steps: usize = (0..places.len())
-            .map(|k| (places[(k + 1) % places.len()].1 + len - places[k].1) % len)
-            .sum();
+        let steps: usize =
+            (0..places.len()).map(|k| (places[(k + 1) % places.len()].1 + len - places[k].1) % len).sum();
         assert_eq!(steps, len, "the corners are not in the loop's order");
     }
 }
@@ -205,7 +204,10 @@ fn on_limit_surface(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
         worst_n = worst_n.max((n - out.normals[i]).length());
         assert!((out.normals[i].length() - 1.0).abs() < 1e-12);
     }
-    eprintln!("{builtin:?}: {} vertices, worst position / bbox {worst_p:e}, worst normal {worst_n:e}", out.positions.len());
+    eprintln!(
+        "{builtin:?}: {} vertices, worst position / bbox {worst_p:e}, worst normal {worst_n:e}",
+        out.positions.len()
+    );
     assert!(worst_p < 1e-12, "position off by {worst_p:e} × bbox");
     assert!(worst_n < 1e-10, "normal off by {worst_n:e}");
 }

@@ -27,8 +27,6 @@ use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, PatchLevels, Resolved, StencilEvaluator};
 
-#[cfg(test)]
-use super::topology::Block;
 use super::topology::Topology;
 use crate::TessError;
 use crate::quadtree::{check_bicubic, regular_grid};
@@ -71,7 +69,7 @@ struct RateBasis {
 
 impl RateBasis {
     fn new(n: u32) -> Self {
-        let t = |i: u32| (2 * i + 1) as f64 / (2 * n) as f64;
+        let t = |i: u32| f64::from(2 * i + 1) / f64::from(2 * n);
         Self { b: (0..n).map(|i| basis(t(i))).collect(), d: (0..n).map(|i| derivative(t(i))).collect() }
     }
 }
@@ -141,7 +139,10 @@ impl Evaluator {
                 .map_err(subdiv_stencil::StencilError::from)?;
             for (l, s) in refiner.levels().iter().enumerate() {
                 if s.child_count() != levels.mesh(l + 1).vertex_count() {
-                    return Err(TessError::Internal(format!("refinement level {} does not match the patch levels", l + 1)));
+                    return Err(TessError::Internal(format!(
+                        "refinement level {} does not match the patch levels",
+                        l + 1
+                    )));
                 }
             }
             Some(refiner)
@@ -286,7 +287,13 @@ impl Evaluator {
     }
 
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
-    pub(crate) fn evaluate(&self, topo: &Topology, parallel: bool, positions: &mut Vec<DVec3>, normals: &mut Vec<DVec3>) {
+    pub(crate) fn evaluate(
+        &self,
+        topo: &Topology,
+        parallel: bool,
+        positions: &mut Vec<DVec3>,
+        normals: &mut Vec<DVec3>,
+    ) {
         let n = topo.sites.len();
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
@@ -364,23 +371,6 @@ impl Evaluator {
         }
         (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t)
     }
-
-    /// The limit point of one output vertex, by the route `evaluate` takes (for tests).
-    #[cfg(test)]
-    pub(crate) fn block_route_matches_pointwise(&self, topo: &Topology, block: &Block) -> f64 {
-        let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { return 0.0 };
-        let n = block.rate as usize;
-        let mut bp = vec![DVec3::ZERO; n * n];
-        let mut bn = vec![DVec3::ZERO; n * n];
-        grid_block(cv, &self.positions[0], &RateBasis::new(block.rate), &mut bp, &mut bn);
-        let mut worst: f64 = 0.0;
-        for k in 0..n * n {
-            let (u, v) = topo.sites[block.base as usize + k].point.to_f64();
-            let (p, du, dv) = bicubic(cv, &self.positions[0], u, v);
-            worst = worst.max((p - bp[k]).length()).max((normal(du, dv) - bn[k]).length());
-        }
-        worst
-    }
 }
 
 /// The dual grid of a bicubic face, row by row.
@@ -391,7 +381,8 @@ fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, positions: &mut
     for j in 0..n {
         let (bv, dv) = (basis.b[j], basis.d[j]);
         // The 4 column combinations of the control points, and of their v-derivative.
-        let col: [DVec3; 4] = std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
+        let col: [DVec3; 4] =
+            std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
         let dcol: [DVec3; 4] =
             std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
         let row_p = &mut positions[j * n..(j + 1) * n];
@@ -412,4 +403,55 @@ fn bicubic_grid(matrices: &PatchMatrices, shape: usize) -> Option<[usize; 16]> {
     let s = &matrices.shapes[shape];
     let grid = regular_grid(s.size, s.parameters.as_ref())?;
     check_bicubic(matrices, shape, &grid).ok().map(|()| grid)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use subdiv_mesh::{BoundaryInterpolation, shapes};
+    use subdiv_schemes::Builtin;
+    use subdiv_stencil::{Grid, StencilTable};
+
+    /// The separable blocks give what the exact stencil tables give (position and normal,
+    /// through the patch frame), on a torus whose faces start their patches at every corner.
+    #[test]
+    fn separable_blocks_equal_the_table_route() {
+        let mesh = Mesh::build(shapes::quad_torus(6, 5)).unwrap();
+        let ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+        let cage = mesh.positions();
+        let mut worst: f64 = 0.0;
+        for n in [1u32, 2, 5, 8] {
+            let basis = RateBasis::new(n);
+            let count = (n * n) as usize;
+            let (mut ps, mut ns) = (vec![DVec3::ZERO; count], vec![DVec3::ZERO; count]);
+            for f in mesh.face_ids() {
+                let FacePlan::Bicubic { cv } = ev.faces[f.index()] else { panic!("{f} of a torus is regular") };
+                let Some(Resolved::Patch { patch, frame, .. }) = ev.levels.resolve(0, f) else { panic!("{f}") };
+                let table = StencilTable::compute_rates(&patch.matrices, BoundaryInterpolation::EdgeOnly, n..=n)
+                    .unwrap()
+                    .remove(0);
+                let points: Vec<DVec3> = patch.vertices.iter().map(|v| cage[v.index()]).collect();
+                grid_block(&cv, cage, &basis, &mut ps, &mut ns);
+                let index: HashMap<Dyadic, usize> =
+                    (0..table.len(Grid::Dual)).map(|k| (table.point(Grid::Dual, k), k)).collect();
+                let (ju, jv) = frame.chain([[1.0, 0.0], [0.0, 1.0]]);
+                for j in 0..n {
+                    for i in 0..n {
+                        let at =
+                            frame.to_patch(Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, 2 * i64::from(n)));
+                        let [x, ds, dt] = table.apply(Grid::Dual, index[&at], &points);
+                        let k = (j * n + i) as usize;
+                        let want_n = normal(ju[0] * ds + ju[1] * dt, jv[0] * ds + jv[1] * dt);
+                        worst = worst.max((x - ps[k]).length()).max((want_n - ns[k]).length());
+                        // The pointwise polynomial, for the points outside blocks, agrees too.
+                        let (u, v) = (f64::from(2 * i + 1) / f64::from(2 * n), f64::from(2 * j + 1) / f64::from(2 * n));
+                        let (p, du, dv) = bicubic(&cv, cage, u, v);
+                        worst = worst.max((p - x).length()).max((normal(du, dv) - want_n).length());
+                    }
+                }
+            }
+        }
+        // The torus is about 3 across.
+        assert!(worst < 1e-12, "block route off the table route by {worst:e}");
+    }
 }

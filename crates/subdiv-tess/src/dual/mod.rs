@@ -211,7 +211,8 @@ impl DualTessellator {
         out.triangle_faces.extend(t.triangle_faces.iter().map(|&f| FaceId::new(f)));
         out.triangle_parameters.clear();
         let params = &out.parameters;
-        out.triangle_parameters.extend(t.triangles.iter().map(|tri| tri.map(|k| [params[k as usize].u, params[k as usize].v])));
+        out.triangle_parameters
+            .extend(t.triangles.iter().map(|tri| tri.map(|k| [params[k as usize].u, params[k as usize].v])));
         out.polygon_offsets.clear();
         out.polygon_offsets.extend_from_slice(&t.polygon_offsets);
         out.polygon_vertices.clear();

@@ -216,7 +216,12 @@ impl<'a> Builder<'a> {
                     self.other.clear();
                     for k in 0..m {
                         let t2 = u64::from(2 * k + 1);
-                        self.row.push(RowPoint { vertex: cell(s, m - 1, k), num: t2, den: 2 * u64::from(m), near: true });
+                        self.row.push(RowPoint {
+                            vertex: cell(s, m - 1, k),
+                            num: t2,
+                            den: 2 * u64::from(m),
+                            near: true,
+                        });
                         self.other.push(RowPoint {
                             vertex: cell(t, k, m - 1),
                             num: t2,
@@ -230,8 +235,7 @@ impl<'a> Builder<'a> {
                 }
                 // The centre: the sub-faces' inner corners, counter-clockwise.
                 let ring: Vec<u32> = (0..size).map(|s| cell(s, m - 1, m - 1)).collect();
-                let centre =
-                    (size >= 5).then(|| self.push_site(f, domain.from_sub_face(0, Dyadic::new(1, 1, 1))));
+                let centre = (size >= 5).then(|| self.push_site(f, domain.from_sub_face(0, Dyadic::new(1, 1, 1))));
                 self.close_ring(&ring, centre, f as u32);
             }
             FaceDomain::Triangle => {
@@ -302,7 +306,12 @@ impl<'a> Builder<'a> {
                         2 => (m - 1 - k, m - 1),
                         _ => (0, m - 1 - k),
                     };
-                    row.push(RowPoint { vertex: base + j * m + i, num: u64::from(2 * k + 1), den: 2 * m64, near: true });
+                    row.push(RowPoint {
+                        vertex: base + j * m + i,
+                        num: u64::from(2 * k + 1),
+                        den: 2 * m64,
+                        near: true,
+                    });
                 }
             }
             FaceDomain::SubFaces { size, .. } => {
@@ -371,7 +380,9 @@ impl<'a> Builder<'a> {
     fn corner_point(&self, f: usize, c: usize) -> Dyadic {
         let cells = self.faces[f].expect("a face with a surface");
         match cells.domain {
-            FaceDomain::Quad => [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(1, 1, 1), Dyadic::new(0, 1, 1)][c],
+            FaceDomain::Quad => {
+                [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(1, 1, 1), Dyadic::new(0, 1, 1)][c]
+            }
             FaceDomain::Triangle => [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(0, 1, 1)][c],
             FaceDomain::SubFaces { .. } => cells.domain.from_sub_face(c, Dyadic::new(0, 0, 1)).reduced(),
         }
@@ -541,7 +552,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
         };
         for h in mesh.face_half_edges(f) {
             if mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) {
-                count += if triangle { n } else if size == 4 { n } else { 2 * n.div_ceil(2) };
+                count += if triangle || size == 4 { n } else { 2 * n.div_ceil(2) };
             }
         }
     }
@@ -550,9 +561,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
         if faces.is_empty() {
             continue;
         }
-        let border = mesh
-            .outgoing(v)
-            .any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)))
+        let border = mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)))
             || mesh.is_boundary_vertex(v);
         if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
             count += 1;
