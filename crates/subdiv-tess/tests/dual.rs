@@ -288,6 +288,12 @@ fn closed_quad_meshes_are_watertight_at_random_rates() {
         let ones = vec![1; mesh.face_count()];
         closed_checks(Builtin::CatmullClark, &mesh, &ones);
     }
+    // Other quad splits: bilinear everywhere, Kobbelt where its valences (3 and 4) allow.
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    closed_checks(Builtin::Bilinear, &cube, &rates_for(&cube, 4, 9));
+    closed_checks(Builtin::Kobbelt, &cube, &rates_for(&cube, 5, 9));
+    let prism = Mesh::build(shapes::ngon_prism(6)).unwrap();
+    closed_checks(Builtin::Bilinear, &prism, &rates_for(&prism, 6, 9));
 }
 
 #[test]
@@ -338,8 +344,11 @@ fn vertices_are_on_the_limit_surface() {
     on_limit_surface(Builtin::CatmullClark, &model, &rates_for(&model, 4, 5));
     let grid = Mesh::build(shapes::quad_grid(3, 3)).unwrap();
     on_limit_surface(Builtin::CatmullClark, &grid, &rates_for(&grid, 5, 7));
+    on_limit_surface(Builtin::Bilinear, &prism, &rates_for(&prism, 8, 5));
+    on_limit_surface(Builtin::Kobbelt, &cube, &rates_for(&cube, 9, 5));
     let ico = Mesh::build(shapes::icosahedron()).unwrap();
     on_limit_surface(Builtin::Loop, &ico, &rates_for(&ico, 6, 6));
+    on_limit_surface(Builtin::Butterfly, &ico, &rates_for(&ico, 10, 4));
     let tri_torus = Mesh::build(shapes::triangle_torus(6, 4)).unwrap();
     on_limit_surface(Builtin::Loop, &tri_torus, &rates_for(&tri_torus, 7, 5));
 }

@@ -70,6 +70,15 @@ pub struct FlatMesh {
 /// Dual-grid stitching tessellator of one control mesh under one scheme, reusable across rates
 /// and cages (it keeps its allocations between calls).
 ///
+/// Output conventions ([`TessMesh`]): a vertex's [`parameters`](TessMesh::parameters) name the
+/// face that evaluated it (a border point: the face beside the border; a vertex's limit point:
+/// one of its faces, at its corner). A triangle of a cell belongs to the cell's face; a strip's
+/// triangle to the face on the left of the edge's lower-numbered half-edge (the face of the
+/// border side, on a border); a vertex polygon's to the first face of its ring. Since strip and
+/// ring triangles span several faces, [`triangle_parameters`](TessMesh::triangle_parameters)
+/// lists each corner's own parameters (those of [`parameters`](TessMesh::parameters)), which
+/// may be in different faces.
+///
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
 /// use subdiv_schemes::Builtin;
