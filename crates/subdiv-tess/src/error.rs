@@ -67,6 +67,40 @@ pub enum TessError {
         /// The largest rate allowed.
         max_rate: u32,
     },
+    /// A face's tessellation rate is outside `1..=`[`MAX_DUAL_RATE`](crate::dual::MAX_DUAL_RATE).
+    #[error("face {face}: rate {rate} is not allowed ({rule})")]
+    Rate {
+        /// The input face.
+        face: usize,
+        /// The rate as given.
+        rate: u32,
+        /// The rule broken.
+        rule: &'static str,
+    },
+    /// The rates slice does not have one rate per input face.
+    #[error("{got} rates given for {expected} faces (one rate per face)")]
+    RateCount {
+        /// The number of faces.
+        expected: usize,
+        /// The number of rates given.
+        got: usize,
+    },
+    /// The cage positions do not have one position per input vertex.
+    #[error("{got} cage positions given for {expected} vertices (one position per vertex)")]
+    CageLength {
+        /// The number of vertices.
+        expected: usize,
+        /// The number of positions given.
+        got: usize,
+    },
+    /// A cage position is not finite.
+    #[error("vertex {vertex}: position {value} is not finite (cage positions must be finite)")]
+    CagePosition {
+        /// The input vertex.
+        vertex: usize,
+        /// The position as given.
+        value: String,
+    },
     /// An internal invariant failed: please report.
     #[error("internal error (please report): {0}")]
     Internal(String),

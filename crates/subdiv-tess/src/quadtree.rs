@@ -755,7 +755,7 @@ fn classify(matrices: &Arc<PatchMatrices>, shape: usize, out: &mut HashMap<Shape
 
 /// The 4 × 4 grid order of a 16-point shape whose control points sit at the integer
 /// parameters `−1..=2` (a regular B-spline patch), if it is one.
-fn regular_grid(size: usize, parameters: Option<&[Vec<f64>; 2]>) -> Option<[usize; 16]> {
+pub(crate) fn regular_grid(size: usize, parameters: Option<&[Vec<f64>; 2]>) -> Option<[usize; 16]> {
     let [us, vs] = parameters?;
     if size != 16 || us.len() != 16 || vs.len() != 16 {
         return None;
@@ -782,7 +782,7 @@ fn regular_grid(size: usize, parameters: Option<&[Vec<f64>; 2]>) -> Option<[usiz
 
 /// Checks that the regular shape's children are the quarters of the bicubic B-spline patch,
 /// on every basis function: what makes the pieces polynomials of bidegree 3.
-fn check_bicubic(matrices: &PatchMatrices, shape: usize, grid: &[usize; 16]) -> Result<(), String> {
+pub(crate) fn check_bicubic(matrices: &PatchMatrices, shape: usize, grid: &[usize; 16]) -> Result<(), String> {
     let s = &matrices.shapes[shape];
     for child in &s.children {
         let Some(child_grid) =

@@ -1,0 +1,457 @@
+//! The numerical half of dual-grid stitching: every output vertex's limit position and unit
+//! normal, and the per-vertex data that lets a new cage be evaluated without topology work.
+//!
+//! Two routes:
+//! - **Regular bicubic faces** (a quad face resolved on level 0 by a patch whose sub-patch
+//!   matrices are those of a bicubic B-spline, checked once per shape as the quadtree does):
+//!   the 16 control points are read from the cage in the face's own frame, and the face's dual
+//!   grid is evaluated separably with per-rate basis tables (`B_a((i+½)/n)` and derivatives):
+//!   per row `j`, 4 column combinations of the control points (and of their `v` derivative),
+//!   then per point 4-term sums for the position, `∂/∂u` and `∂/∂v`. Other points of such a
+//!   face (border points, corners) use the same polynomial at their parameter.
+//! - **Every other face** (extraordinary, boundary or non-bicubic patches on level 0, and faces
+//!   resolved through their children: N-gons, quads with two extraordinary corners): each
+//!   point descends (exactly, in rationals) to the patch that holds it, and its exact surface
+//!   stencil there (position and both derivatives over the patch's control points) is stored
+//!   with the chain-rule factors. A new cage is refined to the levels these patches live on by
+//!   the refinement engine's stencils (a sparse product per level over the whole mesh: `O(4^L)`
+//!   times the cage for `L` levels, `L ≤ 2` for N-gons and double extraordinary quads), and
+//!   each point is then a dot product: no topology work, no allocation per vertex.
+
+use std::sync::Arc;
+
+use glam::DVec3;
+use hashbrown::HashMap;
+use rayon::prelude::*;
+use subdiv_mesh::{FaceId, Mesh};
+use subdiv_schemes::{PatchMatrices, RefineOptions, Refiner, Scheme, Split};
+use subdiv_stencil::{Dyadic, FaceDomain, PatchLevels, Resolved, StencilEvaluator};
+
+use super::topology::Topology;
+use crate::TessError;
+use crate::quadtree::{check_bicubic, regular_grid};
+
+/// A vertex evaluated by its face's block (the separable route).
+const IN_BLOCK: u32 = u32::MAX;
+/// A vertex of a regular face outside its block: the bicubic polynomial at its parameter.
+const BICUBIC: u32 = u32::MAX - 1;
+
+/// How an input face is evaluated.
+#[derive(Clone, Copy, Debug)]
+enum FacePlan {
+    /// A bicubic B-spline patch: cage vertex `cv[j * 4 + i]` is the control point at
+    /// `(i − 1, j − 1)` in the face's own frame.
+    Bicubic { cv: [u32; 16] },
+    /// Through exact stencils of the patch (on any level) holding each point.
+    General,
+    /// No surface.
+    Hole,
+}
+
+/// A vertex on the general route: its patch's control points, its stencil, and the rows that
+/// turn the patch's `(∂/∂s, ∂/∂t)` into the input face's `(∂/∂u, ∂/∂v)`.
+#[derive(Clone, Copy, Debug)]
+struct Record {
+    level: u32,
+    ids: u32,
+    len: u32,
+    weights: u32,
+    ju: [f64; 2],
+    jv: [f64; 2],
+}
+
+/// The uniform cubic B-spline basis and its derivative at the dual points `(i+½)/n`.
+#[derive(Clone, Debug)]
+struct RateBasis {
+    b: Vec<[f64; 4]>,
+    d: Vec<[f64; 4]>,
+}
+
+impl RateBasis {
+    fn new(n: u32) -> Self {
+        let t = |i: u32| f64::from(2 * i + 1) / f64::from(2 * n);
+        Self { b: (0..n).map(|i| basis(t(i))).collect(), d: (0..n).map(|i| derivative(t(i))).collect() }
+    }
+}
+
+/// The uniform cubic B-spline basis at `t ∈ [0, 1]`.
+#[inline]
+fn basis(t: f64) -> [f64; 4] {
+    let s = 1.0 - t;
+    let (t2, t3) = (t * t, t * t * t);
+    [s * s * s / 6.0, (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0, (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t3 / 6.0]
+}
+
+/// The derivative of [`basis`].
+#[inline]
+fn derivative(t: f64) -> [f64; 4] {
+    let s = 1.0 - t;
+    [-0.5 * s * s, (3.0 * t * t - 4.0 * t) * 0.5, (-3.0 * t * t + 2.0 * t + 1.0) * 0.5, 0.5 * t * t]
+}
+
+/// The bicubic patch with control points `cv` (face frame) at `(u, v)`: position, `∂/∂u`,
+/// `∂/∂v`.
+#[inline]
+fn bicubic(cv: &[u32; 16], cage: &[DVec3], u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+    let (bu, du, bv, dv) = (basis(u), derivative(u), basis(v), derivative(v));
+    let (mut p, mut a, mut b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+    for j in 0..4 {
+        let (mut c, mut e) = (DVec3::ZERO, DVec3::ZERO);
+        for i in 0..4 {
+            let x = cage[cv[j * 4 + i] as usize];
+            c += bu[i] * x;
+            e += du[i] * x;
+        }
+        p += bv[j] * c;
+        a += bv[j] * e;
+        b += dv[j] * c;
+    }
+    (p, a, b)
+}
+
+/// A unit normal from two tangents (zero where they are parallel).
+#[inline]
+fn normal(du: DVec3, dv: DVec3) -> DVec3 {
+    du.cross(dv).normalize_or_zero()
+}
+
+/// Evaluates the output vertices of a [`Topology`] on one mesh's limit surface.
+#[derive(Debug)]
+pub(crate) struct Evaluator {
+    levels: PatchLevels,
+    refiner: Option<Refiner>,
+    faces: Vec<FacePlan>,
+    /// Per refinement level, the current cage refined to it (level 0: the cage).
+    positions: Vec<Vec<DVec3>>,
+    bases: Vec<Option<Arc<RateBasis>>>,
+    kinds: Vec<u32>,
+    records: Vec<Record>,
+    ids: Vec<u32>,
+    weights: Vec<f64>,
+}
+
+impl Evaluator {
+    pub(crate) fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
+        let levels = PatchLevels::new(scheme, mesh, &RefineOptions::DEFAULT)?;
+        let count = levels.level_count();
+        let refiner = if count > 1 {
+            let refiner = Refiner::new(levels.mesh(0), scheme, count - 1, &RefineOptions::DEFAULT)
+                .map_err(subdiv_stencil::StencilError::from)?;
+            for (l, s) in refiner.levels().iter().enumerate() {
+                if s.child_count() != levels.mesh(l + 1).vertex_count() {
+                    return Err(TessError::Internal(format!(
+                        "refinement level {} does not match the patch levels",
+                        l + 1
+                    )));
+                }
+            }
+            Some(refiner)
+        } else {
+            None
+        };
+        let mut shapes: HashMap<(usize, usize), Option<[usize; 16]>> = HashMap::new();
+        let mut faces = Vec::with_capacity(mesh.face_count());
+        for f in mesh.face_ids() {
+            let plan = match levels.resolve(0, f) {
+                Some(Resolved::Hole) => FacePlan::Hole,
+                Some(Resolved::Patch { patch, frame, .. }) if levels.split() == Split::Quad => {
+                    let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
+                    let grid = *shapes.entry(key).or_insert_with(|| bicubic_grid(&patch.matrices, patch.shape));
+                    match grid {
+                        Some(grid) => FacePlan::Bicubic {
+                            cv: std::array::from_fn(|k| {
+                                let (i, j) = ((k % 4) as i64, (k / 4) as i64);
+                                let p = frame.to_patch(Dyadic::new(i - 1, j - 1, 1));
+                                patch.vertices[grid[(p.v + 1) as usize * 4 + (p.u + 1) as usize]].index() as u32
+                            }),
+                        },
+                        None => FacePlan::General,
+                    }
+                }
+                Some(_) => FacePlan::General,
+                None => return Err(TessError::Internal(format!("{f} was not prepared"))),
+            };
+            faces.push(plan);
+        }
+        let mut evaluator = Self {
+            levels,
+            refiner,
+            faces,
+            positions: vec![Vec::new(); count],
+            bases: Vec::new(),
+            kinds: Vec::new(),
+            records: Vec::new(),
+            ids: Vec::new(),
+            weights: Vec::new(),
+        };
+        evaluator.set_cage(mesh.positions());
+        Ok(evaluator)
+    }
+
+    /// The patch levels (level 0: the input with the boundary rule applied).
+    pub(crate) fn levels(&self) -> &PatchLevels {
+        &self.levels
+    }
+
+    /// The faces' domains, `None` for holes.
+    pub(crate) fn domains(&self) -> Result<Vec<Option<FaceDomain>>, TessError> {
+        let mesh = self.levels.mesh(0);
+        mesh.face_ids()
+            .map(|f| match self.faces[f.index()] {
+                FacePlan::Hole => Ok(None),
+                _ => Ok(Some(self.levels.domain(f)?)),
+            })
+            .collect()
+    }
+
+    /// Takes a new cage (checked by the caller) and refines it to every level.
+    pub(crate) fn set_cage(&mut self, cage: &[DVec3]) {
+        self.positions[0].clear();
+        self.positions[0].extend_from_slice(cage);
+        if let Some(refiner) = &self.refiner {
+            for (l, stencils) in refiner.levels().iter().enumerate() {
+                let (parent, child) = self.positions.split_at_mut(l + 1);
+                stencils.apply(&parent[l], &mut child[0]);
+            }
+        }
+    }
+
+    /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, and a
+    /// stencil record for every vertex on the general route.
+    pub(crate) fn prepare(&mut self, topo: &Topology) -> Result<(), TessError> {
+        let n = topo.sites.len();
+        self.kinds.clear();
+        self.kinds.resize(n, BICUBIC);
+        self.records.clear();
+        self.ids.clear();
+        self.weights.clear();
+        for block in &topo.blocks {
+            if let FacePlan::Bicubic { .. } = self.faces[block.face as usize] {
+                let r = block.rate as usize;
+                if self.bases.len() <= r {
+                    self.bases.resize(r + 1, None);
+                }
+                if self.bases[r].is_none() {
+                    self.bases[r] = Some(Arc::new(RateBasis::new(block.rate)));
+                }
+                let end = block.base as usize + r * r;
+                self.kinds[block.base as usize..end].fill(IN_BLOCK);
+            }
+        }
+        let mut evaluators: HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>> = HashMap::new();
+        let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
+        for (i, site) in topo.sites.iter().enumerate() {
+            if !matches!(self.faces[site.face as usize], FacePlan::General) {
+                continue;
+            }
+            let face = FaceId::new(site.face);
+            let (mut f, mut p) = (face, site.point.reduced());
+            let mut j = [[1.0, 0.0], [0.0, 1.0]];
+            let mut done = false;
+            for level in 0..self.levels.level_count() {
+                match self.levels.resolve(level, f) {
+                    Some(Resolved::Children { children, domain }) => {
+                        let (child, at, factor) = domain.child_of(p);
+                        f = FaceId::new((children.start + child) as u32);
+                        p = at.reduced();
+                        j = j.map(|row| row.map(|x| x * factor));
+                    }
+                    Some(Resolved::Patch { patch, frame, .. }) => {
+                        let evaluator = evaluators
+                            .entry(Arc::as_ptr(&patch.matrices) as usize)
+                            .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+                        let stencil = evaluator.stencil(patch.shape, frame.to_patch(p).reduced())?;
+                        let (ids, len) = *patches.entry((level, f.index() as u32)).or_insert_with(|| {
+                            let start = self.ids.len() as u32;
+                            self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                            (start, patch.vertices.len() as u32)
+                        });
+                        let weights = self.weights.len() as u32;
+                        self.weights.extend_from_slice(&stencil.position);
+                        self.weights.extend_from_slice(&stencil.du);
+                        self.weights.extend_from_slice(&stencil.dv);
+                        let (ju, jv) = frame.chain(j);
+                        self.kinds[i] = self.records.len() as u32;
+                        self.records.push(Record { level: level as u32, ids, len, weights, ju, jv });
+                        done = true;
+                        break;
+                    }
+                    _ => break,
+                }
+            }
+            if !done {
+                return Err(TessError::Internal(format!("{face}: no patch holds point {:?}", site.point)));
+            }
+        }
+        Ok(())
+    }
+
+    /// Evaluates every vertex of `topo` (prepared) on the current cage.
+    pub(crate) fn evaluate(
+        &self,
+        topo: &Topology,
+        parallel: bool,
+        positions: &mut Vec<DVec3>,
+        normals: &mut Vec<DVec3>,
+    ) {
+        let n = topo.sites.len();
+        positions.resize(n, DVec3::ZERO);
+        normals.resize(n, DVec3::ZERO);
+        let point = |i: usize, p: &mut DVec3, nr: &mut DVec3| {
+            let kind = self.kinds[i];
+            if kind == IN_BLOCK {
+                return;
+            }
+            let site = topo.sites[i];
+            let (x, du, dv) = if kind == BICUBIC {
+                let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
+                let (u, v) = site.point.to_f64();
+                bicubic(cv, &self.positions[0], u, v)
+            } else {
+                self.general(&self.records[kind as usize])
+            };
+            *p = x;
+            *nr = normal(du, dv);
+        };
+        if parallel {
+            positions
+                .par_iter_mut()
+                .zip(normals.par_iter_mut())
+                .enumerate()
+                .with_min_len(256)
+                .for_each(|(i, (p, nr))| point(i, p, nr));
+        } else {
+            for (i, (p, nr)) in positions.iter_mut().zip(normals.iter_mut()).enumerate() {
+                point(i, p, nr);
+            }
+        }
+        // The blocks: consecutive, disjoint vertex ranges in increasing order.
+        let mut pieces = Vec::with_capacity(topo.blocks.len());
+        let (mut ps, mut ns) = (&mut positions[..], &mut normals[..]);
+        let mut at = 0;
+        for block in &topo.blocks {
+            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
+            let len = (block.rate * block.rate) as usize;
+            let skip = block.base as usize - at;
+            let (_, rest_p) = std::mem::take(&mut ps).split_at_mut(skip);
+            let (_, rest_n) = std::mem::take(&mut ns).split_at_mut(skip);
+            let (bp, rest_p) = rest_p.split_at_mut(len);
+            let (bn, rest_n) = rest_n.split_at_mut(len);
+            (ps, ns) = (rest_p, rest_n);
+            at = block.base as usize + len;
+            pieces.push((cv, block.rate, bp, bn));
+        }
+        let cage = &self.positions[0];
+        let run = |(cv, rate, bp, bn): (&[u32; 16], u32, &mut [DVec3], &mut [DVec3])| {
+            let basis = self.bases[rate as usize].as_deref().expect("prepared");
+            grid_block(cv, cage, basis, bp, bn);
+        };
+        if parallel {
+            pieces.into_par_iter().for_each(run);
+        } else {
+            pieces.into_iter().for_each(run);
+        }
+    }
+
+    /// A general-route vertex on the current cage.
+    #[inline]
+    fn general(&self, r: &Record) -> (DVec3, DVec3, DVec3) {
+        let points = &self.positions[r.level as usize];
+        let len = r.len as usize;
+        let ids = &self.ids[r.ids as usize..r.ids as usize + len];
+        let w = &self.weights[r.weights as usize..r.weights as usize + 3 * len];
+        let (wp, rest) = w.split_at(len);
+        let (ws, wt) = rest.split_at(len);
+        let (mut p, mut s, mut t) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
+        for k in 0..len {
+            let x = points[ids[k] as usize];
+            p += wp[k] * x;
+            s += ws[k] * x;
+            t += wt[k] * x;
+        }
+        (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t)
+    }
+}
+
+/// The dual grid of a bicubic face, row by row.
+#[inline]
+fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, positions: &mut [DVec3], normals: &mut [DVec3]) {
+    let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
+    let n = basis.b.len();
+    for j in 0..n {
+        let (bv, dv) = (basis.b[j], basis.d[j]);
+        // The 4 column combinations of the control points, and of their v-derivative.
+        let col: [DVec3; 4] =
+            std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
+        let dcol: [DVec3; 4] =
+            std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
+        let row_p = &mut positions[j * n..(j + 1) * n];
+        let row_n = &mut normals[j * n..(j + 1) * n];
+        for i in 0..n {
+            let (bu, du) = (basis.b[i], basis.d[i]);
+            let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
+            let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
+            let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
+            row_p[i] = p;
+            row_n[i] = normal(a, b);
+        }
+    }
+}
+
+/// The 4 × 4 grid of a shape if its sub-patch matrices are those of a bicubic B-spline.
+fn bicubic_grid(matrices: &PatchMatrices, shape: usize) -> Option<[usize; 16]> {
+    let s = &matrices.shapes[shape];
+    let grid = regular_grid(s.size, s.parameters.as_ref())?;
+    check_bicubic(matrices, shape, &grid).ok().map(|()| grid)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use subdiv_mesh::{BoundaryInterpolation, shapes};
+    use subdiv_schemes::Builtin;
+    use subdiv_stencil::{Grid, StencilTable};
+
+    /// The separable blocks give what the exact stencil tables give (position and normal,
+    /// through the patch frame), on a torus whose faces start their patches at every corner.
+    #[test]
+    fn separable_blocks_equal_the_table_route() {
+        let mesh = Mesh::build(shapes::quad_torus(6, 5)).unwrap();
+        let ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+        let cage = mesh.positions();
+        let mut worst: f64 = 0.0;
+        for n in [1u32, 2, 5, 8] {
+            let basis = RateBasis::new(n);
+            let count = (n * n) as usize;
+            let (mut ps, mut ns) = (vec![DVec3::ZERO; count], vec![DVec3::ZERO; count]);
+            for f in mesh.face_ids() {
+                let FacePlan::Bicubic { cv } = ev.faces[f.index()] else { panic!("{f} of a torus is regular") };
+                let Some(Resolved::Patch { patch, frame, .. }) = ev.levels.resolve(0, f) else { panic!("{f}") };
+                let table = StencilTable::compute_rates(&patch.matrices, BoundaryInterpolation::EdgeOnly, n..=n)
+                    .unwrap()
+                    .remove(0);
+                let points: Vec<DVec3> = patch.vertices.iter().map(|v| cage[v.index()]).collect();
+                grid_block(&cv, cage, &basis, &mut ps, &mut ns);
+                let index: HashMap<Dyadic, usize> =
+                    (0..table.len(Grid::Dual)).map(|k| (table.point(Grid::Dual, k), k)).collect();
+                let (ju, jv) = frame.chain([[1.0, 0.0], [0.0, 1.0]]);
+                for j in 0..n {
+                    for i in 0..n {
+                        let at =
+                            frame.to_patch(Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, 2 * i64::from(n)));
+                        let [x, ds, dt] = table.apply(Grid::Dual, index[&at], &points);
+                        let k = (j * n + i) as usize;
+                        let want_n = normal(ju[0] * ds + ju[1] * dt, jv[0] * ds + jv[1] * dt);
+                        worst = worst.max((x - ps[k]).length()).max((want_n - ns[k]).length());
+                        // The pointwise polynomial, for the points outside blocks, agrees too.
+                        let (u, v) = (f64::from(2 * i + 1) / f64::from(2 * n), f64::from(2 * j + 1) / f64::from(2 * n));
+                        let (p, du, dv) = bicubic(&cv, cage, u, v);
+                        worst = worst.max((p - x).length()).max((normal(du, dv) - want_n).length());
+                    }
+                }
+            }
+        }
+        // The torus is about 3 across.
+        assert!(worst < 1e-12, "block route off the table route by {worst:e}");
+    }
+}

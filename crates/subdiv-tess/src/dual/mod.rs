@@ -1,0 +1,239 @@
+//! Dual-grid stitching (paper 000, Schaefer and Warren, §5.5): uniform tessellation at a
+//! per-face integer rate, watertight across faces of different rates without welding.
+//!
+//! Each face at rate `n` owns the points of its **dual grid** (quads: the cell centres
+//! `((i+½)/n, (j+½)/n)` of its `Bfr` domain; triangles: the centroids of its `n²`
+//! sub-triangles). No point lies on an edge, so no point is shared and none is evaluated
+//! twice. The gaps between faces are closed by **strips** along each edge, which merge the two
+//! faces' rows of points nearest the edge in parameter order (equal rates give quads, different
+//! rates triangles), and by a polygon around each **vertex** through each incident face's point
+//! nearest it. N-gons (N ≠ 4) under a quad split are tessellated through their `Bfr` quad
+//! sub-faces at rate `⌈n/2⌉` each (a sub-face is a quarter of the face, so the spacing matches a
+//! quad neighbour's), with strips along the spokes and a polygon at the centre.
+//!
+//! - **Quad splits** (Catmull-Clark, Kobbelt, bilinear, …): the dual quad grid inside each
+//!   face; a vertex of valence 3 closes with a triangle, valence 4 with a quad, valence ≥ 5
+//!   with a fan around the vertex's limit point (a better shape than a fan from one corner;
+//!   its normal is the limit normal of the stencils).
+//! - **Triangle splits** (Loop, butterfly): the dual hexagons around each interior primal point
+//!   `(i/n, j/n)` are fanned around that point (evaluated too), and every vertex's ring is
+//!   fanned around the vertex's limit point, as the hexagons are.
+//! - **Borders** (mesh boundaries, and the edges of tagged holes, which produce nothing): points
+//!   on the edge at the parameters of the row beside it, and the limit point of each border
+//!   vertex; the strips and vertex fans close against them, so the output's boundary runs
+//!   through the limit points of the input's boundary vertices, in order.
+//!
+//! Every output vertex is evaluated once, exactly (see [`eval`] for the two routes), with a unit
+//! normal from the exact tangents. [`DualTessellator::update_cage`] re-evaluates positions and
+//! normals for a moved cage without any topology or stencil work.
+
+mod eval;
+mod topology;
+
+use glam::DVec3;
+use subdiv_mesh::{FaceId, Mesh};
+use subdiv_schemes::{Scheme, Split};
+
+use self::eval::Evaluator;
+use self::topology::{Builder, Topology};
+use crate::{SurfaceParameter, TessError, TessMesh};
+
+/// The largest rate [`DualTessellator::tessellate`] takes.
+pub const MAX_DUAL_RATE: u32 = 128;
+
+/// Options of [`DualTessellator`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DualOptions {
+    /// Also list the output's quads (face grids, equal-rate strips, valence-4 vertices) as
+    /// [`TessMesh`] polygons. Triangles are always output. Default: `true`.
+    pub quads: bool,
+    /// Evaluate on rayon's thread pool (the output is the same, bit for bit, either way).
+    /// Default: `true`.
+    pub parallel: bool,
+}
+
+impl Default for DualOptions {
+    fn default() -> Self {
+        Self { quads: true, parallel: true }
+    }
+}
+
+/// Flat output buffers for GPUs, GLB files and benchmarks.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FlatMesh {
+    /// Per vertex `px py pz nx ny nz`.
+    pub vertices: Vec<f32>,
+    /// Three indices per triangle, counter-clockwise.
+    pub indices: Vec<u32>,
+}
+
+/// Dual-grid stitching tessellator of one control mesh under one scheme, reusable across rates
+/// and cages (it keeps its allocations between calls).
+///
+/// Output conventions ([`TessMesh`]): a vertex's [`parameters`](TessMesh::parameters) name the
+/// face that evaluated it (a border point: the face beside the border; a vertex's limit point:
+/// one of its faces, at its corner). A triangle of a cell belongs to the cell's face; a strip's
+/// triangle to the face on the left of the edge's lower-numbered half-edge (the face of the
+/// border side, on a border); a vertex polygon's to the first face of its ring. Since strip and
+/// ring triangles span several faces, [`triangle_parameters`](TessMesh::triangle_parameters)
+/// lists each corner's own parameters (those of [`parameters`](TessMesh::parameters)), which
+/// may be in different faces.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+///
+/// let mesh = Mesh::build(shapes::ngon_prism(5))?;
+/// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())?;
+/// let rates: Vec<u32> = (0..tess.face_count() as u32).map(|f| 2 + f % 3).collect();
+/// let out = tess.tessellate(&rates)?;
+/// assert_eq!(out.normals.len(), out.positions.len());
+/// let triangles = out.triangles.len();
+///
+/// // Animation: the same topology on a moved cage.
+/// let moved: Vec<_> = mesh.positions().iter().map(|p| *p * 2.0).collect();
+/// let out = tess.update_cage(&moved)?;
+/// assert_eq!(out.triangles.len(), triangles);
+///
+/// let mut flat = FlatMesh::default();
+/// tess.write_flat(&mut flat);
+/// assert_eq!(flat.indices.len(), 3 * triangles);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct DualTessellator {
+    options: DualOptions,
+    triangle: bool,
+    vertex_count: usize,
+    evaluator: Evaluator,
+    builder_mesh: Mesh,
+    topology: Topology,
+    rates: Vec<u32>,
+    output: TessMesh,
+}
+
+impl DualTessellator {
+    /// Prepares `mesh` under `scheme`: its patches, the levels of refinement its N-gons and
+    /// double extraordinary faces need, and the bicubic faces' control points.
+    ///
+    /// # Errors
+    /// [`TessError::Surface`] as [`PatchLevels::new`](subdiv_stencil::PatchLevels::new): schemes
+    /// without sub-patch matrices (√3, Doo-Sabin, mid-edge), creases and corners, faces the
+    /// scheme does not take.
+    pub fn new(scheme: &Scheme, mesh: &Mesh, options: &DualOptions) -> Result<Self, TessError> {
+        let evaluator = Evaluator::new(scheme, mesh)?;
+        let triangle = evaluator.levels().split() == Split::Triangle;
+        let builder_mesh = evaluator.levels().mesh(0).clone();
+        Ok(Self {
+            options: *options,
+            triangle,
+            vertex_count: mesh.vertex_count(),
+            evaluator,
+            builder_mesh,
+            topology: Topology::default(),
+            rates: Vec::new(),
+            output: TessMesh::default(),
+        })
+    }
+
+    /// The number of input faces (the length [`tessellate`](Self::tessellate)'s rates must have).
+    pub fn face_count(&self) -> usize {
+        self.builder_mesh.face_count()
+    }
+
+    /// Tessellates with `rates[f]` steps per side of input face `f` (holes: ignored, but still
+    /// checked).
+    ///
+    /// # Errors
+    /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
+    /// rate outside `1..=`[`MAX_DUAL_RATE`]; [`TessError::Surface`] if a stencil fails.
+    pub fn tessellate(&mut self, rates: &[u32]) -> Result<&TessMesh, TessError> {
+        if rates.len() != self.face_count() {
+            return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
+        }
+        if let Some((face, &rate)) = rates.iter().enumerate().find(|(_, r)| !(1..=MAX_DUAL_RATE).contains(*r)) {
+            return Err(TessError::Rate { face, rate, rule: "rates are integers from 1 to MAX_DUAL_RATE = 128" });
+        }
+        let domains = self.evaluator.domains()?;
+        let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
+        builder.build(&domains, rates, &mut self.topology);
+        self.evaluator.prepare(&self.topology)?;
+        self.rates.clear();
+        self.rates.extend_from_slice(rates);
+        self.fill_output();
+        Ok(&self.output)
+    }
+
+    /// The animation path: the same topology and rates on a new cage (one finite position per
+    /// input vertex). Only positions and normals are recomputed.
+    ///
+    /// # Errors
+    /// [`TessError::CageLength`], [`TessError::CagePosition`] for a non-finite position.
+    pub fn update_cage(&mut self, positions: &[DVec3]) -> Result<&TessMesh, TessError> {
+        if positions.len() != self.vertex_count {
+            return Err(TessError::CageLength { expected: self.vertex_count, got: positions.len() });
+        }
+        if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+            return Err(TessError::CagePosition { vertex, value: format!("{p}") });
+        }
+        self.evaluator.set_cage(positions);
+        let out = &mut self.output;
+        self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
+        Ok(&self.output)
+    }
+
+    /// The last output (empty before the first [`tessellate`](Self::tessellate)).
+    pub fn mesh(&self) -> &TessMesh {
+        &self.output
+    }
+
+    /// The rates of the last [`tessellate`](Self::tessellate).
+    pub fn rates(&self) -> &[u32] {
+        &self.rates
+    }
+
+    /// The output as flat f32 buffers, reusing `out`'s allocations.
+    pub fn write_flat(&self, out: &mut FlatMesh) {
+        let m = &self.output;
+        out.vertices.clear();
+        out.vertices.reserve(6 * m.positions.len());
+        for (p, n) in m.positions.iter().zip(&m.normals) {
+            out.vertices.extend_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
+        }
+        out.indices.clear();
+        out.indices.extend(m.triangles.iter().flatten());
+    }
+
+    fn fill_output(&mut self) {
+        let t = &self.topology;
+        let out = &mut self.output;
+        self.evaluator.evaluate(t, self.options.parallel, &mut out.positions, &mut out.normals);
+        out.parameters.clear();
+        out.parameters.extend(t.sites.iter().map(|s| {
+            let (u, v) = s.point.to_f64();
+            SurfaceParameter { face: FaceId::new(s.face), u, v }
+        }));
+        out.triangles.clear();
+        out.triangles.extend_from_slice(&t.triangles);
+        out.triangle_faces.clear();
+        out.triangle_faces.extend(t.triangle_faces.iter().map(|&f| FaceId::new(f)));
+        out.triangle_parameters.clear();
+        let params = &out.parameters;
+        out.triangle_parameters
+            .extend(t.triangles.iter().map(|tri| tri.map(|k| [params[k as usize].u, params[k as usize].v])));
+        out.polygon_offsets.clear();
+        out.polygon_offsets.extend_from_slice(&t.polygon_offsets);
+        out.polygon_vertices.clear();
+        out.polygon_vertices.extend_from_slice(&t.polygon_vertices);
+        out.polygon_faces.clear();
+        out.polygon_faces.extend(t.polygon_faces.iter().map(|&f| FaceId::new(f)));
+    }
+}
+
+/// The number of output vertices the construction makes for `mesh` under a quad (or, with
+/// `triangle`, a triangle) split at `rates`: cells, triangle interiors, N-gon centres, border
+/// points and vertex points (see the module docs). For checks.
+pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usize {
+    topology::predicted_vertices(mesh, triangle, rates)
+}

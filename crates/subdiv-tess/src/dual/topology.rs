@@ -1,0 +1,571 @@
+//! The combinatorial half of dual-grid stitching: which output vertices exist (each with its
+//! face and exact parameter), and the triangles and quads between them.
+//!
+//! Output vertices, in this order per input face (then per edge, then per vertex):
+//! - **cells**: a quad face at rate `n` is one cell of `n × n` dual points; an N-gon (N ≠ 4,
+//!   quad split) is N cells, one per `Bfr` sub-face, at rate `⌈n/2⌉` each (a sub-face is a
+//!   quarter-sized quad, so the spacing matches the neighbours'); a triangle (triangle split) is
+//!   one cell of `n²` sub-triangle centroids, then its interior primal points `(i/n, j/n)`
+//!   (`i, j ≥ 1`, `i + j < n`), which the dual hexagons are fanned around;
+//! - an N-gon's centre when `N ≥ 5` (its centre polygon is fanned around it);
+//! - **border points** on each edge without a surface on one side (mesh boundary, or next to a
+//!   hole), at the parameters of the row of points beside it;
+//! - **vertex points**: a mesh vertex's limit point where its polygon is fanned around it (every
+//!   vertex under a triangle split; interior vertices of valence ≥ 5 and every border vertex
+//!   under a quad split).
+//!
+//! Polygons: cell interiors (the dual quad grid; the triangles' hexagons), **strips** along each
+//! edge (and each N-gon spoke) merging the two rows nearest it in parameter order, and **rings**
+//! around each vertex through the nearest point of each incident face. Every output edge is then
+//! shared by exactly two polygons (or one, on the border), by construction.
+
+use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
+use subdiv_stencil::{Dyadic, FaceDomain};
+
+/// An output vertex's place on the surface: the input face that evaluates it and the exact
+/// `Bfr` parameter there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Site {
+    pub face: u32,
+    pub point: Dyadic,
+}
+
+/// The dual grid of a whole quad face (not a sub-face): its points are `base + j·n + i` at
+/// `((i+½)/n, (j+½)/n)`, which the regular fast path evaluates row by row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Block {
+    pub face: u32,
+    pub rate: u32,
+    pub base: u32,
+}
+
+/// A point of a row beside an edge, with its parameter `num / den` along the edge.
+#[derive(Clone, Copy, Debug)]
+struct RowPoint {
+    vertex: u32,
+    num: u64,
+    den: u64,
+    /// Whether a border point goes beside it (every point of a quad row; the upward centroids
+    /// of a triangle row, the ones nearest the edge).
+    near: bool,
+}
+
+/// The output's vertices and connectivity.
+#[derive(Debug, Default)]
+pub(crate) struct Topology {
+    pub sites: Vec<Site>,
+    pub blocks: Vec<Block>,
+    pub triangles: Vec<[u32; 3]>,
+    pub triangle_faces: Vec<u32>,
+    pub polygon_offsets: Vec<u32>,
+    pub polygon_vertices: Vec<u32>,
+    pub polygon_faces: Vec<u32>,
+}
+
+/// One input face's cells.
+#[derive(Clone, Copy, Debug)]
+struct FaceCells {
+    /// The first cell's first vertex (cells of one face are consecutive, `m²` or `n²` each).
+    base: u32,
+    /// Points per side of a cell: `n` for quads and triangles, `⌈n/2⌉` for sub-faces.
+    m: u32,
+    /// The face's domain.
+    domain: FaceDomain,
+}
+
+/// Builds the topology of `mesh` (level 0 of the patch levels, holes tagged) at `rates`.
+pub(crate) struct Builder<'a> {
+    mesh: &'a Mesh,
+    triangle: bool,
+    quads: bool,
+    faces: Vec<Option<FaceCells>>,
+    /// Per half-edge: its corner number in its face.
+    corner: Vec<u32>,
+    /// Per half-edge on a border: its first border point and their number.
+    border: Vec<(u32, u32)>,
+    out: Topology,
+    row: Vec<RowPoint>,
+    other: Vec<RowPoint>,
+    ring: Vec<u32>,
+}
+
+impl<'a> Builder<'a> {
+    /// `domains[f]` is `None` for a hole.
+    pub(crate) fn new(mesh: &'a Mesh, triangle: bool, quads: bool) -> Self {
+        let mut corner = vec![0; mesh.half_edge_count()];
+        for f in mesh.face_ids() {
+            for (k, h) in mesh.face_half_edges(f).enumerate() {
+                corner[h.index()] = k as u32;
+            }
+        }
+        Self {
+            mesh,
+            triangle,
+            quads,
+            faces: Vec::new(),
+            corner,
+            border: Vec::new(),
+            out: Topology::default(),
+            row: Vec::new(),
+            other: Vec::new(),
+            ring: Vec::new(),
+        }
+    }
+
+    /// The topology at `rates` (checked by the caller), reusing `out`'s allocations.
+    pub(crate) fn build(&mut self, domains: &[Option<FaceDomain>], rates: &[u32], out: &mut Topology) {
+        std::mem::swap(&mut self.out, out);
+        let o = &mut self.out;
+        o.sites.clear();
+        o.blocks.clear();
+        o.triangles.clear();
+        o.triangle_faces.clear();
+        o.polygon_offsets.clear();
+        o.polygon_offsets.push(0);
+        o.polygon_vertices.clear();
+        o.polygon_faces.clear();
+        self.faces.clear();
+        self.border.clear();
+        self.border.resize(self.mesh.half_edge_count(), (u32::MAX, 0));
+        for f in 0..domains.len() {
+            self.face(f, domains[f], rates[f]);
+        }
+        for f in self.mesh.face_ids() {
+            if self.faces[f.index()].is_none() {
+                continue;
+            }
+            for h in self.mesh.face_half_edges(f) {
+                self.edge(h);
+            }
+        }
+        for v in self.mesh.vertices() {
+            self.vertex(v);
+        }
+        std::mem::swap(&mut self.out, out);
+    }
+
+    fn push_site(&mut self, face: usize, point: Dyadic) -> u32 {
+        let id = self.out.sites.len() as u32;
+        self.out.sites.push(Site { face: face as u32, point });
+        id
+    }
+
+    fn triangle(&mut self, t: [u32; 3], face: u32) {
+        self.out.triangles.push(t);
+        self.out.triangle_faces.push(face);
+    }
+
+    /// A quad `a b c d` (counter-clockwise): two triangles, and a polygon if asked for.
+    fn quad(&mut self, q: [u32; 4], face: u32) {
+        self.triangle([q[0], q[1], q[2]], face);
+        self.triangle([q[0], q[2], q[3]], face);
+        if self.quads {
+            self.out.polygon_vertices.extend_from_slice(&q);
+            self.out.polygon_offsets.push(self.out.polygon_vertices.len() as u32);
+            self.out.polygon_faces.push(face);
+        }
+    }
+
+    /// A closed ring of points (counter-clockwise): a triangle, a quad, or (with `centre`, or
+    /// more than 4 points) a fan around `centre`. Rings of fewer than 3 points close nothing:
+    /// the strips on either side of them already share their edge.
+    fn close_ring(&mut self, ring: &[u32], centre: Option<u32>, face: u32) {
+        match (ring.len(), centre) {
+            (0..=2, _) => {}
+            (_, Some(c)) => {
+                for k in 0..ring.len() {
+                    self.triangle([c, ring[k], ring[(k + 1) % ring.len()]], face);
+                }
+            }
+            (3, None) => self.triangle([ring[0], ring[1], ring[2]], face),
+            (4, None) => self.quad([ring[0], ring[1], ring[2], ring[3]], face),
+            // Not reached: callers give a centre to rings of 5 or more.
+            (_, None) => {
+                for k in 1..ring.len() - 1 {
+                    self.triangle([ring[0], ring[k], ring[k + 1]], face);
+                }
+            }
+        }
+    }
+
+    /// Cell points and interiors of face `f`.
+    fn face(&mut self, f: usize, domain: Option<FaceDomain>, n: u32) {
+        let Some(domain) = domain else {
+            self.faces.push(None);
+            return;
+        };
+        let base = self.out.sites.len() as u32;
+        match domain {
+            FaceDomain::Quad => {
+                self.out.blocks.push(Block { face: f as u32, rate: n, base });
+                self.quad_cell(f, domain, None, n);
+                self.faces.push(Some(FaceCells { base, m: n, domain }));
+            }
+            FaceDomain::SubFaces { size, .. } => {
+                let m = n.div_ceil(2);
+                for s in 0..size {
+                    self.quad_cell(f, domain, Some(s), m);
+                }
+                self.faces.push(Some(FaceCells { base, m, domain }));
+                let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
+                // Spoke s: sub-face s's side 1 (from the middle of side s to the centre) against
+                // sub-face s + 1's side 2, reversed: equal rates, so quads.
+                for s in 0..size {
+                    let t = (s + 1) % size;
+                    self.row.clear();
+                    self.other.clear();
+                    for k in 0..m {
+                        let t2 = u64::from(2 * k + 1);
+                        self.row.push(RowPoint {
+                            vertex: cell(s, m - 1, k),
+                            num: t2,
+                            den: 2 * u64::from(m),
+                            near: true,
+                        });
+                        self.other.push(RowPoint {
+                            vertex: cell(t, k, m - 1),
+                            num: t2,
+                            den: 2 * u64::from(m),
+                            near: true,
+                        });
+                    }
+                    let (row, other) = (std::mem::take(&mut self.row), std::mem::take(&mut self.other));
+                    self.strip(&row, &other, f as u32);
+                    (self.row, self.other) = (row, other);
+                }
+                // The centre: the sub-faces' inner corners, counter-clockwise.
+                let ring: Vec<u32> = (0..size).map(|s| cell(s, m - 1, m - 1)).collect();
+                let centre = (size >= 5).then(|| self.push_site(f, domain.from_sub_face(0, Dyadic::new(1, 1, 1))));
+                self.close_ring(&ring, centre, f as u32);
+            }
+            FaceDomain::Triangle => {
+                let q = i64::from(3 * n);
+                for j in 0..n {
+                    for i in 0..n - j {
+                        let (i3, j3) = (3 * i64::from(i), 3 * i64::from(j));
+                        self.push_site(f, Dyadic::new(i3 + 1, j3 + 1, q));
+                        if i + j + 1 < n {
+                            self.push_site(f, Dyadic::new(i3 + 2, j3 + 2, q));
+                        }
+                    }
+                }
+                self.faces.push(Some(FaceCells { base, m: n, domain }));
+                let up = |i: u32, j: u32| base + 2 * n * j - j * j + 2 * i;
+                for j in 1..n {
+                    for i in 1..n - j {
+                        let c = self.push_site(f, Dyadic::new(i64::from(i), i64::from(j), i64::from(n)));
+                        // The six sub-triangles around (i, j), counter-clockwise.
+                        let hex = [
+                            up(i, j),
+                            up(i - 1, j) + 1,
+                            up(i - 1, j),
+                            up(i - 1, j - 1) + 1,
+                            up(i, j - 1),
+                            up(i, j - 1) + 1,
+                        ];
+                        self.close_ring(&hex, Some(c), f as u32);
+                    }
+                }
+            }
+        }
+    }
+
+    /// The `m × m` dual points of a quad cell (a whole quad face, or sub-face `sub`) and the
+    /// quads between them.
+    fn quad_cell(&mut self, f: usize, domain: FaceDomain, sub: Option<usize>, m: u32) {
+        let base = self.out.sites.len() as u32;
+        let q = 2 * i64::from(m);
+        for j in 0..m {
+            for i in 0..m {
+                let a = Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, q);
+                let point = sub.map_or(a, |s| domain.from_sub_face(s, a));
+                self.push_site(f, point);
+            }
+        }
+        for j in 0..m.saturating_sub(1) {
+            for i in 0..m - 1 {
+                let k = base + j * m + i;
+                self.quad([k, k + 1, k + 1 + m, k + m], f as u32);
+            }
+        }
+    }
+
+    /// The points of face `f`'s cells nearest its side `c` (from corner `c` to `c + 1`), in
+    /// that direction, with their parameters along the side, into `row`.
+    fn side_row(&self, f: usize, c: usize, row: &mut Vec<RowPoint>) {
+        row.clear();
+        let Some(cells) = self.faces[f] else { return };
+        let (base, m) = (cells.base, cells.m);
+        let m64 = u64::from(m);
+        match cells.domain {
+            FaceDomain::Quad => {
+                for k in 0..m {
+                    let (i, j) = match c {
+                        0 => (k, 0),
+                        1 => (m - 1, k),
+                        2 => (m - 1 - k, m - 1),
+                        _ => (0, m - 1 - k),
+                    };
+                    row.push(RowPoint {
+                        vertex: base + j * m + i,
+                        num: u64::from(2 * k + 1),
+                        den: 2 * m64,
+                        near: true,
+                    });
+                }
+            }
+            FaceDomain::SubFaces { size, .. } => {
+                let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
+                // Sub-face c's side 0 covers the first half, sub-face c + 1's side 3 the second.
+                for k in 0..m {
+                    row.push(RowPoint { vertex: cell(c, k, 0), num: u64::from(2 * k + 1), den: 4 * m64, near: true });
+                }
+                let next = (c + 1) % size;
+                for k in 0..m {
+                    row.push(RowPoint {
+                        vertex: cell(next, 0, m - 1 - k),
+                        num: 2 * m64 + u64::from(2 * k + 1),
+                        den: 4 * m64,
+                        near: true,
+                    });
+                }
+            }
+            FaceDomain::Triangle => {
+                let n = m;
+                let up = |i: u32, j: u32| base + 2 * n * j - j * j + 2 * i;
+                for k in 0..n {
+                    // Upward centroid k along the side, then the downward one after it.
+                    let (u, d) = match c {
+                        0 => (up(k, 0), (k + 1 < n).then(|| up(k, 0) + 1)),
+                        1 => (up(n - 1 - k, k), (k + 1 < n).then(|| up(n - 2 - k, k) + 1)),
+                        _ => (up(0, n - 1 - k), (k + 1 < n).then(|| up(0, n - 2 - k) + 1)),
+                    };
+                    row.push(RowPoint { vertex: u, num: u64::from(2 * k + 1), den: 2 * m64, near: true });
+                    if let Some(d) = d {
+                        row.push(RowPoint { vertex: d, num: u64::from(2 * k + 2), den: 2 * m64, near: false });
+                    }
+                }
+            }
+        }
+    }
+
+    /// The parameter of face `f` at `t = num / den` along its side `c`.
+    fn on_side(&self, f: usize, c: usize, num: u64, den: u64) -> Dyadic {
+        let (t, d) = (num as i64, den as i64);
+        let cells = self.faces[f].expect("a face with a surface");
+        match cells.domain {
+            FaceDomain::Quad => match c {
+                0 => Dyadic::new(t, 0, d),
+                1 => Dyadic::new(d, t, d),
+                2 => Dyadic::new(d - t, d, d),
+                _ => Dyadic::new(0, d - t, d),
+            },
+            FaceDomain::Triangle => match c {
+                0 => Dyadic::new(t, 0, d),
+                1 => Dyadic::new(d - t, t, d),
+                _ => Dyadic::new(0, d - t, d),
+            },
+            FaceDomain::SubFaces { size, .. } => {
+                if 2 * t < d {
+                    cells.domain.from_sub_face(c, Dyadic::new(2 * t, 0, d))
+                } else {
+                    cells.domain.from_sub_face((c + 1) % size, Dyadic::new(0, 2 * (d - t), d))
+                }
+            }
+        }
+        .reduced()
+    }
+
+    /// The parameter of face `f`'s corner `c`.
+    fn corner_point(&self, f: usize, c: usize) -> Dyadic {
+        let cells = self.faces[f].expect("a face with a surface");
+        match cells.domain {
+            FaceDomain::Quad => {
+                [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(1, 1, 1), Dyadic::new(0, 1, 1)][c]
+            }
+            FaceDomain::Triangle => [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(0, 1, 1)][c],
+            FaceDomain::SubFaces { .. } => cells.domain.from_sub_face(c, Dyadic::new(0, 0, 1)).reduced(),
+        }
+    }
+
+    /// Face `f`'s point nearest its corner `c`.
+    fn corner_vertex(&self, f: usize, c: usize) -> u32 {
+        let cells = self.faces[f].expect("a face with a surface");
+        let (base, m) = (cells.base, cells.m);
+        match cells.domain {
+            FaceDomain::Quad => base + [0, m - 1, m * m - 1, m * (m - 1)][c],
+            FaceDomain::SubFaces { .. } => base + (c as u32) * m * m,
+            FaceDomain::Triangle => {
+                let up = |i: u32, j: u32| base + 2 * m * j - j * j + 2 * i;
+                [up(0, 0), up(m - 1, 0), up(0, m - 1)][c]
+            }
+        }
+    }
+
+    /// Whether half-edge `h` (of a face with a surface) has no surface across it.
+    fn is_border(&self, h: HalfEdgeId) -> bool {
+        self.mesh.twin(h).is_none_or(|t| self.faces[self.mesh.face(t).index()].is_none())
+    }
+
+    /// The strip along the edge of half-edge `h` (its face has a surface): against the other
+    /// face's row, or against new border points.
+    fn edge(&mut self, h: HalfEdgeId) {
+        let f = self.mesh.face(h).index();
+        let c = self.corner[h.index()] as usize;
+        let mut row = std::mem::take(&mut self.row);
+        let mut other = std::mem::take(&mut self.other);
+        self.side_row(f, c, &mut row);
+        if !self.is_border(h) {
+            let t = self.mesh.twin(h).expect("not a border");
+            // Each interior edge once, from its lower half-edge.
+            if h.index() < t.index() {
+                let g = self.mesh.face(t).index();
+                self.side_row(g, self.corner[t.index()] as usize, &mut other);
+                other.reverse();
+                for p in &mut other {
+                    p.num = p.den - p.num;
+                }
+                self.strip(&row, &other, f as u32);
+            }
+        } else {
+            other.clear();
+            let first = self.out.sites.len() as u32;
+            for p in row.iter().filter(|p| p.near) {
+                let point = self.on_side(f, c, p.num, p.den);
+                let vertex = self.push_site(f, point);
+                other.push(RowPoint { vertex, num: p.num, den: p.den, near: true });
+            }
+            self.border[h.index()] = (first, other.len() as u32);
+            self.strip(&row, &other, f as u32);
+        }
+        (self.row, self.other) = (row, other);
+    }
+
+    /// Triangulates the ribbon between row `a` (on the left of the direction) and row `b` (on
+    /// the right), both ordered along it: advance the row whose next point comes first; where
+    /// both next points have the same parameter, a quad.
+    fn strip(&mut self, a: &[RowPoint], b: &[RowPoint], face: u32) {
+        let (mut i, mut j) = (0, 0);
+        if a.is_empty() || b.is_empty() {
+            return;
+        }
+        while i + 1 < a.len() || j + 1 < b.len() {
+            let order = if i + 1 == a.len() {
+                std::cmp::Ordering::Greater
+            } else if j + 1 == b.len() {
+                std::cmp::Ordering::Less
+            } else {
+                let (x, y) = (a[i + 1], b[j + 1]);
+                (x.num * y.den).cmp(&(y.num * x.den))
+            };
+            match order {
+                std::cmp::Ordering::Less => {
+                    self.triangle([b[j].vertex, a[i + 1].vertex, a[i].vertex], face);
+                    i += 1;
+                }
+                std::cmp::Ordering::Greater => {
+                    self.triangle([b[j].vertex, b[j + 1].vertex, a[i].vertex], face);
+                    j += 1;
+                }
+                std::cmp::Ordering::Equal => {
+                    self.quad([b[j].vertex, b[j + 1].vertex, a[i + 1].vertex, a[i].vertex], face);
+                    i += 1;
+                    j += 1;
+                }
+            }
+        }
+    }
+
+    /// The polygons around vertex `v`: one closed ring, or one fan per run of faces between
+    /// borders (each run from a border to a border, around the vertex's limit point).
+    fn vertex(&mut self, v: VertexId) {
+        let mesh = self.mesh;
+        let has_surface = |h: HalfEdgeId| self.faces[mesh.face(h).index()].is_some();
+        let mut starts: Vec<HalfEdgeId> = mesh.outgoing(v).filter(|&h| has_surface(h) && self.is_border(h)).collect();
+        let closed = starts.is_empty();
+        if closed {
+            match mesh.outgoing(v).find(|&h| has_surface(h)) {
+                Some(h) => starts.push(h),
+                None => return,
+            }
+        }
+        let mut centre = None;
+        let mut ring = std::mem::take(&mut self.ring);
+        for &start in &starts {
+            ring.clear();
+            let f0 = mesh.face(start).index();
+            if !closed {
+                let (first, _) = self.border[start.index()];
+                ring.push(first);
+            }
+            let mut h = start;
+            loop {
+                let f = mesh.face(h).index();
+                ring.push(self.corner_vertex(f, self.corner[h.index()] as usize));
+                let p = mesh.prev(h);
+                if self.is_border(p) {
+                    if !closed {
+                        let (first, count) = self.border[p.index()];
+                        ring.push(first + count - 1);
+                    }
+                    break;
+                }
+                h = mesh.twin(p).expect("not a border");
+                if closed && h == start {
+                    break;
+                }
+            }
+            // Closed rings of 3 (and 4 under a quad split) are polygons of their own; rings of
+            // fewer than 3 close nothing.
+            let fan = !closed || (ring.len() >= 3 && (self.triangle || ring.len() >= 5));
+            if fan && centre.is_none() {
+                let point = self.corner_point(f0, self.corner[start.index()] as usize);
+                centre = Some(self.push_site(f0, point));
+            }
+            if closed {
+                self.close_ring(&ring, if fan { centre } else { None }, f0 as u32);
+            } else if let Some(c) = centre {
+                // An open fan: from the border point on the first edge to the one on the last.
+                for k in 0..ring.len() - 1 {
+                    self.triangle([c, ring[k], ring[k + 1]], f0 as u32);
+                }
+            }
+        }
+        self.ring = ring;
+    }
+}
+
+/// The number of output vertices at `rates`, from the construction's counts (for tests and for
+/// sizing): cells, triangle interiors, N-gon centres, border points, vertex points.
+pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usize {
+    let hole = |f: FaceId| mesh.is_hole(f);
+    let rate_of = |f: FaceId| rates[f.index()] as usize;
+    let mut count = 0;
+    for f in mesh.face_ids().filter(|&f| !hole(f)) {
+        let (n, size) = (rate_of(f), mesh.face_size(f));
+        count += if triangle {
+            n * n + (n.saturating_sub(1) * n.saturating_sub(2)) / 2
+        } else if size == 4 {
+            n * n
+        } else {
+            size * n.div_ceil(2).pow(2) + usize::from(size >= 5)
+        };
+        for h in mesh.face_half_edges(f) {
+            if mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) {
+                count += if triangle || size == 4 { n } else { 2 * n.div_ceil(2) };
+            }
+        }
+    }
+    for v in mesh.vertices() {
+        let faces: Vec<FaceId> = mesh.vertex_faces(v).filter(|&f| !hole(f)).collect();
+        if faces.is_empty() {
+            continue;
+        }
+        let border = mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)))
+            || mesh.is_boundary_vertex(v);
+        if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
+            count += 1;
+        }
+    }
+    count
+}

@@ -1,0 +1,478 @@
+//! Dual-grid stitching: watertightness and topology at random per-face rates, boundaries, every
+//! vertex on the exact limit surface, the animation path, and typed errors.
+
+#![allow(clippy::print_stderr)]
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+use proptest::prelude::*;
+use subdiv_mesh::{FaceId, Mesh, PolygonSoup, VertexId, shapes};
+use subdiv_schemes::{Builtin, RefineOptions};
+use subdiv_stencil::LimitEvaluator;
+use subdiv_tess::dual::predicted_vertex_count;
+use subdiv_tess::{DualOptions, DualTessellator, FlatMesh, TessError, TessMesh};
+
+fn tessellate(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> TessMesh {
+    let mut tess = DualTessellator::new(builtin.scheme(), mesh, &DualOptions::default()).unwrap();
+    tess.tessellate(rates).unwrap().clone()
+}
+
+/// Each directed edge once; returns the directed edges without an opposite (the border).
+fn directed_edges(out: &TessMesh) -> HashMap<(u32, u32), usize> {
+    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
+    for (k, t) in out.triangles.iter().enumerate() {
+        assert!(t[0] != t[1] && t[1] != t[2] && t[0] != t[2], "triangle {k} is degenerate: {t:?}");
+        for i in 0..3 {
+            let e = (t[i], t[(i + 1) % 3]);
+            assert!(directed.insert(e, k).is_none(), "edge {e:?} used twice in one direction");
+        }
+    }
+    directed
+}
+
+/// Every vertex used, no two at one position, no edge in one direction twice, every edge's
+/// opposite present unless it is a border edge; the border edges returned.
+fn check(out: &TessMesh) -> Vec<(u32, u32)> {
+    let directed = directed_edges(out);
+    let border: Vec<(u32, u32)> = directed.keys().filter(|&&(a, b)| !directed.contains_key(&(b, a))).copied().collect();
+    let mut used = vec![false; out.positions.len()];
+    out.triangles.iter().flatten().for_each(|&v| used[v as usize] = true);
+    assert!(used.iter().all(|&u| u), "an output vertex is in no triangle");
+    let mut seen: HashMap<[u64; 3], usize> = HashMap::new();
+    for (i, p) in out.positions.iter().enumerate() {
+        assert!(p.is_finite());
+        if let Some(j) = seen.insert([p.x.to_bits(), p.y.to_bits(), p.z.to_bits()], i) {
+            panic!("vertices {j} and {i} share the position {p}");
+        }
+    }
+    // Polygons share their edges with triangles' directions.
+    for k in 0..out.polygon_count() {
+        let p = out.polygon(k);
+        for i in 0..p.len() {
+            assert!(directed.contains_key(&(p[i], p[(i + 1) % p.len()])), "polygon {k} edge not a triangle edge");
+        }
+    }
+    border
+}
+
+fn euler(out: &TessMesh) -> i64 {
+    let directed = directed_edges(out);
+    let edges = directed.keys().filter(|&&(a, b)| a < b || !directed.contains_key(&(b, a))).count();
+    out.positions.len() as i64 - edges as i64 + out.triangles.len() as i64
+}
+
+/// The input's χ, without hole faces.
+fn input_euler(mesh: &Mesh) -> i64 {
+    let faces: Vec<FaceId> = mesh.face_ids().filter(|&f| !mesh.is_hole(f)).collect();
+    let mut edges = std::collections::HashSet::new();
+    let mut vertices = std::collections::HashSet::new();
+    for &f in &faces {
+        let vs = mesh.face_vertices(f);
+        for k in 0..vs.len() {
+            let (a, b) = (vs[k], vs[(k + 1) % vs.len()]);
+            edges.insert((a.min(b), a.max(b)));
+            vertices.insert(a);
+        }
+    }
+    vertices.len() as i64 - edges.len() as i64 + faces.len() as i64
+}
+
+fn closed_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> TessMesh {
+    let out = tessellate(builtin, mesh, rates);
+    let border = check(&out);
+    assert!(border.is_empty(), "{} border edges on a closed mesh", border.len());
+    assert_eq!(euler(&out), input_euler(mesh));
+    let triangle = builtin == Builtin::Loop || builtin == Builtin::Butterfly;
+    assert_eq!(out.positions.len(), predicted_vertex_count(mesh, triangle, rates));
+    out
+}
+
+/// Output boundary loops (chains of border edges).
+fn loops(border: &[(u32, u32)]) -> Vec<Vec<u32>> {
+    let next: HashMap<u32, u32> = border.iter().copied().collect();
+    assert_eq!(next.len(), border.len(), "a vertex starts two border edges");
+    let mut done = std::collections::HashSet::new();
+    let mut out = Vec::new();
+    let mut starts: Vec<u32> = next.keys().copied().collect();
+    starts.sort_unstable();
+    for s in starts {
+        if done.contains(&s) {
+            continue;
+        }
+        let mut l = vec![s];
+        done.insert(s);
+        let mut v = next[&s];
+        while v != s {
+            l.push(v);
+            done.insert(v);
+            v = next[&v];
+        }
+        out.push(l);
+    }
+    out
+}
+
+/// Open input: the output's boundary loops are the input's, through the limit points of the
+/// input's boundary vertices in order.
+fn open_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
+    let out = tessellate(builtin, mesh, rates);
+    let border = check(&out);
+    assert_eq!(euler(&out), input_euler(mesh));
+    let triangle = builtin == Builtin::Loop || builtin == Builtin::Butterfly;
+    assert_eq!(out.positions.len(), predicted_vertex_count(mesh, triangle, rates));
+    let output_loops = loops(&border);
+    // The input's border: boundary half-edges and the half-edges of faces next to holes.
+    let mut next: HashMap<VertexId, VertexId> = HashMap::new();
+    for f in mesh.face_ids().filter(|&f| !mesh.is_hole(f)) {
+        for h in mesh.face_half_edges(f) {
+            if mesh.twin(h).is_none_or(|t| mesh.is_hole(mesh.face(t))) {
+                next.insert(mesh.origin(h), mesh.dest(h));
+            }
+        }
+    }
+    let input_loops = {
+        let mut seen = std::collections::HashSet::new();
+        let mut all = Vec::new();
+        let mut keys: Vec<VertexId> = next.keys().copied().collect();
+        keys.sort();
+        for s in keys {
+            if seen.insert(s) {
+                let mut l = vec![s];
+                let mut v = next[&s];
+                while v != s {
+                    seen.insert(v);
+                    l.push(v);
+                    v = next[&v];
+                }
+                all.push(l);
+            }
+        }
+        all
+    };
+    assert_eq!(output_loops.len(), input_loops.len(), "boundary loop count");
+    let evaluator = LimitEvaluator::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
+    let diagonal = diagonal(mesh);
+    // The limit point of each input border vertex, through one of its faces' corners.
+    let limit = |v: VertexId| -> DVec3 {
+        let h = mesh.outgoing(v).find(|&h| !mesh.is_hole(mesh.face(h))).unwrap();
+        let f = mesh.face(h);
+        let c = mesh.face_half_edges(f).position(|x| x == h).unwrap();
+        let domain = evaluator.domain(f).unwrap();
+        let p = match domain {
+            subdiv_stencil::FaceDomain::Quad => [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][c],
+            subdiv_stencil::FaceDomain::Triangle => [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)][c],
+            d @ subdiv_stencil::FaceDomain::SubFaces { .. } => {
+                d.from_sub_face(c, subdiv_stencil::Dyadic::new(0, 0, 1)).to_f64()
+            }
+        };
+        evaluator.eval(f, p.0, p.1).unwrap().position
+    };
+    for input in &input_loops {
+        let corners: Vec<DVec3> = input.iter().map(|&v| limit(v)).collect();
+        // The output loop holding the first corner, and the corners' places along it.
+        let find = |p: DVec3| -> Option<(usize, usize)> {
+            output_loops.iter().enumerate().find_map(|(l, lp)| {
+                lp.iter().position(|&v| (out.positions[v as usize] - p).length() < 1e-12 * diagonal).map(|k| (l, k))
+            })
+        };
+        let places: Vec<(usize, usize)> = corners.iter().map(|&p| find(p).expect("a boundary corner")).collect();
+        assert!(places.iter().all(|p| p.0 == places[0].0), "corners of one input loop on several output loops");
+        // In order along the loop: cyclically increasing positions.
+        let len = output_loops[places[0].0].len();
+        let steps: usize =
+            (0..places.len()).map(|k| (places[(k + 1) % places.len()].1 + len - places[k].1) % len).sum();
+        assert_eq!(steps, len, "the corners are not in the loop's order");
+    }
+}
+
+fn diagonal(mesh: &Mesh) -> f64 {
+    mesh.bounding_box().map_or(1.0, |(lo, hi)| lo.distance(hi))
+}
+
+/// Every output vertex equals the exact limit point at its parameter (1e-12 × bbox), normals
+/// to 1e-10.
+fn on_limit_surface(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
+    let out = tessellate(builtin, mesh, rates);
+    let evaluator = LimitEvaluator::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
+    let d = diagonal(mesh);
+    let (mut worst_p, mut worst_n): (f64, f64) = (0.0, 0.0);
+    for (i, s) in out.parameters.iter().enumerate() {
+        let want = evaluator.eval(s.face, s.u, s.v).unwrap();
+        let n = want.du.cross(want.dv).normalize();
+        worst_p = worst_p.max((want.position - out.positions[i]).length() / d);
+        worst_n = worst_n.max((n - out.normals[i]).length());
+        assert!((out.normals[i].length() - 1.0).abs() < 1e-12);
+    }
+    eprintln!(
+        "{builtin:?}: {} vertices, worst position / bbox {worst_p:e}, worst normal {worst_n:e}",
+        out.positions.len()
+    );
+    assert!(worst_p < 1e-12, "position off by {worst_p:e} × bbox");
+    assert!(worst_n < 1e-10, "normal off by {worst_n:e}");
+}
+
+fn rates_for(mesh: &Mesh, seed: u64, max: u32) -> Vec<u32> {
+    let mut state = seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) | 1;
+    (0..mesh.face_count())
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            1 + (state % u64::from(max)) as u32
+        })
+        .collect()
+}
+
+fn quad_meshes() -> Vec<(&'static str, Mesh)> {
+    [
+        ("cube", shapes::cube()),
+        ("pentagonal prism", shapes::ngon_prism(5)),
+        ("triangular prism", shapes::ngon_prism(3)),
+        ("default model", shapes::default_model()),
+        ("torus", shapes::quad_torus(5, 4)),
+        ("tetrahedron", shapes::tetrahedron()),
+        ("dodecahedron", shapes::dodecahedron()),
+    ]
+    .into_iter()
+    .map(|(n, s)| (n, Mesh::build(s).unwrap()))
+    .collect()
+}
+
+/// A closed mesh with random valences: a cube whose faces are each split into a random fan
+/// (quads, triangles or left alone) — a different set of valences and N-gons per seed.
+fn random_closed(seed: u64) -> Mesh {
+    let cube = shapes::cube();
+    let mut soup = PolygonSoup::default();
+    for p in cube.positions() {
+        soup.push_vertex(*p);
+    }
+    let mut state = seed | 1;
+    let mut rnd = |m: u64| {
+        state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+        (state >> 33) % m
+    };
+    for f in cube.faces() {
+        let vs: Vec<VertexId> = f.to_vec();
+        let centre: DVec3 = vs.iter().map(|v| cube.positions()[v.index()]).sum::<DVec3>() * 0.25;
+        match rnd(3) {
+            0 => {
+                soup.push_face(vs.clone());
+            }
+            1 => {
+                // Four triangles around a raised centre.
+                let c = VertexId::new(soup.positions().len() as u32);
+                soup.push_vertex(centre * 1.3);
+                for k in 0..4 {
+                    soup.push_face([vs[k], vs[(k + 1) % 4], c]);
+                }
+            }
+            _ => {
+                // Two triangles at a diagonal: valences change at its ends.
+                soup.push_face([vs[0], vs[1], vs[2]]);
+                soup.push_face([vs[0], vs[2], vs[3]]);
+            }
+        }
+    }
+    Mesh::build(soup).unwrap()
+}
+
+#[test]
+fn closed_quad_meshes_are_watertight_at_random_rates() {
+    for (name, mesh) in quad_meshes() {
+        for seed in 0..4 {
+            let rates = rates_for(&mesh, seed, 12);
+            eprintln!("{name}, seed {seed}");
+            closed_checks(Builtin::CatmullClark, &mesh, &rates);
+        }
+        let ones = vec![1; mesh.face_count()];
+        closed_checks(Builtin::CatmullClark, &mesh, &ones);
+    }
+    // Other quad splits: bilinear everywhere, Kobbelt where its valences (3 and 4) allow.
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    closed_checks(Builtin::Bilinear, &cube, &rates_for(&cube, 4, 9));
+    closed_checks(Builtin::Kobbelt, &cube, &rates_for(&cube, 5, 9));
+    let prism = Mesh::build(shapes::ngon_prism(6)).unwrap();
+    closed_checks(Builtin::Bilinear, &prism, &rates_for(&prism, 6, 9));
+}
+
+#[test]
+fn triangle_schemes_are_watertight_at_random_rates() {
+    for soup in [shapes::icosahedron(), shapes::triangle_torus(6, 4), shapes::octahedron(), shapes::tetrahedron()] {
+        let mesh = Mesh::build(soup).unwrap();
+        for seed in 0..4 {
+            let rates = rates_for(&mesh, seed, 12);
+            closed_checks(Builtin::Loop, &mesh, &rates);
+        }
+        closed_checks(Builtin::Butterfly, &mesh, &rates_for(&mesh, 9, 6));
+    }
+}
+
+#[test]
+fn open_meshes_keep_their_boundary_loops() {
+    let grid = Mesh::build(shapes::quad_grid(4, 3)).unwrap();
+    for seed in 0..4 {
+        open_checks(Builtin::CatmullClark, &grid, &rates_for(&grid, seed, 9));
+    }
+    let pole = Mesh::build(shapes::pole(5)).unwrap();
+    open_checks(Builtin::CatmullClark, &pole, &rates_for(&pole, 3, 9));
+    // A triangle disk: the icosahedron without one face's fan... an icosahedron with a hole.
+    let mut soup = shapes::icosahedron();
+    soup.tags.holes.push(FaceId::new(0));
+    let holed = Mesh::build(soup).unwrap();
+    open_checks(Builtin::Loop, &holed, &rates_for(&holed, 5, 9));
+    // Holes in a quad mesh: one face of the cube, and a face of the pentagonal prism.
+    let mut soup = shapes::cube();
+    soup.tags.holes.push(FaceId::new(2));
+    let cube = Mesh::build(soup).unwrap();
+    open_checks(Builtin::CatmullClark, &cube, &rates_for(&cube, 1, 9));
+    let mut soup = shapes::ngon_prism(5);
+    soup.tags.holes.push(FaceId::new(0));
+    let prism = Mesh::build(soup).unwrap();
+    open_checks(Builtin::CatmullClark, &prism, &rates_for(&prism, 2, 9));
+}
+
+#[test]
+fn vertices_are_on_the_limit_surface() {
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    on_limit_surface(Builtin::CatmullClark, &cube, &rates_for(&cube, 1, 7));
+    let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    on_limit_surface(Builtin::CatmullClark, &prism, &rates_for(&prism, 2, 7));
+    let torus = Mesh::build(shapes::quad_torus(5, 4)).unwrap();
+    on_limit_surface(Builtin::CatmullClark, &torus, &rates_for(&torus, 3, 7));
+    let model = Mesh::build(shapes::default_model()).unwrap();
+    on_limit_surface(Builtin::CatmullClark, &model, &rates_for(&model, 4, 5));
+    let grid = Mesh::build(shapes::quad_grid(3, 3)).unwrap();
+    on_limit_surface(Builtin::CatmullClark, &grid, &rates_for(&grid, 5, 7));
+    on_limit_surface(Builtin::Bilinear, &prism, &rates_for(&prism, 8, 5));
+    on_limit_surface(Builtin::Kobbelt, &cube, &rates_for(&cube, 9, 5));
+    let ico = Mesh::build(shapes::icosahedron()).unwrap();
+    on_limit_surface(Builtin::Loop, &ico, &rates_for(&ico, 6, 6));
+    on_limit_surface(Builtin::Butterfly, &ico, &rates_for(&ico, 10, 4));
+    let tri_torus = Mesh::build(shapes::triangle_torus(6, 4)).unwrap();
+    on_limit_surface(Builtin::Loop, &tri_torus, &rates_for(&tri_torus, 7, 5));
+}
+
+#[test]
+fn shared_meshes_are_on_the_limit_surface_and_watertight() {
+    for (file, builtin) in [
+        ("opensubdiv/catmark_cube.obj", Builtin::CatmullClark),
+        ("keenan/spot_control_mesh.obj", Builtin::CatmullClark),
+        ("opensubdiv/loop_cube.obj", Builtin::Loop),
+        ("opensubdiv/catmark_hole_test1.obj", Builtin::CatmullClark),
+        ("opensubdiv/catmark_quadstrips.obj", Builtin::CatmullClark),
+        ("opensubdiv/catmark_nonquads.obj", Builtin::CatmullClark),
+    ] {
+        let Some(path) = subdiv_testkit::shared_mesh(file) else { return };
+        let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
+        let rates = rates_for(&mesh, 11, 4);
+        let out = tessellate(builtin, &mesh, &rates);
+        let border = check(&out);
+        if mesh.boundary_edge_count() == 0 && !mesh.face_ids().any(|f| mesh.is_hole(f)) {
+            assert!(border.is_empty(), "{file}: cracks");
+        } else {
+            open_checks(builtin, &mesh, &rates);
+        }
+        eprintln!("{file}");
+        on_limit_surface(builtin, &mesh, &rates);
+    }
+}
+
+#[test]
+fn update_cage_equals_a_fresh_tessellation() {
+    for (builtin, soup) in [
+        (Builtin::CatmullClark, shapes::cube()),
+        (Builtin::CatmullClark, shapes::ngon_prism(5)),
+        (Builtin::CatmullClark, shapes::quad_torus(5, 4)),
+        (Builtin::CatmullClark, shapes::quad_grid(3, 2)),
+        (Builtin::Loop, shapes::icosahedron()),
+    ] {
+        let mesh = Mesh::build(soup).unwrap();
+        let rates = rates_for(&mesh, 21, 9);
+        let mut tess = DualTessellator::new(builtin.scheme(), &mesh, &DualOptions::default()).unwrap();
+        tess.tessellate(&rates).unwrap();
+        let moved: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p * 1.5 + DVec3::new((i as f64).sin(), (i as f64 * 0.7).cos(), 0.25 * i as f64))
+            .collect();
+        let animated = tess.update_cage(&moved).unwrap().clone();
+        let mut moved_mesh = mesh.clone();
+        moved_mesh.positions_mut().copy_from_slice(&moved);
+        let mut fresh = DualTessellator::new(builtin.scheme(), &moved_mesh, &DualOptions::default()).unwrap();
+        let fresh = fresh.tessellate(&rates).unwrap();
+        assert_eq!(animated.triangles, fresh.triangles);
+        assert_eq!(animated.positions, fresh.positions, "{builtin:?}: positions differ");
+        assert_eq!(animated.normals, fresh.normals);
+    }
+}
+
+#[test]
+fn thread_count_does_not_change_the_bits() {
+    let mesh = Mesh::build(shapes::default_model()).unwrap();
+    let rates = rates_for(&mesh, 8, 16);
+    let parallel = tessellate(Builtin::CatmullClark, &mesh, &rates);
+    let mut tess =
+        DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions { parallel: false, quads: true })
+            .unwrap();
+    let sequential = tess.tessellate(&rates).unwrap().clone();
+    assert_eq!(parallel, sequential);
+    let mut flat = FlatMesh::default();
+    tess.write_flat(&mut flat);
+    assert_eq!(flat.vertices.len(), 6 * sequential.positions.len());
+    assert_eq!(flat.indices.len(), 3 * sequential.triangles.len());
+}
+
+#[test]
+fn equal_rates_give_quads() {
+    let torus = Mesh::build(shapes::quad_torus(4, 4)).unwrap();
+    let out = tessellate(Builtin::CatmullClark, &torus, &[6; 16]);
+    // A regular torus at one rate n is an (4n) × (4n) quad grid.
+    assert_eq!(out.polygon_count(), 24 * 24);
+    assert_eq!(out.triangles.len(), 2 * 24 * 24);
+    assert_eq!(out.positions.len(), 24 * 24);
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &cube, &DualOptions::default()).unwrap();
+    assert_eq!(tess.face_count(), 6);
+    assert!(matches!(tess.tessellate(&[1; 5]), Err(TessError::RateCount { expected: 6, got: 5 })));
+    assert!(matches!(tess.tessellate(&[1, 1, 0, 1, 1, 1]), Err(TessError::Rate { face: 2, rate: 0, .. })));
+    let too_big = subdiv_tess::MAX_DUAL_RATE + 1;
+    assert!(matches!(tess.tessellate(&[1, 1, 1, 1, too_big, 1]), Err(TessError::Rate { face: 4, .. })));
+    tess.tessellate(&[2; 6]).unwrap();
+    let mut cage = cube.positions().to_vec();
+    assert!(matches!(tess.update_cage(&cage[1..]), Err(TessError::CageLength { expected: 8, got: 7 })));
+    cage[3].y = f64::NAN;
+    assert!(matches!(tess.update_cage(&cage), Err(TessError::CagePosition { vertex: 3, .. })));
+    let error = TessError::CagePosition { vertex: 3, value: "x".into() }.to_string();
+    assert!(error.contains("vertex 3"), "{error}");
+    // √3 has no sub-patch matrices: the patch levels' typed error.
+    let ico = Mesh::build(shapes::icosahedron()).unwrap();
+    let sqrt3 = DualTessellator::new(Builtin::Sqrt3.scheme(), &ico, &DualOptions::default());
+    assert!(matches!(sqrt3, Err(TessError::Surface(_))), "{sqrt3:?}");
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    #[test]
+    fn random_meshes_and_rates_are_watertight(seed in 0u64..1_000_000, which in 0usize..3, max in 1u32..40) {
+        let mesh = match which {
+            0 => random_closed(seed),
+            1 => Mesh::build(shapes::ngon_prism(3 + (seed % 6) as usize)).unwrap(),
+            _ => Mesh::build(shapes::default_model()).unwrap(),
+        };
+        let rates = rates_for(&mesh, seed, max);
+        closed_checks(Builtin::CatmullClark, &mesh, &rates);
+    }
+
+    #[test]
+    fn random_triangle_meshes_are_watertight(seed in 0u64..1_000_000, max in 1u32..40) {
+        let mesh = Mesh::build(shapes::icosahedron()).unwrap();
+        closed_checks(Builtin::Loop, &mesh, &rates_for(&mesh, seed, max));
+    }
+}
