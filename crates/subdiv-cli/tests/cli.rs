@@ -274,31 +274,67 @@ fn plot_basis_writes_the_four_point_basis_function() {
 fn tessellate_writes_a_watertight_glb_and_obj() {
     let dir = tempfile::tempdir().unwrap();
     let glb = dir.path().join("star.glb");
-    let out = subdiv(&["tessellate", "--tolerance", "0.01", "--relative", "-o", glb.to_str().unwrap()]);
+    let out = subdiv(&["tessellate", "--tolerance", "0.05", "--relative", "-o", glb.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let summary = String::from_utf8_lossy(&out.stderr);
     assert!(summary.contains("triangles") && summary.contains("60 faces"), "{summary}");
     let back = subdiv::io::load_mesh(&glb, &Default::default()).unwrap();
     assert!(back.face_count() > 0 && back.boundary_edge_count() == 0);
 
-    let obj = dir.path().join("cube.obj");
     let cube = dir.path().join("in.obj");
     subdiv::io::write_obj(&cube, &subdiv::mesh::shapes::cube()).unwrap();
+    for method in ["quadtree", "dual"] {
+        let obj = dir.path().join(format!("cube-{method}.obj"));
+        let policy: &[&str] = if method == "quadtree" { &["--tolerance", "0.01"] } else { &["--rate", "5"] };
+        let mut args = vec!["tessellate", cube.to_str().unwrap(), "--method", method, "--polygons", "-o"];
+        args.push(obj.to_str().unwrap());
+        args.extend_from_slice(policy);
+        let out = subdiv(&args);
+        assert!(out.status.success(), "{method}: {}", String::from_utf8_lossy(&out.stderr));
+        // Polygons share edges exactly: the OBJ builds into a closed manifold mesh of the cube's genus.
+        let mesh = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+        assert_eq!(mesh.boundary_edge_count(), 0, "{method}");
+        assert_eq!(mesh.genus(), Some(0), "{method}");
+        assert!(mesh.face_size_histogram().contains_key(&4), "{method}: quads");
+    }
+}
+
+/// With no arguments: the built-in model at the default rate, to `tessellation.glb`; the
+/// parameters CSV has one row per output vertex; Loop and screen-space rates work.
+#[test]
+fn tessellate_defaults_params_and_policies() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_subdiv")).arg("tessellate").current_dir(dir.path()).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let glb = dir.path().join("tessellation.glb");
+    let back = subdiv::io::load_mesh(&glb, &Default::default()).unwrap();
+    assert_eq!(back.boundary_edge_count(), 0);
+
+    let ico = dir.path().join("ico.obj");
+    subdiv::io::write_obj(&ico, &subdiv::mesh::shapes::icosahedron()).unwrap();
+    let (obj, csv) = (dir.path().join("ico-out.obj"), dir.path().join("ico.csv"));
     let out = subdiv(&[
         "tessellate",
-        cube.to_str().unwrap(),
-        "--tolerance",
-        "0.01",
-        "--polygons",
+        ico.to_str().unwrap(),
+        "--scheme",
+        "loop",
+        "--pixels",
+        "20",
+        "--camera",
+        "0,-6,1,0,0,0,0,0,1,50",
+        "--viewport",
+        "640,480",
         "-o",
         obj.to_str().unwrap(),
+        "--params",
+        csv.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    // Polygons share edges exactly: the OBJ builds into a closed manifold mesh of the cube's genus.
-    let mesh = subdiv::io::load_mesh(&obj, &Default::default());
-    let mesh = mesh.unwrap();
-    assert_eq!(mesh.boundary_edge_count(), 0);
-    assert_eq!(mesh.genus(), Some(0));
+    let vertices = std::fs::read_to_string(&obj).unwrap().lines().filter(|l| l.starts_with("v ")).count();
+    let rows: Vec<String> = std::fs::read_to_string(&csv).unwrap().lines().map(str::to_string).collect();
+    assert_eq!(rows[0], "vertex,face,u,v");
+    assert_eq!(rows.len(), vertices + 1);
+    assert!(rows[1].starts_with("0,"), "{}", rows[1]);
 }
 
 #[test]
@@ -311,4 +347,20 @@ fn tessellate_rejects_bad_tolerances_and_schemes() {
     assert_eq!(out.status.code(), Some(2));
     let out = subdiv(&["tessellate", "--tolerance", "0.1", "-o", "x.png"]);
     assert_eq!(out.status.code(), Some(2));
+    let dir = tempfile::tempdir().unwrap();
+    let o = dir.path().join("x.glb");
+    let o = o.to_str().unwrap();
+    for bad in [
+        &["--rate", "0"][..],
+        &["--rate", "100000"],
+        &["--method", "quadtree", "--rate", "4"],
+        &["--pixels", "4", "--camera", "0,0,1,0,0,1,0,1,0"],
+        &["--pixels", "4", "--camera", "1,2,3"],
+        &["--pixels", "-1", "--camera", "0,-5,0,0,0,0,0,0,1"],
+        &["--pixels", "4", "--camera", "0,-5,0,0,0,0,0,0,1", "--viewport", "0,10"],
+    ] {
+        let out = subdiv(&[&["tessellate", "-o", o], bad].concat());
+        assert_eq!(out.status.code(), Some(2), "{bad:?}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(!dir.path().join("x.glb").exists(), "{bad:?} wrote a file");
+    }
 }
