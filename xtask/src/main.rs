@@ -4,6 +4,10 @@
 //!   clippy with warnings denied, and the README's test command.
 //! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named: `topology`,
 //!   `refine`, `stencil` or `eval`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
+//! - `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]…` measures dual-grid
+//!   tessellation into welded flat buffers (default: the peer harness's torus_big, cube and
+//!   valence56 at rates 8, 16, 32, on one thread and on all), beside OpenSubdiv's Bfr when
+//!   `SUBDIV_OSD_BENCH` names the harness's `osd_bench`.
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
@@ -16,19 +20,21 @@
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod adaptive;
+mod bench_tess;
 mod osd;
 mod paper;
 mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask paper | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... | cargo xtask paper | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
+        Some("bench") if args.get(1).is_some_and(|a| a == "tess") => bench_tess::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("paper") => paper::run(),
         Some("adaptive") => {
@@ -57,10 +63,7 @@ fn main() -> ExitCode {
             Some(other) => Err(format!("unknown option {other:?}; usage: cargo xtask tables [--check]")),
         },
         Some("osd-refine") => match args.get(1) {
-            Some(osd) => {
-                let shared = std::env::var_os("SUBDIV_SHARED").map_or_else(|| root().join("../shared"), PathBuf::from);
-                osd::run(Path::new(osd), &shared.join("testdata/meshes"), &[1, 2, 3])
-            }
+            Some(osd) => osd::run(Path::new(osd), &shared_dir().join("testdata/meshes"), &[1, 2, 3]),
             None => Err("usage: cargo xtask osd-refine PATH/TO/osd_refine".to_string()),
         },
         _ => Err(USAGE.to_string()),
@@ -76,6 +79,11 @@ fn main() -> ExitCode {
 
 fn root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("xtask lives in the workspace root").to_path_buf()
+}
+
+/// The shared folder: `SUBDIV_SHARED`, else `../shared` beside the workspace.
+fn shared_dir() -> PathBuf {
+    std::env::var_os("SUBDIV_SHARED").map_or_else(|| root().join("../shared"), PathBuf::from)
 }
 
 fn cargo(args: &[&str]) -> Result<(), String> {

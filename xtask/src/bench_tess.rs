@@ -1,0 +1,150 @@
+//! `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]…`: dual-grid tessellation
+//! throughput into welded flat buffers (f32 positions and normals, u32 indices), one
+//! `key=value` line per measurement; with `SUBDIV_OSD_BENCH` pointing at the peer harness's
+//! `osd_bench`, OpenSubdiv's Bfr on the same meshes and rates, side by side.
+//!
+//! Two modes, as `osd_bench` has: `full` (topology, stencil records, evaluation and flat
+//! buffers from the cage: `tessellate` + `write_flat`, the whole job on a fresh rate set) and
+//! `animate` (`update_cage` + `write_flat`: the same rates on a moved cage). Timing as
+//! `osd_bench`: one warm-up, then 5 samples, each repeating the work until it lasts ≥ 20 ms;
+//! the median. A debug build of xtask (what `cargo xtask` runs) hands the work to a release
+//! build of itself.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+use subdiv::io::load_mesh;
+use subdiv::mesh::Mesh;
+use subdiv::schemes::Builtin;
+use subdiv::tess::{DualOptions, DualTessellator, FlatMesh};
+
+/// The peer harness's benchmark meshes (`../shared/peers/osd/meshes`).
+const PEER_MESHES: [&str; 3] = ["torus_big.obj", "cube.obj", "valence56.obj"];
+
+/// The peer harness's rates.
+const PEER_RATES: [u32; 3] = [8, 16, 32];
+
+pub(crate) fn run(args: &[String]) -> Result<(), String> {
+    if cfg!(debug_assertions) {
+        let mut command = vec!["run", "--release", "--quiet", "-p", "xtask", "--", "bench", "tess"];
+        command.extend(args.iter().map(String::as_str));
+        return crate::cargo(&command);
+    }
+    let mut meshes: Vec<PathBuf> = Vec::new();
+    let mut rates: Vec<u32> = Vec::new();
+    let mut threads: Vec<usize> = Vec::new();
+    let mut rest = args.iter();
+    while let Some(a) = rest.next() {
+        let value = rest.next().ok_or_else(|| format!("{a} needs a value; {USAGE}"))?;
+        match a.as_str() {
+            "--mesh" => meshes.push(PathBuf::from(value)),
+            "--rate" => rates.push(value.parse().map_err(|_| format!("--rate {value}: not a rate; {USAGE}"))?),
+            "--threads" => threads.push(
+                value
+                    .parse()
+                    .ok()
+                    .filter(|&t| t > 0)
+                    .ok_or_else(|| format!("--threads {value}: not a count; {USAGE}"))?,
+            ),
+            _ => return Err(format!("unknown option {a:?}; {USAGE}")),
+        }
+    }
+    if meshes.is_empty() {
+        let dir = crate::shared_dir().join("peers/osd/meshes");
+        meshes = PEER_MESHES.iter().map(|m| dir.join(m)).collect();
+    }
+    if rates.is_empty() {
+        rates = PEER_RATES.to_vec();
+    }
+    if threads.is_empty() {
+        threads = vec![1, std::thread::available_parallelism().map_or(1, usize::from)];
+        threads.dedup();
+    }
+    let peer = std::env::var_os("SUBDIV_OSD_BENCH").map(PathBuf::from);
+    for path in &meshes {
+        let mesh = load_mesh(path, &Default::default()).map_err(|e| format!("{}: {e}", path.display()))?;
+        let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+        for &rate in &rates {
+            for &t in &threads {
+                measure(&mesh, &name, rate, t)?;
+            }
+            if let Some(osd) = &peer {
+                osd_bench(osd, path, &name, rate)?;
+            }
+        }
+    }
+    Ok(())
+}
+
+const USAGE: &str = "usage: cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]...";
+
+/// Our lines for one mesh, rate and thread count.
+fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize) -> Result<(), String> {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
+    let options = DualOptions { quads: false, parallel: threads > 1 };
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), mesh, &options).map_err(|e| e.to_string())?;
+    let rates = vec![rate; tess.face_count()];
+    let cage = mesh.positions().to_vec();
+    let mut flat = FlatMesh::default();
+    pool.install(|| -> Result<(), String> {
+        tess.tessellate(&rates).map_err(|e| e.to_string())?;
+        tess.write_flat(&mut flat);
+        let (vertices, tris) = (flat.vertices.len() / 6, flat.indices.len() / 3);
+        let bytes_per_tri = (24 * vertices + 12 * tris) as f64 / tris as f64;
+        for mode in ["full", "animate"] {
+            let seconds = median_seconds(|| {
+                match mode {
+                    "full" => tess.tessellate(&rates).map(|_| ()),
+                    _ => tess.update_cage(&cage).map(|_| ()),
+                }
+                .expect("checked by the first run");
+                tess.write_flat(&mut flat);
+                std::hint::black_box(flat.indices.len());
+            });
+            println!(
+                "bench=tess peer=subdiv mesh={name} mode={mode} rate={rate} threads={threads} tris={tris} \
+                 vertices={vertices} median_s={seconds:.6} tris_per_s={:.0} bytes_per_tri={bytes_per_tri:.2}",
+                tris as f64 / seconds
+            );
+        }
+        Ok(())
+    })
+}
+
+/// The median of 5 samples (after a warm-up), each repeating `work` until it lasts ≥ 20 ms,
+/// per repetition.
+fn median_seconds(mut work: impl FnMut()) -> f64 {
+    work();
+    let mut samples: Vec<f64> = (0..5)
+        .map(|_| {
+            let start = Instant::now();
+            let mut reps = 0u32;
+            while reps == 0 || start.elapsed().as_secs_f64() < 0.02 {
+                work();
+                reps += 1;
+            }
+            start.elapsed().as_secs_f64() / f64::from(reps)
+        })
+        .collect();
+    samples.sort_by(f64::total_cmp);
+    samples[2]
+}
+
+/// OpenSubdiv's Bfr through the peer harness (`osd_bench MESH tess N`), its lines as it prints
+/// them with `peer=osd` in front.
+fn osd_bench(osd: &Path, mesh: &Path, name: &str, rate: u32) -> Result<(), String> {
+    let out = Command::new(osd)
+        .arg(mesh)
+        .args(["tess", &rate.to_string()])
+        .env("OMP_NUM_THREADS", "1")
+        .output()
+        .map_err(|e| format!("{}: {e}", osd.display()))?;
+    if !out.status.success() {
+        return Err(format!("{} on {name}: {}", osd.display(), String::from_utf8_lossy(&out.stderr)));
+    }
+    for line in String::from_utf8_lossy(&out.stdout).lines().filter(|l| l.contains('=')) {
+        println!("bench=tess peer=osd {line}");
+    }
+    Ok(())
+}
