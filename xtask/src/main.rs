@@ -14,6 +14,9 @@
 //! - `cargo xtask adaptive [--samples N] [--all]` prints paper 002's Table 1 for the quadtree
 //!   tessellator (adaptive against uniform polygons, with the measured worst distance / ε on an
 //!   N × N grid per face, default 67; 0 skips it). Run it in release.
+//! - `cargo xtask rates` prints rational against dyadic rates (paper 000 §6): triangles of the
+//!   cheapest dual-grid tessellations whose per-face rates provably meet ε, rates free or powers
+//!   of two, on closed Catmull-Clark meshes of the shared corpus.
 //! - `cargo xtask tables [--check]` regenerates the committed default stencil tables (or checks
 //!   that they are current).
 
@@ -23,11 +26,12 @@ mod adaptive;
 mod bench_tess;
 mod osd;
 mod paper;
+mod rates_table;
 mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... | cargo xtask paper | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -37,6 +41,7 @@ fn main() -> ExitCode {
         Some("bench") if args.get(1).is_some_and(|a| a == "tess") => bench_tess::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("paper") => paper::run(),
+        Some("rates") => rates_table::run(),
         Some("adaptive") => {
             let mut samples = 67;
             let mut all = false;
