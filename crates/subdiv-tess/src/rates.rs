@@ -150,7 +150,7 @@ impl ScreenSpace {
 }
 
 /// The largest rate the policies give unless told otherwise.
-pub const DEFAULT_MAX_RATE: u32 = 64;
+pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 
 /// Rates to a tolerance: the smallest rate per face for which the dual-grid tessellation is
 /// provably within `ε` of the surface — every limit point at distance ≤ `ε` from the output.
@@ -220,9 +220,7 @@ impl ErrorRates {
     /// [`TessError::RateLimit`] when a face needs more than `max_rate`, and the errors of
     /// [`Tessellator::face_curvature`].
     pub fn face_rates(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<Vec<u32>, TessError> {
-        let epsilon = self.tolerance.absolute(bounds.diagonal())?;
-        let magnitude = mesh.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
-        let budget = epsilon - rounding_slack(magnitude);
+        let budget = self.budget(bounds, mesh)?;
         let max_rate = self.max_rate.max(1);
         // 2^−D ≤ ½ / max_rate: no cell or strip triangle comes closer to a corner.
         let depth_limit = (2 * max_rate).next_power_of_two().trailing_zeros();
@@ -262,6 +260,176 @@ impl ErrorRates {
                 Ok(needed as u32)
             })
             .collect()
+    }
+}
+
+/// Per-face rates with, around extraordinary points, the depth down to which the dual-grid
+/// tessellator adds rings ([`ErrorRates::rates`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct DualRates {
+    /// The rate of each input face.
+    pub faces: Vec<u32>,
+    /// The rings around extraordinary points.
+    pub rings: RingDepths,
+}
+
+/// How close to each extraordinary point the dual-grid tessellator must sample: rings of exact
+/// points at parameter distances `r, r/2, r/4, …` down to `2^−depth` (face units, the corner
+/// square of that side around the point), fanned at the end around its limit point; `0` for
+/// none. `r` is the largest power of two inside the point's nearest dual points, so rings only
+/// appear where the rates leave the point's neighbourhood too coarse.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct RingDepths {
+    /// Per mesh vertex (used at interior vertices of valence ≠ 4 under a quad split).
+    pub vertices: Vec<u32>,
+    /// Per face (used at the centres of N-gons, N ≠ 4, under a quad split).
+    pub centres: Vec<u32>,
+}
+
+/// How finely a face at `rate` samples next to its corners, as a rate of a quad: its dual
+/// points nearest a corner are `½ / reach` away in face units (an N-gon's sub-faces, at
+/// `⌈n/2⌉` each and half as wide, reach `2⌈n/2⌉`).
+fn reach(mesh: &Mesh, face: FaceId, rate: u32) -> u32 {
+    if mesh.face_size(face) == 4 { rate } else { 2 * rate.div_ceil(2) }
+}
+
+/// The depth `d` of the first ring around a point whose nearest dual points are `½ / finest`
+/// away (face units): `2^−d` is the largest power of two below `½ / finest`.
+fn first_ring_depth(finest: u32) -> u32 {
+    finest.next_power_of_two().trailing_zeros() + 2 - u32::from(!finest.is_power_of_two())
+}
+
+/// Below this depth (a square of side 2^−40 around an extraordinary point) a hull bound that is
+/// still above `ε` means the model is too small for the tolerance.
+const MAX_RING_DEPTH: u32 = 40;
+
+impl ErrorRates {
+    /// Rates and ring depths to the tolerance, for the dual-grid tessellator's rings: face rates
+    /// from the second-derivative bound alone (as [`face_rates`](Self::face_rates)), and around
+    /// each extraordinary point the least depth `d` whose corner hulls are within `ε`.
+    ///
+    /// # The bound, with rings
+    /// Rings around an extraordinary point lie at powers of two `r_j` below its nearest dual
+    /// points; between ring `j` and `j + 1` each face holds two quadrilaterals,
+    /// `(r_{j+1}, 0), (r_j, 0), (r_j, r_j), (r_{j+1}, r_{j+1})` and its mirror, inside the
+    /// face's L-shaped region `[0, r_j]² \ [0, r_{j+1})²`: two triangles each, of longest side
+    /// `√5/2 · r_j`, in one flat chart where the surface is C². Their deviation is at most
+    /// `½ M (√5/2 · r_j)²`, `M` the second-derivative bound of the face less its corner square
+    /// of side `r_{j+1}` — checked for every depth below the faces' own bound region. The fan
+    /// inside the last ring lies, with the surface it stands for, in the hull of the corner
+    /// piece of depth `d`: within its diameter. The band from the dual points to the first ring
+    /// has triangles in one face or across one edge, with corners at least `r_1 ≥ ¼ / max_rate`
+    /// from the point and within `√2 / n` of each other: the faces' bound, which excludes only
+    /// the corner squares of side `¼ / max_rate`, covers them.
+    ///
+    /// # Errors
+    /// As [`face_rates`](Self::face_rates); [`TessError::RateLimit`] also when an
+    /// extraordinary point's hull stays above `ε` down to depth 40.
+    pub fn rates(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<DualRates, TessError> {
+        let budget = self.budget(bounds, mesh)?;
+        let max_rate = self.max_rate.max(1);
+        let limit = |face: FaceId, needed: String| TessError::RateLimit { face: face.index(), needed, max_rate };
+        let mut cache: std::collections::HashMap<(FaceId, u32), crate::FaceCurvature> = Default::default();
+        let mut curvature = |f: FaceId, d: u32| -> Result<crate::FaceCurvature, TessError> {
+            if let Some(c) = cache.get(&(f, d)) {
+                return Ok(*c);
+            }
+            let c = bounds.face_curvature(f, d)?;
+            cache.insert((f, d), c);
+            Ok(c)
+        };
+        let faces: Vec<FaceId> = mesh.face_ids().collect();
+        let extraordinary: Vec<bool> =
+            faces.iter().map(|&f| curvature(f, 1).map(|c| c.corner_hull > 0.0)).collect::<Result<_, _>>()?;
+        // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the depth
+        // of the first ring for the finest rate around each of its vertices (no triangle outside
+        // the rings comes closer); finer rates push d deeper, where M grows like (4λ)^d, slower
+        // than n², so the rates settle.
+        let mut rates = vec![1u32; faces.len()];
+        let depth_of = |rates: &[u32], f: FaceId| -> u32 {
+            let finest = mesh
+                .face_vertices(f)
+                .iter()
+                .flat_map(|&v| mesh.vertex_faces(v))
+                .map(|g| reach(mesh, g, rates[g.index()]));
+            first_ring_depth(finest.max().unwrap_or(1))
+        };
+        loop {
+            let depths: Vec<u32> =
+                faces.iter().map(|&f| if extraordinary[f.index()] { depth_of(&rates, f) } else { 1 }).collect();
+            let second: Vec<f64> =
+                faces.iter().map(|&f| curvature(f, depths[f.index()]).map(|c| c.second)).collect::<Result<_, _>>()?;
+            let mut changed = false;
+            for &f in &faces {
+                let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
+                let m = around.fold(0.0f64, |m, g| m.max(second[g.index()]));
+                let needed = (m / budget).sqrt().ceil().max(1.0);
+                if needed > f64::from(max_rate) {
+                    return Err(limit(f, format!("{needed}")));
+                }
+                if needed as u32 > rates[f.index()] {
+                    rates[f.index()] = needed as u32;
+                    changed = true;
+                }
+            }
+            if !changed {
+                break;
+            }
+        }
+        // Rings: per extraordinary point, from the first power of two inside its nearest dual
+        // points down to the least depth whose hull is within ε, every band checked.
+        let ring_depth = |around: &mut dyn Iterator<Item = FaceId>,
+                          curvature: &mut dyn FnMut(FaceId, u32) -> Result<crate::FaceCurvature, TessError>|
+         -> Result<u32, TessError> {
+            let around: Vec<FaceId> = around.collect();
+            let finest = around.iter().map(|&g| reach(mesh, g, rates[g.index()])).max().unwrap_or(1);
+            let first = first_ring_depth(finest);
+            let mut d = first;
+            loop {
+                let mut within = true;
+                for &g in &around {
+                    let c = curvature(g, d)?;
+                    if d > first {
+                        // The band between 2^−(d−1) and 2^−d: triangles of side ≤ √5/2 · 2^−(d−1).
+                        let r = 0.5f64.powi(d as i32 - 1);
+                        if 0.5 * c.second * 1.25 * r * r > budget {
+                            return Err(limit(g, format!("rings whose bands fail the bound at depth {d}")));
+                        }
+                    }
+                    within &= c.corner_hull <= budget;
+                }
+                if within {
+                    return Ok(d);
+                }
+                d += 1;
+                if d > MAX_RING_DEPTH {
+                    return Err(limit(
+                        around[0],
+                        format!("rings deeper than {MAX_RING_DEPTH} (ε is below what f64 resolves)"),
+                    ));
+                }
+            }
+        };
+        let mut vertices = vec![0u32; mesh.vertex_count()];
+        for v in mesh.vertices() {
+            if mesh.vertex_faces(v).any(|f| extraordinary[f.index()]) && mesh.valence(v) != 4 {
+                vertices[v.index()] = ring_depth(&mut mesh.vertex_faces(v), &mut curvature)?;
+            }
+        }
+        let mut centres = vec![0u32; faces.len()];
+        for &f in &faces {
+            if mesh.face_size(f) != 4 {
+                centres[f.index()] = ring_depth(&mut std::iter::once(f), &mut curvature)?;
+            }
+        }
+        Ok(DualRates { faces: rates, rings: RingDepths { vertices, centres } })
+    }
+
+    /// `ε` less the rounding slack.
+    fn budget(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<f64, TessError> {
+        let epsilon = self.tolerance.absolute(bounds.diagonal())?;
+        let magnitude = mesh.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        Ok(epsilon - rounding_slack(magnitude))
     }
 }
 
@@ -313,6 +481,26 @@ mod tests {
         assert!(matches!(err, Err(TessError::RateLimit { max_rate: 8, .. })), "{err:?}");
         let bad = ErrorRates::new(Tolerance::Absolute(-1.0)).face_rates(&bounds, &cube);
         assert!(matches!(bad, Err(TessError::Tolerance { .. })), "{bad:?}");
+    }
+
+    /// With rings the face rates follow the second derivatives alone; the cube's valence-3
+    /// corners get ring depths, deeper for a finer tolerance.
+    #[test]
+    fn ring_depths_follow_the_hulls() {
+        let cc = subdiv_schemes::Builtin::CatmullClark.scheme();
+        let cube = Mesh::build(shapes::cube()).expect("cube");
+        let bounds = Tessellator::new(cc, &cube).expect("closed");
+        let rates = |r: f64| ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &cube).expect("reachable");
+        let (coarse, fine) = (rates(3e-2), rates(1e-2));
+        assert!(coarse.faces.iter().zip(&fine.faces).all(|(c, f)| c < f), "{coarse:?} {fine:?}");
+        assert!(coarse.rings.vertices.iter().all(|&d| d > 0) && coarse.rings.centres.iter().all(|&d| d == 0));
+        assert!(coarse.rings.vertices.iter().zip(&fine.rings.vertices).all(|(c, f)| c <= f), "{coarse:?} {fine:?}");
+        // A regular torus has no extraordinary points: no rings.
+        let torus = Mesh::build(shapes::quad_torus(16, 8)).expect("torus");
+        let bounds = Tessellator::new(cc, &torus).expect("closed");
+        let r = ErrorRates::new(Tolerance::Relative(1e-3)).rates(&bounds, &torus).expect("reachable");
+        assert!(r.rings.vertices.iter().all(|&d| d == 0));
+        assert_eq!(r.faces, ErrorRates::new(Tolerance::Relative(1e-3)).face_rates(&bounds, &torus).expect("reachable"));
     }
 
     #[test]
