@@ -31,6 +31,7 @@ mod eval;
 mod topology;
 
 use glam::DVec3;
+use rayon::prelude::*;
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{Scheme, Split};
 
@@ -205,29 +206,35 @@ impl DualTessellator {
         out.indices.extend(m.triangles.iter().flatten());
     }
 
+    /// Evaluates, and moves the topology's triangles and polygons into the output (their old
+    /// buffers go back to the topology, to be refilled next time: no copies).
     fn fill_output(&mut self) {
-        let t = &self.topology;
+        let t = &mut self.topology;
         let out = &mut self.output;
         self.evaluator.evaluate(t, self.options.parallel, &mut out.positions, &mut out.normals);
-        out.parameters.clear();
-        out.parameters.extend(t.sites.iter().map(|s| {
+        let parameter = |s: &topology::Site| {
             let (u, v) = s.point.to_f64();
             SurfaceParameter { face: FaceId::new(s.face), u, v }
-        }));
-        out.triangles.clear();
-        out.triangles.extend_from_slice(&t.triangles);
-        out.triangle_faces.clear();
-        out.triangle_faces.extend(t.triangle_faces.iter().map(|&f| FaceId::new(f)));
+        };
+        out.parameters.clear();
+        if self.options.parallel {
+            out.parameters.par_extend(t.sites.par_iter().map(parameter));
+        } else {
+            out.parameters.extend(t.sites.iter().map(parameter));
+        }
+        std::mem::swap(&mut out.triangles, &mut t.triangles);
+        std::mem::swap(&mut out.triangle_faces, &mut t.triangle_faces);
+        std::mem::swap(&mut out.polygon_offsets, &mut t.polygon_offsets);
+        std::mem::swap(&mut out.polygon_vertices, &mut t.polygon_vertices);
+        std::mem::swap(&mut out.polygon_faces, &mut t.polygon_faces);
         out.triangle_parameters.clear();
         let params = &out.parameters;
-        out.triangle_parameters
-            .extend(t.triangles.iter().map(|tri| tri.map(|k| [params[k as usize].u, params[k as usize].v])));
-        out.polygon_offsets.clear();
-        out.polygon_offsets.extend_from_slice(&t.polygon_offsets);
-        out.polygon_vertices.clear();
-        out.polygon_vertices.extend_from_slice(&t.polygon_vertices);
-        out.polygon_faces.clear();
-        out.polygon_faces.extend(t.polygon_faces.iter().map(|&f| FaceId::new(f)));
+        let corners = |tri: &[u32; 3]| tri.map(|k| [params[k as usize].u, params[k as usize].v]);
+        if self.options.parallel {
+            out.triangle_parameters.par_extend(out.triangles.par_iter().map(corners));
+        } else {
+            out.triangle_parameters.extend(out.triangles.iter().map(corners));
+        }
     }
 }
 

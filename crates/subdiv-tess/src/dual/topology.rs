@@ -56,10 +56,10 @@ pub(crate) struct Topology {
     pub sites: Vec<Site>,
     pub blocks: Vec<Block>,
     pub triangles: Vec<[u32; 3]>,
-    pub triangle_faces: Vec<u32>,
+    pub triangle_faces: Vec<FaceId>,
     pub polygon_offsets: Vec<u32>,
     pub polygon_vertices: Vec<u32>,
-    pub polygon_faces: Vec<u32>,
+    pub polygon_faces: Vec<FaceId>,
 }
 
 /// One input face's cells.
@@ -87,6 +87,7 @@ pub(crate) struct Builder<'a> {
     row: Vec<RowPoint>,
     other: Vec<RowPoint>,
     ring: Vec<u32>,
+    starts: Vec<HalfEdgeId>,
 }
 
 impl<'a> Builder<'a> {
@@ -109,6 +110,7 @@ impl<'a> Builder<'a> {
             row: Vec::new(),
             other: Vec::new(),
             ring: Vec::new(),
+            starts: Vec::new(),
         }
     }
 
@@ -152,7 +154,7 @@ impl<'a> Builder<'a> {
 
     fn triangle(&mut self, t: [u32; 3], face: u32) {
         self.out.triangles.push(t);
-        self.out.triangle_faces.push(face);
+        self.out.triangle_faces.push(FaceId::new(face));
     }
 
     /// A quad `a b c d` (counter-clockwise): two triangles, and a polygon if asked for.
@@ -162,7 +164,7 @@ impl<'a> Builder<'a> {
         if self.quads {
             self.out.polygon_vertices.extend_from_slice(&q);
             self.out.polygon_offsets.push(self.out.polygon_vertices.len() as u32);
-            self.out.polygon_faces.push(face);
+            self.out.polygon_faces.push(FaceId::new(face));
         }
     }
 
@@ -481,12 +483,17 @@ impl<'a> Builder<'a> {
     fn vertex(&mut self, v: VertexId) {
         let mesh = self.mesh;
         let has_surface = |h: HalfEdgeId| self.faces[mesh.face(h).index()].is_some();
-        let mut starts: Vec<HalfEdgeId> = mesh.outgoing(v).filter(|&h| has_surface(h) && self.is_border(h)).collect();
+        let mut starts = std::mem::take(&mut self.starts);
+        starts.clear();
+        starts.extend(mesh.outgoing(v).filter(|&h| has_surface(h) && self.is_border(h)));
         let closed = starts.is_empty();
         if closed {
             match mesh.outgoing(v).find(|&h| has_surface(h)) {
                 Some(h) => starts.push(h),
-                None => return,
+                None => {
+                    self.starts = starts;
+                    return;
+                }
             }
         }
         let mut centre = None;
@@ -532,6 +539,7 @@ impl<'a> Builder<'a> {
             }
         }
         self.ring = ring;
+        self.starts = starts;
     }
 }
 
