@@ -7,6 +7,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 use proptest::prelude::*;
+use subdiv_eval::Method;
 use subdiv_mesh::{FaceId, Mesh, PolygonSoup, VertexId, shapes};
 use subdiv_schemes::{Builtin, RefineOptions};
 use subdiv_stencil::LimitEvaluator;
@@ -210,6 +211,18 @@ fn on_limit_surface(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     );
     assert!(worst_p < 1e-12, "position off by {worst_p:e} × bbox");
     assert!(worst_n < 1e-10, "normal off by {worst_n:e}");
+    // An independent route: the eigenbasis evaluator (Stam), where it takes the faces.
+    let eigen =
+        subdiv_eval::EigenEvaluator::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT, Method::Auto).unwrap();
+    let (mut worst_p, mut worst_n): (f64, f64) = (0.0, 0.0);
+    for (i, s) in out.parameters.iter().enumerate() {
+        let want = eigen.eval(s.face, s.u, s.v).unwrap();
+        worst_p = worst_p.max((want.position - out.positions[i]).length() / d);
+        worst_n = worst_n.max((want.du.cross(want.dv).normalize() - out.normals[i]).length());
+    }
+    eprintln!("  eigenbasis route: worst position / bbox {worst_p:e}, worst normal {worst_n:e}");
+    assert!(worst_p < 1e-12, "position off the eigenbasis route by {worst_p:e} × bbox");
+    assert!(worst_n < 1e-10, "normal off the eigenbasis route by {worst_n:e}");
 }
 
 fn rates_for(mesh: &Mesh, seed: u64, max: u32) -> Vec<u32> {
