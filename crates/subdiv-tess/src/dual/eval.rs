@@ -11,9 +11,14 @@
 //!   face (border points, corners) use the same polynomial at their parameter.
 //! - **Every other face** (extraordinary, boundary or non-bicubic patches on level 0, and faces
 //!   resolved through their children: N-gons, quads with two extraordinary corners): each
-//!   point descends (exactly, in rationals) to the patch that holds it, and its exact surface
-//!   stencil there (position and both derivatives over the patch's control points) is stored
-//!   with the chain-rule factors. A new cage is refined to the levels these patches live on by
+//!   point descends (exactly, in rationals) to the patch that holds it, with the chain-rule
+//!   factors of the descent and the patch frame. A point of a level-0 patch's own dual grid
+//!   (the face's cell points, read in the patch's frame) refers to the patch type's
+//!   [`StencilTable`] at that rate, shared by every face of the type and kept across calls
+//!   (computed on demand from the patch's matrices: `subdiv-stencil` has no loader for its
+//!   committed tables yet). Any other point (border points, vertex limit points, points under
+//!   refined faces) stores its own exact surface stencil (position and both derivatives over
+//!   the patch's control points) from a [`StencilEvaluator`], also kept across calls. A new cage is refined to the levels these patches live on by
 //!   the refinement engine's stencils (a sparse product per level over the whole mesh: `O(4^L)`
 //!   times the cage for `L` levels, `L ≤ 2` for N-gons and double extraordinary quads), and
 //!   each point is then a dot product: no topology work, no allocation per vertex.
@@ -23,9 +28,9 @@ use std::sync::Arc;
 use glam::DVec3;
 use hashbrown::HashMap;
 use rayon::prelude::*;
-use subdiv_mesh::{FaceId, Mesh};
+use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, RefineOptions, Refiner, Scheme, Split};
-use subdiv_stencil::{Dyadic, FaceDomain, PatchLevels, Resolved, StencilEvaluator};
+use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
 use super::topology::Topology;
 use crate::TessError;
@@ -55,10 +60,18 @@ struct Record {
     level: u32,
     ids: u32,
     len: u32,
+    /// The first of the record's `3 · len` weights in `weights`, or, when `table` is not
+    /// [`NO_TABLE`], the point's index in that table's dual grid.
     weights: u32,
+    table: u32,
     ju: [f64; 2],
     jv: [f64; 2],
 }
+
+/// A record with its own weights.
+const NO_TABLE: u32 = u32::MAX;
+/// The most control points a table record gathers on the stack (Catmull-Clark valence 12).
+const MAX_GATHER: usize = 32;
 
 /// The uniform cubic B-spline basis and its derivative at the dual points `(i+½)/n`.
 #[derive(Clone, Debug)]
@@ -128,6 +141,10 @@ pub(crate) struct Evaluator {
     records: Vec<Record>,
     ids: Vec<u32>,
     weights: Vec<f64>,
+    tables: DualTables,
+    /// Exact stencil evaluators per matrices, kept across calls (they remember what they
+    /// solved, so a second tessellation at the same rates solves nothing).
+    evaluators: HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>,
 }
 
 impl Evaluator {
@@ -183,6 +200,8 @@ impl Evaluator {
             records: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
+            tables: DualTables::default(),
+            evaluators: HashMap::new(),
         };
         evaluator.set_cage(mesh.positions());
         Ok(evaluator)
@@ -238,7 +257,6 @@ impl Evaluator {
                 self.kinds[block.base as usize..end].fill(IN_BLOCK);
             }
         }
-        let mut evaluators: HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>> = HashMap::new();
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         for (i, site) in topo.sites.iter().enumerate() {
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
@@ -257,22 +275,34 @@ impl Evaluator {
                         j = j.map(|row| row.map(|x| x * factor));
                     }
                     Some(Resolved::Patch { patch, frame, .. }) => {
-                        let evaluator = evaluators
-                            .entry(Arc::as_ptr(&patch.matrices) as usize)
-                            .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
-                        let stencil = evaluator.stencil(patch.shape, frame.to_patch(p).reduced())?;
                         let (ids, len) = *patches.entry((level, f.index() as u32)).or_insert_with(|| {
                             let start = self.ids.len() as u32;
                             self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
                             (start, patch.vertices.len() as u32)
                         });
+                        let (ju, jv) = frame.chain(j);
+                        self.kinds[i] = self.records.len() as u32;
+                        // A point of a level-0 patch's own dual grid reads the shared table.
+                        let table = if level == 0 && patch.shape == 0 && patch.vertices.len() <= MAX_GATHER {
+                            dual_table(&mut self.tables, patch, frame.to_patch(site.point))?
+                        } else {
+                            None
+                        };
+                        if let Some((table, index)) = table {
+                            self.records.push(Record { level: 0, ids, len, weights: index, table, ju, jv });
+                            done = true;
+                            break;
+                        }
+                        let evaluator = self
+                            .evaluators
+                            .entry(Arc::as_ptr(&patch.matrices) as usize)
+                            .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+                        let stencil = evaluator.stencil(patch.shape, frame.to_patch(p).reduced())?;
                         let weights = self.weights.len() as u32;
                         self.weights.extend_from_slice(&stencil.position);
                         self.weights.extend_from_slice(&stencil.du);
                         self.weights.extend_from_slice(&stencil.dv);
-                        let (ju, jv) = frame.chain(j);
-                        self.kinds[i] = self.records.len() as u32;
-                        self.records.push(Record { level: level as u32, ids, len, weights, ju, jv });
+                        self.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
                         done = true;
                         break;
                     }
@@ -359,6 +389,15 @@ impl Evaluator {
         let points = &self.positions[r.level as usize];
         let len = r.len as usize;
         let ids = &self.ids[r.ids as usize..r.ids as usize + len];
+        if r.table != NO_TABLE {
+            let mut gathered = [DVec3::ZERO; MAX_GATHER];
+            for (g, &id) in gathered.iter_mut().zip(ids) {
+                *g = points[id as usize];
+            }
+            let [p, s, t] =
+                self.tables.tables[r.table as usize].apply(Grid::Dual, r.weights as usize, &gathered[..len]);
+            return (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t);
+        }
         let w = &self.weights[r.weights as usize..r.weights as usize + 3 * len];
         let (wp, rest) = w.split_at(len);
         let (ws, wt) = rest.split_at(len);
@@ -371,6 +410,56 @@ impl Evaluator {
         }
         (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t)
     }
+}
+
+/// Dual-grid stencil tables of level-0 patches, per (matrices, rate), kept across calls.
+#[derive(Debug, Default)]
+struct DualTables {
+    tables: Vec<Arc<StencilTable>>,
+    index: HashMap<(usize, u32), u32>,
+}
+
+/// The table and index of `point` (in the patch's frame, as the face's grid gave it: not
+/// reduced) if it is a point of the dual grid of some rate of the patch's shape.
+fn dual_table(
+    tables: &mut DualTables,
+    patch: &subdiv_schemes::FoundPatch,
+    point: Dyadic,
+) -> Result<Option<(u32, u32)>, TessError> {
+    let Dyadic { u: a, v: b, denominator: q } = point;
+    let triangle = patch.matrices.face_size == 3;
+    let (rate, index) = if triangle {
+        // Centroids ((3i+1)/3n, (3j+1)/3n) up, ((3i+2)/3n, (3j+2)/3n) down.
+        let r = a.rem_euclid(3);
+        if q % 3 != 0 || r == 0 || b.rem_euclid(3) != r {
+            return Ok(None);
+        }
+        let (n, i, j) = (q / 3, (a - r) / 3, (b - r) / 3);
+        (n, 2 * n * j - j * j + 2 * i + i64::from(r == 2))
+    } else {
+        if q % 2 != 0 || a % 2 == 0 || b % 2 == 0 {
+            return Ok(None);
+        }
+        let n = q / 2;
+        (n, (b - 1) / 2 * n + (a - 1) / 2)
+    };
+    let Ok(rate) = u32::try_from(rate) else { return Ok(None) };
+    let key = (Arc::as_ptr(&patch.matrices) as usize, rate);
+    let table = match tables.index.get(&key) {
+        Some(&t) => t,
+        None => {
+            let computed =
+                StencilTable::compute_rates(&patch.matrices, BoundaryInterpolation::EdgeOnly, rate..=rate)?.remove(0);
+            tables.tables.push(Arc::new(computed));
+            let t = (tables.tables.len() - 1) as u32;
+            tables.index.insert(key, t);
+            t
+        }
+    };
+    let t = &tables.tables[table as usize];
+    // The closed-form index, checked against the table's own order.
+    let index = usize::try_from(index).ok().filter(|&k| k < t.len(Grid::Dual) && t.point(Grid::Dual, k) == point);
+    Ok(index.map(|k| (table, k as u32)))
 }
 
 /// The dual grid of a bicubic face, row by row.
@@ -408,9 +497,8 @@ fn bicubic_grid(matrices: &PatchMatrices, shape: usize) -> Option<[usize; 16]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use subdiv_mesh::{BoundaryInterpolation, shapes};
+    use subdiv_mesh::shapes;
     use subdiv_schemes::Builtin;
-    use subdiv_stencil::{Grid, StencilTable};
 
     /// The separable blocks give what the exact stencil tables give (position and normal,
     /// through the patch frame), on a torus whose faces start their patches at every corner.
@@ -453,5 +541,24 @@ mod tests {
         }
         // The torus is about 3 across.
         assert!(worst < 1e-12, "block route off the table route by {worst:e}");
+    }
+
+    /// Loop on a regular triangle torus: every face is a patch on level 0, so every centroid
+    /// reads the shared dual-grid table, and the other points (interior primal points, vertex
+    /// limit points) have their own exact stencils.
+    #[test]
+    fn level_zero_patches_read_dual_tables() {
+        let mesh = Mesh::build(shapes::triangle_torus(6, 4)).unwrap();
+        let mut ev = Evaluator::new(Builtin::Loop.scheme(), &mesh).unwrap();
+        let domains = ev.domains().unwrap();
+        let mut topo = Topology::default();
+        let faces = mesh.face_count();
+        super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], &mut topo);
+        ev.prepare(&topo).unwrap();
+        let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
+        assert_eq!(tabled, faces * 16);
+        assert_eq!(ev.records.len(), topo.sites.len());
+        // One table: one patch type, one rate.
+        assert_eq!(ev.tables.tables.len(), 1);
     }
 }
