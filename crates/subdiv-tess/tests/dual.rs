@@ -198,8 +198,22 @@ fn on_limit_surface(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     let evaluator = LimitEvaluator::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
     let d = diagonal(mesh);
     let (mut worst_p, mut worst_n): (f64, f64) = (0.0, 0.0);
-    for (i, s) in out.parameters.iter().enumerate() {
-        let want = evaluator.eval(s.face, s.u, s.v).unwrap();
+    // A point on a triangle's third side, (1 − t, t), may round to u + v > 1 in f64 (exactly
+    // summed): the smaller moved back onto the side (by an ulp; 1 − the larger is exact).
+    let params: Vec<(FaceId, f64, f64)> = out
+        .parameters
+        .iter()
+        .map(|s| {
+            let triangle = evaluator.domain(s.face).unwrap() == subdiv_stencil::FaceDomain::Triangle;
+            match (triangle && s.u + s.v >= 1.0 - 1e-12, s.u >= s.v) {
+                (true, true) => (s.face, s.u, s.v.min(1.0 - s.u)),
+                (true, false) => (s.face, s.u.min(1.0 - s.v), s.v),
+                _ => (s.face, s.u, s.v),
+            }
+        })
+        .collect();
+    for (i, &(face, u, v)) in params.iter().enumerate() {
+        let want = evaluator.eval(face, u, v).unwrap();
         let n = want.du.cross(want.dv).normalize();
         worst_p = worst_p.max((want.position - out.positions[i]).length() / d);
         worst_n = worst_n.max((n - out.normals[i]).length());
@@ -215,8 +229,8 @@ fn on_limit_surface(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     let eigen =
         subdiv_eval::EigenEvaluator::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT, Method::Auto).unwrap();
     let (mut worst_p, mut worst_n): (f64, f64) = (0.0, 0.0);
-    for (i, s) in out.parameters.iter().enumerate() {
-        let want = eigen.eval(s.face, s.u, s.v).unwrap();
+    for (i, &(face, u, v)) in params.iter().enumerate() {
+        let want = eigen.eval(face, u, v).unwrap();
         worst_p = worst_p.max((want.position - out.positions[i]).length() / d);
         worst_n = worst_n.max((want.du.cross(want.dv).normalize() - out.normals[i]).length());
     }
@@ -330,7 +344,22 @@ fn open_meshes_keep_their_boundary_loops() {
     }
     let pole = Mesh::build(shapes::pole(5)).unwrap();
     open_checks(Builtin::CatmullClark, &pole, &rates_for(&pole, 3, 9));
-    // A triangle disk: the icosahedron without one face's fan... an icosahedron with a hole.
+    // An open triangle grid (each unit quad of a domed grid cut at a diagonal) under Loop.
+    let quads = shapes::quad_grid(4, 3);
+    let mut soup = PolygonSoup::default();
+    for p in quads.positions() {
+        soup.push_vertex(*p + DVec3::Z * 0.1 * (p.x * p.y).sin());
+    }
+    for f in quads.faces() {
+        soup.push_face([f[0], f[1], f[2]]);
+        soup.push_face([f[0], f[2], f[3]]);
+    }
+    let triangles = Mesh::build(soup).unwrap();
+    for seed in 0..3 {
+        open_checks(Builtin::Loop, &triangles, &rates_for(&triangles, seed, 9));
+    }
+    on_limit_surface(Builtin::Loop, &triangles, &rates_for(&triangles, 7, 5));
+    // A closed triangle mesh with a hole.
     let mut soup = shapes::icosahedron();
     soup.tags.holes.push(FaceId::new(0));
     let holed = Mesh::build(soup).unwrap();
