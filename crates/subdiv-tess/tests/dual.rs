@@ -443,11 +443,16 @@ fn update_cage_equals_a_fresh_tessellation() {
         let animated = tess.update_cage(&moved).unwrap().clone();
         let mut moved_mesh = mesh.clone();
         moved_mesh.positions_mut().copy_from_slice(&moved);
-        let mut fresh = DualTessellator::new(builtin.scheme(), &moved_mesh, &DualOptions::default()).unwrap();
-        let fresh = fresh.tessellate(&rates).unwrap();
+        let mut fresh_tess = DualTessellator::new(builtin.scheme(), &moved_mesh, &DualOptions::default()).unwrap();
+        let fresh = fresh_tess.tessellate(&rates).unwrap();
         assert_eq!(animated.triangles, fresh.triangles);
         assert_eq!(animated.positions, fresh.positions, "{builtin:?}: positions differ");
         assert_eq!(animated.normals, fresh.normals);
+        // Straight into f32: the same as the f64 output written flat.
+        let (mut direct, mut written) = (FlatMesh::default(), FlatMesh::default());
+        fresh_tess.write_flat(&mut written);
+        tess.update_cage_flat(&moved, &mut direct).unwrap();
+        assert_eq!(direct, written, "{builtin:?}: update_cage_flat");
     }
 }
 

@@ -316,6 +316,59 @@ impl Evaluator {
         Ok(())
     }
 
+    /// Position and unit normal of vertex `i` (not in a block) on the current cage.
+    #[inline]
+    fn point(&self, topo: &Topology, i: usize) -> (DVec3, DVec3) {
+        let kind = self.kinds[i];
+        let site = topo.sites[i];
+        let (x, du, dv) = if kind == BICUBIC {
+            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
+            let (u, v) = site.point.to_f64();
+            bicubic(cv, &self.positions[0], u, v)
+        } else {
+            self.general(&self.records[kind as usize])
+        };
+        (x, normal(du, dv))
+    }
+
+    /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
+    /// positions and normals, without the f64 arrays.
+    pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
+        let point = |i: usize, o: &mut [f32]| {
+            if self.kinds[i] != IN_BLOCK {
+                let (p, n) = self.point(topo, i);
+                put_flat(o, p, n);
+            }
+        };
+        if parallel {
+            out.par_chunks_exact_mut(6).enumerate().with_min_len(256).for_each(|(i, o)| point(i, o));
+        } else {
+            out.chunks_exact_mut(6).enumerate().for_each(|(i, o)| point(i, o));
+        }
+        let mut pieces = Vec::with_capacity(topo.blocks.len());
+        let mut rest = out;
+        let mut at = 0;
+        for block in &topo.blocks {
+            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
+            let len = (block.rate * block.rate) as usize;
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(6 * (block.base as usize - at));
+            let (piece, tail) = tail.split_at_mut(6 * len);
+            rest = tail;
+            at = block.base as usize + len;
+            pieces.push((cv, block.rate, piece));
+        }
+        let cage = &self.positions[0];
+        let run = |(cv, rate, piece): (&[u32; 16], u32, &mut [f32])| {
+            let basis = self.bases[rate as usize].as_deref().expect("prepared");
+            grid_block(cv, cage, basis, |k, p, n| put_flat(&mut piece[6 * k..6 * k + 6], p, n));
+        };
+        if parallel {
+            pieces.into_par_iter().for_each(run);
+        } else {
+            pieces.into_iter().for_each(run);
+        }
+    }
+
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
     pub(crate) fn evaluate(
         &self,
@@ -328,20 +381,9 @@ impl Evaluator {
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
         let point = |i: usize, p: &mut DVec3, nr: &mut DVec3| {
-            let kind = self.kinds[i];
-            if kind == IN_BLOCK {
-                return;
+            if self.kinds[i] != IN_BLOCK {
+                (*p, *nr) = self.point(topo, i);
             }
-            let site = topo.sites[i];
-            let (x, du, dv) = if kind == BICUBIC {
-                let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
-                let (u, v) = site.point.to_f64();
-                bicubic(cv, &self.positions[0], u, v)
-            } else {
-                self.general(&self.records[kind as usize])
-            };
-            *p = x;
-            *nr = normal(du, dv);
         };
         if parallel {
             positions
@@ -374,7 +416,10 @@ impl Evaluator {
         let cage = &self.positions[0];
         let run = |(cv, rate, bp, bn): (&[u32; 16], u32, &mut [DVec3], &mut [DVec3])| {
             let basis = self.bases[rate as usize].as_deref().expect("prepared");
-            grid_block(cv, cage, basis, bp, bn);
+            grid_block(cv, cage, basis, |k, p, n| {
+                bp[k] = p;
+                bn[k] = n;
+            });
         };
         if parallel {
             pieces.into_par_iter().for_each(run);
@@ -462,9 +507,10 @@ fn dual_table(
     Ok(index.map(|k| (table, k as u32)))
 }
 
-/// The dual grid of a bicubic face, row by row.
+/// The dual grid of a bicubic face, row by row: `put(k, position, normal)` for point
+/// `k = j · n + i`.
 #[inline]
-fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, positions: &mut [DVec3], normals: &mut [DVec3]) {
+fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl FnMut(usize, DVec3, DVec3)) {
     let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
     let n = basis.b.len();
     for j in 0..n {
@@ -474,17 +520,20 @@ fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, positions: &mut
             std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
         let dcol: [DVec3; 4] =
             std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
-        let row_p = &mut positions[j * n..(j + 1) * n];
-        let row_n = &mut normals[j * n..(j + 1) * n];
         for i in 0..n {
             let (bu, du) = (basis.b[i], basis.d[i]);
             let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
             let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
             let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
-            row_p[i] = p;
-            row_n[i] = normal(a, b);
+            put(j * n + i, p, normal(a, b));
         }
     }
+}
+
+/// A vertex as six f32: position, then normal.
+#[inline]
+fn put_flat(out: &mut [f32], p: DVec3, n: DVec3) {
+    out.copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
 }
 
 /// The 4 × 4 grid of a shape if its sub-patch matrices are those of a bicubic B-spline.
@@ -519,7 +568,10 @@ mod tests {
                     .unwrap()
                     .remove(0);
                 let points: Vec<DVec3> = patch.vertices.iter().map(|v| cage[v.index()]).collect();
-                grid_block(&cv, cage, &basis, &mut ps, &mut ns);
+                grid_block(&cv, cage, &basis, |k, p, n| {
+                    ps[k] = p;
+                    ns[k] = n;
+                });
                 let index: HashMap<Dyadic, usize> =
                     (0..table.len(Grid::Dual)).map(|k| (table.point(Grid::Dual, k), k)).collect();
                 let (ju, jv) = frame.chain([[1.0, 0.0], [0.0, 1.0]]);

@@ -172,16 +172,40 @@ impl DualTessellator {
     /// # Errors
     /// [`TessError::CageLength`], [`TessError::CagePosition`] for a non-finite position.
     pub fn update_cage(&mut self, positions: &[DVec3]) -> Result<&TessMesh, TessError> {
+        self.check_cage(positions)?;
+        self.evaluator.set_cage(positions);
+        let out = &mut self.output;
+        self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
+        Ok(&self.output)
+    }
+
+    /// The animation path straight into flat f32 buffers (what a renderer uploads): as
+    /// [`update_cage`](Self::update_cage) followed by [`write_flat`](Self::write_flat), without
+    /// the f64 positions and normals in between, so [`mesh`](Self::mesh) keeps the previous
+    /// cage's positions and normals until the next [`update_cage`](Self::update_cage) or
+    /// [`tessellate`](Self::tessellate). Reuses `out`'s allocations.
+    ///
+    /// # Errors
+    /// As [`update_cage`](Self::update_cage).
+    pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
+        self.check_cage(positions)?;
+        self.evaluator.set_cage(positions);
+        out.vertices.clear();
+        out.vertices.resize(6 * self.topology.sites.len(), 0.0);
+        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
+        out.indices.clear();
+        out.indices.extend_from_slice(self.output.triangles.as_flattened());
+        Ok(())
+    }
+
+    fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
         if positions.len() != self.vertex_count {
             return Err(TessError::CageLength { expected: self.vertex_count, got: positions.len() });
         }
         if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
             return Err(TessError::CagePosition { vertex, value: format!("{p}") });
         }
-        self.evaluator.set_cage(positions);
-        let out = &mut self.output;
-        self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
-        Ok(&self.output)
+        Ok(())
     }
 
     /// The last output (empty before the first [`tessellate`](Self::tessellate)).
@@ -203,7 +227,7 @@ impl DualTessellator {
             out.vertices.extend_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
         }
         out.indices.clear();
-        out.indices.extend(m.triangles.iter().flatten());
+        out.indices.extend_from_slice(m.triangles.as_flattened());
     }
 
     /// Evaluates, and moves the topology's triangles and polygons into the output (their old
