@@ -258,20 +258,31 @@ impl Evaluator {
             }
         }
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
+        let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         for (i, site) in topo.sites.iter().enumerate() {
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
             }
             let face = FaceId::new(site.face);
+            // Reduced once, as `LimitEvaluator::eval_exact` does: the descent's maps keep it exact.
             let (mut f, mut p) = (face, site.point.reduced());
             let mut j = [[1.0, 0.0], [0.0, 1.0]];
             let mut done = false;
-            for level in 0..self.levels.level_count() {
-                match self.levels.resolve(level, f) {
+            for (level, kept) in last.iter_mut().enumerate() {
+                // Neighbouring points share their faces: the last resolution per level is kept.
+                let resolved = match kept {
+                    Some((g, r)) if *g == f => r.clone(),
+                    _ => {
+                        let r = self.levels.resolve(level, f);
+                        *kept = Some((f, r.clone()));
+                        r
+                    }
+                };
+                match resolved {
                     Some(Resolved::Children { children, domain }) => {
                         let (child, at, factor) = domain.child_of(p);
                         f = FaceId::new((children.start + child) as u32);
-                        p = at.reduced();
+                        p = at;
                         j = j.map(|row| row.map(|x| x * factor));
                     }
                     Some(Resolved::Patch { patch, frame, .. }) => {
@@ -297,7 +308,7 @@ impl Evaluator {
                             .evaluators
                             .entry(Arc::as_ptr(&patch.matrices) as usize)
                             .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
-                        let stencil = evaluator.stencil(patch.shape, frame.to_patch(p).reduced())?;
+                        let stencil = evaluator.stencil(patch.shape, frame.to_patch(p))?;
                         let weights = self.weights.len() as u32;
                         self.weights.extend_from_slice(&stencil.position);
                         self.weights.extend_from_slice(&stencil.du);
