@@ -259,6 +259,7 @@ impl Evaluator {
         }
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
+        let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for (i, site) in topo.sites.iter().enumerate() {
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
@@ -304,15 +305,26 @@ impl Evaluator {
                             done = true;
                             break;
                         }
-                        let evaluator = self
-                            .evaluators
-                            .entry(Arc::as_ptr(&patch.matrices) as usize)
-                            .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
-                        let stencil = evaluator.stencil(patch.shape, frame.to_patch(p))?;
-                        let weights = self.weights.len() as u32;
-                        self.weights.extend_from_slice(&stencil.position);
-                        self.weights.extend_from_slice(&stencil.du);
-                        self.weights.extend_from_slice(&stencil.dv);
+                        // Points at the same place of the same patch shape (the same sub-face
+                        // point on every face of the cube) share one copy of their weights.
+                        let matrices = Arc::as_ptr(&patch.matrices) as usize;
+                        let at = frame.to_patch(p);
+                        let weights = match shared.get(&(matrices, patch.shape, at)) {
+                            Some(&w) => w,
+                            None => {
+                                let evaluator = self
+                                    .evaluators
+                                    .entry(matrices)
+                                    .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+                                let stencil = evaluator.stencil(patch.shape, at)?;
+                                let w = self.weights.len() as u32;
+                                self.weights.extend_from_slice(&stencil.position);
+                                self.weights.extend_from_slice(&stencil.du);
+                                self.weights.extend_from_slice(&stencil.dv);
+                                shared.insert((matrices, patch.shape, at), w);
+                                w
+                            }
+                        };
                         self.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
                         done = true;
                         break;
