@@ -577,3 +577,47 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
     }
     count
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use subdiv_mesh::shapes;
+    use subdiv_stencil::Grid;
+
+    fn row(vertices: std::ops::Range<u32>, den: u64) -> Vec<RowPoint> {
+        vertices.enumerate().map(|(k, vertex)| RowPoint { vertex, num: 2 * k as u64 + 1, den, near: true }).collect()
+    }
+
+    /// Rows of equal rates merge into quads; rows of rates 2 and 3 into 3 triangles, each
+    /// counter-clockwise with the first row on the left.
+    #[test]
+    fn strips_merge_rows_in_parameter_order() {
+        let mesh = Mesh::build(shapes::quad_torus(3, 3)).unwrap();
+        let mut b = Builder::new(&mesh, false, true);
+        b.out.polygon_offsets.push(0);
+        b.strip(&row(0..3, 6), &row(10..13, 6), 0);
+        assert_eq!(b.out.polygon_faces.len(), 2);
+        assert_eq!(b.out.polygon_vertices[..4], [10, 11, 1, 0]);
+        assert_eq!(b.out.triangles.len(), 4);
+        let mut b = Builder::new(&mesh, false, false);
+        // a: 1/4, 3/4; b: 1/6, 3/6, 5/6.
+        b.strip(&row(0..2, 4), &row(10..13, 6), 0);
+        assert_eq!(b.out.triangles, [[10, 11, 0], [10 + 1, 1, 0], [11, 12, 1]]);
+    }
+
+    /// A triangle's cell points come in `Grid::Dual`'s order (the tables' order, which the
+    /// closed-form indices of the evaluator and the hexagons rely on).
+    #[test]
+    fn triangle_cells_follow_the_dual_grid_order() {
+        let mesh = Mesh::build(shapes::icosahedron()).unwrap();
+        let domains = vec![Some(FaceDomain::Triangle); mesh.face_count()];
+        for n in [1, 2, 3, 7] {
+            let mut out = Topology::default();
+            Builder::new(&mesh, true, false).build(&domains, &vec![n; mesh.face_count()], &mut out);
+            let dual = Grid::Dual.points(3, n);
+            let face0: Vec<Dyadic> = out.sites.iter().take(dual.len()).map(|s| s.point).collect();
+            assert_eq!(face0, dual, "rate {n}");
+            assert_eq!(out.sites.len(), predicted_vertices(&mesh, true, &vec![n; mesh.face_count()]));
+        }
+    }
+}
