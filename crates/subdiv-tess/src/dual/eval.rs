@@ -68,6 +68,22 @@ struct Record {
     jv: [f64; 2],
 }
 
+/// Stencil evaluators per matrices (keyed by the matrices' address).
+type Evaluators = HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>;
+
+/// Vertices per chunk of [`Evaluator::prepare`].
+const CHUNK: usize = 4096;
+
+/// One chunk's stencil records, with offsets into its own `ids` and `weights`.
+#[derive(Debug, Default)]
+struct Chunk {
+    /// `(vertex, record)` pairs.
+    assigned: Vec<(u32, u32)>,
+    records: Vec<Record>,
+    ids: Vec<u32>,
+    weights: Vec<f64>,
+}
+
 /// A record with its own weights.
 const NO_TABLE: u32 = u32::MAX;
 /// The most control points a table record gathers on the stack (Catmull-Clark valence 12).
@@ -142,9 +158,10 @@ pub(crate) struct Evaluator {
     ids: Vec<u32>,
     weights: Vec<f64>,
     tables: DualTables,
-    /// Exact stencil evaluators per matrices, kept across calls (they remember what they
-    /// solved, so a second tessellation at the same rates solves nothing).
-    evaluators: HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>,
+    /// Sets of exact stencil evaluators per matrices, one per chunk at work, kept across calls
+    /// (they remember what they solved, so a second tessellation at the same rates solves
+    /// little).
+    pool: Vec<Evaluators>,
 }
 
 impl Evaluator {
@@ -201,7 +218,7 @@ impl Evaluator {
             ids: Vec::new(),
             weights: Vec::new(),
             tables: DualTables::default(),
-            evaluators: HashMap::new(),
+            pool: Vec::new(),
         };
         evaluator.set_cage(mesh.positions());
         Ok(evaluator)
@@ -237,7 +254,7 @@ impl Evaluator {
 
     /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, and a
     /// stencil record for every vertex on the general route.
-    pub(crate) fn prepare(&mut self, topo: &Topology) -> Result<(), TessError> {
+    pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.sites.len();
         self.kinds.clear();
         self.kinds.resize(n, BICUBIC);
@@ -257,10 +274,63 @@ impl Evaluator {
                 self.kinds[block.base as usize..end].fill(IN_BLOCK);
             }
         }
+        // The dual-grid tables the level-0 patches need, first: the chunks below only read them.
+        for f in self.levels.mesh(0).face_ids() {
+            if let (FacePlan::General, Some(Resolved::Patch { patch, .. })) =
+                (self.faces[f.index()], self.levels.resolve(0, f))
+                && patch.shape == 0
+                && patch.vertices.len() <= MAX_GATHER
+            {
+                ensure_table(&mut self.tables, patch, rates[f.index()])?;
+            }
+        }
+        // Stencil records by chunks of vertices, in parallel; each chunk borrows a set of
+        // stencil evaluators from the pool (their results do not depend on what they solved
+        // before, so neither does the output on the thread count).
+        let chunks: Vec<std::ops::Range<usize>> =
+            (0..n).step_by(CHUNK).map(|start| start..(start + CHUNK).min(n)).collect();
+        let pool = std::sync::Mutex::new(std::mem::take(&mut self.pool));
+        let this = &*self;
+        let work = |range: std::ops::Range<usize>| -> Result<Chunk, TessError> {
+            let mut evaluators =
+                pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
+            let chunk = this.chunk(topo, range, &mut evaluators);
+            pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(evaluators);
+            chunk
+        };
+        let results: Vec<Result<Chunk, TessError>> =
+            if parallel { chunks.into_par_iter().map(work).collect() } else { chunks.into_iter().map(work).collect() };
+        self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        for chunk in results {
+            let chunk = chunk?;
+            let (records, ids, weights) = (self.records.len() as u32, self.ids.len() as u32, self.weights.len() as u32);
+            for (vertex, record) in chunk.assigned {
+                self.kinds[vertex as usize] = records + record;
+            }
+            self.records.extend(chunk.records.into_iter().map(|r| Record {
+                ids: r.ids + ids,
+                weights: if r.table == NO_TABLE { r.weights + weights } else { r.weights },
+                ..r
+            }));
+            self.ids.extend_from_slice(&chunk.ids);
+            self.weights.extend_from_slice(&chunk.weights);
+        }
+        Ok(())
+    }
+
+    /// The stencil records of the general-route vertices of `range`, with chunk-local offsets.
+    fn chunk(
+        &self,
+        topo: &Topology,
+        range: std::ops::Range<usize>,
+        evaluators: &mut Evaluators,
+    ) -> Result<Chunk, TessError> {
+        let mut out = Chunk::default();
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
-        for (i, site) in topo.sites.iter().enumerate() {
+        for i in range {
+            let site = topo.sites[i];
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
             }
@@ -288,20 +358,20 @@ impl Evaluator {
                     }
                     Some(Resolved::Patch { patch, frame, .. }) => {
                         let (ids, len) = *patches.entry((level, f.index() as u32)).or_insert_with(|| {
-                            let start = self.ids.len() as u32;
-                            self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                            let start = out.ids.len() as u32;
+                            out.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
                             (start, patch.vertices.len() as u32)
                         });
                         let (ju, jv) = frame.chain(j);
-                        self.kinds[i] = self.records.len() as u32;
+                        out.assigned.push((i as u32, out.records.len() as u32));
                         // A point of a level-0 patch's own dual grid reads the shared table.
                         let table = if level == 0 && patch.shape == 0 && patch.vertices.len() <= MAX_GATHER {
-                            dual_table(&mut self.tables, patch, frame.to_patch(site.point))?
+                            dual_table(&self.tables, patch, frame.to_patch(site.point))
                         } else {
                             None
                         };
                         if let Some((table, index)) = table {
-                            self.records.push(Record { level: 0, ids, len, weights: index, table, ju, jv });
+                            out.records.push(Record { level: 0, ids, len, weights: index, table, ju, jv });
                             done = true;
                             break;
                         }
@@ -312,20 +382,19 @@ impl Evaluator {
                         let weights = match shared.get(&(matrices, patch.shape, at)) {
                             Some(&w) => w,
                             None => {
-                                let evaluator = self
-                                    .evaluators
+                                let evaluator = evaluators
                                     .entry(matrices)
                                     .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
                                 let stencil = evaluator.stencil(patch.shape, at)?;
-                                let w = self.weights.len() as u32;
-                                self.weights.extend_from_slice(&stencil.position);
-                                self.weights.extend_from_slice(&stencil.du);
-                                self.weights.extend_from_slice(&stencil.dv);
+                                let w = out.weights.len() as u32;
+                                out.weights.extend_from_slice(&stencil.position);
+                                out.weights.extend_from_slice(&stencil.du);
+                                out.weights.extend_from_slice(&stencil.dv);
                                 shared.insert((matrices, patch.shape, at), w);
                                 w
                             }
                         };
-                        self.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
+                        out.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
                         done = true;
                         break;
                     }
@@ -336,7 +405,7 @@ impl Evaluator {
                 return Err(TessError::Internal(format!("{face}: no patch holds point {:?}", site.point)));
             }
         }
-        Ok(())
+        Ok(out)
     }
 
     /// Position and unit normal of vertex `i` (not in a block) on the current cage.
@@ -487,47 +556,44 @@ struct DualTables {
     index: HashMap<(usize, u32), u32>,
 }
 
+/// Computes the dual-grid table of `patch`'s shape at `rate` unless it is held.
+fn ensure_table(tables: &mut DualTables, patch: &subdiv_schemes::FoundPatch, rate: u32) -> Result<(), TessError> {
+    let key = (Arc::as_ptr(&patch.matrices) as usize, rate);
+    if !tables.index.contains_key(&key) {
+        let computed =
+            StencilTable::compute_rates(&patch.matrices, BoundaryInterpolation::EdgeOnly, rate..=rate)?.remove(0);
+        tables.tables.push(Arc::new(computed));
+        tables.index.insert(key, (tables.tables.len() - 1) as u32);
+    }
+    Ok(())
+}
+
 /// The table and index of `point` (in the patch's frame, as the face's grid gave it: not
-/// reduced) if it is a point of the dual grid of some rate of the patch's shape.
-fn dual_table(
-    tables: &mut DualTables,
-    patch: &subdiv_schemes::FoundPatch,
-    point: Dyadic,
-) -> Result<Option<(u32, u32)>, TessError> {
+/// reduced) if it is a point of a held dual-grid table of the patch's shape.
+fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dyadic) -> Option<(u32, u32)> {
     let Dyadic { u: a, v: b, denominator: q } = point;
     let triangle = patch.matrices.face_size == 3;
     let (rate, index) = if triangle {
         // Centroids ((3i+1)/3n, (3j+1)/3n) up, ((3i+2)/3n, (3j+2)/3n) down.
         let r = a.rem_euclid(3);
         if q % 3 != 0 || r == 0 || b.rem_euclid(3) != r {
-            return Ok(None);
+            return None;
         }
         let (n, i, j) = (q / 3, (a - r) / 3, (b - r) / 3);
         (n, 2 * n * j - j * j + 2 * i + i64::from(r == 2))
     } else {
         if q % 2 != 0 || a % 2 == 0 || b % 2 == 0 {
-            return Ok(None);
+            return None;
         }
         let n = q / 2;
         (n, (b - 1) / 2 * n + (a - 1) / 2)
     };
-    let Ok(rate) = u32::try_from(rate) else { return Ok(None) };
-    let key = (Arc::as_ptr(&patch.matrices) as usize, rate);
-    let table = match tables.index.get(&key) {
-        Some(&t) => t,
-        None => {
-            let computed =
-                StencilTable::compute_rates(&patch.matrices, BoundaryInterpolation::EdgeOnly, rate..=rate)?.remove(0);
-            tables.tables.push(Arc::new(computed));
-            let t = (tables.tables.len() - 1) as u32;
-            tables.index.insert(key, t);
-            t
-        }
-    };
+    let rate = u32::try_from(rate).ok()?;
+    let table = *tables.index.get(&(Arc::as_ptr(&patch.matrices) as usize, rate))?;
     let t = &tables.tables[table as usize];
     // The closed-form index, checked against the table's own order.
-    let index = usize::try_from(index).ok().filter(|&k| k < t.len(Grid::Dual) && t.point(Grid::Dual, k) == point);
-    Ok(index.map(|k| (table, k as u32)))
+    let index = usize::try_from(index).ok().filter(|&k| k < t.len(Grid::Dual) && t.point(Grid::Dual, k) == point)?;
+    Some((table, index as u32))
 }
 
 /// The dual grid of a bicubic face, row by row: `put(k, position, normal)` for point
@@ -629,7 +695,7 @@ mod tests {
         let mut topo = Topology::default();
         let faces = mesh.face_count();
         super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], &mut topo);
-        ev.prepare(&topo).unwrap();
+        ev.prepare(&topo, &vec![4; faces], true).unwrap();
         let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
         assert_eq!(tabled, faces * 16);
         assert_eq!(ev.records.len(), topo.sites.len());

@@ -159,7 +159,7 @@ impl DualTessellator {
         let domains = self.evaluator.domains()?;
         let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
         builder.build(&domains, rates, &mut self.topology);
-        self.evaluator.prepare(&self.topology)?;
+        self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
         self.fill_output();
