@@ -473,6 +473,16 @@ fn thread_count_does_not_change_the_bits() {
 }
 
 #[test]
+fn extreme_rates_side_by_side_are_watertight() {
+    let max = subdiv_tess::MAX_DUAL_RATE;
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    closed_checks(Builtin::CatmullClark, &cube, &[1, max, 1, max, 2, 3]);
+    let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    let rates: Vec<u32> = (0..prism.face_count()).map(|f| if f % 2 == 0 { max } else { 1 }).collect();
+    closed_checks(Builtin::CatmullClark, &prism, &rates);
+}
+
+#[test]
 fn equal_rates_give_quads() {
     let torus = Mesh::build(shapes::quad_torus(4, 4)).unwrap();
     let out = tessellate(Builtin::CatmullClark, &torus, &[6; 16]);
@@ -516,6 +526,20 @@ proptest! {
         };
         let rates = rates_for(&mesh, seed, max);
         closed_checks(Builtin::CatmullClark, &mesh, &rates);
+    }
+
+    #[test]
+    fn random_open_meshes_keep_their_boundaries(seed in 0u64..1_000_000, which in 0usize..3, max in 1u32..40) {
+        let (builtin, mesh) = match which {
+            0 => (Builtin::CatmullClark, Mesh::build(shapes::quad_grid(1 + (seed % 4) as usize, 1 + (seed / 4 % 3) as usize)).unwrap()),
+            1 => (Builtin::CatmullClark, Mesh::build(shapes::pole(3 + (seed % 5) as usize)).unwrap()),
+            _ => {
+                let mut soup = shapes::ngon_prism(3 + (seed % 5) as usize);
+                soup.tags.holes.push(FaceId::new((seed % 3) as u32));
+                (Builtin::CatmullClark, Mesh::build(soup).unwrap())
+            }
+        };
+        open_checks(builtin, &mesh, &rates_for(&mesh, seed, max));
     }
 
     #[test]
