@@ -144,7 +144,10 @@ impl DualTessellator {
     }
 
     /// Tessellates with `rates[f]` steps per side of input face `f` (holes: ignored, but still
-    /// checked).
+    /// checked), on the latest cage (the mesh's, or the last [`update_cage`](Self::update_cage)'s).
+    /// An N-gon (N ≠ 4) under a quad split takes `⌈n/2⌉` steps per side of each of its `Bfr`
+    /// sub-faces. Rebuilds the topology and the stencil records; the tables and stencils solved
+    /// by earlier calls are kept.
     ///
     /// # Errors
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
