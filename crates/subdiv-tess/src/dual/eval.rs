@@ -702,4 +702,21 @@ mod tests {
         // One table: one patch type, one rate.
         assert_eq!(ev.tables.tables.len(), 1);
     }
+
+    /// The cage refined by the evaluator's own `Refiner` (what `update_cage` uses) lands on the
+    /// patch levels' meshes, vertex for vertex: the stencil records index those vertices.
+    #[test]
+    fn refined_cage_matches_the_patch_levels() {
+        for soup in [shapes::cube(), shapes::ngon_prism(5), shapes::default_model()] {
+            let mesh = Mesh::build(soup).unwrap();
+            let ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+            assert!(ev.levels.level_count() > 1);
+            for level in 0..ev.levels.level_count() {
+                let want = ev.levels.mesh(level).positions();
+                assert_eq!(ev.positions[level].len(), want.len());
+                let worst = ev.positions[level].iter().zip(want).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+                assert!(worst < 1e-12, "level {level}: {worst:e}");
+            }
+        }
+    }
 }
