@@ -515,7 +515,11 @@ fn bad_input_is_a_typed_error() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    // 24 cases by default; PROPTEST_CASES sets another count (a long run).
+    #![proptest_config(ProptestConfig {
+        cases: std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(24),
+        ..ProptestConfig::default()
+    })]
 
     #[test]
     fn random_meshes_and_rates_are_watertight(seed in 0u64..1_000_000, which in 0usize..3, max in 1u32..40) {
