@@ -79,8 +79,27 @@ fn input_euler(mesh: &Mesh) -> i64 {
     vertices.len() as i64 - edges.len() as i64 + faces.len() as i64
 }
 
+/// The output faces the way the input does: on a closed mesh, the signed volumes enclosed by
+/// the output's triangles and by the cage's faces (fanned) have the same sign. (A triangle by
+/// triangle check of facet against limit normals would flag coarse rates on curved, saddle-shaped
+/// regions, where a flat triangle through far-apart limit points legitimately tilts.)
+fn check_facing(out: &TessMesh, mesh: &Mesh) {
+    let volume = |t: [DVec3; 3]| t[0].dot(t[1].cross(t[2])) / 6.0;
+    let output: f64 = out.triangles.iter().map(|t| volume(t.map(|v| out.positions[v as usize]))).sum();
+    let cage: f64 = mesh
+        .face_ids()
+        .flat_map(|f| {
+            let vs = mesh.face_vertices(f);
+            (1..vs.len() - 1).map(move |k| [vs[0], vs[k], vs[k + 1]])
+        })
+        .map(|t| volume(t.map(|v| mesh.position(v))))
+        .sum();
+    assert!(output * cage > 0.0, "output volume {output} against the cage's {cage}: flipped");
+}
+
 fn closed_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> TessMesh {
     let out = tessellate(builtin, mesh, rates);
+    check_facing(&out, mesh);
     let border = check(&out);
     assert!(border.is_empty(), "{} border edges on a closed mesh", border.len());
     assert_eq!(euler(&out), input_euler(mesh));
@@ -550,5 +569,30 @@ proptest! {
     fn random_triangle_meshes_are_watertight(seed in 0u64..1_000_000, max in 1u32..40) {
         let mesh = Mesh::build(shapes::icosahedron()).unwrap();
         closed_checks(Builtin::Loop, &mesh, &rates_for(&mesh, seed, max));
+    }
+}
+
+/// At rates fine for the curvature, every triangle's facet normal agrees with its corners'
+/// limit normals: strips and rings do not fold over, also between unequal rates.
+#[test]
+fn fine_triangles_face_the_way_the_surface_does() {
+    for (builtin, soup, seed) in [
+        (Builtin::CatmullClark, shapes::default_model(), 1),
+        (Builtin::CatmullClark, shapes::ngon_prism(5), 2),
+        (Builtin::CatmullClark, shapes::cube(), 3),
+        (Builtin::Loop, shapes::icosahedron(), 4),
+    ] {
+        let mesh = Mesh::build(soup).unwrap();
+        let rates: Vec<u32> = rates_for(&mesh, seed, 7).into_iter().map(|r| r + 5).collect();
+        let out = tessellate(builtin, &mesh, &rates);
+        let mut flipped = 0;
+        for t in &out.triangles {
+            let [a, b, c] = t.map(|v| out.positions[v as usize]);
+            let normal: DVec3 = t.iter().map(|&v| out.normals[v as usize]).sum();
+            if (b - a).cross(c - a).dot(normal) <= 0.0 {
+                flipped += 1;
+            }
+        }
+        assert_eq!(flipped, 0, "{builtin:?}: {flipped} of {} triangles face away", out.triangles.len());
     }
 }
