@@ -4,7 +4,8 @@
 //! face through its children: exact stencils) and the default model. Three measurements per
 //! case: `tessellate` (topology, stencil records and evaluation), `update_cage` (the animation
 //! path: f64 positions and normals only) and `update_cage_flat` (the animation path straight
-//! into the welded f32 buffers a renderer uploads, indices included). Run with `cargo bench -p subdiv-benches --bench tess`.
+//! into the welded f32 buffers a renderer uploads, indices included). Run with
+//! `cargo bench -p subdiv-benches --bench tess`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use subdiv::mesh::{Mesh, shapes};

@@ -554,7 +554,10 @@ proptest! {
     #[test]
     fn random_open_meshes_keep_their_boundaries(seed in 0u64..1_000_000, which in 0usize..3, max in 1u32..40) {
         let (builtin, mesh) = match which {
-            0 => (Builtin::CatmullClark, Mesh::build(shapes::quad_grid(1 + (seed % 4) as usize, 1 + (seed / 4 % 3) as usize)).unwrap()),
+            0 => {
+                let (m, n) = (1 + (seed % 4) as usize, 1 + (seed / 4 % 3) as usize);
+                (Builtin::CatmullClark, Mesh::build(shapes::quad_grid(m, n)).unwrap())
+            }
             1 => (Builtin::CatmullClark, Mesh::build(shapes::pole(3 + (seed % 5) as usize)).unwrap()),
             _ => {
                 let mut soup = shapes::ngon_prism(3 + (seed % 5) as usize);

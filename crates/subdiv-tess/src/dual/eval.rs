@@ -18,10 +18,12 @@
 //!   (computed on demand from the patch's matrices: `subdiv-stencil` has no loader for its
 //!   committed tables yet). Any other point (border points, vertex limit points, points under
 //!   refined faces) stores its own exact surface stencil (position and both derivatives over
-//!   the patch's control points) from a [`StencilEvaluator`], also kept across calls. A new cage is refined to the levels these patches live on by
-//!   the refinement engine's stencils (a sparse product per level over the whole mesh: `O(4^L)`
-//!   times the cage for `L` levels, `L ≤ 2` for N-gons and double extraordinary quads), and
-//!   each point is then a dot product: no topology work, no allocation per vertex.
+//!   the patch's control points) from a [`StencilEvaluator`], also kept across calls; points at
+//!   the same place of the same patch shape share one copy. A new cage is refined to the levels
+//!   these patches live on by the refinement engine's stencils (a sparse product per level over
+//!   the whole mesh: `O(4^L)` times the cage for `L` levels, `L ≤ 2` for N-gons and double
+//!   extraordinary quads), and each point is then a dot product: no topology work, no
+//!   allocation per vertex. The records are prepared in parallel by chunks of vertices.
 
 use std::sync::Arc;
 

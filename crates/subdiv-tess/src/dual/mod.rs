@@ -25,10 +25,11 @@
 //!
 //! Every output vertex is evaluated once, exactly, with a unit normal from the exact tangents:
 //! regular bicubic faces separably, row by row, with per-rate basis tables; the cell points of
-//! other level-0 patches through their patch type's dual-grid [`StencilTable`](subdiv_stencil::StencilTable);
-//! every other point through its own exact stencil at the patch that holds it (after descending
-//! through the refined levels an N-gon or a face with two extraordinary corners needs). [`DualTessellator::update_cage`] re-evaluates positions and
-//! normals for a moved cage without any topology or stencil work.
+//! other level-0 patches through their patch type's dual-grid
+//! [`StencilTable`](subdiv_stencil::StencilTable); every other point through its own exact
+//! stencil at the patch that holds it (after descending through the refined levels an N-gon or
+//! a face with two extraordinary corners needs). [`DualTessellator::update_cage`] re-evaluates
+//! positions and normals for a moved cage without any topology or stencil work.
 
 mod eval;
 mod topology;
