@@ -206,6 +206,13 @@ fn open_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     }
 }
 
+/// The cube refined twice (Catmull-Clark): 96 quads whose extraordinary vertices (valence 3)
+/// are isolated, so the faces at them are extraordinary patches on level 0 (the table route).
+fn refined_cube() -> Mesh {
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    subdiv_schemes::refine_uniform(&cube, Builtin::CatmullClark.scheme(), 2, &RefineOptions::DEFAULT).unwrap()
+}
+
 fn diagonal(mesh: &Mesh) -> f64 {
     mesh.bounding_box().map_or(1.0, |(lo, hi)| lo.distance(hi))
 }
@@ -398,6 +405,8 @@ fn open_meshes_keep_their_boundary_loops() {
 fn vertices_are_on_the_limit_surface() {
     let cube = Mesh::build(shapes::cube()).unwrap();
     on_limit_surface(Builtin::CatmullClark, &cube, &rates_for(&cube, 1, 7));
+    let refined = refined_cube();
+    on_limit_surface(Builtin::CatmullClark, &refined, &rates_for(&refined, 11, 9));
     let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
     on_limit_surface(Builtin::CatmullClark, &prism, &rates_for(&prism, 2, 7));
     let torus = Mesh::build(shapes::quad_torus(5, 4)).unwrap();
@@ -598,4 +607,35 @@ fn fine_triangles_face_the_way_the_surface_does() {
         }
         assert_eq!(flipped, 0, "{builtin:?}: {flipped} of {} triangles face away", out.triangles.len());
     }
+}
+
+/// The committed default tables (Catmull-Clark, valences 3 to 8, rates 1 to 24) seed the
+/// tessellator, and give the same output, bit for bit, as tables computed on demand.
+#[test]
+fn committed_tables_seed_the_tessellator() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../subdiv-stencil/tables/catmull-clark.stencils");
+    let bytes = std::fs::read(&path).unwrap();
+    let scheme = Builtin::CatmullClark.scheme();
+    let tables = subdiv_stencil::StencilTables::from_bytes(&bytes, scheme).unwrap();
+    // The cube refined twice (valence-3 patches on level 0), and a pentagonal prism refined
+    // twice (valence 5 at the caps' centres, valence 3 at their corners).
+    let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    let prism = subdiv_schemes::refine_uniform(&prism, scheme, 2, &RefineOptions::DEFAULT).unwrap();
+    for mesh in [refined_cube(), prism] {
+        let rates = rates_for(&mesh, 12, 20);
+        let mut seeded = DualTessellator::new(scheme, &mesh, &DualOptions::default()).unwrap();
+        let taken = seeded.seed_tables(&tables).unwrap();
+        assert!(taken > 0, "no table taken");
+        let seeded = seeded.tessellate(&rates).unwrap().clone();
+        let fresh = tessellate(Builtin::CatmullClark, &mesh, &rates);
+        assert_eq!(seeded, fresh);
+    }
+    // Another scheme's tables are refused.
+    let mut loop_tess = DualTessellator::new(
+        Builtin::Loop.scheme(),
+        &Mesh::build(shapes::icosahedron()).unwrap(),
+        &DualOptions::default(),
+    )
+    .unwrap();
+    assert!(matches!(loop_tess.seed_tables(&tables), Err(TessError::Scheme { .. })));
 }

@@ -15,8 +15,8 @@
 //!   factors of the descent and the patch frame. A point of a level-0 patch's own dual grid
 //!   (the face's cell points, read in the patch's frame) refers to the patch type's
 //!   [`StencilTable`] at that rate, shared by every face of the type and kept across calls
-//!   (computed on demand from the patch's matrices: `subdiv-stencil` has no loader for its
-//!   committed tables yet). Any other point (border points, vertex limit points, points under
+//!   (computed on demand from the patch's matrices, unless seeded with precomputed tables such
+//!   as the committed defaults: [`DualTessellator::seed_tables`](super::DualTessellator::seed_tables)). Any other point (border points, vertex limit points, points under
 //!   refined faces) stores its own exact surface stencil (position and both derivatives over
 //!   the patch's control points) from a [`StencilEvaluator`], also kept across calls; points at
 //!   the same place of the same patch shape share one copy. A new cage is refined to the levels
@@ -31,7 +31,7 @@ use glam::DVec3;
 use hashbrown::HashMap;
 use rayon::prelude::*;
 use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
-use subdiv_schemes::{PatchMatrices, RefineOptions, Refiner, Scheme, Split};
+use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
 use super::topology::Topology;
@@ -224,6 +224,36 @@ impl Evaluator {
         };
         evaluator.set_cage(mesh.positions());
         Ok(evaluator)
+    }
+
+    /// Seeds the dual-grid tables with precomputed interior-patch tables (those of the level-0
+    /// patches' types; the scheme was checked by the caller). Returns how many were taken.
+    pub(crate) fn seed_tables(&mut self, tables: &subdiv_stencil::StencilTables) -> usize {
+        let mut seen = hashbrown::HashSet::new();
+        let mut taken = 0;
+        for f in self.levels.mesh(0).face_ids() {
+            let (FacePlan::General, Some(Resolved::Patch { patch, .. })) =
+                (self.faces[f.index()], self.levels.resolve(0, f))
+            else {
+                continue;
+            };
+            let m = &patch.matrices;
+            let ptr = Arc::as_ptr(m) as usize;
+            // Boundary patch types depend on the boundary rule: only interior ones are taken.
+            if patch.shape != 0 || !matches!(m.patch_type, PatchType::Interior { .. }) || !seen.insert(ptr) {
+                continue;
+            }
+            for t in tables.tables().iter().filter(|t| {
+                t.patch_type() == m.patch_type && t.face_size() == m.face_size && t.control_points() == m.shapes[0].size
+            }) {
+                if let hashbrown::hash_map::Entry::Vacant(slot) = self.tables.index.entry((ptr, t.rate())) {
+                    self.tables.tables.push(Arc::new(t.clone()));
+                    slot.insert((self.tables.tables.len() - 1) as u32);
+                    taken += 1;
+                }
+            }
+        }
+        taken
     }
 
     /// The patch levels (level 0: the input with the boundary rule applied).

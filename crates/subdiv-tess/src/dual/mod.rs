@@ -109,6 +109,7 @@ pub struct FlatMesh {
 #[derive(Debug)]
 pub struct DualTessellator {
     options: DualOptions,
+    scheme: String,
     triangle: bool,
     vertex_count: usize,
     evaluator: Evaluator,
@@ -132,6 +133,7 @@ impl DualTessellator {
         let builder_mesh = evaluator.levels().mesh(0).clone();
         Ok(Self {
             options: *options,
+            scheme: scheme.name().to_string(),
             triangle,
             vertex_count: mesh.vertex_count(),
             evaluator,
@@ -140,6 +142,25 @@ impl DualTessellator {
             rates: Vec::new(),
             output: TessMesh::default(),
         })
+    }
+
+    /// Seeds the dual-grid stencil tables with precomputed ones, e.g. the committed defaults
+    /// (`subdiv-stencil`'s `DEFAULT_TABLES`, read with
+    /// [`StencilTables::from_bytes`](subdiv_stencil::StencilTables::from_bytes)), so that the
+    /// level-0 extraordinary patches at those rates need no table work; other tables are still
+    /// computed on demand. Only interior patch types are taken (a boundary patch's table depends
+    /// on the boundary rule). Returns how many tables were taken.
+    ///
+    /// # Errors
+    /// [`TessError::Scheme`] if the tables are another scheme's.
+    pub fn seed_tables(&mut self, tables: &subdiv_stencil::StencilTables) -> Result<usize, TessError> {
+        if tables.scheme() != self.scheme {
+            return Err(TessError::Scheme {
+                scheme: self.scheme.clone(),
+                reason: format!("the stencil tables are for `{}`", tables.scheme()),
+            });
+        }
+        Ok(self.evaluator.seed_tables(tables))
     }
 
     /// The number of input faces (the length [`tessellate`](Self::tessellate)'s rates must have).
