@@ -16,8 +16,10 @@
 //!   (the face's cell points, read in the patch's frame) refers to the patch type's
 //!   [`StencilTable`] at that rate, shared by every face of the type and kept across calls
 //!   (computed on demand from the patch's matrices, unless seeded with precomputed tables such
-//!   as the committed defaults: [`DualTessellator::seed_tables`](super::DualTessellator::seed_tables)). Any other point (border points, vertex limit points, points under
-//!   refined faces) stores its own exact surface stencil (position and both derivatives over
+//!   as the committed defaults:
+//!   [`DualTessellator::seed_tables`](super::DualTessellator::seed_tables)). Any other point
+//!   (border points, vertex limit points, points under refined faces) stores its own exact
+//!   surface stencil (position and both derivatives over
 //!   the patch's control points) from a [`StencilEvaluator`], also kept across calls; points at
 //!   the same place of the same patch shape share one copy. A new cage is refined to the levels
 //!   these patches live on by the refinement engine's stencils (a sparse product per level over
