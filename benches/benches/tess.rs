@@ -3,8 +3,9 @@
 //! a regular 128 × 64 quad torus (every face on the separable bicubic route), the cube (every
 //! face through its children: exact stencils) and the default model. Three measurements per
 //! case: `tessellate` (topology, stencil records and evaluation), `update_cage` (the animation
-//! path: positions and normals only) and `update_cage_flat` (the same plus the welded f32
-//! buffers of `write_flat`). Run with `cargo bench -p subdiv-benches --bench tess`.
+//! path: f64 positions and normals only) and `update_cage_flat` (the animation path straight
+//! into the welded f32 buffers a renderer uploads, indices included). Run with
+//! `cargo bench -p subdiv-benches --bench tess`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use subdiv::mesh::{Mesh, shapes};
@@ -37,8 +38,7 @@ fn dual(c: &mut Criterion) {
             let mut flat = FlatMesh::default();
             group.bench_function(format!("{name}_n{rate}_update_cage_flat"), |b| {
                 b.iter(|| {
-                    tess.update_cage(&cage).expect("finite cage");
-                    tess.write_flat(&mut flat);
+                    tess.update_cage_flat(&cage, &mut flat).expect("finite cage");
                     std::hint::black_box(flat.indices.len())
                 });
             });

@@ -11,21 +11,30 @@
 //!   face (border points, corners) use the same polynomial at their parameter.
 //! - **Every other face** (extraordinary, boundary or non-bicubic patches on level 0, and faces
 //!   resolved through their children: N-gons, quads with two extraordinary corners): each
-//!   point descends (exactly, in rationals) to the patch that holds it, and its exact surface
-//!   stencil there (position and both derivatives over the patch's control points) is stored
-//!   with the chain-rule factors. A new cage is refined to the levels these patches live on by
-//!   the refinement engine's stencils (a sparse product per level over the whole mesh: `O(4^L)`
-//!   times the cage for `L` levels, `L ≤ 2` for N-gons and double extraordinary quads), and
-//!   each point is then a dot product: no topology work, no allocation per vertex.
+//!   point descends (exactly, in rationals) to the patch that holds it, with the chain-rule
+//!   factors of the descent and the patch frame. A point of a level-0 patch's own dual grid
+//!   (the face's cell points, read in the patch's frame) refers to the patch type's
+//!   [`StencilTable`] at that rate, shared by every face of the type and kept across calls
+//!   (computed on demand from the patch's matrices, unless seeded with precomputed tables such
+//!   as the committed defaults:
+//!   [`DualTessellator::seed_tables`](super::DualTessellator::seed_tables)). Any other point
+//!   (border points, vertex limit points, points under refined faces) stores its own exact
+//!   surface stencil (position and both derivatives over
+//!   the patch's control points) from a [`StencilEvaluator`], also kept across calls; points at
+//!   the same place of the same patch shape share one copy. A new cage is refined to the levels
+//!   these patches live on by the refinement engine's stencils (a sparse product per level over
+//!   the whole mesh: `O(4^L)` times the cage for `L` levels, `L ≤ 2` for N-gons and double
+//!   extraordinary quads), and each point is then a dot product: no topology work, no
+//!   allocation per vertex. The records are prepared in parallel by chunks of vertices.
 
 use std::sync::Arc;
 
 use glam::DVec3;
 use hashbrown::HashMap;
 use rayon::prelude::*;
-use subdiv_mesh::{FaceId, Mesh};
-use subdiv_schemes::{PatchMatrices, RefineOptions, Refiner, Scheme, Split};
-use subdiv_stencil::{Dyadic, FaceDomain, PatchLevels, Resolved, StencilEvaluator};
+use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
+use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, Split};
+use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
 use super::topology::Topology;
 use crate::TessError;
@@ -55,10 +64,34 @@ struct Record {
     level: u32,
     ids: u32,
     len: u32,
+    /// The first of the record's `3 · len` weights in `weights`, or, when `table` is not
+    /// [`NO_TABLE`], the point's index in that table's dual grid.
     weights: u32,
+    table: u32,
     ju: [f64; 2],
     jv: [f64; 2],
 }
+
+/// Stencil evaluators per matrices (keyed by the matrices' address).
+type Evaluators = HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>;
+
+/// Vertices per chunk of [`Evaluator::prepare`].
+const CHUNK: usize = 4096;
+
+/// One chunk's stencil records, with offsets into its own `ids` and `weights`.
+#[derive(Debug, Default)]
+struct Chunk {
+    /// `(vertex, record)` pairs.
+    assigned: Vec<(u32, u32)>,
+    records: Vec<Record>,
+    ids: Vec<u32>,
+    weights: Vec<f64>,
+}
+
+/// A record with its own weights.
+const NO_TABLE: u32 = u32::MAX;
+/// The most control points a table record gathers on the stack (Catmull-Clark valence 12).
+const MAX_GATHER: usize = 32;
 
 /// The uniform cubic B-spline basis and its derivative at the dual points `(i+½)/n`.
 #[derive(Clone, Debug)]
@@ -128,6 +161,11 @@ pub(crate) struct Evaluator {
     records: Vec<Record>,
     ids: Vec<u32>,
     weights: Vec<f64>,
+    tables: DualTables,
+    /// Sets of exact stencil evaluators per matrices, one per chunk at work, kept across calls
+    /// (they remember what they solved, so a second tessellation at the same rates solves
+    /// little).
+    pool: Vec<Evaluators>,
 }
 
 impl Evaluator {
@@ -183,9 +221,41 @@ impl Evaluator {
             records: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
+            tables: DualTables::default(),
+            pool: Vec::new(),
         };
         evaluator.set_cage(mesh.positions());
         Ok(evaluator)
+    }
+
+    /// Seeds the dual-grid tables with precomputed interior-patch tables (those of the level-0
+    /// patches' types; the scheme was checked by the caller). Returns how many were taken.
+    pub(crate) fn seed_tables(&mut self, tables: &subdiv_stencil::StencilTables) -> usize {
+        let mut seen = hashbrown::HashSet::new();
+        let mut taken = 0;
+        for f in self.levels.mesh(0).face_ids() {
+            let (FacePlan::General, Some(Resolved::Patch { patch, .. })) =
+                (self.faces[f.index()], self.levels.resolve(0, f))
+            else {
+                continue;
+            };
+            let m = &patch.matrices;
+            let ptr = Arc::as_ptr(m) as usize;
+            // Boundary patch types depend on the boundary rule: only interior ones are taken.
+            if patch.shape != 0 || !matches!(m.patch_type, PatchType::Interior { .. }) || !seen.insert(ptr) {
+                continue;
+            }
+            for t in tables.tables().iter().filter(|t| {
+                t.patch_type() == m.patch_type && t.face_size() == m.face_size && t.control_points() == m.shapes[0].size
+            }) {
+                if let hashbrown::hash_map::Entry::Vacant(slot) = self.tables.index.entry((ptr, t.rate())) {
+                    self.tables.tables.push(Arc::new(t.clone()));
+                    slot.insert((self.tables.tables.len() - 1) as u32);
+                    taken += 1;
+                }
+            }
+        }
+        taken
     }
 
     /// The patch levels (level 0: the input with the boundary rule applied).
@@ -218,7 +288,7 @@ impl Evaluator {
 
     /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, and a
     /// stencil record for every vertex on the general route.
-    pub(crate) fn prepare(&mut self, topo: &Topology) -> Result<(), TessError> {
+    pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.sites.len();
         self.kinds.clear();
         self.kinds.resize(n, BICUBIC);
@@ -238,41 +308,127 @@ impl Evaluator {
                 self.kinds[block.base as usize..end].fill(IN_BLOCK);
             }
         }
-        let mut evaluators: HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>> = HashMap::new();
+        // The dual-grid tables the level-0 patches need, first: the chunks below only read them.
+        for f in self.levels.mesh(0).face_ids() {
+            if let (FacePlan::General, Some(Resolved::Patch { patch, .. })) =
+                (self.faces[f.index()], self.levels.resolve(0, f))
+                && patch.shape == 0
+                && patch.vertices.len() <= MAX_GATHER
+            {
+                ensure_table(&mut self.tables, patch, rates[f.index()])?;
+            }
+        }
+        // Stencil records by chunks of vertices, in parallel; each chunk borrows a set of
+        // stencil evaluators from the pool (their results do not depend on what they solved
+        // before, so neither does the output on the thread count).
+        let chunks: Vec<std::ops::Range<usize>> =
+            (0..n).step_by(CHUNK).map(|start| start..(start + CHUNK).min(n)).collect();
+        let pool = std::sync::Mutex::new(std::mem::take(&mut self.pool));
+        let this = &*self;
+        let work = |range: std::ops::Range<usize>| -> Result<Chunk, TessError> {
+            let mut evaluators =
+                pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
+            let chunk = this.chunk(topo, range, &mut evaluators);
+            pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(evaluators);
+            chunk
+        };
+        let results: Vec<Result<Chunk, TessError>> =
+            if parallel { chunks.into_par_iter().map(work).collect() } else { chunks.into_iter().map(work).collect() };
+        self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        for chunk in results {
+            let chunk = chunk?;
+            let (records, ids, weights) = (self.records.len() as u32, self.ids.len() as u32, self.weights.len() as u32);
+            for (vertex, record) in chunk.assigned {
+                self.kinds[vertex as usize] = records + record;
+            }
+            self.records.extend(chunk.records.into_iter().map(|r| Record {
+                ids: r.ids + ids,
+                weights: if r.table == NO_TABLE { r.weights + weights } else { r.weights },
+                ..r
+            }));
+            self.ids.extend_from_slice(&chunk.ids);
+            self.weights.extend_from_slice(&chunk.weights);
+        }
+        Ok(())
+    }
+
+    /// The stencil records of the general-route vertices of `range`, with chunk-local offsets.
+    fn chunk(
+        &self,
+        topo: &Topology,
+        range: std::ops::Range<usize>,
+        evaluators: &mut Evaluators,
+    ) -> Result<Chunk, TessError> {
+        let mut out = Chunk::default();
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
-        for (i, site) in topo.sites.iter().enumerate() {
+        let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
+        let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
+        for i in range {
+            let site = topo.sites[i];
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
             }
             let face = FaceId::new(site.face);
+            // Reduced once, as `LimitEvaluator::eval_exact` does: the descent's maps keep it exact.
             let (mut f, mut p) = (face, site.point.reduced());
             let mut j = [[1.0, 0.0], [0.0, 1.0]];
             let mut done = false;
-            for level in 0..self.levels.level_count() {
-                match self.levels.resolve(level, f) {
+            for (level, kept) in last.iter_mut().enumerate() {
+                // Neighbouring points share their faces: the last resolution per level is kept.
+                let resolved = match kept {
+                    Some((g, r)) if *g == f => r.clone(),
+                    _ => {
+                        let r = self.levels.resolve(level, f);
+                        *kept = Some((f, r.clone()));
+                        r
+                    }
+                };
+                match resolved {
                     Some(Resolved::Children { children, domain }) => {
                         let (child, at, factor) = domain.child_of(p);
                         f = FaceId::new((children.start + child) as u32);
-                        p = at.reduced();
+                        p = at;
                         j = j.map(|row| row.map(|x| x * factor));
                     }
                     Some(Resolved::Patch { patch, frame, .. }) => {
-                        let evaluator = evaluators
-                            .entry(Arc::as_ptr(&patch.matrices) as usize)
-                            .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
-                        let stencil = evaluator.stencil(patch.shape, frame.to_patch(p).reduced())?;
                         let (ids, len) = *patches.entry((level, f.index() as u32)).or_insert_with(|| {
-                            let start = self.ids.len() as u32;
-                            self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                            let start = out.ids.len() as u32;
+                            out.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
                             (start, patch.vertices.len() as u32)
                         });
-                        let weights = self.weights.len() as u32;
-                        self.weights.extend_from_slice(&stencil.position);
-                        self.weights.extend_from_slice(&stencil.du);
-                        self.weights.extend_from_slice(&stencil.dv);
                         let (ju, jv) = frame.chain(j);
-                        self.kinds[i] = self.records.len() as u32;
-                        self.records.push(Record { level: level as u32, ids, len, weights, ju, jv });
+                        out.assigned.push((i as u32, out.records.len() as u32));
+                        // A point of a level-0 patch's own dual grid reads the shared table.
+                        let table = if level == 0 && patch.shape == 0 && patch.vertices.len() <= MAX_GATHER {
+                            dual_table(&self.tables, patch, frame.to_patch(site.point))
+                        } else {
+                            None
+                        };
+                        if let Some((table, index)) = table {
+                            out.records.push(Record { level: 0, ids, len, weights: index, table, ju, jv });
+                            done = true;
+                            break;
+                        }
+                        // Points at the same place of the same patch shape (the same sub-face
+                        // point on every face of the cube) share one copy of their weights.
+                        let matrices = Arc::as_ptr(&patch.matrices) as usize;
+                        let at = frame.to_patch(p);
+                        let weights = match shared.get(&(matrices, patch.shape, at)) {
+                            Some(&w) => w,
+                            None => {
+                                let evaluator = evaluators
+                                    .entry(matrices)
+                                    .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+                                let stencil = evaluator.stencil(patch.shape, at)?;
+                                let w = out.weights.len() as u32;
+                                out.weights.extend_from_slice(&stencil.position);
+                                out.weights.extend_from_slice(&stencil.du);
+                                out.weights.extend_from_slice(&stencil.dv);
+                                shared.insert((matrices, patch.shape, at), w);
+                                w
+                            }
+                        };
+                        out.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
                         done = true;
                         break;
                     }
@@ -283,7 +439,60 @@ impl Evaluator {
                 return Err(TessError::Internal(format!("{face}: no patch holds point {:?}", site.point)));
             }
         }
-        Ok(())
+        Ok(out)
+    }
+
+    /// Position and unit normal of vertex `i` (not in a block) on the current cage.
+    #[inline]
+    fn point(&self, topo: &Topology, i: usize) -> (DVec3, DVec3) {
+        let kind = self.kinds[i];
+        let site = topo.sites[i];
+        let (x, du, dv) = if kind == BICUBIC {
+            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
+            let (u, v) = site.point.to_f64();
+            bicubic(cv, &self.positions[0], u, v)
+        } else {
+            self.general(&self.records[kind as usize])
+        };
+        (x, normal(du, dv))
+    }
+
+    /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
+    /// positions and normals, without the f64 arrays.
+    pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
+        let point = |i: usize, o: &mut [f32]| {
+            if self.kinds[i] != IN_BLOCK {
+                let (p, n) = self.point(topo, i);
+                put_flat(o, p, n);
+            }
+        };
+        if parallel {
+            out.par_chunks_exact_mut(6).enumerate().with_min_len(256).for_each(|(i, o)| point(i, o));
+        } else {
+            out.chunks_exact_mut(6).enumerate().for_each(|(i, o)| point(i, o));
+        }
+        let mut pieces = Vec::with_capacity(topo.blocks.len());
+        let mut rest = out;
+        let mut at = 0;
+        for block in &topo.blocks {
+            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
+            let len = (block.rate * block.rate) as usize;
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(6 * (block.base as usize - at));
+            let (piece, tail) = tail.split_at_mut(6 * len);
+            rest = tail;
+            at = block.base as usize + len;
+            pieces.push((cv, block.rate, piece));
+        }
+        let cage = &self.positions[0];
+        let run = |(cv, rate, piece): (&[u32; 16], u32, &mut [f32])| {
+            let basis = self.bases[rate as usize].as_deref().expect("prepared");
+            grid_block(cv, cage, basis, |k, p, n| put_flat(&mut piece[6 * k..6 * k + 6], p, n));
+        };
+        if parallel {
+            pieces.into_par_iter().for_each(run);
+        } else {
+            pieces.into_iter().for_each(run);
+        }
     }
 
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
@@ -298,20 +507,9 @@ impl Evaluator {
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
         let point = |i: usize, p: &mut DVec3, nr: &mut DVec3| {
-            let kind = self.kinds[i];
-            if kind == IN_BLOCK {
-                return;
+            if self.kinds[i] != IN_BLOCK {
+                (*p, *nr) = self.point(topo, i);
             }
-            let site = topo.sites[i];
-            let (x, du, dv) = if kind == BICUBIC {
-                let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
-                let (u, v) = site.point.to_f64();
-                bicubic(cv, &self.positions[0], u, v)
-            } else {
-                self.general(&self.records[kind as usize])
-            };
-            *p = x;
-            *nr = normal(du, dv);
         };
         if parallel {
             positions
@@ -344,7 +542,10 @@ impl Evaluator {
         let cage = &self.positions[0];
         let run = |(cv, rate, bp, bn): (&[u32; 16], u32, &mut [DVec3], &mut [DVec3])| {
             let basis = self.bases[rate as usize].as_deref().expect("prepared");
-            grid_block(cv, cage, basis, bp, bn);
+            grid_block(cv, cage, basis, |k, p, n| {
+                bp[k] = p;
+                bn[k] = n;
+            });
         };
         if parallel {
             pieces.into_par_iter().for_each(run);
@@ -359,6 +560,15 @@ impl Evaluator {
         let points = &self.positions[r.level as usize];
         let len = r.len as usize;
         let ids = &self.ids[r.ids as usize..r.ids as usize + len];
+        if r.table != NO_TABLE {
+            let mut gathered = [DVec3::ZERO; MAX_GATHER];
+            for (g, &id) in gathered.iter_mut().zip(ids) {
+                *g = points[id as usize];
+            }
+            let [p, s, t] =
+                self.tables.tables[r.table as usize].apply(Grid::Dual, r.weights as usize, &gathered[..len]);
+            return (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t);
+        }
         let w = &self.weights[r.weights as usize..r.weights as usize + 3 * len];
         let (wp, rest) = w.split_at(len);
         let (ws, wt) = rest.split_at(len);
@@ -373,9 +583,57 @@ impl Evaluator {
     }
 }
 
-/// The dual grid of a bicubic face, row by row.
+/// Dual-grid stencil tables of level-0 patches, per (matrices, rate), kept across calls.
+#[derive(Debug, Default)]
+struct DualTables {
+    tables: Vec<Arc<StencilTable>>,
+    index: HashMap<(usize, u32), u32>,
+}
+
+/// Computes the dual-grid table of `patch`'s shape at `rate` unless it is held.
+fn ensure_table(tables: &mut DualTables, patch: &subdiv_schemes::FoundPatch, rate: u32) -> Result<(), TessError> {
+    let key = (Arc::as_ptr(&patch.matrices) as usize, rate);
+    if !tables.index.contains_key(&key) {
+        let computed =
+            StencilTable::compute_rates(&patch.matrices, BoundaryInterpolation::EdgeOnly, rate..=rate)?.remove(0);
+        tables.tables.push(Arc::new(computed));
+        tables.index.insert(key, (tables.tables.len() - 1) as u32);
+    }
+    Ok(())
+}
+
+/// The table and index of `point` (in the patch's frame, as the face's grid gave it: not
+/// reduced) if it is a point of a held dual-grid table of the patch's shape.
+fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dyadic) -> Option<(u32, u32)> {
+    let Dyadic { u: a, v: b, denominator: q } = point;
+    let triangle = patch.matrices.face_size == 3;
+    let (rate, index) = if triangle {
+        // Centroids ((3i+1)/3n, (3j+1)/3n) up, ((3i+2)/3n, (3j+2)/3n) down.
+        let r = a.rem_euclid(3);
+        if q % 3 != 0 || r == 0 || b.rem_euclid(3) != r {
+            return None;
+        }
+        let (n, i, j) = (q / 3, (a - r) / 3, (b - r) / 3);
+        (n, 2 * n * j - j * j + 2 * i + i64::from(r == 2))
+    } else {
+        if q % 2 != 0 || a % 2 == 0 || b % 2 == 0 {
+            return None;
+        }
+        let n = q / 2;
+        (n, (b - 1) / 2 * n + (a - 1) / 2)
+    };
+    let rate = u32::try_from(rate).ok()?;
+    let table = *tables.index.get(&(Arc::as_ptr(&patch.matrices) as usize, rate))?;
+    let t = &tables.tables[table as usize];
+    // The closed-form index, checked against the table's own order.
+    let index = usize::try_from(index).ok().filter(|&k| k < t.len(Grid::Dual) && t.point(Grid::Dual, k) == point)?;
+    Some((table, index as u32))
+}
+
+/// The dual grid of a bicubic face, row by row: `put(k, position, normal)` for point
+/// `k = j · n + i`.
 #[inline]
-fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, positions: &mut [DVec3], normals: &mut [DVec3]) {
+fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl FnMut(usize, DVec3, DVec3)) {
     let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
     let n = basis.b.len();
     for j in 0..n {
@@ -385,17 +643,20 @@ fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, positions: &mut
             std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
         let dcol: [DVec3; 4] =
             std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
-        let row_p = &mut positions[j * n..(j + 1) * n];
-        let row_n = &mut normals[j * n..(j + 1) * n];
         for i in 0..n {
             let (bu, du) = (basis.b[i], basis.d[i]);
             let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
             let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
             let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
-            row_p[i] = p;
-            row_n[i] = normal(a, b);
+            put(j * n + i, p, normal(a, b));
         }
     }
+}
+
+/// A vertex as six f32: position, then normal.
+#[inline]
+fn put_flat(out: &mut [f32], p: DVec3, n: DVec3) {
+    out.copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
 }
 
 /// The 4 × 4 grid of a shape if its sub-patch matrices are those of a bicubic B-spline.
@@ -408,9 +669,8 @@ fn bicubic_grid(matrices: &PatchMatrices, shape: usize) -> Option<[usize; 16]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use subdiv_mesh::{BoundaryInterpolation, shapes};
+    use subdiv_mesh::shapes;
     use subdiv_schemes::Builtin;
-    use subdiv_stencil::{Grid, StencilTable};
 
     /// The separable blocks give what the exact stencil tables give (position and normal,
     /// through the patch frame), on a torus whose faces start their patches at every corner.
@@ -431,7 +691,10 @@ mod tests {
                     .unwrap()
                     .remove(0);
                 let points: Vec<DVec3> = patch.vertices.iter().map(|v| cage[v.index()]).collect();
-                grid_block(&cv, cage, &basis, &mut ps, &mut ns);
+                grid_block(&cv, cage, &basis, |k, p, n| {
+                    ps[k] = p;
+                    ns[k] = n;
+                });
                 let index: HashMap<Dyadic, usize> =
                     (0..table.len(Grid::Dual)).map(|k| (table.point(Grid::Dual, k), k)).collect();
                 let (ju, jv) = frame.chain([[1.0, 0.0], [0.0, 1.0]]);
@@ -453,5 +716,41 @@ mod tests {
         }
         // The torus is about 3 across.
         assert!(worst < 1e-12, "block route off the table route by {worst:e}");
+    }
+
+    /// Loop on a regular triangle torus: every face is a patch on level 0, so every centroid
+    /// reads the shared dual-grid table, and the other points (interior primal points, vertex
+    /// limit points) have their own exact stencils.
+    #[test]
+    fn level_zero_patches_read_dual_tables() {
+        let mesh = Mesh::build(shapes::triangle_torus(6, 4)).unwrap();
+        let mut ev = Evaluator::new(Builtin::Loop.scheme(), &mesh).unwrap();
+        let domains = ev.domains().unwrap();
+        let mut topo = Topology::default();
+        let faces = mesh.face_count();
+        super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], &mut topo);
+        ev.prepare(&topo, &vec![4; faces], true).unwrap();
+        let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
+        assert_eq!(tabled, faces * 16);
+        assert_eq!(ev.records.len(), topo.sites.len());
+        // One table: one patch type, one rate.
+        assert_eq!(ev.tables.tables.len(), 1);
+    }
+
+    /// The cage refined by the evaluator's own `Refiner` (what `update_cage` uses) lands on the
+    /// patch levels' meshes, vertex for vertex: the stencil records index those vertices.
+    #[test]
+    fn refined_cage_matches_the_patch_levels() {
+        for soup in [shapes::cube(), shapes::ngon_prism(5), shapes::default_model()] {
+            let mesh = Mesh::build(soup).unwrap();
+            let ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+            assert!(ev.levels.level_count() > 1);
+            for level in 0..ev.levels.level_count() {
+                let want = ev.levels.mesh(level).positions();
+                assert_eq!(ev.positions[level].len(), want.len());
+                let worst = ev.positions[level].iter().zip(want).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+                assert!(worst < 1e-12, "level {level}: {worst:e}");
+            }
+        }
     }
 }

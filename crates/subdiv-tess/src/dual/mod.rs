@@ -23,14 +23,19 @@
 //!   vertex; the strips and vertex fans close against them, so the output's boundary runs
 //!   through the limit points of the input's boundary vertices, in order.
 //!
-//! Every output vertex is evaluated once, exactly (see [`eval`] for the two routes), with a unit
-//! normal from the exact tangents. [`DualTessellator::update_cage`] re-evaluates positions and
-//! normals for a moved cage without any topology or stencil work.
+//! Every output vertex is evaluated once, exactly, with a unit normal from the exact tangents:
+//! regular bicubic faces separably, row by row, with per-rate basis tables; the cell points of
+//! other level-0 patches through their patch type's dual-grid
+//! [`StencilTable`](subdiv_stencil::StencilTable); every other point through its own exact
+//! stencil at the patch that holds it (after descending through the refined levels an N-gon or
+//! a face with two extraordinary corners needs). [`DualTessellator::update_cage`] re-evaluates
+//! positions and normals for a moved cage without any topology or stencil work.
 
 mod eval;
 mod topology;
 
 use glam::DVec3;
+use rayon::prelude::*;
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{Scheme, Split};
 
@@ -104,6 +109,7 @@ pub struct FlatMesh {
 #[derive(Debug)]
 pub struct DualTessellator {
     options: DualOptions,
+    scheme: String,
     triangle: bool,
     vertex_count: usize,
     evaluator: Evaluator,
@@ -127,6 +133,7 @@ impl DualTessellator {
         let builder_mesh = evaluator.levels().mesh(0).clone();
         Ok(Self {
             options: *options,
+            scheme: scheme.name().to_string(),
             triangle,
             vertex_count: mesh.vertex_count(),
             evaluator,
@@ -137,13 +144,35 @@ impl DualTessellator {
         })
     }
 
+    /// Seeds the dual-grid stencil tables with precomputed ones, e.g. the committed defaults
+    /// (`subdiv-stencil`'s `DEFAULT_TABLES`, read with
+    /// [`StencilTables::from_bytes`](subdiv_stencil::StencilTables::from_bytes)), so that the
+    /// level-0 extraordinary patches at those rates need no table work; other tables are still
+    /// computed on demand. Only interior patch types are taken (a boundary patch's table depends
+    /// on the boundary rule). Returns how many tables were taken.
+    ///
+    /// # Errors
+    /// [`TessError::Scheme`] if the tables are another scheme's.
+    pub fn seed_tables(&mut self, tables: &subdiv_stencil::StencilTables) -> Result<usize, TessError> {
+        if tables.scheme() != self.scheme {
+            return Err(TessError::Scheme {
+                scheme: self.scheme.clone(),
+                reason: format!("the stencil tables are for `{}`", tables.scheme()),
+            });
+        }
+        Ok(self.evaluator.seed_tables(tables))
+    }
+
     /// The number of input faces (the length [`tessellate`](Self::tessellate)'s rates must have).
     pub fn face_count(&self) -> usize {
         self.builder_mesh.face_count()
     }
 
     /// Tessellates with `rates[f]` steps per side of input face `f` (holes: ignored, but still
-    /// checked).
+    /// checked), on the latest cage (the mesh's, or the last [`update_cage`](Self::update_cage)'s).
+    /// An N-gon (N ≠ 4) under a quad split takes `⌈n/2⌉` steps per side of each of its `Bfr`
+    /// sub-faces. Rebuilds the topology and the stencil records; the tables and stencils solved
+    /// by earlier calls are kept.
     ///
     /// # Errors
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
@@ -158,7 +187,7 @@ impl DualTessellator {
         let domains = self.evaluator.domains()?;
         let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
         builder.build(&domains, rates, &mut self.topology);
-        self.evaluator.prepare(&self.topology)?;
+        self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
         self.fill_output();
@@ -171,16 +200,40 @@ impl DualTessellator {
     /// # Errors
     /// [`TessError::CageLength`], [`TessError::CagePosition`] for a non-finite position.
     pub fn update_cage(&mut self, positions: &[DVec3]) -> Result<&TessMesh, TessError> {
+        self.check_cage(positions)?;
+        self.evaluator.set_cage(positions);
+        let out = &mut self.output;
+        self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
+        Ok(&self.output)
+    }
+
+    /// The animation path straight into flat f32 buffers (what a renderer uploads): as
+    /// [`update_cage`](Self::update_cage) followed by [`write_flat`](Self::write_flat), without
+    /// the f64 positions and normals in between, so [`mesh`](Self::mesh) keeps the previous
+    /// cage's positions and normals until the next [`update_cage`](Self::update_cage) or
+    /// [`tessellate`](Self::tessellate). Reuses `out`'s allocations.
+    ///
+    /// # Errors
+    /// As [`update_cage`](Self::update_cage).
+    pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
+        self.check_cage(positions)?;
+        self.evaluator.set_cage(positions);
+        out.vertices.clear();
+        out.vertices.resize(6 * self.topology.sites.len(), 0.0);
+        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
+        out.indices.clear();
+        out.indices.extend_from_slice(self.output.triangles.as_flattened());
+        Ok(())
+    }
+
+    fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
         if positions.len() != self.vertex_count {
             return Err(TessError::CageLength { expected: self.vertex_count, got: positions.len() });
         }
         if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
             return Err(TessError::CagePosition { vertex, value: format!("{p}") });
         }
-        self.evaluator.set_cage(positions);
-        let out = &mut self.output;
-        self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
-        Ok(&self.output)
+        Ok(())
     }
 
     /// The last output (empty before the first [`tessellate`](Self::tessellate)).
@@ -202,32 +255,38 @@ impl DualTessellator {
             out.vertices.extend_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
         }
         out.indices.clear();
-        out.indices.extend(m.triangles.iter().flatten());
+        out.indices.extend_from_slice(m.triangles.as_flattened());
     }
 
+    /// Evaluates, and moves the topology's triangles and polygons into the output (their old
+    /// buffers go back to the topology, to be refilled next time: no copies).
     fn fill_output(&mut self) {
-        let t = &self.topology;
+        let t = &mut self.topology;
         let out = &mut self.output;
         self.evaluator.evaluate(t, self.options.parallel, &mut out.positions, &mut out.normals);
-        out.parameters.clear();
-        out.parameters.extend(t.sites.iter().map(|s| {
+        let parameter = |s: &topology::Site| {
             let (u, v) = s.point.to_f64();
             SurfaceParameter { face: FaceId::new(s.face), u, v }
-        }));
-        out.triangles.clear();
-        out.triangles.extend_from_slice(&t.triangles);
-        out.triangle_faces.clear();
-        out.triangle_faces.extend(t.triangle_faces.iter().map(|&f| FaceId::new(f)));
+        };
+        out.parameters.clear();
+        if self.options.parallel {
+            out.parameters.par_extend(t.sites.par_iter().map(parameter));
+        } else {
+            out.parameters.extend(t.sites.iter().map(parameter));
+        }
+        std::mem::swap(&mut out.triangles, &mut t.triangles);
+        std::mem::swap(&mut out.triangle_faces, &mut t.triangle_faces);
+        std::mem::swap(&mut out.polygon_offsets, &mut t.polygon_offsets);
+        std::mem::swap(&mut out.polygon_vertices, &mut t.polygon_vertices);
+        std::mem::swap(&mut out.polygon_faces, &mut t.polygon_faces);
         out.triangle_parameters.clear();
         let params = &out.parameters;
-        out.triangle_parameters
-            .extend(t.triangles.iter().map(|tri| tri.map(|k| [params[k as usize].u, params[k as usize].v])));
-        out.polygon_offsets.clear();
-        out.polygon_offsets.extend_from_slice(&t.polygon_offsets);
-        out.polygon_vertices.clear();
-        out.polygon_vertices.extend_from_slice(&t.polygon_vertices);
-        out.polygon_faces.clear();
-        out.polygon_faces.extend(t.polygon_faces.iter().map(|&f| FaceId::new(f)));
+        let corners = |tri: &[u32; 3]| tri.map(|k| [params[k as usize].u, params[k as usize].v]);
+        if self.options.parallel {
+            out.triangle_parameters.par_extend(out.triangles.par_iter().map(corners));
+        } else {
+            out.triangle_parameters.extend(out.triangles.iter().map(corners));
+        }
     }
 }
 

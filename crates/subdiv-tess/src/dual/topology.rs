@@ -56,10 +56,10 @@ pub(crate) struct Topology {
     pub sites: Vec<Site>,
     pub blocks: Vec<Block>,
     pub triangles: Vec<[u32; 3]>,
-    pub triangle_faces: Vec<u32>,
+    pub triangle_faces: Vec<FaceId>,
     pub polygon_offsets: Vec<u32>,
     pub polygon_vertices: Vec<u32>,
-    pub polygon_faces: Vec<u32>,
+    pub polygon_faces: Vec<FaceId>,
 }
 
 /// One input face's cells.
@@ -87,6 +87,7 @@ pub(crate) struct Builder<'a> {
     row: Vec<RowPoint>,
     other: Vec<RowPoint>,
     ring: Vec<u32>,
+    starts: Vec<HalfEdgeId>,
 }
 
 impl<'a> Builder<'a> {
@@ -109,6 +110,7 @@ impl<'a> Builder<'a> {
             row: Vec::new(),
             other: Vec::new(),
             ring: Vec::new(),
+            starts: Vec::new(),
         }
     }
 
@@ -152,7 +154,7 @@ impl<'a> Builder<'a> {
 
     fn triangle(&mut self, t: [u32; 3], face: u32) {
         self.out.triangles.push(t);
-        self.out.triangle_faces.push(face);
+        self.out.triangle_faces.push(FaceId::new(face));
     }
 
     /// A quad `a b c d` (counter-clockwise): two triangles, and a polygon if asked for.
@@ -162,7 +164,7 @@ impl<'a> Builder<'a> {
         if self.quads {
             self.out.polygon_vertices.extend_from_slice(&q);
             self.out.polygon_offsets.push(self.out.polygon_vertices.len() as u32);
-            self.out.polygon_faces.push(face);
+            self.out.polygon_faces.push(FaceId::new(face));
         }
     }
 
@@ -481,12 +483,17 @@ impl<'a> Builder<'a> {
     fn vertex(&mut self, v: VertexId) {
         let mesh = self.mesh;
         let has_surface = |h: HalfEdgeId| self.faces[mesh.face(h).index()].is_some();
-        let mut starts: Vec<HalfEdgeId> = mesh.outgoing(v).filter(|&h| has_surface(h) && self.is_border(h)).collect();
+        let mut starts = std::mem::take(&mut self.starts);
+        starts.clear();
+        starts.extend(mesh.outgoing(v).filter(|&h| has_surface(h) && self.is_border(h)));
         let closed = starts.is_empty();
         if closed {
             match mesh.outgoing(v).find(|&h| has_surface(h)) {
                 Some(h) => starts.push(h),
-                None => return,
+                None => {
+                    self.starts = starts;
+                    return;
+                }
             }
         }
         let mut centre = None;
@@ -532,6 +539,7 @@ impl<'a> Builder<'a> {
             }
         }
         self.ring = ring;
+        self.starts = starts;
     }
 }
 
@@ -568,4 +576,48 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
         }
     }
     count
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use subdiv_mesh::shapes;
+    use subdiv_stencil::Grid;
+
+    fn row(vertices: std::ops::Range<u32>, den: u64) -> Vec<RowPoint> {
+        vertices.enumerate().map(|(k, vertex)| RowPoint { vertex, num: 2 * k as u64 + 1, den, near: true }).collect()
+    }
+
+    /// Rows of equal rates merge into quads; rows of rates 2 and 3 into 3 triangles, each
+    /// counter-clockwise with the first row on the left.
+    #[test]
+    fn strips_merge_rows_in_parameter_order() {
+        let mesh = Mesh::build(shapes::quad_torus(3, 3)).unwrap();
+        let mut b = Builder::new(&mesh, false, true);
+        b.out.polygon_offsets.push(0);
+        b.strip(&row(0..3, 6), &row(10..13, 6), 0);
+        assert_eq!(b.out.polygon_faces.len(), 2);
+        assert_eq!(b.out.polygon_vertices[..4], [10, 11, 1, 0]);
+        assert_eq!(b.out.triangles.len(), 4);
+        let mut b = Builder::new(&mesh, false, false);
+        // a: 1/4, 3/4; b: 1/6, 3/6, 5/6.
+        b.strip(&row(0..2, 4), &row(10..13, 6), 0);
+        assert_eq!(b.out.triangles, [[10, 11, 0], [10 + 1, 1, 0], [11, 12, 1]]);
+    }
+
+    /// A triangle's cell points come in `Grid::Dual`'s order (the tables' order, which the
+    /// closed-form indices of the evaluator and the hexagons rely on).
+    #[test]
+    fn triangle_cells_follow_the_dual_grid_order() {
+        let mesh = Mesh::build(shapes::icosahedron()).unwrap();
+        let domains = vec![Some(FaceDomain::Triangle); mesh.face_count()];
+        for n in [1, 2, 3, 7] {
+            let mut out = Topology::default();
+            Builder::new(&mesh, true, false).build(&domains, &vec![n; mesh.face_count()], &mut out);
+            let dual = Grid::Dual.points(3, n);
+            let face0: Vec<Dyadic> = out.sites.iter().take(dual.len()).map(|s| s.point).collect();
+            assert_eq!(face0, dual, "rate {n}");
+            assert_eq!(out.sites.len(), predicted_vertices(&mesh, true, &vec![n; mesh.face_count()]));
+        }
+    }
 }
