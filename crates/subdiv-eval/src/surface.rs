@@ -166,6 +166,7 @@ impl PatchSurface {
     ///
     /// # Errors
     /// [`StencilError::OutsideDomain`] (wrapped) for a point outside the domain or not finite.
+    #[inline]
     pub fn eval(&self, s: f64, t: f64) -> Result<PatchPoint, EvalError> {
         self.check(s, t)?;
         Ok(self.eval_unchecked(s, t))
@@ -176,6 +177,7 @@ impl PatchSurface {
     ///
     /// # Errors
     /// As [`eval`](Self::eval).
+    #[inline]
     pub fn eval_second(&self, s: f64, t: f64) -> Result<PatchPoint2, EvalError> {
         self.check(s, t)?;
         Ok(self.eval_second_unchecked(s, t))
@@ -185,6 +187,7 @@ impl PatchSurface {
         self.basis.power.kind == PolyKind::Quartic
     }
 
+    #[inline]
     fn check(&self, s: f64, t: f64) -> Result<(), EvalError> {
         let inside = if self.triangle() {
             s >= 0.0 && t >= 0.0 && s + t <= 1.0
