@@ -14,7 +14,7 @@ use subdiv::tess::check::LimitSamples;
 use subdiv::tess::{TessOptions, Tessellator, Tolerance};
 
 /// Closed Catmull-Clark cages of the shared corpus without tags (`testdata/meshes/SOURCES.md`).
-const MODELS: [&str; 6] = [
+pub(crate) const MODELS: [&str; 6] = [
     "geometry-central/dodecahedron_poly.obj",
     "geometry-central/platonic_shelf.obj",
     "opensubdiv/catmark_cube.obj",

@@ -14,16 +14,6 @@ use subdiv::schemes::Builtin;
 use subdiv::tess::rates::ErrorRates;
 use subdiv::tess::{DualOptions, DualTessellator, Tessellator, Tolerance};
 
-/// Closed Catmull-Clark cages of the shared corpus without tags.
-const MODELS: [&str; 6] = [
-    "geometry-central/dodecahedron_poly.obj",
-    "geometry-central/platonic_shelf.obj",
-    "opensubdiv/catmark_cube.obj",
-    "keenan/blub_control_mesh.obj",
-    "keenan/spot_control_mesh.obj",
-    "odedstein/penguin_control_mesh.obj",
-];
-
 /// Relative tolerances (× the bounding-box diagonal).
 const TOLERANCES: [f64; 3] = [3e-2, 1e-2, 3e-3];
 
@@ -36,7 +26,8 @@ pub(crate) fn run() -> Result<(), String> {
         "| model | faces | ε / bbox | rates (rational) | triangles (rational) | triangles (dyadic) | dyadic / rational | uniform rational n: triangles | uniform dyadic n: triangles | dyadic / rational (uniform) |"
     );
     println!("|---|---|---|---|---|---|---|---|---|---|");
-    for model in MODELS {
+    // The models of `cargo xtask adaptive`: closed Catmull-Clark cages without tags.
+    for model in crate::adaptive::MODELS {
         let path: PathBuf =
             subdiv_testkit::shared_mesh(model).ok_or("the shared corpus is missing (set SUBDIV_SHARED)")?;
         let mesh = load_mesh(&path, &Default::default()).map_err(|e| format!("{model}: {e}"))?;
