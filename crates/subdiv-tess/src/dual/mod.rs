@@ -41,10 +41,16 @@ use subdiv_schemes::{Scheme, Split};
 
 use self::eval::Evaluator;
 use self::topology::{Builder, Topology};
+use crate::rates::RingDepths;
 use crate::{SurfaceParameter, TessError, TessMesh};
 
 /// The largest rate [`DualTessellator::tessellate`] takes.
 pub const MAX_DUAL_RATE: u32 = 128;
+
+/// The largest ring depth [`DualTessellator::tessellate_with_rings`] takes: rings come down to
+/// `2^−60` face units, whose parameters (and an N-gon's sub-face coordinates, twice as fine)
+/// are exact in the `i64` dyadics of the stencils.
+pub const MAX_DUAL_RING_DEPTH: u32 = 60;
 
 /// Options of [`DualTessellator`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -178,6 +184,48 @@ impl DualTessellator {
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
     /// rate outside `1..=`[`MAX_DUAL_RATE`]; [`TessError::Surface`] if a stencil fails.
     pub fn tessellate(&mut self, rates: &[u32]) -> Result<&TessMesh, TessError> {
+        self.build(rates, None)
+    }
+
+    /// As [`tessellate`](Self::tessellate), with rings of exact points around extraordinary
+    /// points down to the depths of `rings` (see the module docs; [`ErrorRates::rates`]
+    /// computes them with the rates): `rings.vertices[v]` around interior mesh vertices of
+    /// valence ≠ 4, `rings.centres[f]` around the centres of N-gons (N ≠ 4); depth 0, and the
+    /// entries of other vertices and faces, change nothing.
+    ///
+    /// [`ErrorRates::rates`]: crate::rates::ErrorRates::rates
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate); [`TessError::RingCount`] unless there is one depth
+    /// per input vertex and one per input face; [`TessError::RingDepth`] for a depth above
+    /// [`MAX_DUAL_RING_DEPTH`]; [`TessError::Unsupported`] for a depth > 0 under a triangle
+    /// split (Loop, butterfly), which has no rings.
+    pub fn tessellate_with_rings(&mut self, rates: &[u32], rings: &RingDepths) -> Result<&TessMesh, TessError> {
+        let (vertices, faces) = (self.builder_mesh.vertex_count(), self.face_count());
+        if rings.vertices.len() != vertices {
+            return Err(TessError::RingCount { what: "vertices", expected: vertices, got: rings.vertices.len() });
+        }
+        if rings.centres.len() != faces {
+            return Err(TessError::RingCount { what: "centres", expected: faces, got: rings.centres.len() });
+        }
+        let too_deep = |depths: &[u32], kind: &str| {
+            depths.iter().enumerate().find(|(_, d)| **d > MAX_DUAL_RING_DEPTH).map(|(k, &depth)| {
+                TessError::RingDepth { element: format!("{kind} {k}"), depth, max: MAX_DUAL_RING_DEPTH }
+            })
+        };
+        if let Some(e) = too_deep(&rings.vertices, "vertex").or_else(|| too_deep(&rings.centres, "face")) {
+            return Err(e);
+        }
+        if self.triangle && rings.vertices.iter().chain(&rings.centres).any(|&d| d > 0) {
+            return Err(TessError::Unsupported {
+                feature: "rings around extraordinary points under a triangle split",
+                element: format!("scheme {}", self.scheme),
+            });
+        }
+        self.build(rates, Some(rings))
+    }
+
+    fn build(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<&TessMesh, TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
@@ -186,7 +234,7 @@ impl DualTessellator {
         }
         let domains = self.evaluator.domains()?;
         let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
-        builder.build(&domains, rates, &mut self.topology);
+        builder.build(&domains, rates, rings, &mut self.topology);
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
@@ -294,5 +342,16 @@ impl DualTessellator {
 /// `triangle`, a triangle) split at `rates`: cells, triangle interiors, N-gon centres, border
 /// points and vertex points (see the module docs). For checks.
 pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usize {
-    topology::predicted_vertices(mesh, triangle, rates)
+    topology::predicted_vertices(mesh, triangle, rates, None)
+}
+
+/// [`predicted_vertex_count`] under a quad split with `rings` (one depth per vertex and per
+/// face, as [`DualTessellator::tessellate_with_rings`] takes them): each ring adds two points
+/// per face around its point, and a ringed point of valence (or size) 3 its limit point.
+///
+/// # Panics
+/// If `rings` does not have one depth per vertex and one per face.
+pub fn predicted_vertex_count_with_rings(mesh: &Mesh, rates: &[u32], rings: &RingDepths) -> usize {
+    assert!(rings.vertices.len() == mesh.vertex_count() && rings.centres.len() == mesh.face_count(), "ring depths");
+    topology::predicted_vertices(mesh, false, rates, Some(rings))
 }

@@ -22,6 +22,8 @@
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
 use subdiv_stencil::{Dyadic, FaceDomain};
 
+use crate::rates::{RingDepths, first_ring_depth, reach};
+
 /// An output vertex's place on the surface: the input face that evaluates it and the exact
 /// `Bfr` parameter there.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -62,6 +64,32 @@ pub(crate) struct Topology {
     pub polygon_faces: Vec<FaceId>,
 }
 
+/// A corner at an extraordinary point, in whose frame ring points are placed: face `face`'s
+/// corner `corner` at a mesh vertex (the frame's `s` axis along side `corner`, `t` towards
+/// corner `corner − 1`), or sub-face `sub`'s inner corner at an N-gon's centre (`s` along the
+/// spoke shared with sub-face `sub − 1`, `t` along the one shared with `sub + 1`). Both frames
+/// turn counter-clockwise around the point, from one corner of the ring to the next.
+#[derive(Clone, Copy, Debug)]
+enum RingCorner {
+    Vertex { face: u32, corner: u32 },
+    Centre { face: u32, sub: u32 },
+}
+
+impl RingCorner {
+    fn face(self) -> usize {
+        match self {
+            Self::Vertex { face, .. } | Self::Centre { face, .. } => face as usize,
+        }
+    }
+}
+
+/// The number of rings around a point at `depth` (> 0) whose finest face reach is `finest`:
+/// from the first power of two inside the nearest dual points, `2^−d1`, down to
+/// `2^−max(depth, d1)`, one ring per halving (at least one).
+fn ring_count(finest: u32, depth: u32) -> u32 {
+    depth.saturating_sub(first_ring_depth(finest)) + 1
+}
+
 /// One input face's cells.
 #[derive(Clone, Copy, Debug)]
 struct FaceCells {
@@ -88,6 +116,12 @@ pub(crate) struct Builder<'a> {
     other: Vec<RowPoint>,
     ring: Vec<u32>,
     starts: Vec<HalfEdgeId>,
+    /// The ring's corners, beside `ring` (for the rings around extraordinary points).
+    ring_corners: Vec<RingCorner>,
+    /// The rates being built, and the ring depths (empty: none).
+    rates: Vec<u32>,
+    ring_vertices: Vec<u32>,
+    ring_centres: Vec<u32>,
 }
 
 impl<'a> Builder<'a> {
@@ -111,11 +145,30 @@ impl<'a> Builder<'a> {
             other: Vec::new(),
             ring: Vec::new(),
             starts: Vec::new(),
+            ring_corners: Vec::new(),
+            rates: Vec::new(),
+            ring_vertices: Vec::new(),
+            ring_centres: Vec::new(),
         }
     }
 
-    /// The topology at `rates` (checked by the caller), reusing `out`'s allocations.
-    pub(crate) fn build(&mut self, domains: &[Option<FaceDomain>], rates: &[u32], out: &mut Topology) {
+    /// The topology at `rates` with `rings` around extraordinary points (both checked by the
+    /// caller; rings only under a quad split), reusing `out`'s allocations.
+    pub(crate) fn build(
+        &mut self,
+        domains: &[Option<FaceDomain>],
+        rates: &[u32],
+        rings: Option<&RingDepths>,
+        out: &mut Topology,
+    ) {
+        self.rates.clear();
+        self.rates.extend_from_slice(rates);
+        self.ring_vertices.clear();
+        self.ring_centres.clear();
+        if let Some(r) = rings.filter(|_| !self.triangle) {
+            self.ring_vertices.extend_from_slice(&r.vertices);
+            self.ring_centres.extend_from_slice(&r.centres);
+        }
         std::mem::swap(&mut self.out, out);
         let o = &mut self.out;
         o.sites.clear();
@@ -236,9 +289,22 @@ impl<'a> Builder<'a> {
                     (self.row, self.other) = (row, other);
                 }
                 // The centre: the sub-faces' inner corners, counter-clockwise.
-                let ring: Vec<u32> = (0..size).map(|s| cell(s, m - 1, m - 1)).collect();
-                let centre = (size >= 5).then(|| self.push_site(f, domain.from_sub_face(0, Dyadic::new(1, 1, 1))));
-                self.close_ring(&ring, centre, f as u32);
+                let mut ring = std::mem::take(&mut self.ring);
+                ring.clear();
+                ring.extend((0..size).map(|s| cell(s, m - 1, m - 1)));
+                let centre_point = domain.from_sub_face(0, Dyadic::new(1, 1, 1));
+                let depth = self.ring_centres.get(f).copied().unwrap_or(0);
+                if depth > 0 {
+                    let mut corners = std::mem::take(&mut self.ring_corners);
+                    corners.clear();
+                    corners.extend((0..size as u32).map(|sub| RingCorner::Centre { face: f as u32, sub }));
+                    self.rings(&corners, &ring, depth, (f, centre_point));
+                    self.ring_corners = corners;
+                } else {
+                    let centre = (size >= 5).then(|| self.push_site(f, centre_point));
+                    self.close_ring(&ring, centre, f as u32);
+                }
+                self.ring = ring;
             }
             FaceDomain::Triangle => {
                 let q = i64::from(3 * n);
@@ -498,8 +564,10 @@ impl<'a> Builder<'a> {
         }
         let mut centre = None;
         let mut ring = std::mem::take(&mut self.ring);
+        let mut corners = std::mem::take(&mut self.ring_corners);
         for &start in &starts {
             ring.clear();
+            corners.clear();
             let f0 = mesh.face(start).index();
             if !closed {
                 let (first, _) = self.border[start.index()];
@@ -509,6 +577,7 @@ impl<'a> Builder<'a> {
             loop {
                 let f = mesh.face(h).index();
                 ring.push(self.corner_vertex(f, self.corner[h.index()] as usize));
+                corners.push(RingCorner::Vertex { face: f as u32, corner: self.corner[h.index()] });
                 let p = mesh.prev(h);
                 if self.is_border(p) {
                     if !closed {
@@ -521,6 +590,14 @@ impl<'a> Builder<'a> {
                 if closed && h == start {
                     break;
                 }
+            }
+            // An extraordinary interior vertex (quad split) with a ring depth: rings down to it,
+            // fanned around its limit point, in place of the polygon.
+            let depth = self.ring_vertices.get(v.index()).copied().unwrap_or(0);
+            if closed && depth > 0 && ring.len() >= 3 && ring.len() != 4 {
+                let point = self.corner_point(f0, self.corner[start.index()] as usize);
+                self.rings(&corners, &ring, depth, (f0, point));
+                continue;
             }
             // Closed rings of 3 (and 4 under a quad split) are polygons of their own; rings of
             // fewer than 3 close nothing.
@@ -539,13 +616,97 @@ impl<'a> Builder<'a> {
             }
         }
         self.ring = ring;
+        self.ring_corners = corners;
         self.starts = starts;
+    }
+
+    /// The point `(a, b) · 2^−e` (face units, `a, b ∈ {0, 1}`, `e ≥ 2`) of `corner`'s frame, as
+    /// its face's parameter: a quad's own coordinates turned to the corner; an N-gon's sub-face
+    /// coordinates, which are twice the face units (a sub-face is a quarter of the face).
+    fn ring_point(&self, corner: RingCorner, a: i64, b: i64, e: u32) -> Dyadic {
+        let domain = self.faces[corner.face()].expect("a face with a surface").domain;
+        match corner {
+            RingCorner::Vertex { corner: c, .. } => match domain {
+                FaceDomain::SubFaces { .. } => domain.from_sub_face(c as usize, Dyadic::new(a, b, 1 << (e - 1))),
+                _ => {
+                    let d = 1i64 << e;
+                    let (u, v) = match c {
+                        0 => (a, b),
+                        1 => (d - b, a),
+                        2 => (d - a, d - b),
+                        _ => (b, d - a),
+                    };
+                    Dyadic::new(u, v, d)
+                }
+            },
+            // The inner corner (1, 1) of the sub-face, its frame turned half a turn.
+            RingCorner::Centre { sub, .. } => {
+                let d = 1i64 << (e - 1);
+                domain.from_sub_face(sub as usize, Dyadic::new(d - a, d - b, d))
+            }
+        }
+        .reduced()
+    }
+
+    /// Rings around an extraordinary point, in place of its polygon `outer` (the faces' nearest
+    /// dual points, counter-clockwise, one per corner of `corners`), down to `depth`, fanned at
+    /// the end around the point's limit point `centre` (face, parameter).
+    ///
+    /// Ring `j` (radius `r_j = 2^−(d1 + j − 1)`, `d1` the first depth inside the nearest dual
+    /// points, [`first_ring_depth`]) has a point on every edge (or spoke) at `r_j` from the
+    /// point, made once in the face whose `s` axis the edge is, and one per face at
+    /// `(r_j, r_j)`; its points run `edge_0, diagonal_0, edge_1, diagonal_1, …`, counter-
+    /// clockwise. Every triangle lies in one face's region or across one edge, as the bound of
+    /// [`ErrorRates::rates`](crate::rates::ErrorRates::rates) assumes: from the polygon's corners
+    /// to ring 1 two triangles per face and one across each edge; between rings `j` and `j + 1`
+    /// two quads per face in its L-shaped region `[0, r_j]² \ [0, r_{j+1})²`; a fan inside the
+    /// last.
+    fn rings(&mut self, corners: &[RingCorner], outer: &[u32], depth: u32, centre: (usize, Dyadic)) {
+        let n = corners.len() as u32;
+        let finest = corners
+            .iter()
+            .map(|c| reach(self.mesh, FaceId::new(c.face() as u32), self.rates[c.face()]))
+            .max()
+            .unwrap_or(1);
+        let first = first_ring_depth(finest);
+        let count = ring_count(finest, depth);
+        let base = self.out.sites.len() as u32;
+        for j in 0..count {
+            for &c in corners {
+                let on_edge = self.ring_point(c, 1, 0, first + j);
+                self.push_site(c.face(), on_edge);
+                let diagonal = self.ring_point(c, 1, 1, first + j);
+                self.push_site(c.face(), diagonal);
+            }
+        }
+        let p = self.push_site(centre.0, centre.1);
+        // Point k (cyclic) of ring j (from 0): edge points at even k, diagonal points at odd.
+        let at = |j: u32, k: u32| base + j * 2 * n + k % (2 * n);
+        let face = |k: u32| corners[k as usize].face() as u32;
+        for k in 0..n {
+            let (d, next) = (outer[k as usize], outer[((k + 1) % n) as usize]);
+            let (e, q, e_next) = (at(0, 2 * k), at(0, 2 * k + 1), at(0, 2 * k + 2));
+            self.triangle([d, q, e], face(k));
+            self.triangle([d, e_next, q], face(k));
+            self.triangle([d, next, e_next], face(k));
+        }
+        for j in 0..count - 1 {
+            for k in 0..n {
+                let (e, q, e_next) = (2 * k, 2 * k + 1, 2 * k + 2);
+                self.quad([at(j + 1, e), at(j, e), at(j, q), at(j + 1, q)], face(k));
+                self.quad([at(j + 1, q), at(j, q), at(j, e_next), at(j + 1, e_next)], face(k));
+            }
+        }
+        for k in 0..2 * n {
+            self.triangle([p, at(count - 1, k), at(count - 1, k + 1)], face(k / 2));
+        }
     }
 }
 
 /// The number of output vertices at `rates`, from the construction's counts (for tests and for
 /// sizing): cells, triangle interiors, N-gon centres, border points, vertex points.
-pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usize {
+pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rings: Option<&RingDepths>) -> usize {
+    let rings = rings.filter(|_| !triangle);
     let hole = |f: FaceId| mesh.is_hole(f);
     let rate_of = |f: FaceId| rates[f.index()] as usize;
     let mut count = 0;
@@ -556,7 +717,15 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
         } else if size == 4 {
             n * n
         } else {
-            size * n.div_ceil(2).pow(2) + usize::from(size >= 5)
+            let depth = rings.map_or(0, |r| r.centres[f.index()]);
+            let centre = if depth > 0 {
+                // Two points per sub-face per ring, and the centre (N = 3 has none without).
+                let finest = crate::rates::reach(mesh, f, rates[f.index()]);
+                2 * size * ring_count(finest, depth) as usize + 1
+            } else {
+                usize::from(size >= 5)
+            };
+            size * n.div_ceil(2).pow(2) + centre
         };
         for h in mesh.face_half_edges(f) {
             if mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) {
@@ -571,7 +740,12 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
         }
         let border = mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)))
             || mesh.is_boundary_vertex(v);
-        if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
+        let depth = rings.map_or(0, |r| r.vertices[v.index()]);
+        if !border && depth > 0 && faces.len() >= 3 && faces.len() != 4 {
+            // Two points per face per ring (its edge's and its diagonal's), and the limit point.
+            let finest = faces.iter().map(|&f| crate::rates::reach(mesh, f, rates[f.index()])).max().unwrap_or(1);
+            count += 2 * faces.len() * ring_count(finest, depth) as usize + 1;
+        } else if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
             count += 1;
         }
     }
@@ -613,11 +787,11 @@ mod tests {
         let domains = vec![Some(FaceDomain::Triangle); mesh.face_count()];
         for n in [1, 2, 3, 7] {
             let mut out = Topology::default();
-            Builder::new(&mesh, true, false).build(&domains, &vec![n; mesh.face_count()], &mut out);
+            Builder::new(&mesh, true, false).build(&domains, &vec![n; mesh.face_count()], None, &mut out);
             let dual = Grid::Dual.points(3, n);
             let face0: Vec<Dyadic> = out.sites.iter().take(dual.len()).map(|s| s.point).collect();
             assert_eq!(face0, dual, "rate {n}");
-            assert_eq!(out.sites.len(), predicted_vertices(&mesh, true, &vec![n; mesh.face_count()]));
+            assert_eq!(out.sites.len(), predicted_vertices(&mesh, true, &vec![n; mesh.face_count()], None));
         }
     }
 }
