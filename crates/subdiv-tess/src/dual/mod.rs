@@ -208,11 +208,12 @@ impl DualTessellator {
         if rings.centres.len() != faces {
             return Err(TessError::RingCount { what: "centres", expected: faces, got: rings.centres.len() });
         }
-        let too_deep = |depths: &[u32], kind: &str| {
-            depths.iter().enumerate().find(|(_, d)| **d > MAX_DUAL_RING_DEPTH).map(|(k, &depth)| {
-                TessError::RingDepth { element: format!("{kind} {k}"), depth, max: MAX_DUAL_RING_DEPTH }
-            })
-        };
+        let too_deep =
+            |depths: &[u32], kind: &str| {
+                depths.iter().enumerate().find(|(_, d)| **d > MAX_DUAL_RING_DEPTH).map(|(k, &depth)| {
+                    TessError::RingDepth { element: format!("{kind} {k}"), depth, max: MAX_DUAL_RING_DEPTH }
+                })
+            };
         if let Some(e) = too_deep(&rings.vertices, "vertex").or_else(|| too_deep(&rings.centres, "face")) {
             return Err(e);
         }
