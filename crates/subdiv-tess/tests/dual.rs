@@ -1024,16 +1024,13 @@ fn rings_keep_the_surface_within_tolerance() {
         for f in mesh.face_ids() {
             let domain = evaluator.domain(f).unwrap();
             samples.extend(evaluator.grid(f, 32).unwrap().into_iter().map(|(_, p)| p.position));
-            // Charts: the face, or each sub-face (a chart point (x, y) in [0, 1]²).
-            let charts: Vec<Box<dyn Fn(f64, f64) -> (f64, f64)>> = match domain {
-                subdiv_stencil::FaceDomain::SubFaces { size, columns } => (0..size)
-                    .map(|s| {
-                        let (tu, tv) = ((s % columns) as f64, (s / columns) as f64);
-                        Box::new(move |x: f64, y: f64| (tu + 0.5 * x, tv + 0.5 * y))
-                            as Box<dyn Fn(f64, f64) -> (f64, f64)>
-                    })
-                    .collect(),
-                _ => vec![Box::new(|x: f64, y: f64| (x, y))],
+            // Charts: the face, or each sub-face; chart point (x, y) in [0, 1]² is the face's
+            // (origin + scale · (x, y)).
+            let charts: Vec<((f64, f64), f64)> = match domain {
+                subdiv_stencil::FaceDomain::SubFaces { size, columns } => {
+                    (0..size).map(|s| (((s % columns) as f64, (s / columns) as f64), 0.5)).collect()
+                }
+                _ => vec![((0.0, 0.0), 1.0)],
             };
             for chart in &charts {
                 for corner in 0..4 {
@@ -1043,7 +1040,8 @@ fn rings_keep_the_surface_within_tolerance() {
                             for i in 0..=4 {
                                 let (a, b) = (side * f64::from(i) / 4.0, side * f64::from(j) / 4.0);
                                 let (x, y) = [(a, b), (1.0 - a, b), (1.0 - a, 1.0 - b), (a, 1.0 - b)][corner];
-                                let (u, v) = chart(x, y);
+                                let ((u0, v0), scale) = *chart;
+                                let (u, v) = (u0 + scale * x, v0 + scale * y);
                                 let p = evaluator.eval(f, u, v).unwrap().position;
                                 samples.push(p);
                                 if k >= 8 {

@@ -23,6 +23,25 @@
 //!   vertex; the strips and vertex fans close against them, so the output's boundary runs
 //!   through the limit points of the input's boundary vertices, in order.
 //!
+//! **Rings** ([`DualTessellator::tessellate_with_rings`], quad splits): the polygon at an
+//! extraordinary point (an interior vertex of valence ≠ 4, or an N-gon's centre) stands for a
+//! piece of surface as coarse as its faces' rates, which the tolerance policy's hull bound may
+//! not accept. With a ring depth `d > 0` for the point
+//! ([`ErrorRates::rates`](crate::rates::ErrorRates::rates) computes them), the polygon is
+//! replaced by rings of exact points at `r_j = 2^−(d1 + j − 1)` face units from the point,
+//! `j = 1..=K`, `K = max(1, d − d1 + 1)`: `d1` is the depth of the first power of two strictly
+//! inside the nearest dual points (which are `½ / reach` away, `reach` the rate of a quad
+//! neighbour, `2⌈n/2⌉` for an N-gon's sub-faces). Each ring has a point on every edge (an
+//! N-gon's spoke) at `r_j`, made once for the two faces beside it, and one per face at
+//! `(r_j, r_j)` in that face's corner frame (an N-gon's sub-face coordinates are twice the face
+//! units). Triangles, each in one face's region or across one edge, as the bound assumes: from
+//! each face's corner dual point to ring 1 two in the face and one across each edge to the next
+//! face's; between rings `j` and `j + 1` two quads per face in its L-shaped region
+//! `[0, r_j]² \ [0, r_{j+1})²`; inside the last ring a fan around the point's limit point. The
+//! ring points are ordinary output vertices (evaluated by exact stencils, re-evaluated by
+//! [`DualTessellator::update_cage`]); below about `2^−50` face units they are no longer apart
+//! in f64 positions, which the tolerances that need rings never reach.
+//!
 //! Every output vertex is evaluated once, exactly, with a unit normal from the exact tangents:
 //! regular bicubic faces separably, row by row, with per-rate basis tables; the cell points of
 //! other level-0 patches through their patch type's dual-grid
@@ -85,8 +104,10 @@ pub struct FlatMesh {
 /// face that evaluated it (a border point: the face beside the border; a vertex's limit point:
 /// one of its faces, at its corner). A triangle of a cell belongs to the cell's face; a strip's
 /// triangle to the face on the left of the edge's lower-numbered half-edge (the face of the
-/// border side, on a border); a vertex polygon's to the first face of its ring. Since strip and
-/// ring triangles span several faces, [`triangle_parameters`](TessMesh::triangle_parameters)
+/// border side, on a border); a vertex polygon's to the first face of its ring; a ring's triangle
+/// (rings around extraordinary points) to the face whose region holds it (across an edge: the
+/// face before the edge, counter-clockwise). Since strip, vertex-polygon and ring triangles span
+/// several faces, [`triangle_parameters`](TessMesh::triangle_parameters)
 /// lists each corner's own parameters (those of [`parameters`](TessMesh::parameters)), which
 /// may be in different faces.
 ///

@@ -12,7 +12,11 @@
 //!   hole), at the parameters of the row of points beside it;
 //! - **vertex points**: a mesh vertex's limit point where its polygon is fanned around it (every
 //!   vertex under a triangle split; interior vertices of valence ≥ 5 and every border vertex
-//!   under a quad split).
+//!   under a quad split);
+//! - **ring points** around an extraordinary point with a ring depth (quad split), made where its
+//!   polygon would be (an N-gon's centre: after its cells; a vertex: with the vertex points):
+//!   per ring, per face counter-clockwise, the point on the face's first edge (spoke), then the
+//!   one on its diagonal; then the point's limit point.
 //!
 //! Polygons: cell interiors (the dual quad grid; the triangles' hexagons), **strips** along each
 //! edge (and each N-gon spoke) merging the two rows nearest it in parameter order, and **rings**
