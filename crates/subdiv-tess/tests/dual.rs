@@ -838,6 +838,37 @@ fn rings_on_fixed_meshes_are_watertight_and_in_their_regions() {
     }
 }
 
+/// Open meshes: rings around interior extraordinary points (a pole's centre, a prism's cap
+/// centre beside a hole) leave the border alone — the same border edges, by position, as
+/// without rings — and border vertices (whatever their depth) keep their fans.
+#[test]
+fn rings_leave_borders_alone() {
+    let mut holed = shapes::ngon_prism(6);
+    holed.tags.holes.push(FaceId::new(2));
+    for soup in [shapes::pole(3), shapes::pole(5), shapes::pole(7), holed, shapes::quad_grid(3, 2)] {
+        let mesh = Mesh::build(soup).unwrap();
+        for seed in 0..3 {
+            let rates = rates_for(&mesh, seed, 9);
+            let rings = random_rings(&mesh, seed, 9);
+            let out = tessellate_rings(&mesh, &rates, &rings);
+            let border = check(&out);
+            assert_eq!(euler(&out), input_euler(&mesh));
+            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, &rates, &rings));
+            let plain = tessellate(Builtin::CatmullClark, &mesh, &rates);
+            let key = |m: &TessMesh, (a, b): (u32, u32)| {
+                let (p, q) = (m.positions[a as usize], m.positions[b as usize]);
+                [p.x, p.y, p.z, q.x, q.y, q.z].map(f64::to_bits)
+            };
+            let mut with: Vec<_> = border.iter().map(|&e| key(&out, e)).collect();
+            let mut without: Vec<_> = check(&plain).iter().map(|&e| key(&plain, e)).collect();
+            with.sort_unstable();
+            without.sort_unstable();
+            assert_eq!(with, without, "seed {seed}: the border moved");
+            check_ring_regions(&mesh, &out, &rates);
+        }
+    }
+}
+
 /// The deepest rings allowed (2^−60 face units): watertight, the predicted count, every point
 /// on the limit surface (in f64 the innermost rings' positions coincide with the limit point,
 /// so positions are not checked for distinctness here).
