@@ -810,8 +810,56 @@ fn ring_checks(mesh: &Mesh, rates: &[u32], rings: &RingDepths, deep: bool) -> Te
     assert!(worst < 1e-12, "position off the limit surface by {worst:e} × bbox");
     if !deep {
         check_ring_regions(mesh, &out, rates);
+        check_ring_radii(mesh, &out, rates, rings);
     }
     out
+}
+
+/// Each extraordinary point's rings are at exactly the radii the bound assumes: `2^−e` for
+/// `e` from `d1` (the least with `2^−e` strictly below the nearest dual points' `½ / finest`)
+/// to `max(depth, d1)`, with one diagonal point per face (sub-face) corner and radius; none
+/// where the depth is 0 or the point is regular. Closed meshes.
+fn check_ring_radii(mesh: &Mesh, out: &TessMesh, rates: &[u32], rings: &RingDepths) {
+    let evaluator = LimitEvaluator::new(Builtin::CatmullClark.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
+    let reach = |f: FaceId| {
+        if mesh.face_size(f) == 4 { rates[f.index()] } else { 2 * rates[f.index()].div_ceil(2) }
+    };
+    let mut found: HashMap<(u32, bool, usize), Vec<f64>> = HashMap::new();
+    for p in &out.parameters {
+        let Some(l) = local(evaluator.domain(p.face).unwrap(), p) else { continue };
+        let inside = l.rho() > 0.0 && l.rho() < 0.5 / f64::from(reach(p.face)) * (1.0 - 1e-9);
+        if inside && l.s == l.t {
+            found.entry(l.key).or_default().push(l.rho());
+        }
+    }
+    for f in mesh.face_ids() {
+        let size = mesh.face_size(f);
+        let corners: Vec<(bool, usize)> =
+            (0..size).map(|c| (false, c)).chain((0..if size == 4 { 0 } else { size }).map(|s| (true, s))).collect();
+        for (centre, c) in corners {
+            let (depth, finest) = if centre {
+                (rings.centres[f.index()], reach(f))
+            } else {
+                let v = mesh.origin(mesh.face_half_edges(f).nth(c).unwrap());
+                let faces: Vec<FaceId> = mesh.vertex_faces(v).collect();
+                let extraordinary = faces.len() >= 3 && faces.len() != 4 && !mesh.is_boundary_vertex(v);
+                let depth = if extraordinary { rings.vertices[v.index()] } else { 0 };
+                (depth, faces.iter().map(|&g| reach(g)).max().unwrap())
+            };
+            let mut want = Vec::new();
+            if depth > 0 {
+                let mut first = 0;
+                while (1u64 << first) <= 2 * u64::from(finest) {
+                    first += 1;
+                }
+                want.extend((first..=depth.max(first)).map(|e| 0.5f64.powi(e as i32)));
+            }
+            let mut got = found.remove(&(f.index() as u32, centre, c)).unwrap_or_default();
+            got.sort_by(|a, b| b.total_cmp(a));
+            assert_eq!(got, want, "{f}, corner {c} (centre: {centre}), depth {depth}, finest reach {finest}");
+        }
+    }
+    assert!(found.is_empty(), "diagonal ring points at no corner: {found:?}");
 }
 
 #[test]
