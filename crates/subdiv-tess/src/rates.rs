@@ -277,7 +277,8 @@ pub struct DualRates {
 /// points at parameter distances `r, r/2, r/4, …` down to `2^−depth` (face units, the corner
 /// square of that side around the point), fanned at the end around its limit point; `0` for
 /// none. `r` is the largest power of two inside the point's nearest dual points, so rings only
-/// appear where the rates leave the point's neighbourhood too coarse.
+/// appear where the rates leave the point's neighbourhood too coarse. Consumed by
+/// [`DualTessellator::tessellate_with_rings`](crate::DualTessellator::tessellate_with_rings).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RingDepths {
     /// Per mesh vertex (used at interior vertices of valence ≠ 4 under a quad split).

@@ -221,8 +221,26 @@ impl DualTessellator {
     /// per input vertex and one per input face; [`TessError::RingDepth`] for a depth above
     /// [`MAX_DUAL_RING_DEPTH`]; [`TessError::Unsupported`] for a depth > 0 under a triangle
     /// split (Loop, butterfly), which has no rings.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::rates::ErrorRates;
+    /// use subdiv_tess::{DualOptions, DualTessellator, Tessellator, Tolerance};
+    ///
+    /// let mesh = Mesh::build(shapes::cube())?;
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// // Rates and ring depths to 1% of the bounding box (the bounds come from the quadtree's pieces).
+    /// let rates = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&Tessellator::new(cc, &mesh)?, &mesh)?;
+    /// assert!(rates.rings.vertices.iter().all(|&d| d > 0)); // the cube's valence-3 corners
+    /// let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::default())?;
+    /// let plain = tess.tessellate(&rates.faces)?.positions.len();
+    /// let ringed = tess.tessellate_with_rings(&rates.faces, &rates.rings)?.positions.len();
+    /// assert!(ringed > plain);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn tessellate_with_rings(&mut self, rates: &[u32], rings: &RingDepths) -> Result<&TessMesh, TessError> {
-        let (vertices, faces) = (self.builder_mesh.vertex_count(), self.face_count());
+        let (vertices, faces) = (self.vertex_count, self.face_count());
         if rings.vertices.len() != vertices {
             return Err(TessError::RingCount { what: "vertices", expected: vertices, got: rings.vertices.len() });
         }
