@@ -784,6 +784,18 @@ fn check_ring_regions(mesh: &Mesh, out: &TessMesh, rates: &[u32]) -> usize {
     checked
 }
 
+/// Triangles whose facet faces away from their corners' summed limit normals.
+fn flipped(out: &TessMesh) -> usize {
+    out.triangles
+        .iter()
+        .filter(|t| {
+            let [a, b, c] = t.map(|v| out.positions[v as usize]);
+            let normal: DVec3 = t.iter().map(|&v| out.normals[v as usize]).sum();
+            (b - a).cross(c - a).dot(normal) <= 0.0
+        })
+        .count()
+}
+
 /// The closed checks with rings, every vertex on the limit surface, and the triangles' regions.
 /// With `deep` (rings below about 2^−50, where neither the f64 parameters nor the positions
 /// resolve neighbouring ring points any more) only the combinatorial checks and the surface.
@@ -798,7 +810,7 @@ fn ring_checks(mesh: &Mesh, rates: &[u32], rings: &RingDepths, deep: bool) -> Te
     };
     assert!(border.is_empty(), "{} border edges on a closed mesh", border.len());
     assert_eq!(euler(&out), input_euler(mesh));
-    assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(mesh, rates, rings));
+    assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(mesh, false, rates, rings));
     let evaluator = LimitEvaluator::new(Builtin::CatmullClark.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
     let d = diagonal(mesh);
     let mut worst: f64 = 0.0;
@@ -811,8 +823,57 @@ fn ring_checks(mesh: &Mesh, rates: &[u32], rings: &RingDepths, deep: bool) -> Te
     if !deep {
         check_ring_regions(mesh, &out, rates);
         check_ring_radii(mesh, &out, rates, rings);
+        check_ring_folds(mesh, &out, rates);
     }
     out
+}
+
+/// Where the rings fold: no band or fan triangle (nor any triangle away from the rings beyond
+/// those the plain output already has) faces away from its corners' limit normals. The one
+/// exception, counted and printed: the outer band's triangle across an edge, `(d_f, d_g, e)`,
+/// whose edge point `e` at `r_1` (the largest power of two below the dual points' `½/n`, as the
+/// bound fixes it) can lie, on the surface, just outside the chord `d_f d_g` when `r_1` is
+/// close to `½/n` (seen at valence-3 vertices, where the characteristic map opens each face to
+/// 120°, so the chord between two faces' points passes closer to the vertex than in the
+/// parameters): a sliver, within ε like any other triangle, but folded.
+fn check_ring_folds(mesh: &Mesh, out: &TessMesh, rates: &[u32]) {
+    let evaluator = LimitEvaluator::new(Builtin::CatmullClark.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
+    let reach = |f: FaceId| if mesh.face_size(f) == 4 { rates[f.index()] } else { 2 * rates[f.index()].div_ceil(2) };
+    let locals: Vec<Local> = out
+        .parameters
+        .iter()
+        .map(|p| {
+            frames(evaluator.domain(p.face).unwrap(), p).into_iter().next().unwrap_or(Local {
+                key: (0, false, 0),
+                s: 1.0,
+                t: 1.0,
+            })
+        })
+        .collect();
+    let ring = |v: u32| {
+        let (l, f) = (locals[v as usize], out.parameters[v as usize].face);
+        l.rho() > 0.0 && l.rho() < 0.5 / f64::from(reach(f)) * (1.0 - 1e-9)
+    };
+    let (mut away, mut slivers) = (0, 0);
+    for t in &out.triangles {
+        let [a, b, c] = t.map(|v| out.positions[v as usize]);
+        let normal: DVec3 = t.iter().map(|&v| out.normals[v as usize]).sum();
+        if (b - a).cross(c - a).dot(normal) > 0.0 {
+            continue;
+        }
+        let rings: Vec<u32> = t.iter().copied().filter(|&v| ring(v)).collect();
+        let centre = t.iter().any(|&v| locals[v as usize].rho() == 0.0);
+        match (rings.len(), centre) {
+            (0, _) => away += 1,
+            (1, false) if locals[rings[0] as usize].on_edge() => slivers += 1,
+            _ => panic!("a ring triangle folds: {:?}", t.map(|v| locals[v as usize])),
+        }
+    }
+    let plain = flipped(&tessellate(Builtin::CatmullClark, mesh, rates));
+    assert!(away <= plain, "{away} triangles away from the rings face away, {plain} without rings");
+    if slivers > 0 {
+        eprintln!("  {slivers} outer-band slivers across an edge fold ({} triangles)", out.triangles.len());
+    }
 }
 
 /// Each extraordinary point's rings are at exactly the radii the bound assumes: `2^−e` for
@@ -901,7 +962,7 @@ fn rings_leave_borders_alone() {
             let out = tessellate_rings(&mesh, &rates, &rings);
             let border = check(&out);
             assert_eq!(euler(&out), input_euler(&mesh));
-            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, &rates, &rings));
+            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, false, &rates, &rings));
             let plain = tessellate(Builtin::CatmullClark, &mesh, &rates);
             let key = |m: &TessMesh, (a, b): (u32, u32)| {
                 let (p, q) = (m.positions[a as usize], m.positions[b as usize]);
@@ -986,15 +1047,56 @@ fn bad_rings_are_typed_errors() {
     deep.centres[2] = 99;
     assert!(matches!(tess.tessellate_with_rings(&rates, &deep), Err(TessError::RingDepth { depth: 99, .. })));
     assert!(tess.tessellate_with_rings(&rates, &good).is_ok());
-    // Triangle splits have no rings (depth 0 is still fine).
-    let ico = Mesh::build(shapes::icosahedron()).unwrap();
-    let mut loop_tess = DualTessellator::new(Builtin::Loop.scheme(), &ico, &DualOptions::default()).unwrap();
-    let rates = vec![3; ico.face_count()];
-    let mut rings = RingDepths { vertices: vec![0; ico.vertex_count()], centres: vec![0; ico.face_count()] };
-    assert!(loop_tess.tessellate_with_rings(&rates, &rings).is_ok());
-    rings.vertices[0] = 2;
-    let err = loop_tess.tessellate_with_rings(&rates, &rings);
-    assert!(matches!(err, Err(TessError::Unsupported { .. })), "{err:?}");
+}
+
+/// Triangle splits (Loop): rings around interior vertices of valence ≠ 6 (the icosahedron's 5,
+/// the octahedron's 4, the tetrahedron's 3; none on the regular torus), watertight, counted,
+/// every vertex on the limit surface, at random rates and depths.
+#[test]
+fn loop_rings_are_watertight_and_on_the_surface() {
+    let scheme = Builtin::Loop.scheme();
+    for (name, soup) in [
+        ("icosahedron", shapes::icosahedron()),
+        ("octahedron", shapes::octahedron()),
+        ("tetrahedron", shapes::tetrahedron()),
+        ("torus", shapes::triangle_torus(6, 4)),
+    ] {
+        let mesh = Mesh::build(soup).unwrap();
+        let evaluator = LimitEvaluator::new(scheme, &mesh, &RefineOptions::DEFAULT).unwrap();
+        for seed in 0..4 {
+            let rates = rates_for(&mesh, seed, 9);
+            let rings = random_rings(&mesh, seed, 10);
+            let mut tess = DualTessellator::new(scheme, &mesh, &DualOptions::default()).unwrap();
+            let out = tess.tessellate_with_rings(&rates, &rings).unwrap().clone();
+            let plain = tess.tessellate(&rates).unwrap().clone();
+            check_facing(&out, &mesh);
+            assert!(check(&out).is_empty(), "{name}: border edges on a closed mesh");
+            assert_eq!(euler(&out), input_euler(&mesh));
+            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, true, &rates, &rings));
+            let regular = name == "torus";
+            assert_eq!(out.positions.len() == plain.positions.len(), regular, "{name}: rings only where irregular");
+            let d = diagonal(&mesh);
+            let mut worst: f64 = 0.0;
+            for (i, p) in out.parameters.iter().enumerate() {
+                // Rounding may put a point of a triangle's third side just outside: back onto it.
+                let (u, v) = if p.u + p.v > 1.0 { (p.u, 1.0 - p.u) } else { (p.u, p.v) };
+                let want = evaluator.eval(p.face, u, v).unwrap();
+                worst = worst.max((want.position - out.positions[i]).length() / d);
+            }
+            assert!(worst < 1e-12, "{name}: off the limit surface by {worst:e} × bbox");
+            assert!(
+                flipped(&out) <= flipped(&plain),
+                "{name}: {} flipped, {} without rings",
+                flipped(&out),
+                flipped(&plain)
+            );
+            eprintln!(
+                "{name}, seed {seed}: {} vertices with rings, {} without",
+                out.positions.len(),
+                plain.positions.len()
+            );
+        }
+    }
 }
 
 /// Closest point of triangle `abc` to `p` (Ericson, Real-Time Collision Detection §5.1.5).
@@ -1136,6 +1238,7 @@ fn rings_keep_the_surface_within_tolerance() {
             let rates = ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &mesh).unwrap();
             let epsilon = Tolerance::Relative(r).absolute(bounds.diagonal()).unwrap();
             let out = tessellate_rings(&mesh, &rates.faces, &rates.rings);
+            check_ring_folds(&mesh, &out, &rates.faces);
             let buckets = Buckets::new(&out, epsilon);
             let worst = samples.iter().map(|&p| buckets.distance(&out, p)).fold(0.0, f64::max);
             eprintln!(

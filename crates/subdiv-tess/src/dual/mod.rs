@@ -23,7 +23,7 @@
 //!   vertex; the strips and vertex fans close against them, so the output's boundary runs
 //!   through the limit points of the input's boundary vertices, in order.
 //!
-//! **Rings** ([`DualTessellator::tessellate_with_rings`], quad splits): the polygon at an
+//! **Rings** ([`DualTessellator::tessellate_with_rings`]): the polygon at an
 //! extraordinary point (an interior vertex of valence ≠ 4, or an N-gon's centre) stands for a
 //! piece of surface as coarse as its faces' rates, which the tolerance policy's hull bound may
 //! not accept. With a ring depth `d > 0` for the point
@@ -41,6 +41,10 @@
 //! ring points are ordinary output vertices (evaluated by exact stencils, re-evaluated by
 //! [`DualTessellator::update_cage`]); below about `2^−50` face units they are no longer apart
 //! in f64 positions, which the tolerances that need rings never reach.
+//! Triangle splits take rings too (around interior vertices of valence ≠ 6), in the
+//! triangles' corner frames: the first ring below the corner centroids' `1 / (3n)`, per face a
+//! point on its edge at `r_j` and one at `(r_j/2, r_j/2)`, the bands between rings trapezoids;
+//! no tolerance policy computes their depths yet.
 //!
 //! Every output vertex is evaluated once, exactly, with a unit normal from the exact tangents:
 //! regular bicubic faces separably, row by row, with per-rate basis tables; the cell points of
@@ -210,17 +214,17 @@ impl DualTessellator {
 
     /// As [`tessellate`](Self::tessellate), with rings of exact points around extraordinary
     /// points down to the depths of `rings` (see the module docs; [`ErrorRates::rates`]
-    /// computes them with the rates): `rings.vertices[v]` around interior mesh vertices of
-    /// valence ≠ 4, `rings.centres[f]` around the centres of N-gons (N ≠ 4); depth 0, and the
-    /// entries of other vertices and faces, change nothing.
+    /// computes them with the rates, for Catmull-Clark): `rings.vertices[v]` around interior mesh
+    /// vertices of valence ≠ 4 (≠ 6 under a triangle split), `rings.centres[f]` around the
+    /// centres of N-gons (N ≠ 4, quad splits); depth 0, and the entries of other vertices and
+    /// faces, change nothing.
     ///
     /// [`ErrorRates::rates`]: crate::rates::ErrorRates::rates
     ///
     /// # Errors
     /// As [`tessellate`](Self::tessellate); [`TessError::RingCount`] unless there is one depth
     /// per input vertex and one per input face; [`TessError::RingDepth`] for a depth above
-    /// [`MAX_DUAL_RING_DEPTH`]; [`TessError::Unsupported`] for a depth > 0 under a triangle
-    /// split (Loop, butterfly), which has no rings.
+    /// [`MAX_DUAL_RING_DEPTH`].
     ///
     /// ```
     /// use subdiv_mesh::{shapes, Mesh};
@@ -255,12 +259,6 @@ impl DualTessellator {
             };
         if let Some(e) = too_deep(&rings.vertices, "vertex").or_else(|| too_deep(&rings.centres, "face")) {
             return Err(e);
-        }
-        if self.triangle && rings.vertices.iter().chain(&rings.centres).any(|&d| d > 0) {
-            return Err(TessError::Unsupported {
-                feature: "rings around extraordinary points under a triangle split",
-                element: format!("scheme {}", self.scheme),
-            });
         }
         self.build(rates, Some(rings))
     }
@@ -385,13 +383,14 @@ pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usi
     topology::predicted_vertices(mesh, triangle, rates, None)
 }
 
-/// [`predicted_vertex_count`] under a quad split with `rings` (one depth per vertex and per
-/// face, as [`DualTessellator::tessellate_with_rings`] takes them): each ring adds two points
-/// per face around its point, and a ringed point of valence (or size) 3 its limit point.
+/// [`predicted_vertex_count`] with `rings` (one depth per vertex and per face, as
+/// [`DualTessellator::tessellate_with_rings`] takes them): each ring adds two points per face
+/// around its point, and a ringed point of valence (or size) 3 under a quad split its limit
+/// point.
 ///
 /// # Panics
 /// If `rings` does not have one depth per vertex and one per face.
-pub fn predicted_vertex_count_with_rings(mesh: &Mesh, rates: &[u32], rings: &RingDepths) -> usize {
+pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u32], rings: &RingDepths) -> usize {
     assert!(rings.vertices.len() == mesh.vertex_count() && rings.centres.len() == mesh.face_count(), "ring depths");
-    topology::predicted_vertices(mesh, false, rates, Some(rings))
+    topology::predicted_vertices(mesh, triangle, rates, Some(rings))
 }

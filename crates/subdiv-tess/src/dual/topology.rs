@@ -87,11 +87,25 @@ impl RingCorner {
     }
 }
 
-/// The number of rings around a point at `depth` (> 0) whose finest face reach is `finest`:
-/// from the first power of two inside the nearest dual points, `2^−d1`, down to
-/// `2^−max(depth, d1)`, one ring per halving (at least one).
-fn ring_count(finest: u32, depth: u32) -> u32 {
-    depth.saturating_sub(first_ring_depth(finest)) + 1
+/// How finely face `f` at `rate` samples next to its corners: a quad split's
+/// [`reach`] (a quad's rate, `2⌈n/2⌉` for an N-gon's sub-faces); a triangle's rate.
+fn face_reach(mesh: &Mesh, triangle: bool, f: FaceId, rate: u32) -> u32 {
+    if triangle { rate } else { reach(mesh, f, rate) }
+}
+
+/// The depth `d1` of the first ring around a point whose finest face reach is `finest`: under a
+/// quad split [`first_ring_depth`] (`2^−d1` the largest power of two below the nearest dual
+/// points' `½ / finest`); under a triangle split the largest power of two below `1 / (3 finest)`,
+/// the corner centroids' distance from each side, so that the first ring's points on the edges
+/// and at `(r/2, r/2)` lie inside the polygon through the centroids.
+fn first_depth(triangle: bool, finest: u32) -> u32 {
+    if triangle { (3 * finest + 1).next_power_of_two().trailing_zeros() } else { first_ring_depth(finest) }
+}
+
+/// The number of rings around a point at `depth` (> 0) whose first ring is at depth `first`:
+/// from `2^−first` down to `2^−max(depth, first)`, one ring per halving (at least one).
+fn ring_count(first: u32, depth: u32) -> u32 {
+    depth.saturating_sub(first) + 1
 }
 
 /// One input face's cells.
@@ -169,7 +183,7 @@ impl<'a> Builder<'a> {
         self.rates.extend_from_slice(rates);
         self.ring_vertices.clear();
         self.ring_centres.clear();
-        if let Some(r) = rings.filter(|_| !self.triangle) {
+        if let Some(r) = rings {
             self.ring_vertices.extend_from_slice(&r.vertices);
             self.ring_centres.extend_from_slice(&r.centres);
         }
@@ -598,7 +612,8 @@ impl<'a> Builder<'a> {
             // An extraordinary interior vertex (quad split) with a ring depth: rings down to it,
             // fanned around its limit point, in place of the polygon.
             let depth = self.ring_vertices.get(v.index()).copied().unwrap_or(0);
-            if closed && depth > 0 && ring.len() >= 3 && ring.len() != 4 {
+            let regular = if self.triangle { 6 } else { 4 };
+            if closed && depth > 0 && ring.len() >= 3 && ring.len() != regular {
                 let point = self.corner_point(f0, self.corner[start.index()] as usize);
                 self.rings(&corners, &ring, depth, (f0, point));
                 continue;
@@ -624,15 +639,25 @@ impl<'a> Builder<'a> {
         self.starts = starts;
     }
 
-    /// The point `(a, b) · 2^−e` (face units, `a, b ∈ {0, 1}`, `e ≥ 2`) of `corner`'s frame, as
-    /// its face's parameter: a quad's own coordinates turned to the corner; an N-gon's sub-face
-    /// coordinates, which are twice the face units (a sub-face is a quarter of the face).
+    /// The point `(a, b) · 2^−e` (face units, `a, b ≤ 2`, `e ≥ 2`) of `corner`'s frame, as its
+    /// face's parameter: a quad's own coordinates turned to the corner; an N-gon's sub-face
+    /// coordinates, which are twice the face units (a sub-face is a quarter of the face); a
+    /// triangle's turned to the corner (`s` along side `c`, `t` along side `c − 1` reversed).
     fn ring_point(&self, corner: RingCorner, a: i64, b: i64, e: u32) -> Dyadic {
         let domain = self.faces[corner.face()].expect("a face with a surface").domain;
         match corner {
             RingCorner::Vertex { corner: c, .. } => match domain {
                 FaceDomain::SubFaces { .. } => domain.from_sub_face(c as usize, Dyadic::new(a, b, 1 << (e - 1))),
-                _ => {
+                FaceDomain::Triangle => {
+                    let d = 1i64 << e;
+                    let (u, v) = match c {
+                        0 => (a, b),
+                        1 => (d - a - b, a),
+                        _ => (b, d - a - b),
+                    };
+                    Dyadic::new(u, v, d)
+                }
+                FaceDomain::Quad => {
                     let d = 1i64 << e;
                     let (u, v) = match c {
                         0 => (a, b),
@@ -664,22 +689,28 @@ impl<'a> Builder<'a> {
     /// [`ErrorRates::rates`](crate::rates::ErrorRates::rates) assumes: from the polygon's corners
     /// to ring 1 two triangles per face and one across each edge; between rings `j` and `j + 1`
     /// two quads per face in its L-shaped region `[0, r_j]² \ [0, r_{j+1})²`; a fan inside the
-    /// last.
+    /// last. Under a triangle split (no tolerance policy yet) the same with a triangle's frames:
+    /// `d1` from [`first_depth`], the inner point at `(r_j/2, r_j/2)`, and the quads in the
+    /// trapezoid `r_{j+1} ≤ s + t ≤ r_j`.
     fn rings(&mut self, corners: &[RingCorner], outer: &[u32], depth: u32, centre: (usize, Dyadic)) {
         let n = corners.len() as u32;
         let finest = corners
             .iter()
-            .map(|c| reach(self.mesh, FaceId::new(c.face() as u32), self.rates[c.face()]))
+            .map(|c| face_reach(self.mesh, self.triangle, FaceId::new(c.face() as u32), self.rates[c.face()]))
             .max()
             .unwrap_or(1);
-        let first = first_ring_depth(finest);
-        let count = ring_count(finest, depth);
+        let first = first_depth(self.triangle, finest);
+        let count = ring_count(first, depth);
         let base = self.out.sites.len() as u32;
+        // Per face: the point on its first edge at r, and the inner one: the diagonal point
+        // (r, r) of a quad corner; (r/2, r/2) of a triangle corner, on the segment between the
+        // corner's two edge points (the triangle's region between rings is a trapezoid).
+        let ((edge, inner), shift) = if self.triangle { (((2, 0), (1, 1)), 1) } else { (((1, 0), (1, 1)), 0) };
         for j in 0..count {
             for &c in corners {
-                let on_edge = self.ring_point(c, 1, 0, first + j);
+                let on_edge = self.ring_point(c, edge.0, edge.1, first + j + shift);
                 self.push_site(c.face(), on_edge);
-                let diagonal = self.ring_point(c, 1, 1, first + j);
+                let diagonal = self.ring_point(c, inner.0, inner.1, first + j + shift);
                 self.push_site(c.face(), diagonal);
             }
         }
@@ -710,7 +741,6 @@ impl<'a> Builder<'a> {
 /// The number of output vertices at `rates`, from the construction's counts (for tests and for
 /// sizing): cells, triangle interiors, N-gon centres, border points, vertex points.
 pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rings: Option<&RingDepths>) -> usize {
-    let rings = rings.filter(|_| !triangle);
     let hole = |f: FaceId| mesh.is_hole(f);
     let rate_of = |f: FaceId| rates[f.index()] as usize;
     let mut count = 0;
@@ -724,8 +754,8 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             let depth = rings.map_or(0, |r| r.centres[f.index()]);
             let centre = if depth > 0 {
                 // Two points per sub-face per ring, and the centre (N = 3 has none without).
-                let finest = crate::rates::reach(mesh, f, rates[f.index()]);
-                2 * size * ring_count(finest, depth) as usize + 1
+                let finest = reach(mesh, f, rates[f.index()]);
+                2 * size * ring_count(first_depth(false, finest), depth) as usize + 1
             } else {
                 usize::from(size >= 5)
             };
@@ -745,10 +775,11 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
         let border = mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)))
             || mesh.is_boundary_vertex(v);
         let depth = rings.map_or(0, |r| r.vertices[v.index()]);
-        if !border && depth > 0 && faces.len() >= 3 && faces.len() != 4 {
-            // Two points per face per ring (its edge's and its diagonal's), and the limit point.
-            let finest = faces.iter().map(|&f| crate::rates::reach(mesh, f, rates[f.index()])).max().unwrap_or(1);
-            count += 2 * faces.len() * ring_count(finest, depth) as usize + 1;
+        let regular = if triangle { 6 } else { 4 };
+        if !border && depth > 0 && faces.len() >= 3 && faces.len() != regular {
+            // Two points per face per ring (its edge's and its inner one), and the limit point.
+            let finest = faces.iter().map(|&f| face_reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
+            count += 2 * faces.len() * ring_count(first_depth(triangle, finest), depth) as usize + 1;
         } else if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
             count += 1;
         }
