@@ -833,9 +833,10 @@ fn ring_checks(mesh: &Mesh, rates: &[u32], rings: &RingDepths, deep: bool) -> Te
 /// exception, counted and printed: the outer band's triangle across an edge, `(d_f, d_g, e)`,
 /// whose edge point `e` at `r_1` (the largest power of two below the dual points' `½/n`, as the
 /// bound fixes it) can lie, on the surface, just outside the chord `d_f d_g` when `r_1` is
-/// close to `½/n` (seen at valence-3 vertices, where the characteristic map opens each face to
-/// 120°, so the chord between two faces' points passes closer to the vertex than in the
-/// parameters): a sliver, within ε like any other triangle, but folded.
+/// close to `½/n` (seen only at valence-3 points, vertices and triangles' centres, where the
+/// characteristic map opens each face to 120°, so the chord between two faces' points passes
+/// closer to the point than in the parameters): a sliver, within ε like any other triangle, but
+/// folded.
 fn check_ring_folds(mesh: &Mesh, out: &TessMesh, rates: &[u32]) {
     let evaluator = LimitEvaluator::new(Builtin::CatmullClark.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
     let reach = |f: FaceId| if mesh.face_size(f) == 4 { rates[f.index()] } else { 2 * rates[f.index()].div_ceil(2) };
