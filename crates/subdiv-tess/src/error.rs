@@ -20,8 +20,8 @@ pub enum TessError {
         /// The rule broken.
         reason: String,
     },
-    /// The mesh has a feature the tessellator does not handle.
-    #[error("{element}: {feature} not supported by the quadtree tessellator")]
+    /// The mesh (or the request) has a feature the tessellator does not handle.
+    #[error("{element}: {feature} not supported by this tessellator")]
     Unsupported {
         /// The feature.
         feature: &'static str,
@@ -84,6 +84,27 @@ pub enum TessError {
         expected: usize,
         /// The number of rates given.
         got: usize,
+    },
+    /// The ring depths do not have one depth per input vertex (`what`: `"vertices"`) or per
+    /// input face (`"centres"`) ([`RingDepths`](crate::rates::RingDepths)).
+    #[error("{got} ring depths given for {expected} {what} (one depth per element)")]
+    RingCount {
+        /// Which list: `"vertices"` or `"centres"`.
+        what: &'static str,
+        /// The number of vertices or faces.
+        expected: usize,
+        /// The number of depths given.
+        got: usize,
+    },
+    /// A ring depth beyond [`MAX_DUAL_RING_DEPTH`](crate::dual::MAX_DUAL_RING_DEPTH).
+    #[error("{element}: ring depth {depth} is above the largest allowed ({max})")]
+    RingDepth {
+        /// The vertex or face.
+        element: String,
+        /// The depth as given.
+        depth: u32,
+        /// The largest depth allowed.
+        max: u32,
     },
     /// The cage positions do not have one position per input vertex.
     #[error("{got} cage positions given for {expected} vertices (one position per vertex)")]

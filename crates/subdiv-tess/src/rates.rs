@@ -277,7 +277,8 @@ pub struct DualRates {
 /// points at parameter distances `r, r/2, r/4, …` down to `2^−depth` (face units, the corner
 /// square of that side around the point), fanned at the end around its limit point; `0` for
 /// none. `r` is the largest power of two inside the point's nearest dual points, so rings only
-/// appear where the rates leave the point's neighbourhood too coarse.
+/// appear where the rates leave the point's neighbourhood too coarse. Consumed by
+/// [`DualTessellator::tessellate_with_rings`](crate::DualTessellator::tessellate_with_rings).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RingDepths {
     /// Per mesh vertex (used at interior vertices of valence ≠ 4 under a quad split).
@@ -289,13 +290,13 @@ pub struct RingDepths {
 /// How finely a face at `rate` samples next to its corners, as a rate of a quad: its dual
 /// points nearest a corner are `½ / reach` away in face units (an N-gon's sub-faces, at
 /// `⌈n/2⌉` each and half as wide, reach `2⌈n/2⌉`).
-fn reach(mesh: &Mesh, face: FaceId, rate: u32) -> u32 {
+pub(crate) fn reach(mesh: &Mesh, face: FaceId, rate: u32) -> u32 {
     if mesh.face_size(face) == 4 { rate } else { 2 * rate.div_ceil(2) }
 }
 
 /// The depth `d` of the first ring around a point whose nearest dual points are `½ / finest`
 /// away (face units): `2^−d` is the largest power of two below `½ / finest`.
-fn first_ring_depth(finest: u32) -> u32 {
+pub(crate) fn first_ring_depth(finest: u32) -> u32 {
     finest.next_power_of_two().trailing_zeros() + 2 - u32::from(!finest.is_power_of_two())
 }
 

@@ -728,7 +728,7 @@ mod tests {
         let domains = ev.domains().unwrap();
         let mut topo = Topology::default();
         let faces = mesh.face_count();
-        super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], &mut topo);
+        super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], None, &mut topo);
         ev.prepare(&topo, &vec![4; faces], true).unwrap();
         let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
         assert_eq!(tabled, faces * 16);

@@ -23,6 +23,29 @@
 //!   vertex; the strips and vertex fans close against them, so the output's boundary runs
 //!   through the limit points of the input's boundary vertices, in order.
 //!
+//! **Rings** ([`DualTessellator::tessellate_with_rings`]): the polygon at an
+//! extraordinary point (an interior vertex of valence ≠ 4, or an N-gon's centre) stands for a
+//! piece of surface as coarse as its faces' rates, which the tolerance policy's hull bound may
+//! not accept. With a ring depth `d > 0` for the point
+//! ([`ErrorRates::rates`](crate::rates::ErrorRates::rates) computes them), the polygon is
+//! replaced by rings of exact points at `r_j = 2^−(d1 + j − 1)` face units from the point,
+//! `j = 1..=K`, `K = max(1, d − d1 + 1)`: `d1` is the depth of the first power of two strictly
+//! inside the nearest dual points (which are `½ / reach` away, `reach` the rate of a quad
+//! neighbour, `2⌈n/2⌉` for an N-gon's sub-faces). Each ring has a point on every edge (an
+//! N-gon's spoke) at `r_j`, made once for the two faces beside it, and one per face at
+//! `(r_j, r_j)` in that face's corner frame (an N-gon's sub-face coordinates are twice the face
+//! units). Triangles, each in one face's region or across one edge, as the bound assumes: from
+//! each face's corner dual point to ring 1 two in the face and one across each edge to the next
+//! face's; between rings `j` and `j + 1` two quads per face in its L-shaped region
+//! `[0, r_j]² \ [0, r_{j+1})²`; inside the last ring a fan around the point's limit point. The
+//! ring points are ordinary output vertices (evaluated by exact stencils, re-evaluated by
+//! [`DualTessellator::update_cage`]); below about `2^−50` face units they are no longer apart
+//! in f64 positions, which the tolerances that need rings never reach.
+//! Triangle splits take rings too (around interior vertices of valence ≠ 6), in the
+//! triangles' corner frames: the first ring below the corner centroids' `1 / (3n)`, per face a
+//! point on its edge at `r_j` and one at `(r_j/2, r_j/2)`, the bands between rings trapezoids;
+//! no tolerance policy computes their depths yet.
+//!
 //! Every output vertex is evaluated once, exactly, with a unit normal from the exact tangents:
 //! regular bicubic faces separably, row by row, with per-rate basis tables; the cell points of
 //! other level-0 patches through their patch type's dual-grid
@@ -41,10 +64,16 @@ use subdiv_schemes::{Scheme, Split};
 
 use self::eval::Evaluator;
 use self::topology::{Builder, Topology};
+use crate::rates::RingDepths;
 use crate::{SurfaceParameter, TessError, TessMesh};
 
 /// The largest rate [`DualTessellator::tessellate`] takes.
 pub const MAX_DUAL_RATE: u32 = 128;
+
+/// The largest ring depth [`DualTessellator::tessellate_with_rings`] takes: rings come down to
+/// `2^−60` face units, whose parameters (and an N-gon's sub-face coordinates, twice as fine)
+/// are exact in the `i64` dyadics of the stencils.
+pub const MAX_DUAL_RING_DEPTH: u32 = 60;
 
 /// Options of [`DualTessellator`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -79,8 +108,10 @@ pub struct FlatMesh {
 /// face that evaluated it (a border point: the face beside the border; a vertex's limit point:
 /// one of its faces, at its corner). A triangle of a cell belongs to the cell's face; a strip's
 /// triangle to the face on the left of the edge's lower-numbered half-edge (the face of the
-/// border side, on a border); a vertex polygon's to the first face of its ring. Since strip and
-/// ring triangles span several faces, [`triangle_parameters`](TessMesh::triangle_parameters)
+/// border side, on a border); a vertex polygon's to the first face of its ring; a ring's triangle
+/// (rings around extraordinary points) to the face whose region holds it (across an edge: the
+/// face before the edge, counter-clockwise). Since strip, vertex-polygon and ring triangles span
+/// several faces, [`triangle_parameters`](TessMesh::triangle_parameters)
 /// lists each corner's own parameters (those of [`parameters`](TessMesh::parameters)), which
 /// may be in different faces.
 ///
@@ -178,6 +209,61 @@ impl DualTessellator {
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
     /// rate outside `1..=`[`MAX_DUAL_RATE`]; [`TessError::Surface`] if a stencil fails.
     pub fn tessellate(&mut self, rates: &[u32]) -> Result<&TessMesh, TessError> {
+        self.build(rates, None)
+    }
+
+    /// As [`tessellate`](Self::tessellate), with rings of exact points around extraordinary
+    /// points down to the depths of `rings` (see the module docs; [`ErrorRates::rates`]
+    /// computes them with the rates, for Catmull-Clark): `rings.vertices[v]` around interior mesh
+    /// vertices of valence ≠ 4 (≠ 6 under a triangle split), `rings.centres[f]` around the
+    /// centres of N-gons (N ≠ 4, quad splits); depth 0, and the entries of other vertices and
+    /// faces, change nothing.
+    ///
+    /// [`ErrorRates::rates`]: crate::rates::ErrorRates::rates
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate); [`TessError::RingCount`] unless there is one depth
+    /// per input vertex and one per input face; [`TessError::RingDepth`] for a depth above
+    /// [`MAX_DUAL_RING_DEPTH`].
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::rates::ErrorRates;
+    /// use subdiv_tess::{DualOptions, DualTessellator, Tessellator, Tolerance};
+    ///
+    /// let mesh = Mesh::build(shapes::cube())?;
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// // Rates and ring depths to 1% of the bounding box (the bounds come from the quadtree's pieces).
+    /// let rates = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&Tessellator::new(cc, &mesh)?, &mesh)?;
+    /// assert!(rates.rings.vertices.iter().all(|&d| d > 0)); // the cube's valence-3 corners
+    /// let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::default())?;
+    /// let plain = tess.tessellate(&rates.faces)?.positions.len();
+    /// let ringed = tess.tessellate_with_rings(&rates.faces, &rates.rings)?.positions.len();
+    /// assert!(ringed > plain);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn tessellate_with_rings(&mut self, rates: &[u32], rings: &RingDepths) -> Result<&TessMesh, TessError> {
+        let (vertices, faces) = (self.vertex_count, self.face_count());
+        if rings.vertices.len() != vertices {
+            return Err(TessError::RingCount { what: "vertices", expected: vertices, got: rings.vertices.len() });
+        }
+        if rings.centres.len() != faces {
+            return Err(TessError::RingCount { what: "centres", expected: faces, got: rings.centres.len() });
+        }
+        let too_deep =
+            |depths: &[u32], kind: &str| {
+                depths.iter().enumerate().find(|(_, d)| **d > MAX_DUAL_RING_DEPTH).map(|(k, &depth)| {
+                    TessError::RingDepth { element: format!("{kind} {k}"), depth, max: MAX_DUAL_RING_DEPTH }
+                })
+            };
+        if let Some(e) = too_deep(&rings.vertices, "vertex").or_else(|| too_deep(&rings.centres, "face")) {
+            return Err(e);
+        }
+        self.build(rates, Some(rings))
+    }
+
+    fn build(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<&TessMesh, TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
@@ -186,7 +272,7 @@ impl DualTessellator {
         }
         let domains = self.evaluator.domains()?;
         let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
-        builder.build(&domains, rates, &mut self.topology);
+        builder.build(&domains, rates, rings, &mut self.topology);
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
@@ -294,5 +380,17 @@ impl DualTessellator {
 /// `triangle`, a triangle) split at `rates`: cells, triangle interiors, N-gon centres, border
 /// points and vertex points (see the module docs). For checks.
 pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usize {
-    topology::predicted_vertices(mesh, triangle, rates)
+    topology::predicted_vertices(mesh, triangle, rates, None)
+}
+
+/// [`predicted_vertex_count`] with `rings` (one depth per vertex and per face, as
+/// [`DualTessellator::tessellate_with_rings`] takes them): each ring adds two points per face
+/// around its point, and a ringed point of valence (or size) 3 under a quad split its limit
+/// point.
+///
+/// # Panics
+/// If `rings` does not have one depth per vertex and one per face.
+pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u32], rings: &RingDepths) -> usize {
+    assert!(rings.vertices.len() == mesh.vertex_count() && rings.centres.len() == mesh.face_count(), "ring depths");
+    topology::predicted_vertices(mesh, triangle, rates, Some(rings))
 }

@@ -12,7 +12,11 @@
 //!   hole), at the parameters of the row of points beside it;
 //! - **vertex points**: a mesh vertex's limit point where its polygon is fanned around it (every
 //!   vertex under a triangle split; interior vertices of valence ≥ 5 and every border vertex
-//!   under a quad split).
+//!   under a quad split);
+//! - **ring points** around an extraordinary point with a ring depth (quad split), made where its
+//!   polygon would be (an N-gon's centre: after its cells; a vertex: with the vertex points):
+//!   per ring, per face counter-clockwise, the point on the face's first edge (spoke), then the
+//!   one on its diagonal; then the point's limit point.
 //!
 //! Polygons: cell interiors (the dual quad grid; the triangles' hexagons), **strips** along each
 //! edge (and each N-gon spoke) merging the two rows nearest it in parameter order, and **rings**
@@ -21,6 +25,8 @@
 
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
 use subdiv_stencil::{Dyadic, FaceDomain};
+
+use crate::rates::{RingDepths, first_ring_depth, reach};
 
 /// An output vertex's place on the surface: the input face that evaluates it and the exact
 /// `Bfr` parameter there.
@@ -62,6 +68,46 @@ pub(crate) struct Topology {
     pub polygon_faces: Vec<FaceId>,
 }
 
+/// A corner at an extraordinary point, in whose frame ring points are placed: face `face`'s
+/// corner `corner` at a mesh vertex (the frame's `s` axis along side `corner`, `t` towards
+/// corner `corner − 1`), or sub-face `sub`'s inner corner at an N-gon's centre (`s` along the
+/// spoke shared with sub-face `sub − 1`, `t` along the one shared with `sub + 1`). Both frames
+/// turn counter-clockwise around the point, from one corner of the ring to the next.
+#[derive(Clone, Copy, Debug)]
+enum RingCorner {
+    Vertex { face: u32, corner: u32 },
+    Centre { face: u32, sub: u32 },
+}
+
+impl RingCorner {
+    fn face(self) -> usize {
+        match self {
+            Self::Vertex { face, .. } | Self::Centre { face, .. } => face as usize,
+        }
+    }
+}
+
+/// How finely face `f` at `rate` samples next to its corners: a quad split's
+/// [`reach`] (a quad's rate, `2⌈n/2⌉` for an N-gon's sub-faces); a triangle's rate.
+fn face_reach(mesh: &Mesh, triangle: bool, f: FaceId, rate: u32) -> u32 {
+    if triangle { rate } else { reach(mesh, f, rate) }
+}
+
+/// The depth `d1` of the first ring around a point whose finest face reach is `finest`: under a
+/// quad split [`first_ring_depth`] (`2^−d1` the largest power of two below the nearest dual
+/// points' `½ / finest`); under a triangle split the largest power of two below `1 / (3 finest)`,
+/// the corner centroids' distance from each side, so that the first ring's points on the edges
+/// and at `(r/2, r/2)` lie inside the polygon through the centroids.
+fn first_depth(triangle: bool, finest: u32) -> u32 {
+    if triangle { (3 * finest + 1).next_power_of_two().trailing_zeros() } else { first_ring_depth(finest) }
+}
+
+/// The number of rings around a point at `depth` (> 0) whose first ring is at depth `first`:
+/// from `2^−first` down to `2^−max(depth, first)`, one ring per halving (at least one).
+fn ring_count(first: u32, depth: u32) -> u32 {
+    depth.saturating_sub(first) + 1
+}
+
 /// One input face's cells.
 #[derive(Clone, Copy, Debug)]
 struct FaceCells {
@@ -88,6 +134,12 @@ pub(crate) struct Builder<'a> {
     other: Vec<RowPoint>,
     ring: Vec<u32>,
     starts: Vec<HalfEdgeId>,
+    /// The ring's corners, beside `ring` (for the rings around extraordinary points).
+    ring_corners: Vec<RingCorner>,
+    /// The rates being built, and the ring depths (empty: none).
+    rates: Vec<u32>,
+    ring_vertices: Vec<u32>,
+    ring_centres: Vec<u32>,
 }
 
 impl<'a> Builder<'a> {
@@ -111,11 +163,30 @@ impl<'a> Builder<'a> {
             other: Vec::new(),
             ring: Vec::new(),
             starts: Vec::new(),
+            ring_corners: Vec::new(),
+            rates: Vec::new(),
+            ring_vertices: Vec::new(),
+            ring_centres: Vec::new(),
         }
     }
 
-    /// The topology at `rates` (checked by the caller), reusing `out`'s allocations.
-    pub(crate) fn build(&mut self, domains: &[Option<FaceDomain>], rates: &[u32], out: &mut Topology) {
+    /// The topology at `rates` with `rings` around extraordinary points (both checked by the
+    /// caller; rings only under a quad split), reusing `out`'s allocations.
+    pub(crate) fn build(
+        &mut self,
+        domains: &[Option<FaceDomain>],
+        rates: &[u32],
+        rings: Option<&RingDepths>,
+        out: &mut Topology,
+    ) {
+        self.rates.clear();
+        self.rates.extend_from_slice(rates);
+        self.ring_vertices.clear();
+        self.ring_centres.clear();
+        if let Some(r) = rings {
+            self.ring_vertices.extend_from_slice(&r.vertices);
+            self.ring_centres.extend_from_slice(&r.centres);
+        }
         std::mem::swap(&mut self.out, out);
         let o = &mut self.out;
         o.sites.clear();
@@ -236,9 +307,22 @@ impl<'a> Builder<'a> {
                     (self.row, self.other) = (row, other);
                 }
                 // The centre: the sub-faces' inner corners, counter-clockwise.
-                let ring: Vec<u32> = (0..size).map(|s| cell(s, m - 1, m - 1)).collect();
-                let centre = (size >= 5).then(|| self.push_site(f, domain.from_sub_face(0, Dyadic::new(1, 1, 1))));
-                self.close_ring(&ring, centre, f as u32);
+                let mut ring = std::mem::take(&mut self.ring);
+                ring.clear();
+                ring.extend((0..size).map(|s| cell(s, m - 1, m - 1)));
+                let centre_point = domain.from_sub_face(0, Dyadic::new(1, 1, 1));
+                let depth = self.ring_centres.get(f).copied().unwrap_or(0);
+                if depth > 0 {
+                    let mut corners = std::mem::take(&mut self.ring_corners);
+                    corners.clear();
+                    corners.extend((0..size as u32).map(|sub| RingCorner::Centre { face: f as u32, sub }));
+                    self.rings(&corners, &ring, depth, (f, centre_point));
+                    self.ring_corners = corners;
+                } else {
+                    let centre = (size >= 5).then(|| self.push_site(f, centre_point));
+                    self.close_ring(&ring, centre, f as u32);
+                }
+                self.ring = ring;
             }
             FaceDomain::Triangle => {
                 let q = i64::from(3 * n);
@@ -498,8 +582,10 @@ impl<'a> Builder<'a> {
         }
         let mut centre = None;
         let mut ring = std::mem::take(&mut self.ring);
+        let mut corners = std::mem::take(&mut self.ring_corners);
         for &start in &starts {
             ring.clear();
+            corners.clear();
             let f0 = mesh.face(start).index();
             if !closed {
                 let (first, _) = self.border[start.index()];
@@ -509,6 +595,7 @@ impl<'a> Builder<'a> {
             loop {
                 let f = mesh.face(h).index();
                 ring.push(self.corner_vertex(f, self.corner[h.index()] as usize));
+                corners.push(RingCorner::Vertex { face: f as u32, corner: self.corner[h.index()] });
                 let p = mesh.prev(h);
                 if self.is_border(p) {
                     if !closed {
@@ -521,6 +608,15 @@ impl<'a> Builder<'a> {
                 if closed && h == start {
                     break;
                 }
+            }
+            // An extraordinary interior vertex (quad split) with a ring depth: rings down to it,
+            // fanned around its limit point, in place of the polygon.
+            let depth = self.ring_vertices.get(v.index()).copied().unwrap_or(0);
+            let regular = if self.triangle { 6 } else { 4 };
+            if closed && depth > 0 && ring.len() >= 3 && ring.len() != regular {
+                let point = self.corner_point(f0, self.corner[start.index()] as usize);
+                self.rings(&corners, &ring, depth, (f0, point));
+                continue;
             }
             // Closed rings of 3 (and 4 under a quad split) are polygons of their own; rings of
             // fewer than 3 close nothing.
@@ -539,13 +635,112 @@ impl<'a> Builder<'a> {
             }
         }
         self.ring = ring;
+        self.ring_corners = corners;
         self.starts = starts;
+    }
+
+    /// The point `(a, b) · 2^−e` (face units, `a, b ≤ 2`, `e ≥ 2`) of `corner`'s frame, as its
+    /// face's parameter: a quad's own coordinates turned to the corner; an N-gon's sub-face
+    /// coordinates, which are twice the face units (a sub-face is a quarter of the face); a
+    /// triangle's turned to the corner (`s` along side `c`, `t` along side `c − 1` reversed).
+    fn ring_point(&self, corner: RingCorner, a: i64, b: i64, e: u32) -> Dyadic {
+        let domain = self.faces[corner.face()].expect("a face with a surface").domain;
+        match corner {
+            RingCorner::Vertex { corner: c, .. } => match domain {
+                FaceDomain::SubFaces { .. } => domain.from_sub_face(c as usize, Dyadic::new(a, b, 1 << (e - 1))),
+                FaceDomain::Triangle => {
+                    let d = 1i64 << e;
+                    let (u, v) = match c {
+                        0 => (a, b),
+                        1 => (d - a - b, a),
+                        _ => (b, d - a - b),
+                    };
+                    Dyadic::new(u, v, d)
+                }
+                FaceDomain::Quad => {
+                    let d = 1i64 << e;
+                    let (u, v) = match c {
+                        0 => (a, b),
+                        1 => (d - b, a),
+                        2 => (d - a, d - b),
+                        _ => (b, d - a),
+                    };
+                    Dyadic::new(u, v, d)
+                }
+            },
+            // The inner corner (1, 1) of the sub-face, its frame turned half a turn.
+            RingCorner::Centre { sub, .. } => {
+                let d = 1i64 << (e - 1);
+                domain.from_sub_face(sub as usize, Dyadic::new(d - a, d - b, d))
+            }
+        }
+        .reduced()
+    }
+
+    /// Rings around an extraordinary point, in place of its polygon `outer` (the faces' nearest
+    /// dual points, counter-clockwise, one per corner of `corners`), down to `depth`, fanned at
+    /// the end around the point's limit point `centre` (face, parameter).
+    ///
+    /// Ring `j` (radius `r_j = 2^−(d1 + j − 1)`, `d1` the first depth inside the nearest dual
+    /// points, [`first_ring_depth`]) has a point on every edge (or spoke) at `r_j` from the
+    /// point, made once in the face whose `s` axis the edge is, and one per face at
+    /// `(r_j, r_j)`; its points run `edge_0, diagonal_0, edge_1, diagonal_1, …`, counter-
+    /// clockwise. Every triangle lies in one face's region or across one edge, as the bound of
+    /// [`ErrorRates::rates`](crate::rates::ErrorRates::rates) assumes: from the polygon's corners
+    /// to ring 1 two triangles per face and one across each edge; between rings `j` and `j + 1`
+    /// two quads per face in its L-shaped region `[0, r_j]² \ [0, r_{j+1})²`; a fan inside the
+    /// last. Under a triangle split (no tolerance policy yet) the same with a triangle's frames:
+    /// `d1` from [`first_depth`], the inner point at `(r_j/2, r_j/2)`, and the quads in the
+    /// trapezoid `r_{j+1} ≤ s + t ≤ r_j`.
+    fn rings(&mut self, corners: &[RingCorner], outer: &[u32], depth: u32, centre: (usize, Dyadic)) {
+        let n = corners.len() as u32;
+        let finest = corners
+            .iter()
+            .map(|c| face_reach(self.mesh, self.triangle, FaceId::new(c.face() as u32), self.rates[c.face()]))
+            .max()
+            .unwrap_or(1);
+        let first = first_depth(self.triangle, finest);
+        let count = ring_count(first, depth);
+        let base = self.out.sites.len() as u32;
+        // Per face: the point on its first edge at r, and the inner one: the diagonal point
+        // (r, r) of a quad corner; (r/2, r/2) of a triangle corner, on the segment between the
+        // corner's two edge points (the triangle's region between rings is a trapezoid).
+        let ((edge, inner), shift) = if self.triangle { (((2, 0), (1, 1)), 1) } else { (((1, 0), (1, 1)), 0) };
+        for j in 0..count {
+            for &c in corners {
+                let on_edge = self.ring_point(c, edge.0, edge.1, first + j + shift);
+                self.push_site(c.face(), on_edge);
+                let diagonal = self.ring_point(c, inner.0, inner.1, first + j + shift);
+                self.push_site(c.face(), diagonal);
+            }
+        }
+        let p = self.push_site(centre.0, centre.1);
+        // Point k (cyclic) of ring j (from 0): edge points at even k, diagonal points at odd.
+        let at = |j: u32, k: u32| base + j * 2 * n + k % (2 * n);
+        let face = |k: u32| corners[k as usize].face() as u32;
+        for k in 0..n {
+            let (d, next) = (outer[k as usize], outer[((k + 1) % n) as usize]);
+            let (e, q, e_next) = (at(0, 2 * k), at(0, 2 * k + 1), at(0, 2 * k + 2));
+            self.triangle([d, q, e], face(k));
+            self.triangle([d, e_next, q], face(k));
+            self.triangle([d, next, e_next], face(k));
+        }
+        for j in 0..count - 1 {
+            for k in 0..n {
+                let (e, q, e_next) = (2 * k, 2 * k + 1, 2 * k + 2);
+                self.quad([at(j + 1, e), at(j, e), at(j, q), at(j + 1, q)], face(k));
+                self.quad([at(j + 1, q), at(j, q), at(j, e_next), at(j + 1, e_next)], face(k));
+            }
+        }
+        for k in 0..2 * n {
+            self.triangle([p, at(count - 1, k), at(count - 1, k + 1)], face(k / 2));
+        }
     }
 }
 
 /// The number of output vertices at `rates`, from the construction's counts (for tests and for
 /// sizing): cells, triangle interiors, N-gon centres, border points, vertex points.
-pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usize {
+pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rings: Option<&RingDepths>) -> usize {
     let hole = |f: FaceId| mesh.is_hole(f);
     let rate_of = |f: FaceId| rates[f.index()] as usize;
     let mut count = 0;
@@ -556,7 +751,15 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
         } else if size == 4 {
             n * n
         } else {
-            size * n.div_ceil(2).pow(2) + usize::from(size >= 5)
+            let depth = rings.map_or(0, |r| r.centres[f.index()]);
+            let centre = if depth > 0 {
+                // Two points per sub-face per ring, and the centre (N = 3 has none without).
+                let finest = reach(mesh, f, rates[f.index()]);
+                2 * size * ring_count(first_depth(false, finest), depth) as usize + 1
+            } else {
+                usize::from(size >= 5)
+            };
+            size * n.div_ceil(2).pow(2) + centre
         };
         for h in mesh.face_half_edges(f) {
             if mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) {
@@ -571,7 +774,13 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32]) -> 
         }
         let border = mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)))
             || mesh.is_boundary_vertex(v);
-        if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
+        let depth = rings.map_or(0, |r| r.vertices[v.index()]);
+        let regular = if triangle { 6 } else { 4 };
+        if !border && depth > 0 && faces.len() >= 3 && faces.len() != regular {
+            // Two points per face per ring (its edge's and its inner one), and the limit point.
+            let finest = faces.iter().map(|&f| face_reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
+            count += 2 * faces.len() * ring_count(first_depth(triangle, finest), depth) as usize + 1;
+        } else if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
             count += 1;
         }
     }
@@ -613,11 +822,11 @@ mod tests {
         let domains = vec![Some(FaceDomain::Triangle); mesh.face_count()];
         for n in [1, 2, 3, 7] {
             let mut out = Topology::default();
-            Builder::new(&mesh, true, false).build(&domains, &vec![n; mesh.face_count()], &mut out);
+            Builder::new(&mesh, true, false).build(&domains, &vec![n; mesh.face_count()], None, &mut out);
             let dual = Grid::Dual.points(3, n);
             let face0: Vec<Dyadic> = out.sites.iter().take(dual.len()).map(|s| s.point).collect();
             assert_eq!(face0, dual, "rate {n}");
-            assert_eq!(out.sites.len(), predicted_vertices(&mesh, true, &vec![n; mesh.face_count()]));
+            assert_eq!(out.sites.len(), predicted_vertices(&mesh, true, &vec![n; mesh.face_count()], None));
         }
     }
 }
