@@ -9,7 +9,7 @@ use std::time::Instant;
 use subdiv::io::{GlbMesh, write_glb};
 use subdiv::mesh::{DVec3, Mesh};
 use subdiv::schemes::Scheme;
-use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE, ErrorRates, ScreenSpace};
+use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE, DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv::tess::{DualOptions, DualTessellator, TessMesh, TessOptions, Tessellator, Tolerance};
 
 use crate::UserError;
@@ -120,11 +120,16 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
             (result, format!("ε = {epsilon:.3e}, depth ≤ {}", stats.max_depth))
         }
         Method::Dual => {
-            let (rates, policy) = dual_rates(args, tolerance, &scheme, &mesh, &loaded.name)?;
+            let (rates, rings, policy) = dual_rates(args, tolerance, &scheme, &mesh, &loaded.name)?;
             let options = DualOptions { quads: args.polygons, ..DualOptions::default() };
             let mut tess = DualTessellator::new(&scheme, &mesh, &options).map_err(|e| located(&e))?;
             bar.say("dual-grid stitching");
-            let result = tess.tessellate(&rates).map_err(|e| located(&e))?.clone();
+            let result = match &rings {
+                Some(rings) => tess.tessellate_with_rings(&rates, rings),
+                None => tess.tessellate(&rates),
+            }
+            .map_err(|e| located(&e))?
+            .clone();
             let (lo, hi) = rates.iter().fold((u32::MAX, 0), |(lo, hi), &r| (lo.min(r), hi.max(r)));
             (result, format!("{policy}, rates {lo}..={hi}"))
         }
@@ -166,21 +171,22 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     Ok(())
 }
 
-/// The per-face rates of the dual method, and the policy in words.
+/// The per-face rates of the dual method, the rings around extraordinary points (for a
+/// tolerance), and the policy in words.
 fn dual_rates(
     args: &TessellateArgs,
     tolerance: Option<Tolerance>,
     scheme: &Scheme,
     mesh: &Mesh,
     name: &str,
-) -> Result<(Vec<u32>, String), UserError> {
+) -> Result<(Vec<u32>, Option<RingDepths>, String), UserError> {
     let located = |error: subdiv::tess::TessError| UserError(format!("{name}: {error}"));
     if let Some(tolerance) = tolerance {
         let bounds = Tessellator::new(scheme, mesh).map_err(|e| UserError(format!("{name}: --tolerance: {e}")))?;
         let policy = ErrorRates { tolerance, max_rate: args.max_rate };
-        let rates = policy.face_rates(&bounds, mesh).map_err(located)?;
+        let DualRates { faces, rings } = policy.rates(&bounds, mesh).map_err(located)?;
         let epsilon = tolerance.absolute(bounds.diagonal())?;
-        return Ok((rates, format!("ε = {epsilon:.3e}")));
+        return Ok((faces, Some(rings), format!("ε = {epsilon:.3e}")));
     }
     if let Some(pixels) = args.pixels {
         let camera = parse_camera(args.camera.as_deref().unwrap_or_default())?;
@@ -194,10 +200,10 @@ fn dual_rates(
             max_rate: args.max_rate,
             ..ScreenSpace::new(camera, [size(viewport[0])?, size(viewport[1])?], pixels)
         };
-        return Ok((policy.face_rates(mesh).map_err(located)?, format!("{pixels} pixels per edge")));
+        return Ok((policy.face_rates(mesh).map_err(located)?, None, format!("{pixels} pixels per edge")));
     }
     let rate = args.rate.unwrap_or(DEFAULT_RATE);
-    Ok((vec![rate; mesh.face_count()], format!("uniform rate {rate}")))
+    Ok((vec![rate; mesh.face_count()], None, format!("uniform rate {rate}")))
 }
 
 /// `--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ[,FOVY_DEG]`.

@@ -327,6 +327,21 @@ impl ErrorRates {
     /// As [`face_rates`](Self::face_rates); [`TessError::RateLimit`] also when an
     /// extraordinary point's hull stays above `ε` down to depth 40.
     pub fn rates(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<DualRates, TessError> {
+        self.rates_rounded(bounds, mesh, |n| n)
+    }
+
+    /// As [`rates`](Self::rates), with every face rate taken from those `round` gives (which
+    /// must not be below its argument): `u32::next_power_of_two` gives the cheapest dyadic
+    /// rates that meet the tolerance by the same bound (paper 000 §6's comparison).
+    ///
+    /// # Errors
+    /// As [`rates`](Self::rates).
+    pub fn rates_rounded(
+        &self,
+        bounds: &Tessellator,
+        mesh: &Mesh,
+        round: impl Fn(u32) -> u32,
+    ) -> Result<DualRates, TessError> {
         let budget = self.budget(bounds, mesh)?;
         let max_rate = self.max_rate.max(1);
         let limit = |face: FaceId, needed: String| TessError::RateLimit { face: face.index(), needed, max_rate };
@@ -346,7 +361,7 @@ impl ErrorRates {
         // of the first ring for the finest rate around each of its vertices (no triangle outside
         // the rings comes closer); finer rates push d deeper, where M grows like (4λ)^d, slower
         // than n², so the rates settle.
-        let mut rates = vec![1u32; faces.len()];
+        let mut rates = vec![round(1); faces.len()];
         let depth_of = |rates: &[u32], f: FaceId| -> u32 {
             let finest = mesh
                 .face_vertices(f)
@@ -365,6 +380,7 @@ impl ErrorRates {
                 let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
                 let m = around.fold(0.0f64, |m, g| m.max(second[g.index()]));
                 let needed = (m / budget).sqrt().ceil().max(1.0);
+                let needed = if needed > f64::from(max_rate) { needed } else { f64::from(round(needed as u32)) };
                 if needed > f64::from(max_rate) {
                     return Err(limit(f, format!("{needed}")));
                 }

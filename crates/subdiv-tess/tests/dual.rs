@@ -11,6 +11,7 @@ use subdiv_eval::Method;
 use subdiv_mesh::{FaceId, Mesh, PolygonSoup, VertexId, shapes};
 use subdiv_schemes::{Builtin, RefineOptions};
 use subdiv_stencil::LimitEvaluator;
+use subdiv_tess::check::MeshDistance;
 use subdiv_tess::dual::{MAX_DUAL_RING_DEPTH, predicted_vertex_count, predicted_vertex_count_with_rings};
 use subdiv_tess::rates::{ErrorRates, RingDepths};
 use subdiv_tess::{DualOptions, DualTessellator, FlatMesh, TessError, TessMesh, Tessellator, Tolerance};
@@ -1100,91 +1101,6 @@ fn loop_rings_are_watertight_and_on_the_surface() {
     }
 }
 
-/// Closest point of triangle `abc` to `p` (Ericson, Real-Time Collision Detection §5.1.5).
-fn closest_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> DVec3 {
-    let (ab, ac, ap) = (b - a, c - a, p - a);
-    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
-    if d1 <= 0.0 && d2 <= 0.0 {
-        return a;
-    }
-    let bp = p - b;
-    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
-    if d3 >= 0.0 && d4 <= d3 {
-        return b;
-    }
-    let vc = d1 * d4 - d3 * d2;
-    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return a + ab * (d1 / (d1 - d3));
-    }
-    let cp = p - c;
-    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
-    if d6 >= 0.0 && d5 <= d6 {
-        return c;
-    }
-    let vb = d5 * d2 - d1 * d6;
-    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return a + ac * (d2 / (d2 - d6));
-    }
-    let va = d3 * d6 - d5 * d4;
-    if va <= 0.0 && d4 - d3 >= 0.0 && d5 - d6 >= 0.0 {
-        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-    }
-    let denom = 1.0 / (va + vb + vc);
-    a + ab * (vb * denom) + ac * (vc * denom)
-}
-
-/// Triangles bucketed by their bounding boxes grown by `reach` on a uniform grid: a point's
-/// cell lists every triangle within `reach` of it.
-struct Buckets {
-    lo: DVec3,
-    cell: f64,
-    dims: [usize; 3],
-    cells: Vec<Vec<u32>>,
-}
-
-impl Buckets {
-    fn new(out: &TessMesh, reach: f64) -> Self {
-        let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
-        for p in &out.positions {
-            (lo, hi) = (lo.min(*p), hi.max(*p));
-        }
-        (lo, hi) = (lo - DVec3::splat(2.0 * reach), hi + DVec3::splat(2.0 * reach));
-        let cell = ((hi - lo).max_element() / 48.0).max(reach);
-        let dims = ((hi - lo) / cell).ceil().to_array().map(|x| (x as usize).max(1));
-        let mut cells = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
-        let index = |p: DVec3| -> [usize; 3] {
-            let q = ((p - lo) / cell).floor().to_array();
-            std::array::from_fn(|i| (q[i].max(0.0) as usize).min(dims[i] - 1))
-        };
-        for (k, t) in out.triangles.iter().enumerate() {
-            let [a, b, c] = t.map(|v| out.positions[v as usize]);
-            let (tlo, thi) = (a.min(b).min(c) - DVec3::splat(reach), a.max(b).max(c) + DVec3::splat(reach));
-            let (i0, i1) = (index(tlo), index(thi));
-            for x in i0[0]..=i1[0] {
-                for y in i0[1]..=i1[1] {
-                    for z in i0[2]..=i1[2] {
-                        cells[(z * dims[1] + y) * dims[0] + x].push(k as u32);
-                    }
-                }
-            }
-        }
-        Self { lo, cell, dims, cells }
-    }
-
-    /// The distance from `p` to the nearest triangle, if one is within `reach`; else infinity.
-    fn distance(&self, out: &TessMesh, p: DVec3) -> f64 {
-        let q = ((p - self.lo) / self.cell).floor().to_array();
-        let [x, y, z]: [usize; 3] = std::array::from_fn(|i| (q[i].max(0.0) as usize).min(self.dims[i] - 1));
-        self.cells[(z * self.dims[1] + y) * self.dims[0] + x]
-            .iter()
-            .map(|&k| {
-                let [a, b, c] = out.triangles[k as usize].map(|v| out.positions[v as usize]);
-                (closest_on_triangle(p, a, b, c) - p).length()
-            })
-            .fold(f64::INFINITY, f64::min)
-    }
-}
-
 /// The guarantee end to end: rates and ring depths from `ErrorRates::rates`, then every limit
 /// point sampled — each face's 33 × 33 grid (each N-gon sub-face's), and grids shrinking
 /// towards every corner of every face and sub-face down to 2^−30 — is within ε of the output.
@@ -1240,7 +1156,7 @@ fn rings_keep_the_surface_within_tolerance() {
             let epsilon = Tolerance::Relative(r).absolute(bounds.diagonal()).unwrap();
             let out = tessellate_rings(&mesh, &rates.faces, &rates.rings);
             check_ring_folds(&mesh, &out, &rates.faces);
-            let buckets = Buckets::new(&out, epsilon);
+            let buckets = MeshDistance::new(&out, epsilon);
             let worst = samples.iter().map(|&p| buckets.distance(&out, p)).fold(0.0, f64::max);
             eprintln!(
                 "{name}, ε = {r} × bbox: {} triangles, rings {:?} / {:?}, {} samples, worst distance / ε = {:.4}",
@@ -1257,10 +1173,10 @@ fn rings_keep_the_surface_within_tolerance() {
             // For comparison (not asserted: the bound is a bound, the plain output may well be
             // within ε too): the same rates without rings.
             let plain = tessellate(Builtin::CatmullClark, &mesh, &rates.faces);
-            let buckets = Buckets::new(&plain, epsilon);
+            let buckets = MeshDistance::new(&plain, epsilon);
             let plain_worst = samples.iter().map(|&p| buckets.distance(&plain, p)).fold(0.0, f64::max);
             let plain_near = near.iter().map(|&p| buckets.distance(&plain, p)).fold(0.0, f64::max);
-            let buckets = Buckets::new(&out, epsilon);
+            let buckets = MeshDistance::new(&out, epsilon);
             let ringed_near = near.iter().map(|&p| buckets.distance(&out, p)).fold(0.0, f64::max);
             eprintln!(
                 "  within 2^−8 of a corner: worst / ε {:.4} with rings, {:.4} without; everywhere without rings: {:.4}",
