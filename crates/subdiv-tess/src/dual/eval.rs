@@ -64,7 +64,8 @@ struct Record {
     level: u32,
     ids: u32,
     len: u32,
-    /// The first of the record's `3 · len` weights in `weights`, or, when `table` is not
+    /// The first of the record's weights in `weights` (three rows of [`padded`]`(len)`: position,
+    /// `∂/∂s`, `∂/∂t`, zeros after `len`), or, when `table` is not
     /// [`NO_TABLE`], the point's index in that table's dual grid.
     weights: u32,
     table: u32,
@@ -90,6 +91,45 @@ struct Chunk {
 
 /// A record with its own weights.
 const NO_TABLE: u32 = u32::MAX;
+/// The lanes of the general route's dot products: each record's ids and weight rows are padded
+/// to a multiple of this (the same sums on every target, so the same bits).
+const LANES: usize = 4;
+
+/// `len` rounded up to a multiple of [`LANES`].
+#[inline]
+fn padded(len: usize) -> usize {
+    len.div_ceil(LANES) * LANES
+}
+
+/// The position and both derivatives `Σ w_k · points[ids[k]]` of a record with its own weights
+/// (`ids` and each of the three weight rows [`padded`]): [`LANES`] partial sums per coordinate,
+/// added pairwise at the end. In f64, so exact to rounding.
+#[inline(always)]
+fn dot3(points: &[DVec3], ids: &[u32], w: &[f64]) -> [DVec3; 3] {
+    let len = ids.len();
+    let (wp, rest) = w.split_at(len);
+    let (ws, wt) = rest.split_at(len);
+    let mut acc = [[0.0f64; LANES]; 9];
+    for (((id, a), b), c) in
+        ids.chunks_exact(LANES).zip(wp.chunks_exact(LANES)).zip(ws.chunks_exact(LANES)).zip(wt.chunks_exact(LANES))
+    {
+        let x: [DVec3; LANES] = std::array::from_fn(|l| points[id[l] as usize]);
+        for l in 0..LANES {
+            acc[0][l] += a[l] * x[l].x;
+            acc[1][l] += a[l] * x[l].y;
+            acc[2][l] += a[l] * x[l].z;
+            acc[3][l] += b[l] * x[l].x;
+            acc[4][l] += b[l] * x[l].y;
+            acc[5][l] += b[l] * x[l].z;
+            acc[6][l] += c[l] * x[l].x;
+            acc[7][l] += c[l] * x[l].y;
+            acc[8][l] += c[l] * x[l].z;
+        }
+    }
+    let sum = |a: [f64; LANES]| (a[0] + a[1]) + (a[2] + a[3]);
+    let v = acc.map(sum);
+    [DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]), DVec3::new(v[6], v[7], v[8])]
+}
 /// The most control points a table record gathers on the stack (Catmull-Clark valence 12).
 const MAX_GATHER: usize = 32;
 
@@ -394,6 +434,9 @@ impl Evaluator {
                         let (ids, len) = *patches.entry((level, f.index() as u32)).or_insert_with(|| {
                             let start = out.ids.len() as u32;
                             out.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                            // Padded to a multiple of `LANES` with the first id (its weights are 0).
+                            let first = out.ids[start as usize];
+                            out.ids.resize(start as usize + padded(patch.vertices.len()), first);
                             (start, patch.vertices.len() as u32)
                         });
                         let (ju, jv) = frame.chain(j);
@@ -421,9 +464,11 @@ impl Evaluator {
                                     .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
                                 let stencil = evaluator.stencil(patch.shape, at)?;
                                 let w = out.weights.len() as u32;
-                                out.weights.extend_from_slice(&stencil.position);
-                                out.weights.extend_from_slice(&stencil.du);
-                                out.weights.extend_from_slice(&stencil.dv);
+                                let pad = padded(stencil.position.len());
+                                for row in [&stencil.position, &stencil.du, &stencil.dv] {
+                                    out.weights.extend_from_slice(row);
+                                    out.weights.resize(out.weights.len() + pad - row.len(), 0.0);
+                                }
                                 shared.insert((matrices, patch.shape, at), w);
                                 w
                             }
@@ -442,57 +487,10 @@ impl Evaluator {
         Ok(out)
     }
 
-    /// Position and unit normal of vertex `i` (not in a block) on the current cage.
-    #[inline]
-    fn point(&self, topo: &Topology, i: usize) -> (DVec3, DVec3) {
-        let kind = self.kinds[i];
-        let site = topo.sites[i];
-        let (x, du, dv) = if kind == BICUBIC {
-            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
-            let (u, v) = site.point.to_f64();
-            bicubic(cv, &self.positions[0], u, v)
-        } else {
-            self.general(&self.records[kind as usize])
-        };
-        (x, normal(du, dv))
-    }
-
     /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
     /// positions and normals, without the f64 arrays.
     pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
-        let point = |i: usize, o: &mut [f32]| {
-            if self.kinds[i] != IN_BLOCK {
-                let (p, n) = self.point(topo, i);
-                put_flat(o, p, n);
-            }
-        };
-        if parallel {
-            out.par_chunks_exact_mut(6).enumerate().with_min_len(256).for_each(|(i, o)| point(i, o));
-        } else {
-            out.chunks_exact_mut(6).enumerate().for_each(|(i, o)| point(i, o));
-        }
-        let mut pieces = Vec::with_capacity(topo.blocks.len());
-        let mut rest = out;
-        let mut at = 0;
-        for block in &topo.blocks {
-            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
-            let len = (block.rate * block.rate) as usize;
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(6 * (block.base as usize - at));
-            let (piece, tail) = tail.split_at_mut(6 * len);
-            rest = tail;
-            at = block.base as usize + len;
-            pieces.push((cv, block.rate, piece));
-        }
-        let cage = &self.positions[0];
-        let run = |(cv, rate, piece): (&[u32; 16], u32, &mut [f32])| {
-            let basis = self.bases[rate as usize].as_deref().expect("prepared");
-            grid_block(cv, cage, basis, |k, p, n| put_flat(&mut piece[6 * k..6 * k + 6], p, n));
-        };
-        if parallel {
-            pieces.into_par_iter().for_each(run);
-        } else {
-            pieces.into_iter().for_each(run);
-        }
+        self.evaluate_into(topo, parallel, FlatSink(out));
     }
 
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
@@ -506,46 +504,68 @@ impl Evaluator {
         let n = topo.sites.len();
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
-        let point = |i: usize, p: &mut DVec3, nr: &mut DVec3| {
-            if self.kinds[i] != IN_BLOCK {
-                (*p, *nr) = self.point(topo, i);
+        self.evaluate_into(topo, parallel, WideSink(positions, normals));
+    }
+
+    /// Every vertex into `out`, in one pass over disjoint pieces of the vertex range: the
+    /// bicubic blocks, and the runs between them (general-route and pointwise bicubic vertices)
+    /// cut to at most [`RUN`] vertices. Each vertex is computed alone, so the output does not
+    /// depend on how the pieces are shared among threads.
+    fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S) {
+        let mut pieces: Vec<Piece<'_, S>> = Vec::with_capacity(2 * topo.blocks.len() + 1);
+        let mut rest = out;
+        let mut at = 0;
+        let push_run = |rest: &mut S, at: &mut usize, end: usize, pieces: &mut Vec<Piece<'_, S>>| {
+            while *at < end {
+                let len = (end - *at).min(RUN);
+                let (piece, tail) = std::mem::replace(rest, S::empty()).split(len);
+                *rest = tail;
+                pieces.push(Piece::Run { start: *at, out: piece });
+                *at += len;
             }
         };
-        if parallel {
-            positions
-                .par_iter_mut()
-                .zip(normals.par_iter_mut())
-                .enumerate()
-                .with_min_len(256)
-                .for_each(|(i, (p, nr))| point(i, p, nr));
-        } else {
-            for (i, (p, nr)) in positions.iter_mut().zip(normals.iter_mut()).enumerate() {
-                point(i, p, nr);
-            }
-        }
-        // The blocks: consecutive, disjoint vertex ranges in increasing order.
-        let mut pieces = Vec::with_capacity(topo.blocks.len());
-        let (mut ps, mut ns) = (&mut positions[..], &mut normals[..]);
-        let mut at = 0;
         for block in &topo.blocks {
             let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
+            push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
             let len = (block.rate * block.rate) as usize;
-            let skip = block.base as usize - at;
-            let (_, rest_p) = std::mem::take(&mut ps).split_at_mut(skip);
-            let (_, rest_n) = std::mem::take(&mut ns).split_at_mut(skip);
-            let (bp, rest_p) = rest_p.split_at_mut(len);
-            let (bn, rest_n) = rest_n.split_at_mut(len);
-            (ps, ns) = (rest_p, rest_n);
-            at = block.base as usize + len;
-            pieces.push((cv, block.rate, bp, bn));
+            let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
+            rest = tail;
+            at += len;
+            pieces.push(Piece::Block { cv, rate: block.rate, out: piece });
         }
+        push_run(&mut rest, &mut at, topo.sites.len(), &mut pieces);
         let cage = &self.positions[0];
-        let run = |(cv, rate, bp, bn): (&[u32; 16], u32, &mut [DVec3], &mut [DVec3])| {
-            let basis = self.bases[rate as usize].as_deref().expect("prepared");
-            grid_block(cv, cage, basis, |k, p, n| {
-                bp[k] = p;
-                bn[k] = n;
-            });
+        let run = |piece: Piece<'_, S>| match piece {
+            Piece::Block { cv, rate, mut out } => {
+                let basis = self.bases[rate as usize].as_deref().expect("prepared");
+                grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
+            }
+            Piece::Run { start, mut out } => {
+                // By batches: first the positions and the tangents' cross products, then the
+                // normalisations (their square roots and divisions overlap).
+                let mut xs = [DVec3::ZERO; BATCH];
+                let mut cs = [DVec3::ZERO; BATCH];
+                let kinds = &self.kinds[start..start + out.len()];
+                for (b, batch) in kinds.chunks(BATCH).enumerate() {
+                    for (k, &kind) in batch.iter().enumerate() {
+                        let (x, du, dv) = if kind == BICUBIC {
+                            let site = topo.sites[start + b * BATCH + k];
+                            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
+                                unreachable!("bicubic face")
+                            };
+                            let (u, v) = site.point.to_f64();
+                            bicubic(cv, cage, u, v)
+                        } else {
+                            self.general(&self.records[kind as usize])
+                        };
+                        xs[k] = x;
+                        cs[k] = du.cross(dv);
+                    }
+                    for (k, (x, c)) in xs.iter().zip(&cs).take(batch.len()).enumerate() {
+                        out.put(b * BATCH + k, *x, c.normalize_or_zero());
+                    }
+                }
+            }
         };
         if parallel {
             pieces.into_par_iter().for_each(run);
@@ -569,16 +589,10 @@ impl Evaluator {
                 self.tables.tables[r.table as usize].apply(Grid::Dual, r.weights as usize, &gathered[..len]);
             return (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t);
         }
-        let w = &self.weights[r.weights as usize..r.weights as usize + 3 * len];
-        let (wp, rest) = w.split_at(len);
-        let (ws, wt) = rest.split_at(len);
-        let (mut p, mut s, mut t) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
-        for k in 0..len {
-            let x = points[ids[k] as usize];
-            p += wp[k] * x;
-            s += ws[k] * x;
-            t += wt[k] * x;
-        }
+        let pad = padded(len);
+        let ids = &self.ids[r.ids as usize..r.ids as usize + pad];
+        let w = &self.weights[r.weights as usize..r.weights as usize + 3 * pad];
+        let [p, s, t] = dot3(points, ids, w);
         (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t)
     }
 }
@@ -653,10 +667,73 @@ fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl F
     }
 }
 
-/// A vertex as six f32: position, then normal.
-#[inline]
-fn put_flat(out: &mut [f32], p: DVec3, n: DVec3) {
-    out.copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
+/// Vertices per piece of a run of vertices outside the blocks in [`Evaluator::evaluate_into`].
+const RUN: usize = 1024;
+
+/// Vertices per batch of a run's normalisations.
+const BATCH: usize = 64;
+
+/// A piece of [`Evaluator::evaluate_into`]'s work.
+enum Piece<'a, S> {
+    /// A bicubic face's dual grid.
+    Block { cv: &'a [u32; 16], rate: u32, out: S },
+    /// Vertices `start..start + out.len()`, each on its own.
+    Run { start: usize, out: S },
+}
+
+/// Where [`Evaluator::evaluate_into`] writes a range of vertices.
+trait Sink: Send + Sized {
+    /// An empty range.
+    fn empty() -> Self;
+    /// The number of vertices.
+    fn len(&self) -> usize;
+    /// The first `k` vertices and the rest.
+    fn split(self, k: usize) -> (Self, Self);
+    /// Writes vertex `k`'s position and unit normal.
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3);
+}
+
+/// Interleaved f32: per vertex `px py pz nx ny nz`.
+struct FlatSink<'a>(&'a mut [f32]);
+
+impl Sink for FlatSink<'_> {
+    fn empty() -> Self {
+        Self(&mut [])
+    }
+    fn len(&self) -> usize {
+        self.0.len() / 6
+    }
+    fn split(self, k: usize) -> (Self, Self) {
+        let (a, b) = self.0.split_at_mut(6 * k);
+        (Self(a), Self(b))
+    }
+    #[inline]
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3) {
+        self.0[6 * k..6 * k + 6]
+            .copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
+    }
+}
+
+/// f64 positions and normals.
+struct WideSink<'a>(&'a mut [DVec3], &'a mut [DVec3]);
+
+impl Sink for WideSink<'_> {
+    fn empty() -> Self {
+        Self(&mut [], &mut [])
+    }
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn split(self, k: usize) -> (Self, Self) {
+        let (a, b) = self.0.split_at_mut(k);
+        let (c, d) = self.1.split_at_mut(k);
+        (Self(a, c), Self(b, d))
+    }
+    #[inline]
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3) {
+        self.0[k] = p;
+        self.1[k] = n;
+    }
 }
 
 /// The 4 × 4 grid of a shape if its sub-patch matrices are those of a bicubic B-spline.
