@@ -404,6 +404,9 @@ impl Evaluator {
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for i in range {
+            if self.kinds[i] == IN_BLOCK {
+                continue;
+            }
             let site = topo.sites[i];
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;

@@ -178,6 +178,13 @@ impl DualTessellator {
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
     /// rate outside `1..=`[`MAX_DUAL_RATE`]; [`TessError::Surface`] if a stencil fails.
     pub fn tessellate(&mut self, rates: &[u32]) -> Result<&TessMesh, TessError> {
+        self.rebuild(rates)?;
+        self.fill_output();
+        Ok(&self.output)
+    }
+
+    /// Checks `rates`, rebuilds the topology and prepares the evaluation.
+    fn rebuild(&mut self, rates: &[u32]) -> Result<(), TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
@@ -190,8 +197,7 @@ impl DualTessellator {
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
-        self.fill_output();
-        Ok(&self.output)
+        Ok(())
     }
 
     /// The animation path: the same topology and rates on a new cage (one finite position per
@@ -218,11 +224,41 @@ impl DualTessellator {
     pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
-        out.vertices.clear();
+        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
         out.vertices.resize(6 * self.topology.sites.len(), 0.0);
         self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
         out.indices.clear();
         out.indices.extend_from_slice(self.output.triangles.as_flattened());
+        Ok(())
+    }
+
+    /// [`tessellate`](Self::tessellate) straight into flat f32 buffers (what a renderer
+    /// uploads; the same values as [`tessellate`](Self::tessellate) then
+    /// [`write_flat`](Self::write_flat)), without the f64 positions and normals and without the
+    /// vertices' and triangles' surface parameters. Afterwards [`mesh`](Self::mesh) has the new
+    /// triangles and polygons but no vertex data (empty positions, normals and parameters) until
+    /// the next [`update_cage`](Self::update_cage) (positions and normals) or
+    /// [`tessellate`](Self::tessellate); [`update_cage_flat`](Self::update_cage_flat) works as
+    /// after [`tessellate`](Self::tessellate). Reuses `out`'s allocations.
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate).
+    pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
+        self.rebuild(rates)?;
+        out.vertices.resize(6 * self.topology.sites.len(), 0.0);
+        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
+        let (t, m) = (&mut self.topology, &mut self.output);
+        out.indices.clear();
+        out.indices.extend_from_slice(t.triangles.as_flattened());
+        std::mem::swap(&mut m.triangles, &mut t.triangles);
+        std::mem::swap(&mut m.triangle_faces, &mut t.triangle_faces);
+        std::mem::swap(&mut m.polygon_offsets, &mut t.polygon_offsets);
+        std::mem::swap(&mut m.polygon_vertices, &mut t.polygon_vertices);
+        std::mem::swap(&mut m.polygon_faces, &mut t.polygon_faces);
+        m.positions.clear();
+        m.normals.clear();
+        m.parameters.clear();
+        m.triangle_parameters.clear();
         Ok(())
     }
 
