@@ -73,8 +73,13 @@ struct Record {
     jv: [f64; 2],
 }
 
-/// Stencil evaluators per matrices (keyed by the matrices' address).
-type Evaluators = HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>;
+/// Stencil evaluators per matrices (keyed by the matrices' address), and the bicubic grids of
+/// patch shapes (per matrices and shape; `None`: not bicubic).
+#[derive(Debug, Default)]
+struct Evaluators {
+    stencils: HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>,
+    grids: HashMap<(usize, usize), Option<[u8; 16]>>,
+}
 
 /// Vertices per chunk of [`Evaluator::prepare`].
 const CHUNK: usize = 4096;
@@ -85,8 +90,47 @@ struct Chunk {
     /// `(vertex, record)` pairs.
     assigned: Vec<(u32, u32)>,
     records: Vec<Record>,
+    /// Per record: where it is, for gathering the points of one bicubic patch into a grid.
+    places: Vec<Place>,
     ids: Vec<u32>,
     weights: Vec<f64>,
+}
+
+/// A record's patch and parameter there, for [`Evaluator::patch_grids`].
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    /// The patch's level and face on that level.
+    patch: (u32, u32),
+    /// The point in the patch's frame.
+    at: Dyadic,
+    /// The patch's 4 × 4 grid (indices into its control points, `grid[j * 4 + i]` at
+    /// `(i − 1, j − 1)` in the patch's frame) if its sub-patch matrices are bicubic.
+    grid: Option<[u8; 16]>,
+}
+
+/// A vertex evaluated by a [`PatchGrid`].
+const IN_PATCH_GRID: u32 = u32::MAX - 2;
+
+/// The points of one bicubic patch on a refined level that form a grid `s × t` in its frame
+/// (the dual grid of a quad face over a regular descendant): evaluated separably, as the
+/// level-0 blocks are, instead of one stencil per point.
+#[derive(Clone, Debug)]
+struct PatchGrid {
+    level: u32,
+    /// Control points, `cv[j * 4 + i]` at `(i − 1, j − 1)` in the patch's frame.
+    cv: [u32; 16],
+    /// The rows turning `(∂/∂s, ∂/∂t)` into the face's `(∂/∂u, ∂/∂v)`.
+    ju: [f64; 2],
+    jv: [f64; 2],
+    /// The first of the basis and its derivative at each `s`, then at each `t`, in
+    /// `grid_basis`.
+    basis: u32,
+    /// The numbers of `s` and of `t`.
+    s: u32,
+    t: u32,
+    /// The first vertex in `grid_vertices`: the output vertex at `(s[a], t[b])` is
+    /// `grid_vertices[vertices + b · s + a]`.
+    vertices: u32,
 }
 
 /// A record with its own weights.
@@ -199,6 +243,15 @@ pub(crate) struct Evaluator {
     bases: Vec<Option<Arc<RateBasis>>>,
     kinds: Vec<u32>,
     records: Vec<Record>,
+    /// Per record, its patch and parameter (for [`Self::patch_grids`]).
+    places: Vec<Place>,
+    /// The separable grids of bicubic patches on refined levels.
+    patch_grids: Vec<PatchGrid>,
+    /// Per block of the topology, its range of `patch_grids`.
+    block_grids: Vec<(u32, u32)>,
+    /// The patch grids' bases and vertices.
+    grid_basis: Vec<[[f64; 4]; 2]>,
+    grid_vertices: Vec<u32>,
     ids: Vec<u32>,
     weights: Vec<f64>,
     tables: DualTables,
@@ -259,6 +312,11 @@ impl Evaluator {
             bases: Vec::new(),
             kinds: Vec::new(),
             records: Vec::new(),
+            places: Vec::new(),
+            patch_grids: Vec::new(),
+            block_grids: Vec::new(),
+            grid_basis: Vec::new(),
+            grid_vertices: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
             tables: DualTables::default(),
@@ -329,6 +387,13 @@ impl Evaluator {
     /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, and a
     /// stencil record for every vertex on the general route.
     pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
+        self.prepare_records(topo, rates, parallel)?;
+        self.patch_grids(topo);
+        Ok(())
+    }
+
+    /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record.
+    fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.sites.len();
         self.kinds.clear();
         self.kinds.resize(n, BICUBIC);
@@ -375,8 +440,10 @@ impl Evaluator {
         let results: Vec<Result<Chunk, TessError>> =
             if parallel { chunks.into_par_iter().map(work).collect() } else { chunks.into_iter().map(work).collect() };
         self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        self.places.clear();
         for chunk in results {
             let chunk = chunk?;
+            self.places.extend_from_slice(&chunk.places);
             let (records, ids, weights) = (self.records.len() as u32, self.ids.len() as u32, self.weights.len() as u32);
             for (vertex, record) in chunk.assigned {
                 self.kinds[vertex as usize] = records + record;
@@ -390,6 +457,124 @@ impl Evaluator {
             self.weights.extend_from_slice(&chunk.weights);
         }
         Ok(())
+    }
+
+    /// Gathers, per quad face on the general route, the points of each bicubic patch on a
+    /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
+    /// (checked against the points' own stencils), and marks them [`IN_PATCH_GRID`].
+    fn patch_grids(&mut self, topo: &Topology) {
+        self.patch_grids.clear();
+        self.block_grids.clear();
+        self.grid_basis.clear();
+        self.grid_vertices.clear();
+        let (mut s, mut t) = (Vec::new(), Vec::new());
+        let mut pairs: Vec<((u32, u32), u32)> = Vec::new();
+        let mut vertices: Vec<u32> = Vec::new();
+        for block in &topo.blocks {
+            let first = self.patch_grids.len() as u32;
+            if let FacePlan::General = self.faces[block.face as usize] {
+                pairs.clear();
+                let base = block.base as usize;
+                for v in base..base + (block.rate * block.rate) as usize {
+                    let kind = self.kinds[v];
+                    if kind < IN_PATCH_GRID && self.places[kind as usize].grid.is_some() {
+                        pairs.push((self.places[kind as usize].patch, v as u32));
+                    }
+                }
+                pairs.sort_unstable();
+                for group in pairs.chunk_by(|a, b| a.0 == b.0) {
+                    vertices.clear();
+                    vertices.extend(group.iter().map(|&(_, v)| v));
+                    if let Some(grid) = self.patch_grid(&vertices, &mut s, &mut t) {
+                        for &v in &vertices {
+                            self.kinds[v as usize] = IN_PATCH_GRID;
+                        }
+                        self.patch_grids.push(grid);
+                    }
+                }
+            }
+            self.block_grids.push((first, self.patch_grids.len() as u32));
+        }
+    }
+
+    /// The [`PatchGrid`] of `vertices` (records of one bicubic patch) if they form a full grid
+    /// with one derivative map, and the tensor-product weights are their stencils' (to 1e-12);
+    /// its bases and vertices are appended to `grid_basis` and `grid_vertices` (`s` and `t`:
+    /// scratch).
+    fn patch_grid(&mut self, vertices: &[u32], s: &mut Vec<f64>, t: &mut Vec<f64>) -> Option<PatchGrid> {
+        let (records, places, kinds) = (&self.records, &self.places, &self.kinds);
+        let record = |v: u32| &records[kinds[v as usize] as usize];
+        let place = |v: u32| &places[kinds[v as usize] as usize];
+        let r0 = *record(vertices[0]);
+        let grid = place(vertices[0]).grid?;
+        s.clear();
+        t.clear();
+        for &v in vertices {
+            let (a, b) = place(v).at.to_f64();
+            s.push(a);
+            t.push(b);
+        }
+        s.sort_unstable_by(f64::total_cmp);
+        t.sort_unstable_by(f64::total_cmp);
+        s.dedup();
+        t.dedup();
+        if s.len() * t.len() != vertices.len() || s.len() < 2 || t.len() < 2 {
+            return None;
+        }
+        let pad = padded(r0.len as usize);
+        let ids0 = &self.ids[r0.ids as usize..r0.ids as usize + pad];
+        let first = self.grid_vertices.len();
+        self.grid_vertices.resize(first + vertices.len(), u32::MAX);
+        let slots = &mut self.grid_vertices[first..];
+        let fail = |this: &mut Self| {
+            this.grid_vertices.truncate(first);
+            None
+        };
+        for &v in vertices {
+            let r = record(v);
+            let same_patch = r.ids == r0.ids || self.ids[r.ids as usize..r.ids as usize + pad] == *ids0;
+            if r.level != r0.level || r.len != r0.len || !same_patch || r.ju != r0.ju || r.jv != r0.jv {
+                return fail(self);
+            }
+            let (u, w) = place(v).at.to_f64();
+            let (Ok(a), Ok(b)) = (s.binary_search_by(|x| x.total_cmp(&u)), t.binary_search_by(|x| x.total_cmp(&w)))
+            else {
+                return fail(self);
+            };
+            let slot = &mut slots[b * s.len() + a];
+            if *slot != u32::MAX {
+                return fail(self);
+            }
+            *slot = v;
+            // The tensor-product weights must be the stencil's (checked along the first row and
+            // column: the patch is bicubic, so this fixes the grid's orientation).
+            if a != 0 && b != 0 {
+                continue;
+            }
+            let w = &self.weights[r.weights as usize..r.weights as usize + 3 * pad];
+            let (bs, ds, bt, dt) = (basis(s[a]), derivative(s[a]), basis(t[b]), derivative(t[b]));
+            for j in 0..4 {
+                for i in 0..4 {
+                    let k = usize::from(grid[j * 4 + i]);
+                    let want = [bs[i] * bt[j], ds[i] * bt[j], bs[i] * dt[j]];
+                    if (0..3).any(|row| (w[row * pad + k] - want[row]).abs() > 1e-12) {
+                        return fail(self);
+                    }
+                }
+            }
+        }
+        let at = self.grid_basis.len() as u32;
+        self.grid_basis.extend(s.iter().chain(t.iter()).map(|&x| [basis(x), derivative(x)]));
+        Some(PatchGrid {
+            level: r0.level,
+            cv: std::array::from_fn(|k| ids0[usize::from(grid[k])]),
+            ju: r0.ju,
+            jv: r0.jv,
+            basis: at,
+            s: s.len() as u32,
+            t: t.len() as u32,
+            vertices: first as u32,
+        })
     }
 
     /// The stencil records of the general-route vertices of `range`, with chunk-local offsets.
@@ -452,6 +637,7 @@ impl Evaluator {
                         };
                         if let Some((table, index)) = table {
                             out.records.push(Record { level: 0, ids, len, weights: index, table, ju, jv });
+                            out.places.push(Place { patch: (0, f.index() as u32), at: site.point, grid: None });
                             done = true;
                             break;
                         }
@@ -463,6 +649,7 @@ impl Evaluator {
                             Some(&w) => w,
                             None => {
                                 let evaluator = evaluators
+                                    .stencils
                                     .entry(matrices)
                                     .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
                                 let stencil = evaluator.stencil(patch.shape, at)?;
@@ -477,6 +664,14 @@ impl Evaluator {
                             }
                         };
                         out.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
+                        let grid = if level > 0 && len == 16 {
+                            *evaluators.grids.entry((matrices, patch.shape)).or_insert_with(|| {
+                                bicubic_grid(&patch.matrices, patch.shape).map(|g| g.map(|k| k as u8))
+                            })
+                        } else {
+                            None
+                        };
+                        out.places.push(Place { patch: (level as u32, f.index() as u32), at, grid });
                         done = true;
                         break;
                     }
@@ -523,14 +718,25 @@ impl Evaluator {
                 let len = (end - *at).min(RUN);
                 let (piece, tail) = std::mem::replace(rest, S::empty()).split(len);
                 *rest = tail;
-                pieces.push(Piece::Run { start: *at, out: piece });
+                pieces.push(Piece::Run { start: *at, out: piece, grids: &[] });
                 *at += len;
             }
         };
-        for block in &topo.blocks {
-            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
-            push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+        for (block, &(first, last)) in topo.blocks.iter().zip(&self.block_grids) {
             let len = (block.rate * block.rate) as usize;
+            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else {
+                if first < last {
+                    // A general face with patch grids: one piece (its grids write anywhere in it).
+                    push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+                    let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
+                    rest = tail;
+                    let grids = &self.patch_grids[first as usize..last as usize];
+                    pieces.push(Piece::Run { start: at, out: piece, grids });
+                    at += len;
+                }
+                continue;
+            };
+            push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
             let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
             rest = tail;
             at += len;
@@ -543,14 +749,23 @@ impl Evaluator {
                 let basis = self.bases[rate as usize].as_deref().expect("prepared");
                 grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
             }
-            Piece::Run { start, mut out } => {
+            Piece::Run { start, mut out, grids } => {
+                for grid in grids {
+                    let points = &self.positions[grid.level as usize];
+                    self.patch_grid_eval(grid, points, |v, p, n| out.put(v as usize - start, p, n));
+                }
                 // By batches: first the positions and the tangents' cross products, then the
                 // normalisations (their square roots and divisions overlap).
                 let mut xs = [DVec3::ZERO; BATCH];
                 let mut cs = [DVec3::ZERO; BATCH];
+                let mut ks = [0usize; BATCH];
                 let kinds = &self.kinds[start..start + out.len()];
                 for (b, batch) in kinds.chunks(BATCH).enumerate() {
+                    let mut m = 0;
                     for (k, &kind) in batch.iter().enumerate() {
+                        if kind == IN_PATCH_GRID {
+                            continue;
+                        }
                         let (x, du, dv) = if kind == BICUBIC {
                             let site = topo.sites[start + b * BATCH + k];
                             let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
@@ -561,11 +776,11 @@ impl Evaluator {
                         } else {
                             self.general(&self.records[kind as usize])
                         };
-                        xs[k] = x;
-                        cs[k] = du.cross(dv);
+                        (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
+                        m += 1;
                     }
-                    for (k, (x, c)) in xs.iter().zip(&cs).take(batch.len()).enumerate() {
-                        out.put(b * BATCH + k, *x, c.normalize_or_zero());
+                    for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
+                        out.put(k, *x, c.normalize_or_zero());
                     }
                 }
             }
@@ -574,6 +789,28 @@ impl Evaluator {
             pieces.into_par_iter().for_each(run);
         } else {
             pieces.into_iter().for_each(run);
+        }
+    }
+
+    /// A [`PatchGrid`] on its level's points, row by row: `put(vertex, position, normal)`.
+    #[inline]
+    fn patch_grid_eval(&self, g: &PatchGrid, points: &[DVec3], mut put: impl FnMut(u32, DVec3, DVec3)) {
+        let c: [DVec3; 16] = std::array::from_fn(|k| points[g.cv[k] as usize]);
+        let (ns, nt) = (g.s as usize, g.t as usize);
+        let (ss, ts) = self.grid_basis[g.basis as usize..g.basis as usize + ns + nt].split_at(ns);
+        let vertices = &self.grid_vertices[g.vertices as usize..g.vertices as usize + ns * nt];
+        for ([bt, dt], row) in ts.iter().zip(vertices.chunks_exact(ns)) {
+            let col: [DVec3; 4] =
+                std::array::from_fn(|i| bt[0] * c[i] + bt[1] * c[4 + i] + bt[2] * c[8 + i] + bt[3] * c[12 + i]);
+            let dcol: [DVec3; 4] =
+                std::array::from_fn(|i| dt[0] * c[i] + dt[1] * c[4 + i] + dt[2] * c[8 + i] + dt[3] * c[12 + i]);
+            for ([bs, ds], &v) in ss.iter().zip(row) {
+                let p = bs[0] * col[0] + bs[1] * col[1] + bs[2] * col[2] + bs[3] * col[3];
+                let s = ds[0] * col[0] + ds[1] * col[1] + ds[2] * col[2] + ds[3] * col[3];
+                let t = bs[0] * dcol[0] + bs[1] * dcol[1] + bs[2] * dcol[2] + bs[3] * dcol[3];
+                let (du, dv) = (g.ju[0] * s + g.ju[1] * t, g.jv[0] * s + g.jv[1] * t);
+                put(v, p, normal(du, dv));
+            }
         }
     }
 
@@ -680,8 +917,9 @@ const BATCH: usize = 64;
 enum Piece<'a, S> {
     /// A bicubic face's dual grid.
     Block { cv: &'a [u32; 16], rate: u32, out: S },
-    /// Vertices `start..start + out.len()`, each on its own.
-    Run { start: usize, out: S },
+    /// Vertices `start..start + out.len()`: the patch grids' (all in the range), then each
+    /// other one on its own.
+    Run { start: usize, out: S, grids: &'a [PatchGrid] },
 }
 
 /// Where [`Evaluator::evaluate_into`] writes a range of vertices.
@@ -815,6 +1053,39 @@ mod tests {
         assert_eq!(ev.records.len(), topo.sites.len());
         // One table: one patch type, one rate.
         assert_eq!(ev.tables.tables.len(), 1);
+    }
+
+    /// Refined regular patches evaluated separably ([`PatchGrid`]) give what their points'
+    /// own stencil records give, and many general-route points of the cube, the default
+    /// model and a prism take that route at these rates.
+    #[test]
+    fn patch_grids_equal_the_records() {
+        for (soup, rate) in [(shapes::cube(), 12u32), (shapes::default_model(), 8), (shapes::ngon_prism(5), 9)] {
+            let mesh = Mesh::build(soup).unwrap();
+            let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+            let moved: Vec<DVec3> =
+                mesh.positions().iter().enumerate().map(|(i, p)| *p * 1.3 + DVec3::splat((i as f64).sin())).collect();
+            ev.set_cage(&moved);
+            let domains = ev.domains().unwrap();
+            let mut topo = Topology::default();
+            let rates = vec![rate; mesh.face_count()];
+            super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, &mut topo);
+            ev.prepare_records(&topo, &rates, true).unwrap();
+            let kinds = ev.kinds.clone();
+            ev.patch_grids(&topo);
+            let gridded = ev.kinds.iter().filter(|&&k| k == IN_PATCH_GRID).count();
+            assert!(4 * gridded > ev.records.len(), "{gridded} of {} in patch grids", ev.records.len());
+            let (mut ps, mut ns) = (Vec::new(), Vec::new());
+            ev.evaluate(&topo, true, &mut ps, &mut ns);
+            let mut worst: f64 = 0.0;
+            for (v, &kind) in ev.kinds.iter().enumerate() {
+                if kind == IN_PATCH_GRID {
+                    let (p, du, dv) = ev.general(&ev.records[kinds[v] as usize]);
+                    worst = worst.max((p - ps[v]).length()).max((normal(du, dv) - ns[v]).length());
+                }
+            }
+            assert!(worst < 1e-12, "patch grids off the records by {worst:e}");
+        }
     }
 
     /// The cage refined by the evaluator's own `Refiner` (what `update_cage` uses) lands on the
