@@ -259,6 +259,8 @@ pub(crate) struct Evaluator {
     /// (they remember what they solved, so a second tessellation at the same rates solves
     /// little).
     pool: Vec<Evaluators>,
+    /// Chunk buffers of the last [`prepare`](Self::prepare), to be reused.
+    spare: Vec<Chunk>,
 }
 
 impl Evaluator {
@@ -321,6 +323,7 @@ impl Evaluator {
             weights: Vec::new(),
             tables: DualTables::default(),
             pool: Vec::new(),
+            spare: Vec::new(),
         };
         evaluator.set_cage(mesh.positions());
         Ok(evaluator)
@@ -429,64 +432,94 @@ impl Evaluator {
         let chunks: Vec<std::ops::Range<usize>> =
             (0..n).step_by(CHUNK).map(|start| start..(start + CHUNK).min(n)).collect();
         let pool = std::sync::Mutex::new(std::mem::take(&mut self.pool));
+        // The chunks' buffers are kept across calls too (no fresh pages per call).
+        let spare = std::sync::Mutex::new(std::mem::take(&mut self.spare));
         let this = &*self;
         let work = |range: std::ops::Range<usize>| -> Result<Chunk, TessError> {
             let mut evaluators =
                 pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
-            let chunk = this.chunk(topo, range, &mut evaluators);
+            let out = spare.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
+            let chunk = this.chunk(topo, range, &mut evaluators, out);
             pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(evaluators);
             chunk
         };
         let results: Vec<Result<Chunk, TessError>> =
             if parallel { chunks.into_par_iter().map(work).collect() } else { chunks.into_iter().map(work).collect() };
         self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        self.spare = spare.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.places.clear();
         for chunk in results {
             let chunk = chunk?;
             self.places.extend_from_slice(&chunk.places);
             let (records, ids, weights) = (self.records.len() as u32, self.ids.len() as u32, self.weights.len() as u32);
-            for (vertex, record) in chunk.assigned {
+            for &(vertex, record) in &chunk.assigned {
                 self.kinds[vertex as usize] = records + record;
             }
-            self.records.extend(chunk.records.into_iter().map(|r| Record {
+            self.records.extend(chunk.records.iter().map(|r| Record {
                 ids: r.ids + ids,
                 weights: if r.table == NO_TABLE { r.weights + weights } else { r.weights },
-                ..r
+                ..*r
             }));
             self.ids.extend_from_slice(&chunk.ids);
             self.weights.extend_from_slice(&chunk.weights);
+            self.spare.push(chunk);
         }
         Ok(())
     }
 
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
     /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
-    /// (checked against the points' own stencils), and marks them [`IN_PATCH_GRID`].
+    /// (the patch shapes' stencils checked once against the tensor products), and marks them
+    /// [`IN_PATCH_GRID`].
     fn patch_grids(&mut self, topo: &Topology) {
         self.patch_grids.clear();
         self.block_grids.clear();
         self.grid_basis.clear();
         self.grid_vertices.clear();
         let (mut s, mut t) = (Vec::new(), Vec::new());
-        let mut pairs: Vec<((u32, u32), u32)> = Vec::new();
-        let mut vertices: Vec<u32> = Vec::new();
+        // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
+        // by a counting sort (in vertex order within each).
+        let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for block in &topo.blocks {
             let first = self.patch_grids.len() as u32;
             if let FacePlan::General = self.faces[block.face as usize] {
-                pairs.clear();
+                keys.clear();
+                group.clear();
                 let base = block.base as usize;
+                let mut last = usize::MAX;
                 for v in base..base + (block.rate * block.rate) as usize {
                     let kind = self.kinds[v];
-                    if kind < IN_PATCH_GRID && self.places[kind as usize].grid.is_some() {
-                        pairs.push((self.places[kind as usize].patch, v as u32));
+                    if kind >= IN_PATCH_GRID || self.places[kind as usize].grid.is_none() {
+                        continue;
                     }
+                    let key = self.places[kind as usize].patch;
+                    if last == usize::MAX || keys[last] != key {
+                        last = keys.iter().position(|&k| k == key).unwrap_or_else(|| {
+                            keys.push(key);
+                            keys.len() - 1
+                        });
+                    }
+                    group.push((last as u32, v as u32));
                 }
-                pairs.sort_unstable();
-                for group in pairs.chunk_by(|a, b| a.0 == b.0) {
-                    vertices.clear();
-                    vertices.extend(group.iter().map(|&(_, v)| v));
-                    if let Some(grid) = self.patch_grid(&vertices, &mut s, &mut t) {
-                        for &v in &vertices {
+                starts.clear();
+                starts.resize(keys.len() + 1, 0u32);
+                for &(g, _) in &group {
+                    starts[g as usize + 1] += 1;
+                }
+                for g in 0..keys.len() {
+                    starts[g + 1] += starts[g];
+                }
+                sorted.clear();
+                sorted.resize(group.len(), 0u32);
+                let mut next = starts.clone();
+                for &(g, v) in &group {
+                    sorted[next[g as usize] as usize] = v;
+                    next[g as usize] += 1;
+                }
+                for g in 0..keys.len() {
+                    let vertices = &sorted[starts[g] as usize..starts[g + 1] as usize];
+                    if let Some(grid) = self.patch_grid(vertices, &mut s, &mut t) {
+                        for &v in vertices {
                             self.kinds[v as usize] = IN_PATCH_GRID;
                         }
                         self.patch_grids.push(grid);
@@ -497,8 +530,9 @@ impl Evaluator {
         }
     }
 
-    /// The [`PatchGrid`] of `vertices` (records of one bicubic patch) if they form a full grid
-    /// with one derivative map, and the tensor-product weights are their stencils' (to 1e-12);
+    /// The [`PatchGrid`] of `vertices` (records of one bicubic patch, whose shape's stencils were
+    /// checked to be the tensor products over its grid) if they form a full grid with one
+    /// derivative map;
     /// its bases and vertices are appended to `grid_basis` and `grid_vertices` (`s` and `t`:
     /// scratch).
     fn patch_grid(&mut self, vertices: &[u32], s: &mut Vec<f64>, t: &mut Vec<f64>) -> Option<PatchGrid> {
@@ -511,13 +545,16 @@ impl Evaluator {
         t.clear();
         for &v in vertices {
             let (a, b) = place(v).at.to_f64();
-            s.push(a);
-            t.push(b);
+            // Few distinct values (at most the face's rate): a scan, then a sort of those.
+            if !s.contains(&a) {
+                s.push(a);
+            }
+            if !t.contains(&b) {
+                t.push(b);
+            }
         }
         s.sort_unstable_by(f64::total_cmp);
         t.sort_unstable_by(f64::total_cmp);
-        s.dedup();
-        t.dedup();
         if s.len() * t.len() != vertices.len() || s.len() < 2 || t.len() < 2 {
             return None;
         }
@@ -546,22 +583,6 @@ impl Evaluator {
                 return fail(self);
             }
             *slot = v;
-            // The tensor-product weights must be the stencil's (checked along the first row and
-            // column: the patch is bicubic, so this fixes the grid's orientation).
-            if a != 0 && b != 0 {
-                continue;
-            }
-            let w = &self.weights[r.weights as usize..r.weights as usize + 3 * pad];
-            let (bs, ds, bt, dt) = (basis(s[a]), derivative(s[a]), basis(t[b]), derivative(t[b]));
-            for j in 0..4 {
-                for i in 0..4 {
-                    let k = usize::from(grid[j * 4 + i]);
-                    let want = [bs[i] * bt[j], ds[i] * bt[j], bs[i] * dt[j]];
-                    if (0..3).any(|row| (w[row * pad + k] - want[row]).abs() > 1e-12) {
-                        return fail(self);
-                    }
-                }
-            }
         }
         let at = self.grid_basis.len() as u32;
         self.grid_basis.extend(s.iter().chain(t.iter()).map(|&x| [basis(x), derivative(x)]));
@@ -583,8 +604,13 @@ impl Evaluator {
         topo: &Topology,
         range: std::ops::Range<usize>,
         evaluators: &mut Evaluators,
+        mut out: Chunk,
     ) -> Result<Chunk, TessError> {
-        let mut out = Chunk::default();
+        out.assigned.clear();
+        out.records.clear();
+        out.places.clear();
+        out.ids.clear();
+        out.weights.clear();
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
@@ -665,9 +691,22 @@ impl Evaluator {
                         };
                         out.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
                         let grid = if level > 0 && len == 16 {
-                            *evaluators.grids.entry((matrices, patch.shape)).or_insert_with(|| {
-                                bicubic_grid(&patch.matrices, patch.shape).map(|g| g.map(|k| k as u8))
-                            })
+                            match evaluators.grids.get(&(matrices, patch.shape)) {
+                                Some(&grid) => grid,
+                                None => {
+                                    let grid = bicubic_grid(&patch.matrices, patch.shape)
+                                        .map(|g| g.map(|k| k as u8))
+                                        .filter(|g| {
+                                            let evaluator = evaluators
+                                                .stencils
+                                                .entry(matrices)
+                                                .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+                                            tensor_weights_match(evaluator, patch.shape, g)
+                                        });
+                                    evaluators.grids.insert((matrices, patch.shape), grid);
+                                    grid
+                                }
+                            }
                         } else {
                             None
                         };
@@ -975,6 +1014,23 @@ impl Sink for WideSink<'_> {
         self.0[k] = p;
         self.1[k] = n;
     }
+}
+
+/// Whether the exact stencil of the shape at a point without symmetry is the tensor product
+/// of the cubic B-spline basis over `grid` (position and both derivatives, to 1e-12): then so
+/// is every point's, the patch being bicubic, and the grid's orientation is the stencils'.
+fn tensor_weights_match(evaluator: &mut StencilEvaluator<Arc<PatchMatrices>>, shape: usize, grid: &[u8; 16]) -> bool {
+    let at = Dyadic::new(3, 5, 16);
+    let Ok(stencil) = evaluator.stencil(shape, at) else { return false };
+    let (s, t) = at.to_f64();
+    let (bs, ds, bt, dt) = (basis(s), derivative(s), basis(t), derivative(t));
+    (0..16).all(|k| {
+        let (i, j) = (k % 4, k / 4);
+        let g = usize::from(grid[k]);
+        let want = [bs[i] * bt[j], ds[i] * bt[j], bs[i] * dt[j]];
+        let got = [stencil.position[g], stencil.du[g], stencil.dv[g]];
+        want.iter().zip(got).all(|(w, g)| (w - g).abs() <= 1e-12)
+    })
 }
 
 /// The 4 × 4 grid of a shape if its sub-patch matrices are those of a bicubic B-spline.
