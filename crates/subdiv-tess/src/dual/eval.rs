@@ -227,7 +227,7 @@ fn bicubic(cv: &[u32; 16], cage: &[DVec3], u: f64, v: f64) -> (DVec3, DVec3, DVe
 }
 
 /// A unit normal from two tangents (zero where they are parallel).
-#[inline]
+#[cfg(test)]
 fn normal(du: DVec3, dv: DVec3) -> DVec3 {
     du.cross(dv).normalize_or_zero()
 }
@@ -789,14 +789,14 @@ impl Evaluator {
                 grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
             }
             Piece::Run { start, mut out, grids } => {
-                for grid in grids {
-                    let points = &self.positions[grid.level as usize];
-                    self.patch_grid_eval(grid, points, |v, p, n| out.put(v as usize - start, p, n));
-                }
                 // By batches: first the positions and the tangents' cross products, then the
                 // normalisations (their square roots and divisions overlap).
                 let mut xs = [DVec3::ZERO; BATCH];
                 let mut cs = [DVec3::ZERO; BATCH];
+                for grid in grids {
+                    let points = &self.positions[grid.level as usize];
+                    self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| out.put(v as usize - start, p, n));
+                }
                 let mut ks = [0usize; BATCH];
                 let kinds = &self.kinds[start..start + out.len()];
                 for (b, batch) in kinds.chunks(BATCH).enumerate() {
@@ -833,23 +833,42 @@ impl Evaluator {
 
     /// A [`PatchGrid`] on its level's points, row by row: `put(vertex, position, normal)`.
     #[inline]
-    fn patch_grid_eval(&self, g: &PatchGrid, points: &[DVec3], mut put: impl FnMut(u32, DVec3, DVec3)) {
+    fn patch_grid_eval(
+        &self,
+        g: &PatchGrid,
+        points: &[DVec3],
+        (xs, cs): (&mut [DVec3; BATCH], &mut [DVec3; BATCH]),
+        mut put: impl FnMut(u32, DVec3, DVec3),
+    ) {
         let c: [DVec3; 16] = std::array::from_fn(|k| points[g.cv[k] as usize]);
         let (ns, nt) = (g.s as usize, g.t as usize);
         let (ss, ts) = self.grid_basis[g.basis as usize..g.basis as usize + ns + nt].split_at(ns);
         let vertices = &self.grid_vertices[g.vertices as usize..g.vertices as usize + ns * nt];
+        let mut ks = [0u32; BATCH];
+        let mut m = 0;
         for ([bt, dt], row) in ts.iter().zip(vertices.chunks_exact(ns)) {
             let col: [DVec3; 4] =
                 std::array::from_fn(|i| bt[0] * c[i] + bt[1] * c[4 + i] + bt[2] * c[8 + i] + bt[3] * c[12 + i]);
             let dcol: [DVec3; 4] =
                 std::array::from_fn(|i| dt[0] * c[i] + dt[1] * c[4 + i] + dt[2] * c[8 + i] + dt[3] * c[12 + i]);
+            // By batches (across rows): positions and cross products, then the normalisations.
             for ([bs, ds], &v) in ss.iter().zip(row) {
                 let p = bs[0] * col[0] + bs[1] * col[1] + bs[2] * col[2] + bs[3] * col[3];
                 let s = ds[0] * col[0] + ds[1] * col[1] + ds[2] * col[2] + ds[3] * col[3];
                 let t = bs[0] * dcol[0] + bs[1] * dcol[1] + bs[2] * dcol[2] + bs[3] * dcol[3];
                 let (du, dv) = (g.ju[0] * s + g.ju[1] * t, g.jv[0] * s + g.jv[1] * t);
-                put(v, p, normal(du, dv));
+                (xs[m], cs[m], ks[m]) = (p, du.cross(dv), v);
+                m += 1;
+                if m == BATCH {
+                    for ((x, c), &k) in xs.iter().zip(cs.iter()).zip(ks.iter()) {
+                        put(k, *x, c.normalize_or_zero());
+                    }
+                    m = 0;
+                }
             }
+        }
+        for ((x, c), &k) in xs.iter().zip(cs.iter()).zip(ks.iter()).take(m) {
+            put(k, *x, c.normalize_or_zero());
         }
     }
 
@@ -929,6 +948,7 @@ fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dy
 fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl FnMut(usize, DVec3, DVec3)) {
     let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
     let n = basis.b.len();
+    let (mut xs, mut cs) = ([DVec3::ZERO; BATCH], [DVec3::ZERO; BATCH]);
     for j in 0..n {
         let (bv, dv) = (basis.b[j], basis.d[j]);
         // The 4 column combinations of the control points, and of their v-derivative.
@@ -936,12 +956,19 @@ fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl F
             std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
         let dcol: [DVec3; 4] =
             std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
-        for i in 0..n {
-            let (bu, du) = (basis.b[i], basis.d[i]);
-            let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
-            let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
-            let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
-            put(j * n + i, p, normal(a, b));
+        // By batches: positions and cross products, then the normalisations.
+        for start in (0..n).step_by(BATCH) {
+            let end = (start + BATCH).min(n);
+            for i in start..end {
+                let (bu, du) = (basis.b[i], basis.d[i]);
+                let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
+                let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
+                let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
+                (xs[i - start], cs[i - start]) = (p, a.cross(b));
+            }
+            for i in start..end {
+                put(j * n + i, xs[i - start], cs[i - start].normalize_or_zero());
+            }
         }
     }
 }
