@@ -24,8 +24,18 @@
 //!   the same place of the same patch shape share one copy. A new cage is refined to the levels
 //!   these patches live on by the refinement engine's stencils (a sparse product per level over
 //!   the whole mesh: `O(4^L)` times the cage for `L` levels, `L ≤ 2` for N-gons and double
-//!   extraordinary quads), and each point is then a dot product: no topology work, no
-//!   allocation per vertex. The records are prepared in parallel by chunks of vertices.
+//!   extraordinary quads), and each point is then a dot product (4 fixed f64 lanes, weights
+//!   padded with zeros): no topology work, no allocation per vertex. The records are prepared
+//!   in parallel by chunks of vertices. **Patch grids**: the cell points of a quad face that
+//!   fall in one regular (bicubic) patch on a refined level form a grid `s × t` in its frame;
+//!   they are then evaluated separably, as the level-0 blocks are (the shape's stencils checked
+//!   once to be the tensor products over its grid), instead of one 16-point stencil each.
+//!
+//! One pass writes every vertex (f64 arrays or interleaved f32), over disjoint pieces of the
+//! vertex range (blocks, faces with patch grids, runs of other vertices) shared among threads;
+//! each vertex is computed alone, so the bits do not depend on the thread count. Normals are
+//! normalised by batches (cross products first), which lets the square roots and divisions
+//! overlap.
 
 use std::sync::Arc;
 

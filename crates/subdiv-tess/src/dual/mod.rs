@@ -28,7 +28,8 @@
 //! other level-0 patches through their patch type's dual-grid
 //! [`StencilTable`](subdiv_stencil::StencilTable); every other point through its own exact
 //! stencil at the patch that holds it (after descending through the refined levels an N-gon or
-//! a face with two extraordinary corners needs). [`DualTessellator::update_cage`] re-evaluates
+//! a face with two extraordinary corners needs), or, where a quad face's cell points fill a grid
+//! of a regular patch on a refined level, separably too. [`DualTessellator::update_cage`] re-evaluates
 //! positions and normals for a moved cage without any topology or stencil work.
 
 mod eval;
