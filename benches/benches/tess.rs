@@ -1,8 +1,9 @@
 //! Dual-grid stitching (subdiv-tess `DualTessellator`), one thread (`parallel: false`):
 //! triangles per second (Throughput::Elements = output triangles) at uniform rates 8, 16, 32 on
 //! a regular 128 × 64 quad torus (every face on the separable bicubic route), the cube (every
-//! face through its children: exact stencils) and the default model. Three measurements per
-//! case: `tessellate` (topology, stencil records and evaluation), `update_cage` (the animation
+//! face through its children: exact stencils) and the default model. Four measurements per
+//! case: `tessellate` (topology, stencil records and evaluation), `tessellate_flat` (the same
+//! straight into the welded f32 buffers, without surface parameters), `update_cage` (the animation
 //! path: f64 positions and normals only) and `update_cage_flat` (the animation path straight
 //! into the welded f32 buffers a renderer uploads, indices included). Run with
 //! `cargo bench -p subdiv-benches --bench tess`.
@@ -31,11 +32,17 @@ fn dual(c: &mut Criterion) {
             group.bench_function(format!("{name}_n{rate}_tessellate"), |b| {
                 b.iter(|| std::hint::black_box(tess.tessellate(&rates).expect("valid rates").triangles.len()));
             });
+            let mut flat = FlatMesh::default();
+            group.bench_function(format!("{name}_n{rate}_tessellate_flat"), |b| {
+                b.iter(|| {
+                    tess.tessellate_flat(&rates, &mut flat).expect("valid rates");
+                    std::hint::black_box(flat.indices.len())
+                });
+            });
             let cage = mesh.positions().to_vec();
             group.bench_function(format!("{name}_n{rate}_update_cage"), |b| {
                 b.iter(|| std::hint::black_box(tess.update_cage(&cage).expect("finite cage").positions.len()));
             });
-            let mut flat = FlatMesh::default();
             group.bench_function(format!("{name}_n{rate}_update_cage_flat"), |b| {
                 b.iter(|| {
                     tess.update_cage_flat(&cage, &mut flat).expect("finite cage");

@@ -4,8 +4,11 @@
 //! `osd_bench`, OpenSubdiv's Bfr on the same meshes and rates, side by side.
 //!
 //! Two modes, as `osd_bench` has: `full` (topology, stencil records, evaluation and flat
-//! buffers from the cage: `tessellate` + `write_flat`, the whole job on a fresh rate set) and
-//! `animate` (`update_cage` + `write_flat`: the same rates on a moved cage). Timing as
+//! buffers from the cage: `tessellate_flat`, the whole job on a fresh rate set) and `animate`
+//! (`update_cage_flat`: the same rates on a moved cage), both straight into the flat buffers;
+//! and the same through the f64 [`TessMesh`](subdiv::tess::TessMesh) (with surface parameters)
+//! then `write_flat`: `full_mesh` (`tessellate` + `write_flat`) and `animate_mesh`
+//! (`update_cage` + `write_flat`). Timing as
 //! `osd_bench`: one warm-up, then 5 samples, each repeating the work until it lasts ≥ 20 ms;
 //! the median. A debug build of xtask (what `cargo xtask` runs) hands the work to a release
 //! build of itself.
@@ -92,14 +95,18 @@ fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize) -> Result<(), Str
         tess.write_flat(&mut flat);
         let (vertices, tris) = (flat.vertices.len() / 6, flat.indices.len() / 3);
         let bytes_per_tri = (24 * vertices + 12 * tris) as f64 / tris as f64;
-        for mode in ["full", "animate"] {
+        for mode in ["full", "animate", "full_mesh", "animate_mesh"] {
             let seconds = median_seconds(|| {
                 match mode {
-                    "full" => tess.tessellate(&rates).map(|_| ()),
+                    "full" => tess.tessellate_flat(&rates, &mut flat),
+                    "animate" => tess.update_cage_flat(&cage, &mut flat),
+                    "full_mesh" => tess.tessellate(&rates).map(|_| ()),
                     _ => tess.update_cage(&cage).map(|_| ()),
                 }
                 .expect("checked by the first run");
-                tess.write_flat(&mut flat);
+                if mode.ends_with("_mesh") {
+                    tess.write_flat(&mut flat);
+                }
                 std::hint::black_box(flat.indices.len());
             });
             println!(

@@ -483,6 +483,16 @@ fn update_cage_equals_a_fresh_tessellation() {
         fresh_tess.write_flat(&mut written);
         tess.update_cage_flat(&moved, &mut direct).unwrap();
         assert_eq!(direct, written, "{builtin:?}: update_cage_flat");
+        // The flat-only tessellation: the same buffers, and the same animation after it.
+        let mut flat_tess = DualTessellator::new(builtin.scheme(), &moved_mesh, &DualOptions::default()).unwrap();
+        let mut stale = FlatMesh { vertices: vec![7.0; 5], indices: vec![3; 2] };
+        flat_tess.tessellate_flat(&rates, &mut stale).unwrap();
+        assert_eq!(stale, written, "{builtin:?}: tessellate_flat");
+        assert_eq!(flat_tess.mesh().triangles, fresh_tess.mesh().triangles);
+        assert!(flat_tess.mesh().positions.is_empty() && flat_tess.mesh().triangle_parameters.is_empty());
+        flat_tess.update_cage_flat(&moved, &mut stale).unwrap();
+        assert_eq!(stale, written, "{builtin:?}: update_cage_flat after tessellate_flat");
+        assert_eq!(flat_tess.update_cage(&moved).unwrap().positions, fresh_tess.mesh().positions);
     }
 }
 

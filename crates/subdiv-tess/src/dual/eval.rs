@@ -24,8 +24,18 @@
 //!   the same place of the same patch shape share one copy. A new cage is refined to the levels
 //!   these patches live on by the refinement engine's stencils (a sparse product per level over
 //!   the whole mesh: `O(4^L)` times the cage for `L` levels, `L ≤ 2` for N-gons and double
-//!   extraordinary quads), and each point is then a dot product: no topology work, no
-//!   allocation per vertex. The records are prepared in parallel by chunks of vertices.
+//!   extraordinary quads), and each point is then a dot product (4 fixed f64 lanes, weights
+//!   padded with zeros): no topology work, no allocation per vertex. The records are prepared
+//!   in parallel by chunks of vertices. **Patch grids**: the cell points of a quad face that
+//!   fall in one regular (bicubic) patch on a refined level form a grid `s × t` in its frame;
+//!   they are then evaluated separably, as the level-0 blocks are (the shape's stencils checked
+//!   once to be the tensor products over its grid), instead of one 16-point stencil each.
+//!
+//! One pass writes every vertex (f64 arrays or interleaved f32), over disjoint pieces of the
+//! vertex range (blocks, faces with patch grids, runs of other vertices) shared among threads;
+//! each vertex is computed alone, so the bits do not depend on the thread count. Normals are
+//! normalised by batches (cross products first), which lets the square roots and divisions
+//! overlap.
 
 use std::sync::Arc;
 
@@ -64,7 +74,8 @@ struct Record {
     level: u32,
     ids: u32,
     len: u32,
-    /// The first of the record's `3 · len` weights in `weights`, or, when `table` is not
+    /// The first of the record's weights in `weights` (three rows of [`padded`]`(len)`: position,
+    /// `∂/∂s`, `∂/∂t`, zeros after `len`), or, when `table` is not
     /// [`NO_TABLE`], the point's index in that table's dual grid.
     weights: u32,
     table: u32,
@@ -72,8 +83,13 @@ struct Record {
     jv: [f64; 2],
 }
 
-/// Stencil evaluators per matrices (keyed by the matrices' address).
-type Evaluators = HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>;
+/// Stencil evaluators per matrices (keyed by the matrices' address), and the bicubic grids of
+/// patch shapes (per matrices and shape; `None`: not bicubic).
+#[derive(Debug, Default)]
+struct Evaluators {
+    stencils: HashMap<usize, StencilEvaluator<Arc<PatchMatrices>>>,
+    grids: HashMap<(usize, usize), Option<[u8; 16]>>,
+}
 
 /// Vertices per chunk of [`Evaluator::prepare`].
 const CHUNK: usize = 4096;
@@ -84,12 +100,90 @@ struct Chunk {
     /// `(vertex, record)` pairs.
     assigned: Vec<(u32, u32)>,
     records: Vec<Record>,
+    /// Per record: where it is, for gathering the points of one bicubic patch into a grid.
+    places: Vec<Place>,
     ids: Vec<u32>,
     weights: Vec<f64>,
 }
 
+/// A record's patch and parameter there, for [`Evaluator::patch_grids`].
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    /// The patch's level and face on that level.
+    patch: (u32, u32),
+    /// The point in the patch's frame.
+    at: Dyadic,
+    /// The patch's 4 × 4 grid (indices into its control points, `grid[j * 4 + i]` at
+    /// `(i − 1, j − 1)` in the patch's frame) if its sub-patch matrices are bicubic.
+    grid: Option<[u8; 16]>,
+}
+
+/// A vertex evaluated by a [`PatchGrid`].
+const IN_PATCH_GRID: u32 = u32::MAX - 2;
+
+/// The points of one bicubic patch on a refined level that form a grid `s × t` in its frame
+/// (the dual grid of a quad face over a regular descendant): evaluated separably, as the
+/// level-0 blocks are, instead of one stencil per point.
+#[derive(Clone, Debug)]
+struct PatchGrid {
+    level: u32,
+    /// Control points, `cv[j * 4 + i]` at `(i − 1, j − 1)` in the patch's frame.
+    cv: [u32; 16],
+    /// The rows turning `(∂/∂s, ∂/∂t)` into the face's `(∂/∂u, ∂/∂v)`.
+    ju: [f64; 2],
+    jv: [f64; 2],
+    /// The first of the basis and its derivative at each `s`, then at each `t`, in
+    /// `grid_basis`.
+    basis: u32,
+    /// The numbers of `s` and of `t`.
+    s: u32,
+    t: u32,
+    /// The first vertex in `grid_vertices`: the output vertex at `(s[a], t[b])` is
+    /// `grid_vertices[vertices + b · s + a]`.
+    vertices: u32,
+}
+
 /// A record with its own weights.
 const NO_TABLE: u32 = u32::MAX;
+/// The lanes of the general route's dot products: each record's ids and weight rows are padded
+/// to a multiple of this (the same sums on every target, so the same bits).
+const LANES: usize = 4;
+
+/// `len` rounded up to a multiple of [`LANES`].
+#[inline]
+fn padded(len: usize) -> usize {
+    len.div_ceil(LANES) * LANES
+}
+
+/// The position and both derivatives `Σ w_k · points[ids[k]]` of a record with its own weights
+/// (`ids` and each of the three weight rows [`padded`]): [`LANES`] partial sums per coordinate,
+/// added pairwise at the end. In f64, so exact to rounding.
+#[inline(always)]
+fn dot3(points: &[DVec3], ids: &[u32], w: &[f64]) -> [DVec3; 3] {
+    let len = ids.len();
+    let (wp, rest) = w.split_at(len);
+    let (ws, wt) = rest.split_at(len);
+    let mut acc = [[0.0f64; LANES]; 9];
+    for (((id, a), b), c) in
+        ids.chunks_exact(LANES).zip(wp.chunks_exact(LANES)).zip(ws.chunks_exact(LANES)).zip(wt.chunks_exact(LANES))
+    {
+        let x: [DVec3; LANES] = std::array::from_fn(|l| points[id[l] as usize]);
+        for l in 0..LANES {
+            acc[0][l] += a[l] * x[l].x;
+            acc[1][l] += a[l] * x[l].y;
+            acc[2][l] += a[l] * x[l].z;
+            acc[3][l] += b[l] * x[l].x;
+            acc[4][l] += b[l] * x[l].y;
+            acc[5][l] += b[l] * x[l].z;
+            acc[6][l] += c[l] * x[l].x;
+            acc[7][l] += c[l] * x[l].y;
+            acc[8][l] += c[l] * x[l].z;
+        }
+    }
+    let sum = |a: [f64; LANES]| (a[0] + a[1]) + (a[2] + a[3]);
+    let v = acc.map(sum);
+    [DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]), DVec3::new(v[6], v[7], v[8])]
+}
 /// The most control points a table record gathers on the stack (Catmull-Clark valence 12).
 const MAX_GATHER: usize = 32;
 
@@ -143,7 +237,7 @@ fn bicubic(cv: &[u32; 16], cage: &[DVec3], u: f64, v: f64) -> (DVec3, DVec3, DVe
 }
 
 /// A unit normal from two tangents (zero where they are parallel).
-#[inline]
+#[cfg(test)]
 fn normal(du: DVec3, dv: DVec3) -> DVec3 {
     du.cross(dv).normalize_or_zero()
 }
@@ -159,6 +253,15 @@ pub(crate) struct Evaluator {
     bases: Vec<Option<Arc<RateBasis>>>,
     kinds: Vec<u32>,
     records: Vec<Record>,
+    /// Per record, its patch and parameter (for [`Self::patch_grids`]).
+    places: Vec<Place>,
+    /// The separable grids of bicubic patches on refined levels.
+    patch_grids: Vec<PatchGrid>,
+    /// Per block of the topology, its range of `patch_grids`.
+    block_grids: Vec<(u32, u32)>,
+    /// The patch grids' bases and vertices.
+    grid_basis: Vec<[[f64; 4]; 2]>,
+    grid_vertices: Vec<u32>,
     ids: Vec<u32>,
     weights: Vec<f64>,
     tables: DualTables,
@@ -166,6 +269,8 @@ pub(crate) struct Evaluator {
     /// (they remember what they solved, so a second tessellation at the same rates solves
     /// little).
     pool: Vec<Evaluators>,
+    /// Chunk buffers of the last [`prepare`](Self::prepare), to be reused.
+    spare: Vec<Chunk>,
 }
 
 impl Evaluator {
@@ -219,10 +324,16 @@ impl Evaluator {
             bases: Vec::new(),
             kinds: Vec::new(),
             records: Vec::new(),
+            places: Vec::new(),
+            patch_grids: Vec::new(),
+            block_grids: Vec::new(),
+            grid_basis: Vec::new(),
+            grid_vertices: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
             tables: DualTables::default(),
             pool: Vec::new(),
+            spare: Vec::new(),
         };
         evaluator.set_cage(mesh.positions());
         Ok(evaluator)
@@ -289,6 +400,13 @@ impl Evaluator {
     /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, and a
     /// stencil record for every vertex on the general route.
     pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
+        self.prepare_records(topo, rates, parallel)?;
+        self.patch_grids(topo);
+        Ok(())
+    }
+
+    /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record.
+    fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.sites.len();
         self.kinds.clear();
         self.kinds.resize(n, BICUBIC);
@@ -324,32 +442,170 @@ impl Evaluator {
         let chunks: Vec<std::ops::Range<usize>> =
             (0..n).step_by(CHUNK).map(|start| start..(start + CHUNK).min(n)).collect();
         let pool = std::sync::Mutex::new(std::mem::take(&mut self.pool));
+        // The chunks' buffers are kept across calls too (no fresh pages per call).
+        let spare = std::sync::Mutex::new(std::mem::take(&mut self.spare));
         let this = &*self;
         let work = |range: std::ops::Range<usize>| -> Result<Chunk, TessError> {
             let mut evaluators =
                 pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
-            let chunk = this.chunk(topo, range, &mut evaluators);
+            let out = spare.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
+            let chunk = this.chunk(topo, range, &mut evaluators, out);
             pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(evaluators);
             chunk
         };
         let results: Vec<Result<Chunk, TessError>> =
             if parallel { chunks.into_par_iter().map(work).collect() } else { chunks.into_iter().map(work).collect() };
         self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        self.spare = spare.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
+        self.places.clear();
         for chunk in results {
             let chunk = chunk?;
+            self.places.extend_from_slice(&chunk.places);
             let (records, ids, weights) = (self.records.len() as u32, self.ids.len() as u32, self.weights.len() as u32);
-            for (vertex, record) in chunk.assigned {
+            for &(vertex, record) in &chunk.assigned {
                 self.kinds[vertex as usize] = records + record;
             }
-            self.records.extend(chunk.records.into_iter().map(|r| Record {
+            self.records.extend(chunk.records.iter().map(|r| Record {
                 ids: r.ids + ids,
                 weights: if r.table == NO_TABLE { r.weights + weights } else { r.weights },
-                ..r
+                ..*r
             }));
             self.ids.extend_from_slice(&chunk.ids);
             self.weights.extend_from_slice(&chunk.weights);
+            self.spare.push(chunk);
         }
         Ok(())
+    }
+
+    /// Gathers, per quad face on the general route, the points of each bicubic patch on a
+    /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
+    /// (the patch shapes' stencils checked once against the tensor products), and marks them
+    /// [`IN_PATCH_GRID`].
+    fn patch_grids(&mut self, topo: &Topology) {
+        self.patch_grids.clear();
+        self.block_grids.clear();
+        self.grid_basis.clear();
+        self.grid_vertices.clear();
+        let (mut s, mut t) = (Vec::new(), Vec::new());
+        // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
+        // by a counting sort (in vertex order within each).
+        let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for block in &topo.blocks {
+            let first = self.patch_grids.len() as u32;
+            if let FacePlan::General = self.faces[block.face as usize] {
+                keys.clear();
+                group.clear();
+                let base = block.base as usize;
+                let mut last = usize::MAX;
+                for v in base..base + (block.rate * block.rate) as usize {
+                    let kind = self.kinds[v];
+                    if kind >= IN_PATCH_GRID || self.places[kind as usize].grid.is_none() {
+                        continue;
+                    }
+                    let key = self.places[kind as usize].patch;
+                    if last == usize::MAX || keys[last] != key {
+                        last = keys.iter().position(|&k| k == key).unwrap_or_else(|| {
+                            keys.push(key);
+                            keys.len() - 1
+                        });
+                    }
+                    group.push((last as u32, v as u32));
+                }
+                starts.clear();
+                starts.resize(keys.len() + 1, 0u32);
+                for &(g, _) in &group {
+                    starts[g as usize + 1] += 1;
+                }
+                for g in 0..keys.len() {
+                    starts[g + 1] += starts[g];
+                }
+                sorted.clear();
+                sorted.resize(group.len(), 0u32);
+                let mut next = starts.clone();
+                for &(g, v) in &group {
+                    sorted[next[g as usize] as usize] = v;
+                    next[g as usize] += 1;
+                }
+                for g in 0..keys.len() {
+                    let vertices = &sorted[starts[g] as usize..starts[g + 1] as usize];
+                    if let Some(grid) = self.patch_grid(vertices, &mut s, &mut t) {
+                        for &v in vertices {
+                            self.kinds[v as usize] = IN_PATCH_GRID;
+                        }
+                        self.patch_grids.push(grid);
+                    }
+                }
+            }
+            self.block_grids.push((first, self.patch_grids.len() as u32));
+        }
+    }
+
+    /// The [`PatchGrid`] of `vertices` (records of one bicubic patch, whose shape's stencils were
+    /// checked to be the tensor products over its grid) if they form a full grid with one
+    /// derivative map;
+    /// its bases and vertices are appended to `grid_basis` and `grid_vertices` (`s` and `t`:
+    /// scratch).
+    fn patch_grid(&mut self, vertices: &[u32], s: &mut Vec<f64>, t: &mut Vec<f64>) -> Option<PatchGrid> {
+        let (records, places, kinds) = (&self.records, &self.places, &self.kinds);
+        let record = |v: u32| &records[kinds[v as usize] as usize];
+        let place = |v: u32| &places[kinds[v as usize] as usize];
+        let r0 = *record(vertices[0]);
+        let grid = place(vertices[0]).grid?;
+        s.clear();
+        t.clear();
+        for &v in vertices {
+            let (a, b) = place(v).at.to_f64();
+            // Few distinct values (at most the face's rate): a scan, then a sort of those.
+            if !s.contains(&a) {
+                s.push(a);
+            }
+            if !t.contains(&b) {
+                t.push(b);
+            }
+        }
+        s.sort_unstable_by(f64::total_cmp);
+        t.sort_unstable_by(f64::total_cmp);
+        if s.len() * t.len() != vertices.len() || s.len() < 2 || t.len() < 2 {
+            return None;
+        }
+        let pad = padded(r0.len as usize);
+        let ids0 = &self.ids[r0.ids as usize..r0.ids as usize + pad];
+        let first = self.grid_vertices.len();
+        self.grid_vertices.resize(first + vertices.len(), u32::MAX);
+        let slots = &mut self.grid_vertices[first..];
+        let fail = |this: &mut Self| {
+            this.grid_vertices.truncate(first);
+            None
+        };
+        for &v in vertices {
+            let r = record(v);
+            let same_patch = r.ids == r0.ids || self.ids[r.ids as usize..r.ids as usize + pad] == *ids0;
+            if r.level != r0.level || r.len != r0.len || !same_patch || r.ju != r0.ju || r.jv != r0.jv {
+                return fail(self);
+            }
+            let (u, w) = place(v).at.to_f64();
+            let (Ok(a), Ok(b)) = (s.binary_search_by(|x| x.total_cmp(&u)), t.binary_search_by(|x| x.total_cmp(&w)))
+            else {
+                return fail(self);
+            };
+            let slot = &mut slots[b * s.len() + a];
+            if *slot != u32::MAX {
+                return fail(self);
+            }
+            *slot = v;
+        }
+        let at = self.grid_basis.len() as u32;
+        self.grid_basis.extend(s.iter().chain(t.iter()).map(|&x| [basis(x), derivative(x)]));
+        Some(PatchGrid {
+            level: r0.level,
+            cv: std::array::from_fn(|k| ids0[usize::from(grid[k])]),
+            ju: r0.ju,
+            jv: r0.jv,
+            basis: at,
+            s: s.len() as u32,
+            t: t.len() as u32,
+            vertices: first as u32,
+        })
     }
 
     /// The stencil records of the general-route vertices of `range`, with chunk-local offsets.
@@ -358,12 +614,20 @@ impl Evaluator {
         topo: &Topology,
         range: std::ops::Range<usize>,
         evaluators: &mut Evaluators,
+        mut out: Chunk,
     ) -> Result<Chunk, TessError> {
-        let mut out = Chunk::default();
+        out.assigned.clear();
+        out.records.clear();
+        out.places.clear();
+        out.ids.clear();
+        out.weights.clear();
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for i in range {
+            if self.kinds[i] == IN_BLOCK {
+                continue;
+            }
             let site = topo.sites[i];
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
@@ -394,6 +658,9 @@ impl Evaluator {
                         let (ids, len) = *patches.entry((level, f.index() as u32)).or_insert_with(|| {
                             let start = out.ids.len() as u32;
                             out.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                            // Padded to a multiple of `LANES` with the first id (its weights are 0).
+                            let first = out.ids[start as usize];
+                            out.ids.resize(start as usize + padded(patch.vertices.len()), first);
                             (start, patch.vertices.len() as u32)
                         });
                         let (ju, jv) = frame.chain(j);
@@ -406,6 +673,7 @@ impl Evaluator {
                         };
                         if let Some((table, index)) = table {
                             out.records.push(Record { level: 0, ids, len, weights: index, table, ju, jv });
+                            out.places.push(Place { patch: (0, f.index() as u32), at: site.point, grid: None });
                             done = true;
                             break;
                         }
@@ -417,18 +685,42 @@ impl Evaluator {
                             Some(&w) => w,
                             None => {
                                 let evaluator = evaluators
+                                    .stencils
                                     .entry(matrices)
                                     .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
                                 let stencil = evaluator.stencil(patch.shape, at)?;
                                 let w = out.weights.len() as u32;
-                                out.weights.extend_from_slice(&stencil.position);
-                                out.weights.extend_from_slice(&stencil.du);
-                                out.weights.extend_from_slice(&stencil.dv);
+                                let pad = padded(stencil.position.len());
+                                for row in [&stencil.position, &stencil.du, &stencil.dv] {
+                                    out.weights.extend_from_slice(row);
+                                    out.weights.resize(out.weights.len() + pad - row.len(), 0.0);
+                                }
                                 shared.insert((matrices, patch.shape, at), w);
                                 w
                             }
                         };
                         out.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
+                        let grid = if level > 0 && len == 16 {
+                            match evaluators.grids.get(&(matrices, patch.shape)) {
+                                Some(&grid) => grid,
+                                None => {
+                                    let grid = bicubic_grid(&patch.matrices, patch.shape)
+                                        .map(|g| g.map(|k| k as u8))
+                                        .filter(|g| {
+                                            let evaluator = evaluators
+                                                .stencils
+                                                .entry(matrices)
+                                                .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+                                            tensor_weights_match(evaluator, patch.shape, g)
+                                        });
+                                    evaluators.grids.insert((matrices, patch.shape), grid);
+                                    grid
+                                }
+                            }
+                        } else {
+                            None
+                        };
+                        out.places.push(Place { patch: (level as u32, f.index() as u32), at, grid });
                         done = true;
                         break;
                     }
@@ -442,57 +734,10 @@ impl Evaluator {
         Ok(out)
     }
 
-    /// Position and unit normal of vertex `i` (not in a block) on the current cage.
-    #[inline]
-    fn point(&self, topo: &Topology, i: usize) -> (DVec3, DVec3) {
-        let kind = self.kinds[i];
-        let site = topo.sites[i];
-        let (x, du, dv) = if kind == BICUBIC {
-            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
-            let (u, v) = site.point.to_f64();
-            bicubic(cv, &self.positions[0], u, v)
-        } else {
-            self.general(&self.records[kind as usize])
-        };
-        (x, normal(du, dv))
-    }
-
     /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
     /// positions and normals, without the f64 arrays.
     pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
-        let point = |i: usize, o: &mut [f32]| {
-            if self.kinds[i] != IN_BLOCK {
-                let (p, n) = self.point(topo, i);
-                put_flat(o, p, n);
-            }
-        };
-        if parallel {
-            out.par_chunks_exact_mut(6).enumerate().with_min_len(256).for_each(|(i, o)| point(i, o));
-        } else {
-            out.chunks_exact_mut(6).enumerate().for_each(|(i, o)| point(i, o));
-        }
-        let mut pieces = Vec::with_capacity(topo.blocks.len());
-        let mut rest = out;
-        let mut at = 0;
-        for block in &topo.blocks {
-            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
-            let len = (block.rate * block.rate) as usize;
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(6 * (block.base as usize - at));
-            let (piece, tail) = tail.split_at_mut(6 * len);
-            rest = tail;
-            at = block.base as usize + len;
-            pieces.push((cv, block.rate, piece));
-        }
-        let cage = &self.positions[0];
-        let run = |(cv, rate, piece): (&[u32; 16], u32, &mut [f32])| {
-            let basis = self.bases[rate as usize].as_deref().expect("prepared");
-            grid_block(cv, cage, basis, |k, p, n| put_flat(&mut piece[6 * k..6 * k + 6], p, n));
-        };
-        if parallel {
-            pieces.into_par_iter().for_each(run);
-        } else {
-            pieces.into_iter().for_each(run);
-        }
+        self.evaluate_into(topo, parallel, FlatSink(out));
     }
 
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
@@ -506,51 +751,134 @@ impl Evaluator {
         let n = topo.sites.len();
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
-        let point = |i: usize, p: &mut DVec3, nr: &mut DVec3| {
-            if self.kinds[i] != IN_BLOCK {
-                (*p, *nr) = self.point(topo, i);
+        self.evaluate_into(topo, parallel, WideSink(positions, normals));
+    }
+
+    /// Every vertex into `out`, in one pass over disjoint pieces of the vertex range: the
+    /// bicubic blocks, and the runs between them (general-route and pointwise bicubic vertices)
+    /// cut to at most [`RUN`] vertices. Each vertex is computed alone, so the output does not
+    /// depend on how the pieces are shared among threads.
+    fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S) {
+        let mut pieces: Vec<Piece<'_, S>> = Vec::with_capacity(2 * topo.blocks.len() + 1);
+        let mut rest = out;
+        let mut at = 0;
+        let push_run = |rest: &mut S, at: &mut usize, end: usize, pieces: &mut Vec<Piece<'_, S>>| {
+            while *at < end {
+                let len = (end - *at).min(RUN);
+                let (piece, tail) = std::mem::replace(rest, S::empty()).split(len);
+                *rest = tail;
+                pieces.push(Piece::Run { start: *at, out: piece, grids: &[] });
+                *at += len;
             }
         };
-        if parallel {
-            positions
-                .par_iter_mut()
-                .zip(normals.par_iter_mut())
-                .enumerate()
-                .with_min_len(256)
-                .for_each(|(i, (p, nr))| point(i, p, nr));
-        } else {
-            for (i, (p, nr)) in positions.iter_mut().zip(normals.iter_mut()).enumerate() {
-                point(i, p, nr);
-            }
-        }
-        // The blocks: consecutive, disjoint vertex ranges in increasing order.
-        let mut pieces = Vec::with_capacity(topo.blocks.len());
-        let (mut ps, mut ns) = (&mut positions[..], &mut normals[..]);
-        let mut at = 0;
-        for block in &topo.blocks {
-            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else { continue };
+        for (block, &(first, last)) in topo.blocks.iter().zip(&self.block_grids) {
             let len = (block.rate * block.rate) as usize;
-            let skip = block.base as usize - at;
-            let (_, rest_p) = std::mem::take(&mut ps).split_at_mut(skip);
-            let (_, rest_n) = std::mem::take(&mut ns).split_at_mut(skip);
-            let (bp, rest_p) = rest_p.split_at_mut(len);
-            let (bn, rest_n) = rest_n.split_at_mut(len);
-            (ps, ns) = (rest_p, rest_n);
-            at = block.base as usize + len;
-            pieces.push((cv, block.rate, bp, bn));
+            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else {
+                if first < last {
+                    // A general face with patch grids: one piece (its grids write anywhere in it).
+                    push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+                    let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
+                    rest = tail;
+                    let grids = &self.patch_grids[first as usize..last as usize];
+                    pieces.push(Piece::Run { start: at, out: piece, grids });
+                    at += len;
+                }
+                continue;
+            };
+            push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+            let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
+            rest = tail;
+            at += len;
+            pieces.push(Piece::Block { cv, rate: block.rate, out: piece });
         }
+        push_run(&mut rest, &mut at, topo.sites.len(), &mut pieces);
         let cage = &self.positions[0];
-        let run = |(cv, rate, bp, bn): (&[u32; 16], u32, &mut [DVec3], &mut [DVec3])| {
-            let basis = self.bases[rate as usize].as_deref().expect("prepared");
-            grid_block(cv, cage, basis, |k, p, n| {
-                bp[k] = p;
-                bn[k] = n;
-            });
+        let run = |piece: Piece<'_, S>| match piece {
+            Piece::Block { cv, rate, mut out } => {
+                let basis = self.bases[rate as usize].as_deref().expect("prepared");
+                grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
+            }
+            Piece::Run { start, mut out, grids } => {
+                // By batches: first the positions and the tangents' cross products, then the
+                // normalisations (their square roots and divisions overlap).
+                let mut xs = [DVec3::ZERO; BATCH];
+                let mut cs = [DVec3::ZERO; BATCH];
+                for grid in grids {
+                    let points = &self.positions[grid.level as usize];
+                    self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| out.put(v as usize - start, p, n));
+                }
+                let mut ks = [0usize; BATCH];
+                let kinds = &self.kinds[start..start + out.len()];
+                for (b, batch) in kinds.chunks(BATCH).enumerate() {
+                    let mut m = 0;
+                    for (k, &kind) in batch.iter().enumerate() {
+                        if kind == IN_PATCH_GRID {
+                            continue;
+                        }
+                        let (x, du, dv) = if kind == BICUBIC {
+                            let site = topo.sites[start + b * BATCH + k];
+                            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
+                                unreachable!("bicubic face")
+                            };
+                            let (u, v) = site.point.to_f64();
+                            bicubic(cv, cage, u, v)
+                        } else {
+                            self.general(&self.records[kind as usize])
+                        };
+                        (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
+                        m += 1;
+                    }
+                    for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
+                        out.put(k, *x, c.normalize_or_zero());
+                    }
+                }
+            }
         };
         if parallel {
             pieces.into_par_iter().for_each(run);
         } else {
             pieces.into_iter().for_each(run);
+        }
+    }
+
+    /// A [`PatchGrid`] on its level's points, row by row: `put(vertex, position, normal)`.
+    #[inline]
+    fn patch_grid_eval(
+        &self,
+        g: &PatchGrid,
+        points: &[DVec3],
+        (xs, cs): (&mut [DVec3; BATCH], &mut [DVec3; BATCH]),
+        mut put: impl FnMut(u32, DVec3, DVec3),
+    ) {
+        let c: [DVec3; 16] = std::array::from_fn(|k| points[g.cv[k] as usize]);
+        let (ns, nt) = (g.s as usize, g.t as usize);
+        let (ss, ts) = self.grid_basis[g.basis as usize..g.basis as usize + ns + nt].split_at(ns);
+        let vertices = &self.grid_vertices[g.vertices as usize..g.vertices as usize + ns * nt];
+        let mut ks = [0u32; BATCH];
+        let mut m = 0;
+        for ([bt, dt], row) in ts.iter().zip(vertices.chunks_exact(ns)) {
+            let col: [DVec3; 4] =
+                std::array::from_fn(|i| bt[0] * c[i] + bt[1] * c[4 + i] + bt[2] * c[8 + i] + bt[3] * c[12 + i]);
+            let dcol: [DVec3; 4] =
+                std::array::from_fn(|i| dt[0] * c[i] + dt[1] * c[4 + i] + dt[2] * c[8 + i] + dt[3] * c[12 + i]);
+            // By batches (across rows): positions and cross products, then the normalisations.
+            for ([bs, ds], &v) in ss.iter().zip(row) {
+                let p = bs[0] * col[0] + bs[1] * col[1] + bs[2] * col[2] + bs[3] * col[3];
+                let s = ds[0] * col[0] + ds[1] * col[1] + ds[2] * col[2] + ds[3] * col[3];
+                let t = bs[0] * dcol[0] + bs[1] * dcol[1] + bs[2] * dcol[2] + bs[3] * dcol[3];
+                let (du, dv) = (g.ju[0] * s + g.ju[1] * t, g.jv[0] * s + g.jv[1] * t);
+                (xs[m], cs[m], ks[m]) = (p, du.cross(dv), v);
+                m += 1;
+                if m == BATCH {
+                    for ((x, c), &k) in xs.iter().zip(cs.iter()).zip(ks.iter()) {
+                        put(k, *x, c.normalize_or_zero());
+                    }
+                    m = 0;
+                }
+            }
+        }
+        for ((x, c), &k) in xs.iter().zip(cs.iter()).zip(ks.iter()).take(m) {
+            put(k, *x, c.normalize_or_zero());
         }
     }
 
@@ -569,16 +897,10 @@ impl Evaluator {
                 self.tables.tables[r.table as usize].apply(Grid::Dual, r.weights as usize, &gathered[..len]);
             return (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t);
         }
-        let w = &self.weights[r.weights as usize..r.weights as usize + 3 * len];
-        let (wp, rest) = w.split_at(len);
-        let (ws, wt) = rest.split_at(len);
-        let (mut p, mut s, mut t) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
-        for k in 0..len {
-            let x = points[ids[k] as usize];
-            p += wp[k] * x;
-            s += ws[k] * x;
-            t += wt[k] * x;
-        }
+        let pad = padded(len);
+        let ids = &self.ids[r.ids as usize..r.ids as usize + pad];
+        let w = &self.weights[r.weights as usize..r.weights as usize + 3 * pad];
+        let [p, s, t] = dot3(points, ids, w);
         (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t)
     }
 }
@@ -636,6 +958,7 @@ fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dy
 fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl FnMut(usize, DVec3, DVec3)) {
     let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
     let n = basis.b.len();
+    let (mut xs, mut cs) = ([DVec3::ZERO; BATCH], [DVec3::ZERO; BATCH]);
     for j in 0..n {
         let (bv, dv) = (basis.b[j], basis.d[j]);
         // The 4 column combinations of the control points, and of their v-derivative.
@@ -643,20 +966,108 @@ fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl F
             std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
         let dcol: [DVec3; 4] =
             std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
-        for i in 0..n {
-            let (bu, du) = (basis.b[i], basis.d[i]);
-            let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
-            let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
-            let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
-            put(j * n + i, p, normal(a, b));
+        // By batches: positions and cross products, then the normalisations.
+        for start in (0..n).step_by(BATCH) {
+            let end = (start + BATCH).min(n);
+            for i in start..end {
+                let (bu, du) = (basis.b[i], basis.d[i]);
+                let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
+                let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
+                let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
+                (xs[i - start], cs[i - start]) = (p, a.cross(b));
+            }
+            for i in start..end {
+                put(j * n + i, xs[i - start], cs[i - start].normalize_or_zero());
+            }
         }
     }
 }
 
-/// A vertex as six f32: position, then normal.
-#[inline]
-fn put_flat(out: &mut [f32], p: DVec3, n: DVec3) {
-    out.copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
+/// Vertices per piece of a run of vertices outside the blocks in [`Evaluator::evaluate_into`].
+const RUN: usize = 1024;
+
+/// Vertices per batch of a run's normalisations.
+const BATCH: usize = 64;
+
+/// A piece of [`Evaluator::evaluate_into`]'s work.
+enum Piece<'a, S> {
+    /// A bicubic face's dual grid.
+    Block { cv: &'a [u32; 16], rate: u32, out: S },
+    /// Vertices `start..start + out.len()`: the patch grids' (all in the range), then each
+    /// other one on its own.
+    Run { start: usize, out: S, grids: &'a [PatchGrid] },
+}
+
+/// Where [`Evaluator::evaluate_into`] writes a range of vertices.
+trait Sink: Send + Sized {
+    /// An empty range.
+    fn empty() -> Self;
+    /// The number of vertices.
+    fn len(&self) -> usize;
+    /// The first `k` vertices and the rest.
+    fn split(self, k: usize) -> (Self, Self);
+    /// Writes vertex `k`'s position and unit normal.
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3);
+}
+
+/// Interleaved f32: per vertex `px py pz nx ny nz`.
+struct FlatSink<'a>(&'a mut [f32]);
+
+impl Sink for FlatSink<'_> {
+    fn empty() -> Self {
+        Self(&mut [])
+    }
+    fn len(&self) -> usize {
+        self.0.len() / 6
+    }
+    fn split(self, k: usize) -> (Self, Self) {
+        let (a, b) = self.0.split_at_mut(6 * k);
+        (Self(a), Self(b))
+    }
+    #[inline]
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3) {
+        self.0[6 * k..6 * k + 6]
+            .copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
+    }
+}
+
+/// f64 positions and normals.
+struct WideSink<'a>(&'a mut [DVec3], &'a mut [DVec3]);
+
+impl Sink for WideSink<'_> {
+    fn empty() -> Self {
+        Self(&mut [], &mut [])
+    }
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn split(self, k: usize) -> (Self, Self) {
+        let (a, b) = self.0.split_at_mut(k);
+        let (c, d) = self.1.split_at_mut(k);
+        (Self(a, c), Self(b, d))
+    }
+    #[inline]
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3) {
+        self.0[k] = p;
+        self.1[k] = n;
+    }
+}
+
+/// Whether the exact stencil of the shape at a point without symmetry is the tensor product
+/// of the cubic B-spline basis over `grid` (position and both derivatives, to 1e-12): then so
+/// is every point's, the patch being bicubic, and the grid's orientation is the stencils'.
+fn tensor_weights_match(evaluator: &mut StencilEvaluator<Arc<PatchMatrices>>, shape: usize, grid: &[u8; 16]) -> bool {
+    let at = Dyadic::new(3, 5, 16);
+    let Ok(stencil) = evaluator.stencil(shape, at) else { return false };
+    let (s, t) = at.to_f64();
+    let (bs, ds, bt, dt) = (basis(s), derivative(s), basis(t), derivative(t));
+    (0..16).all(|k| {
+        let (i, j) = (k % 4, k / 4);
+        let g = usize::from(grid[k]);
+        let want = [bs[i] * bt[j], ds[i] * bt[j], bs[i] * dt[j]];
+        let got = [stencil.position[g], stencil.du[g], stencil.dv[g]];
+        want.iter().zip(got).all(|(w, g)| (w - g).abs() <= 1e-12)
+    })
 }
 
 /// The 4 × 4 grid of a shape if its sub-patch matrices are those of a bicubic B-spline.
@@ -735,6 +1146,39 @@ mod tests {
         assert_eq!(ev.records.len(), topo.sites.len());
         // One table: one patch type, one rate.
         assert_eq!(ev.tables.tables.len(), 1);
+    }
+
+    /// Refined regular patches evaluated separably ([`PatchGrid`]) give what their points'
+    /// own stencil records give, and many general-route points of the cube, the default
+    /// model and a prism take that route at these rates.
+    #[test]
+    fn patch_grids_equal_the_records() {
+        for (soup, rate) in [(shapes::cube(), 12u32), (shapes::default_model(), 8), (shapes::ngon_prism(5), 9)] {
+            let mesh = Mesh::build(soup).unwrap();
+            let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+            let moved: Vec<DVec3> =
+                mesh.positions().iter().enumerate().map(|(i, p)| *p * 1.3 + DVec3::splat((i as f64).sin())).collect();
+            ev.set_cage(&moved);
+            let domains = ev.domains().unwrap();
+            let mut topo = Topology::default();
+            let rates = vec![rate; mesh.face_count()];
+            super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
+            ev.prepare_records(&topo, &rates, true).unwrap();
+            let kinds = ev.kinds.clone();
+            ev.patch_grids(&topo);
+            let gridded = ev.kinds.iter().filter(|&&k| k == IN_PATCH_GRID).count();
+            assert!(4 * gridded > ev.records.len(), "{gridded} of {} in patch grids", ev.records.len());
+            let (mut ps, mut ns) = (Vec::new(), Vec::new());
+            ev.evaluate(&topo, true, &mut ps, &mut ns);
+            let mut worst: f64 = 0.0;
+            for (v, &kind) in ev.kinds.iter().enumerate() {
+                if kind == IN_PATCH_GRID {
+                    let (p, du, dv) = ev.general(&ev.records[kinds[v] as usize]);
+                    worst = worst.max((p - ps[v]).length()).max((normal(du, dv) - ns[v]).length());
+                }
+            }
+            assert!(worst < 1e-12, "patch grids off the records by {worst:e}");
+        }
     }
 
     /// The cage refined by the evaluator's own `Refiner` (what `update_cage` uses) lands on the

@@ -51,7 +51,8 @@
 //! other level-0 patches through their patch type's dual-grid
 //! [`StencilTable`](subdiv_stencil::StencilTable); every other point through its own exact
 //! stencil at the patch that holds it (after descending through the refined levels an N-gon or
-//! a face with two extraordinary corners needs). [`DualTessellator::update_cage`] re-evaluates
+//! a face with two extraordinary corners needs), or, where a quad face's cell points fill a grid
+//! of a regular patch on a refined level, separably too. [`DualTessellator::update_cage`] re-evaluates
 //! positions and normals for a moved cage without any topology or stencil work.
 
 mod eval;
@@ -209,7 +210,9 @@ impl DualTessellator {
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
     /// rate outside `1..=`[`MAX_DUAL_RATE`]; [`TessError::Surface`] if a stencil fails.
     pub fn tessellate(&mut self, rates: &[u32]) -> Result<&TessMesh, TessError> {
-        self.build(rates, None)
+        self.rebuild(rates, None)?;
+        self.fill_output();
+        Ok(&self.output)
     }
 
     /// As [`tessellate`](Self::tessellate), with rings of exact points around extraordinary
@@ -260,10 +263,13 @@ impl DualTessellator {
         if let Some(e) = too_deep(&rings.vertices, "vertex").or_else(|| too_deep(&rings.centres, "face")) {
             return Err(e);
         }
-        self.build(rates, Some(rings))
+        self.rebuild(rates, Some(rings))?;
+        self.fill_output();
+        Ok(&self.output)
     }
 
-    fn build(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<&TessMesh, TessError> {
+    /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
+    fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
@@ -276,8 +282,7 @@ impl DualTessellator {
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
-        self.fill_output();
-        Ok(&self.output)
+        Ok(())
     }
 
     /// The animation path: the same topology and rates on a new cage (one finite position per
@@ -304,11 +309,41 @@ impl DualTessellator {
     pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
-        out.vertices.clear();
+        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
         out.vertices.resize(6 * self.topology.sites.len(), 0.0);
         self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
         out.indices.clear();
         out.indices.extend_from_slice(self.output.triangles.as_flattened());
+        Ok(())
+    }
+
+    /// [`tessellate`](Self::tessellate) straight into flat f32 buffers (what a renderer
+    /// uploads; the same values as [`tessellate`](Self::tessellate) then
+    /// [`write_flat`](Self::write_flat)), without the f64 positions and normals and without the
+    /// vertices' and triangles' surface parameters. Afterwards [`mesh`](Self::mesh) has the new
+    /// triangles and polygons but no vertex data (empty positions, normals and parameters) until
+    /// the next [`update_cage`](Self::update_cage) (positions and normals) or
+    /// [`tessellate`](Self::tessellate); [`update_cage_flat`](Self::update_cage_flat) works as
+    /// after [`tessellate`](Self::tessellate). Reuses `out`'s allocations.
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate).
+    pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
+        self.rebuild(rates, None)?;
+        out.vertices.resize(6 * self.topology.sites.len(), 0.0);
+        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
+        let (t, m) = (&mut self.topology, &mut self.output);
+        out.indices.clear();
+        out.indices.extend_from_slice(t.triangles.as_flattened());
+        std::mem::swap(&mut m.triangles, &mut t.triangles);
+        std::mem::swap(&mut m.triangle_faces, &mut t.triangle_faces);
+        std::mem::swap(&mut m.polygon_offsets, &mut t.polygon_offsets);
+        std::mem::swap(&mut m.polygon_vertices, &mut t.polygon_vertices);
+        std::mem::swap(&mut m.polygon_faces, &mut t.polygon_faces);
+        m.positions.clear();
+        m.normals.clear();
+        m.parameters.clear();
+        m.triangle_parameters.clear();
         Ok(())
     }
 
