@@ -110,20 +110,17 @@ fn closed_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> TessMesh {
     out
 }
 
-/// Output boundary loops (chains of border edges).
-fn loops(border: &[(u32, u32)]) -> Vec<Vec<u32>> {
-    let next: HashMap<u32, u32> = border.iter().copied().collect();
-    assert_eq!(next.len(), border.len(), "a vertex starts two border edges");
+/// The cycles of a successor map (each key's chain back to itself), from the least key up.
+fn cycles<T: Copy + Ord + std::hash::Hash>(next: &HashMap<T, T>) -> Vec<Vec<T>> {
     let mut done = std::collections::HashSet::new();
     let mut out = Vec::new();
-    let mut starts: Vec<u32> = next.keys().copied().collect();
+    let mut starts: Vec<T> = next.keys().copied().collect();
     starts.sort_unstable();
     for s in starts {
-        if done.contains(&s) {
+        if !done.insert(s) {
             continue;
         }
         let mut l = vec![s];
-        done.insert(s);
         let mut v = next[&s];
         while v != s {
             l.push(v);
@@ -133,6 +130,13 @@ fn loops(border: &[(u32, u32)]) -> Vec<Vec<u32>> {
         out.push(l);
     }
     out
+}
+
+/// Output boundary loops (chains of border edges).
+fn loops(border: &[(u32, u32)]) -> Vec<Vec<u32>> {
+    let next: HashMap<u32, u32> = border.iter().copied().collect();
+    assert_eq!(next.len(), border.len(), "a vertex starts two border edges");
+    cycles(&next)
 }
 
 /// Open input: the output's boundary loops are the input's, through the limit points of the
@@ -153,25 +157,7 @@ fn open_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
             }
         }
     }
-    let input_loops = {
-        let mut seen = std::collections::HashSet::new();
-        let mut all = Vec::new();
-        let mut keys: Vec<VertexId> = next.keys().copied().collect();
-        keys.sort();
-        for s in keys {
-            if seen.insert(s) {
-                let mut l = vec![s];
-                let mut v = next[&s];
-                while v != s {
-                    seen.insert(v);
-                    l.push(v);
-                    v = next[&v];
-                }
-                all.push(l);
-            }
-        }
-        all
-    };
+    let input_loops = cycles(&next);
     assert_eq!(output_loops.len(), input_loops.len(), "boundary loop count");
     let evaluator = LimitEvaluator::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
     let diagonal = diagonal(mesh);
@@ -558,20 +544,26 @@ fn bad_input_is_a_typed_error() {
     assert!(matches!(sqrt3, Err(TessError::Surface(_))), "{sqrt3:?}");
 }
 
+/// The proptests' case count: 24 by default; `PROPTEST_CASES` sets another (a long run).
+fn cases() -> u32 {
+    std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(24)
+}
+
+/// A closed quad-split test mesh: a random one, an N-gon prism, or the built-in model.
+fn closed_mesh(seed: u64, which: usize) -> Mesh {
+    match which {
+        0 => random_closed(seed),
+        1 => Mesh::build(shapes::ngon_prism(3 + (seed % 6) as usize)).unwrap(),
+        _ => Mesh::build(shapes::default_model()).unwrap(),
+    }
+}
+
 proptest! {
-    // 24 cases by default; PROPTEST_CASES sets another count (a long run).
-    #![proptest_config(ProptestConfig {
-        cases: std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(24),
-        ..ProptestConfig::default()
-    })]
+    #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
 
     #[test]
     fn random_meshes_and_rates_are_watertight(seed in 0u64..1_000_000, which in 0usize..3, max in 1u32..40) {
-        let mesh = match which {
-            0 => random_closed(seed),
-            1 => Mesh::build(shapes::ngon_prism(3 + (seed % 6) as usize)).unwrap(),
-            _ => Mesh::build(shapes::default_model()).unwrap(),
-        };
+        let mesh = closed_mesh(seed, which);
         let rates = rates_for(&mesh, seed, max);
         closed_checks(Builtin::CatmullClark, &mesh, &rates);
     }
@@ -1199,18 +1191,11 @@ fn rings_keep_the_surface_within_tolerance() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig {
-        cases: std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(24),
-        ..ProptestConfig::default()
-    })]
+    #![proptest_config(ProptestConfig { cases: cases(), ..ProptestConfig::default() })]
 
     #[test]
     fn random_meshes_with_rings_are_watertight(seed in 0u64..1_000_000, which in 0usize..3, max in 1u32..24) {
-        let mesh = match which {
-            0 => random_closed(seed),
-            1 => Mesh::build(shapes::ngon_prism(3 + (seed % 6) as usize)).unwrap(),
-            _ => Mesh::build(shapes::default_model()).unwrap(),
-        };
+        let mesh = closed_mesh(seed, which);
         let rates = rates_for(&mesh, seed, max);
         let rings = random_rings(&mesh, seed, 12);
         ring_checks(&mesh, &rates, &rings, false);

@@ -335,11 +335,7 @@ impl DualTessellator {
         let (t, m) = (&mut self.topology, &mut self.output);
         out.indices.clear();
         out.indices.extend_from_slice(t.triangles.as_flattened());
-        std::mem::swap(&mut m.triangles, &mut t.triangles);
-        std::mem::swap(&mut m.triangle_faces, &mut t.triangle_faces);
-        std::mem::swap(&mut m.polygon_offsets, &mut t.polygon_offsets);
-        std::mem::swap(&mut m.polygon_vertices, &mut t.polygon_vertices);
-        std::mem::swap(&mut m.polygon_faces, &mut t.polygon_faces);
+        move_connectivity(t, m);
         m.positions.clear();
         m.normals.clear();
         m.parameters.clear();
@@ -395,11 +391,7 @@ impl DualTessellator {
         } else {
             out.parameters.extend(t.sites.iter().map(parameter));
         }
-        std::mem::swap(&mut out.triangles, &mut t.triangles);
-        std::mem::swap(&mut out.triangle_faces, &mut t.triangle_faces);
-        std::mem::swap(&mut out.polygon_offsets, &mut t.polygon_offsets);
-        std::mem::swap(&mut out.polygon_vertices, &mut t.polygon_vertices);
-        std::mem::swap(&mut out.polygon_faces, &mut t.polygon_faces);
+        move_connectivity(t, out);
         out.triangle_parameters.clear();
         let params = &out.parameters;
         let corners = |tri: &[u32; 3]| tri.map(|k| [params[k as usize].u, params[k as usize].v]);
@@ -428,4 +420,14 @@ pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usi
 pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u32], rings: &RingDepths) -> usize {
     assert!(rings.vertices.len() == mesh.vertex_count() && rings.centres.len() == mesh.face_count(), "ring depths");
     topology::predicted_vertices(mesh, triangle, rates, Some(rings))
+}
+
+/// Moves the triangles and polygons the builder made into the output (no copies: the builder
+/// gets the output's old buffers back to fill next time).
+fn move_connectivity(t: &mut Topology, out: &mut TessMesh) {
+    std::mem::swap(&mut out.triangles, &mut t.triangles);
+    std::mem::swap(&mut out.triangle_faces, &mut t.triangle_faces);
+    std::mem::swap(&mut out.polygon_offsets, &mut t.polygon_offsets);
+    std::mem::swap(&mut out.polygon_vertices, &mut t.polygon_vertices);
+    std::mem::swap(&mut out.polygon_faces, &mut t.polygon_faces);
 }
