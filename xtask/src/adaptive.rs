@@ -8,7 +8,7 @@ use std::path::PathBuf;
 
 use subdiv::eval::{EigenEvaluator, Method};
 use subdiv::io::load_mesh;
-use subdiv::mesh::Mesh;
+use subdiv::mesh::{DVec3, Mesh};
 use subdiv::schemes::{Builtin, RefineOptions};
 use subdiv::tess::check::LimitSamples;
 use subdiv::tess::{TessOptions, Tessellator, Tolerance};
@@ -115,10 +115,17 @@ pub(crate) fn run(samples: u32, all: bool) -> Result<(), String> {
 /// Limit positions on every face's `--grid n`, from the eigenbasis evaluator (fast, and
 /// independent of the tessellator's Bézier pieces).
 fn limit_samples(mesh: &Mesh, n: u32) -> Result<LimitSamples, String> {
+    Ok(LimitSamples::from_samples(limit_grids(mesh, n)?, n))
+}
+
+/// Per face, `(u, v, position)` on its grid (`FaceDomain::grid`).
+pub(crate) type FaceGrids = Vec<Vec<(f64, f64, DVec3)>>;
+
+/// Every face's `--grid n` (each N-gon sub-face's), from the eigenbasis evaluator.
+pub(crate) fn limit_grids(mesh: &Mesh, n: u32) -> Result<FaceGrids, String> {
     let scheme = Builtin::CatmullClark.scheme();
     let eval = EigenEvaluator::new(scheme, mesh, &RefineOptions::DEFAULT, Method::Auto).map_err(|e| e.to_string())?;
-    let faces = mesh
-        .face_ids()
+    mesh.face_ids()
         .map(|f| {
             let domain = eval.stencil().domain(f).map_err(|e| e.to_string())?;
             domain
@@ -127,6 +134,5 @@ fn limit_samples(mesh: &Mesh, n: u32) -> Result<LimitSamples, String> {
                 .map(|g| Ok((g.u, g.v, eval.eval(f, g.u, g.v).map_err(|e| e.to_string())?.position)))
                 .collect::<Result<Vec<_>, String>>()
         })
-        .collect::<Result<Vec<_>, String>>()?;
-    Ok(LimitSamples::from_samples(faces, n))
+        .collect()
 }

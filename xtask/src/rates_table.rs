@@ -8,11 +8,9 @@
 
 use std::path::PathBuf;
 
-use subdiv::eval::{EigenEvaluator, Method};
 use subdiv::io::load_mesh;
-use subdiv::mesh::{DVec3, Mesh};
+use subdiv::mesh::DVec3;
 use subdiv::schemes::Builtin;
-use subdiv::schemes::RefineOptions;
 use subdiv::tess::check::MeshDistance;
 use subdiv::tess::rates::{ErrorRates, RingDepths};
 use subdiv::tess::{DualOptions, DualTessellator, Tessellator, Tolerance};
@@ -37,7 +35,8 @@ pub(crate) fn run() -> Result<(), String> {
         let bounds = Tessellator::new(cc, &mesh).map_err(|e| format!("{model}: {e}"))?;
         let mut dual = DualTessellator::new(cc, &mesh, &DualOptions { quads: false, ..DualOptions::default() })
             .map_err(|e| format!("{model}: {e}"))?;
-        let samples = limit_samples(&mesh)?;
+        let samples: Vec<DVec3> =
+            crate::adaptive::limit_grids(&mesh, 24)?.into_iter().flatten().map(|(.., p)| p).collect();
         for r in TOLERANCES {
             let epsilon = Tolerance::Relative(r).absolute(bounds.diagonal()).map_err(|e| e.to_string())?;
             let (rational, rings) = match ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &mesh) {
@@ -82,19 +81,4 @@ pub(crate) fn run() -> Result<(), String> {
          surface (each face's 24 × 24 grid, eigenbasis evaluator) to the output triangles, over ε."
     );
     Ok(())
-}
-
-/// Exact limit points on every face's 24 × 24 grid (per N-gon sub-face), from the eigenbasis
-/// evaluator.
-fn limit_samples(mesh: &Mesh) -> Result<Vec<DVec3>, String> {
-    let eval = EigenEvaluator::new(Builtin::CatmullClark.scheme(), mesh, &RefineOptions::DEFAULT, Method::Auto)
-        .map_err(|e| e.to_string())?;
-    let mut out = Vec::new();
-    for f in mesh.face_ids() {
-        let domain = eval.stencil().domain(f).map_err(|e| e.to_string())?;
-        for g in domain.grid(24) {
-            out.push(eval.eval(f, g.u, g.v).map_err(|e| e.to_string())?.position);
-        }
-    }
-    Ok(out)
 }

@@ -124,12 +124,12 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
             let options = DualOptions { quads: args.polygons, ..DualOptions::default() };
             let mut tess = DualTessellator::new(&scheme, &mesh, &options).map_err(|e| located(&e))?;
             bar.say("dual-grid stitching");
-            let result = match &rings {
+            match &rings {
                 Some(rings) => tess.tessellate_with_rings(&rates, rings),
                 None => tess.tessellate(&rates),
             }
-            .map_err(|e| located(&e))?
-            .clone();
+            .map_err(|e| located(&e))?;
+            let result = tess.into_mesh();
             let (lo, hi) = rates.iter().fold((u32::MAX, 0), |(lo, hi), &r| (lo.min(r), hi.max(r)));
             (result, format!("{policy}, rates {lo}..={hi}"))
         }

@@ -686,13 +686,15 @@ struct Budget<'a> {
     options: &'a TessOptions,
 }
 
-/// The `Bfr` parameters of root point `(x, y)`.
+/// The `Bfr` parameters of root point `(x, y)`, laid out by [`FaceDomain`] (exact in f64: the
+/// denominators are powers of two).
 fn bfr(root: Root, x: i64, y: i64) -> (f64, f64) {
-    let (a, b) = (x as f64 / FULL as f64, y as f64 / FULL as f64);
+    let p = Dyadic::new(x, y, FULL);
     match root.sub {
-        None => (a, b),
-        Some((s, _, columns)) => ((s % columns) as f64 + 0.5 * a, (s / columns) as f64 + 0.5 * b),
+        None => p,
+        Some((s, size, columns)) => FaceDomain::SubFaces { size, columns }.from_sub_face(s, p),
     }
+    .to_f64()
 }
 
 /// The Bézier net, in the face's coordinates, of a regular patch whose B-spline control points

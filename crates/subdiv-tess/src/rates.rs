@@ -171,15 +171,14 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// so a face with rate `n ≥ √(M/ε)` keeps its own triangles, and those it shares with coarser
 /// neighbours' rates, within `ε` — provided `M` bounds every face that a triangle touches:
 /// each face takes the largest `M` ([`Tessellator::face_curvature`]) of the faces sharing a
-/// vertex with it. Near an extraordinary vertex `M` is taken over the face less the corner
-/// square of side `2^−D`, `2^−D ≤ ½ / max_rate`, which no cell or strip triangle enters.
+/// vertex with it. Near an extraordinary point `M` is taken over the face less the corner
+/// square inside the first ring around it (below), which no cell or strip triangle enters;
+/// since that square shrinks as the rates around grow, and `M` grows like `(4λ)^d` there,
+/// slower than `n²`, the rates are the least fixed point of this rule.
 ///
-/// The polygon around an extraordinary vertex is not in any flat chart. Its corners are the
-/// faces' dual points nearest the vertex, at `½/n_f`; with `2^−d ≥ ½/n` for every rate `n`
-/// around it, the surface it stands for and its corners lie, face by face, in the hull of the
-/// corner piece of depth `d` (the sub-patch matrices are convex), so every such surface point
-/// is within that hull's diameter of the polygon's corner in its face. Each face takes the
-/// smallest `d` whose hull diameter is ≤ `ε` at every face around, and the rate `2^{d−1}`.
+/// The polygon around an extraordinary point is not in a flat chart: the tessellator replaces
+/// it by rings ([`DualTessellator::tessellate_with_rings`](crate::DualTessellator::tessellate_with_rings)),
+/// whose depths [`rates`](Self::rates) computes and whose bound it states.
 ///
 /// A `rounding_slack` of `1e−12 ×` the model's size is kept from `ε` for the f64 arithmetic.
 /// The bounds come from the quadtree tessellator's pieces, so this policy takes what it takes:
@@ -193,8 +192,8 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 ///
 /// let mesh = Mesh::build(shapes::quad_torus(16, 8))?;
 /// let bounds = Tessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
-/// let coarse = ErrorRates::new(Tolerance::Relative(1e-2)).face_rates(&bounds, &mesh)?;
-/// let fine = ErrorRates::new(Tolerance::Relative(1e-3)).face_rates(&bounds, &mesh)?;
+/// let coarse = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&bounds, &mesh)?.faces;
+/// let fine = ErrorRates::new(Tolerance::Relative(1e-3)).rates(&bounds, &mesh)?.faces;
 /// assert!(coarse.iter().zip(&fine).all(|(c, f)| c <= f) && fine.iter().max() > coarse.iter().max());
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
@@ -210,56 +209,6 @@ impl ErrorRates {
     /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`].
     pub fn new(tolerance: Tolerance) -> Self {
         Self { tolerance, max_rate: DEFAULT_MAX_RATE }
-    }
-
-    /// The rate of every face of `mesh`, with `bounds` the quadtree tessellator of the same
-    /// mesh (its pieces give the bounds).
-    ///
-    /// # Errors
-    /// [`TessError::Tolerance`] for a tolerance that is not a positive finite number,
-    /// [`TessError::RateLimit`] when a face needs more than `max_rate`, and the errors of
-    /// [`Tessellator::face_curvature`].
-    pub fn face_rates(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<Vec<u32>, TessError> {
-        let budget = self.budget(bounds, mesh)?;
-        let max_rate = self.max_rate.max(1);
-        // 2^−D ≤ ½ / max_rate: no cell or strip triangle comes closer to a corner.
-        let depth_limit = (2 * max_rate).next_power_of_two().trailing_zeros();
-        let faces: Vec<FaceId> = mesh.face_ids().collect();
-        let curvature = faces.iter().map(|&f| bounds.face_curvature(f, depth_limit)).collect::<Result<Vec<_>, _>>()?;
-        // Per face, the depth its extraordinary corners need (0: none).
-        let mut corner_depth = vec![0u32; faces.len()];
-        for (k, &f) in faces.iter().enumerate() {
-            if curvature[k].corner_hull == 0.0 {
-                continue;
-            }
-            corner_depth[k] = (1..=depth_limit)
-                .map(|d| bounds.face_curvature(f, d).map(|c| (d, c.corner_hull)))
-                .find(|r| r.as_ref().map_or(true, |&(_, hull)| hull <= budget))
-                .transpose()?
-                .map(|(d, _)| d)
-                .ok_or_else(|| TessError::RateLimit {
-                    face: f.index(),
-                    needed: format!("more than {max_rate} (its extraordinary corner is not within ε at that rate)"),
-                    max_rate,
-                })?;
-        }
-        faces
-            .iter()
-            .map(|&f| {
-                // Every face sharing a vertex with f (f included).
-                let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
-                let (second, depth) = around.fold((0.0f64, 0u32), |(m, d), g| {
-                    (m.max(curvature[g.index()].second), d.max(corner_depth[g.index()]))
-                });
-                let smooth = (second / budget).sqrt().ceil();
-                let corner = if depth > 0 { f64::from(1u32 << (depth - 1)) } else { 1.0 };
-                let needed = smooth.max(corner).max(1.0);
-                if needed > f64::from(max_rate) {
-                    return Err(TessError::RateLimit { face: f.index(), needed: format!("{needed}"), max_rate });
-                }
-                Ok(needed as u32)
-            })
-            .collect()
     }
 }
 
@@ -305,9 +254,11 @@ pub(crate) fn first_ring_depth(finest: u32) -> u32 {
 const MAX_RING_DEPTH: u32 = 40;
 
 impl ErrorRates {
-    /// Rates and ring depths to the tolerance, for the dual-grid tessellator's rings: face rates
-    /// from the second-derivative bound alone (as [`face_rates`](Self::face_rates)), and around
-    /// each extraordinary point the least depth `d` whose corner hulls are within `ε`.
+    /// Rates and ring depths to the tolerance, for the dual-grid tessellator's rings
+    /// ([`DualTessellator::tessellate_with_rings`](crate::DualTessellator::tessellate_with_rings)),
+    /// with `bounds` the quadtree tessellator of the same mesh (its pieces give the bounds): face
+    /// rates from the second-derivative bound (see [`ErrorRates`]), and around each
+    /// extraordinary point the least depth `d` whose corner hulls are within `ε`.
     ///
     /// # The bound, with rings
     /// Rings around an extraordinary point lie at powers of two `r_j` below its nearest dual
@@ -319,13 +270,15 @@ impl ErrorRates {
     /// of side `r_{j+1}` — checked for every depth below the faces' own bound region. The fan
     /// inside the last ring lies, with the surface it stands for, in the hull of the corner
     /// piece of depth `d`: within its diameter. The band from the dual points to the first ring
-    /// has triangles in one face or across one edge, with corners at least `r_1 ≥ ¼ / max_rate`
-    /// from the point and within `√2 / n` of each other: the faces' bound, which excludes only
-    /// the corner squares of side `¼ / max_rate`, covers them.
+    /// has triangles in one face or across one edge, with corners at least `r_1` from the point
+    /// and within `√2 / n` of each other: the faces' bound, which excludes only the corner
+    /// squares of side `r_1` (for the finest rate around), covers them.
     ///
     /// # Errors
-    /// As [`face_rates`](Self::face_rates); [`TessError::RateLimit`] also when an
-    /// extraordinary point's hull stays above `ε` down to depth 40.
+    /// [`TessError::Tolerance`] for a tolerance that is not a positive finite number,
+    /// [`TessError::RateLimit`] when a face needs more than `max_rate` or an extraordinary
+    /// point's hull stays above `ε` down to depth 40, and the errors of
+    /// [`Tessellator::face_curvature`].
     pub fn rates(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<DualRates, TessError> {
         self.rates_rounded(bounds, mesh, |n| n)
     }
@@ -480,23 +433,23 @@ mod tests {
         assert_eq!(ScreenSpace::new(behind, [1000, 1000], 5.0).face_rates(&mesh).expect("valid"), [1]);
     }
 
-    /// On a regular torus the rate grows like `1/√ε`; at the cube's valence-3 corners the hull
-    /// bound sets the rate, and a tolerance beyond reach is a typed error naming a face.
+    /// On a regular torus the rate grows like `1/√ε`; a tolerance beyond reach is a typed error
+    /// naming a face.
     #[test]
     fn error_rates_follow_the_bounds() {
         let cc = subdiv_schemes::Builtin::CatmullClark.scheme();
         let torus = Mesh::build(shapes::quad_torus(16, 8)).expect("torus");
         let bounds = Tessellator::new(cc, &torus).expect("closed");
-        let rate = |r: f64| ErrorRates::new(Tolerance::Relative(r)).face_rates(&bounds, &torus).expect("reachable");
+        let rate = |r: f64| ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &torus).expect("reachable").faces;
         let (coarse, fine) = (rate(1e-2), rate(1e-4));
         let ratio = f64::from(*fine.iter().max().expect("faces")) / f64::from(*coarse.iter().max().expect("faces"));
         assert!((8.0..=12.0).contains(&ratio), "rates {coarse:?} → {fine:?}");
         let cube = Mesh::build(shapes::cube()).expect("cube");
         let bounds = Tessellator::new(cc, &cube).expect("closed");
-        assert!(ErrorRates::new(Tolerance::Relative(3e-2)).face_rates(&bounds, &cube).is_ok());
-        let err = ErrorRates { max_rate: 8, ..ErrorRates::new(Tolerance::Relative(1e-3)) }.face_rates(&bounds, &cube);
+        assert!(ErrorRates::new(Tolerance::Relative(3e-2)).rates(&bounds, &cube).is_ok());
+        let err = ErrorRates { max_rate: 8, ..ErrorRates::new(Tolerance::Relative(1e-3)) }.rates(&bounds, &cube);
         assert!(matches!(err, Err(TessError::RateLimit { max_rate: 8, .. })), "{err:?}");
-        let bad = ErrorRates::new(Tolerance::Absolute(-1.0)).face_rates(&bounds, &cube);
+        let bad = ErrorRates::new(Tolerance::Absolute(-1.0)).rates(&bounds, &cube);
         assert!(matches!(bad, Err(TessError::Tolerance { .. })), "{bad:?}");
     }
 
@@ -517,7 +470,20 @@ mod tests {
         let bounds = Tessellator::new(cc, &torus).expect("closed");
         let r = ErrorRates::new(Tolerance::Relative(1e-3)).rates(&bounds, &torus).expect("reachable");
         assert!(r.rings.vertices.iter().all(|&d| d == 0));
-        assert_eq!(r.faces, ErrorRates::new(Tolerance::Relative(1e-3)).face_rates(&bounds, &torus).expect("reachable"));
+        // And the rates are ⌈√(M/ε)⌉ of the faces' own bound (no corner to exclude).
+        let epsilon = Tolerance::Relative(1e-3).absolute(bounds.diagonal()).expect("valid");
+        let magnitude = torus.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+        let budget = epsilon - rounding_slack(magnitude);
+        let second: Vec<f64> = torus.face_ids().map(|f| bounds.face_curvature(f, 1).expect("face").second).collect();
+        let want: Vec<u32> = torus
+            .face_ids()
+            .map(|f| {
+                let around = torus.face_vertices(f).iter().flat_map(|&v| torus.vertex_faces(v));
+                let m = around.map(|g| second[g.index()]).fold(0.0, f64::max);
+                (m / budget).sqrt().ceil() as u32
+            })
+            .collect();
+        assert_eq!(r.faces, want);
     }
 
     #[test]

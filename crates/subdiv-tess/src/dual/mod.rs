@@ -353,6 +353,11 @@ impl DualTessellator {
         Ok(())
     }
 
+    /// The last output, keeping nothing else (a one-shot tessellation without a copy).
+    pub fn into_mesh(self) -> TessMesh {
+        self.output
+    }
+
     /// The last output (empty before the first [`tessellate`](Self::tessellate)).
     pub fn mesh(&self) -> &TessMesh {
         &self.output
