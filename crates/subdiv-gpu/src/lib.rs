@@ -1,0 +1,11 @@
+//! GPU evaluation of subdivision-surface tessellations, and offscreen rendering (wgpu).
+//!
+//! [`Gpu`] holds a device and its queue. Every GPU test of the workspace gets one through
+//! [`Gpu::for_tests`], which skips (saying so) when no adapter exists, unless
+//! `SUBDIV_REQUIRE_GPU=1` is set, as `.ci/run` does: there a missing adapter fails the test.
+
+mod adapter;
+mod error;
+
+pub use adapter::{Gpu, GpuOptions};
+pub use error::GpuError;
