@@ -59,7 +59,7 @@ mod mesh;
 pub mod quadtree;
 pub mod rates;
 
-pub use dual::{DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE};
+pub use dual::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, MAX_DUAL_RATE};
 pub use error::TessError;
 pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessMesh};

@@ -482,6 +482,59 @@ fn update_cage_equals_a_fresh_tessellation() {
     }
 }
 
+/// The plan's f64 evaluation against the tessellator's own, on a moved cage.
+fn check_plan(name: &str, tess: &DualTessellator, cage: &[DVec3], out: &TessMesh) {
+    let plan = tess.evaluation_plan();
+    assert_eq!(plan.vertices.len(), out.positions.len(), "{name}: one entry per vertex");
+    let (mut positions, mut normals) = (Vec::new(), Vec::new());
+    plan.evaluate(cage, &mut positions, &mut normals);
+    let scale = cage.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
+    for (k, (p, n)) in positions.iter().zip(&normals).enumerate() {
+        assert!(p.distance(out.positions[k]) <= 1e-12 * scale, "{name}: vertex {k} {p} vs {}", out.positions[k]);
+        assert!(n.distance(out.normals[k]) <= 1e-10, "{name}: normal {k} {n} vs {}", out.normals[k]);
+    }
+}
+
+#[test]
+fn evaluation_plans_reproduce_the_tessellator() {
+    for (builtin, name, soup) in [
+        (Builtin::CatmullClark, "cube", shapes::cube()),
+        (Builtin::CatmullClark, "pentagonal prism", shapes::ngon_prism(5)),
+        (Builtin::CatmullClark, "torus", shapes::quad_torus(5, 4)),
+        (Builtin::CatmullClark, "grid", shapes::quad_grid(3, 2)),
+        (Builtin::CatmullClark, "default model", shapes::default_model()),
+        (Builtin::Loop, "icosahedron", shapes::icosahedron()),
+    ] {
+        let mesh = Mesh::build(soup).unwrap();
+        let rates = rates_for(&mesh, 5, 9);
+        let mut tess = DualTessellator::new(builtin.scheme(), &mesh, &DualOptions::default()).unwrap();
+        let out = tess.tessellate(&rates).unwrap().clone();
+        check_plan(name, &tess, mesh.positions(), &out);
+        let plan = tess.evaluation_plan();
+        let kinds = |kind| plan.vertices.iter().filter(|&&e| e >> subdiv_tess::dual::PLAN_KIND_SHIFT == kind).count();
+        eprintln!(
+            "{name}: {} vertices: {} block, {} bicubic, {} general; {} refined points",
+            plan.vertices.len(),
+            kinds(subdiv_tess::dual::PLAN_BLOCK),
+            kinds(subdiv_tess::dual::PLAN_BICUBIC),
+            kinds(subdiv_tess::dual::PLAN_GENERAL),
+            plan.point_count() - mesh.vertex_count()
+        );
+        // The plan is linear in the cage: it follows a moved one, rings included.
+        let moved: Vec<DVec3> = mesh
+            .positions()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p * 1.5 + DVec3::new(0.1 * i as f64, 0.0, -0.2))
+            .collect();
+        let out = tess.update_cage(&moved).unwrap().clone();
+        check_plan(name, &tess, &moved, &out);
+        let rings = random_rings(&mesh, 3, 3);
+        let out = tess.tessellate_with_rings(&rates, &rings).unwrap().clone();
+        check_plan(&format!("{name} with rings"), &tess, &moved, &out);
+    }
+}
+
 #[test]
 fn thread_count_does_not_change_the_bits() {
     let mesh = Mesh::build(shapes::default_model()).unwrap();

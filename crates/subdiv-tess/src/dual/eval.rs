@@ -46,6 +46,9 @@ use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
+use super::plan::{
+    EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
+};
 use super::topology::Topology;
 use crate::TessError;
 use crate::quadtree::{check_bicubic, regular_grid};
@@ -220,12 +223,19 @@ fn derivative(t: f64) -> [f64; 4] {
 /// `∂/∂v`.
 #[inline]
 fn bicubic(cv: &[u32; 16], cage: &[DVec3], u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+    bicubic_at(|k| cage[cv[k] as usize], u, v)
+}
+
+/// The bicubic patch with control point `k = j · 4 + i` at `(i − 1, j − 1)` given by
+/// `point(k)`, at `(u, v)`: position, `∂/∂u`, `∂/∂v`.
+#[inline]
+pub(super) fn bicubic_at(point: impl Fn(usize) -> DVec3, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
     let (bu, du, bv, dv) = (basis(u), derivative(u), basis(v), derivative(v));
     let (mut p, mut a, mut b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
     for j in 0..4 {
         let (mut c, mut e) = (DVec3::ZERO, DVec3::ZERO);
         for i in 0..4 {
-            let x = cage[cv[j * 4 + i] as usize];
+            let x = point(j * 4 + i);
             c += bu[i] * x;
             e += du[i] * x;
         }
@@ -261,6 +271,8 @@ pub(crate) struct Evaluator {
     block_grids: Vec<(u32, u32)>,
     /// The patch grids' bases and vertices.
     grid_basis: Vec<[[f64; 4]; 2]>,
+    /// The parameters of `grid_basis`'s entries.
+    grid_params: Vec<f64>,
     grid_vertices: Vec<u32>,
     ids: Vec<u32>,
     weights: Vec<f64>,
@@ -328,6 +340,7 @@ impl Evaluator {
             patch_grids: Vec::new(),
             block_grids: Vec::new(),
             grid_basis: Vec::new(),
+            grid_params: Vec::new(),
             grid_vertices: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
@@ -485,6 +498,7 @@ impl Evaluator {
         self.patch_grids.clear();
         self.block_grids.clear();
         self.grid_basis.clear();
+        self.grid_params.clear();
         self.grid_vertices.clear();
         let (mut s, mut t) = (Vec::new(), Vec::new());
         // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
@@ -596,6 +610,7 @@ impl Evaluator {
         }
         let at = self.grid_basis.len() as u32;
         self.grid_basis.extend(s.iter().chain(t.iter()).map(|&x| [basis(x), derivative(x)]));
+        self.grid_params.extend(s.iter().chain(t.iter()));
         Some(PatchGrid {
             level: r0.level,
             cv: std::array::from_fn(|k| ids0[usize::from(grid[k])]),
@@ -902,6 +917,109 @@ impl Evaluator {
         let w = &self.weights[r.weights as usize..r.weights as usize + 3 * pad];
         let [p, s, t] = dot3(points, ids, w);
         (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t)
+    }
+}
+
+impl Evaluator {
+    /// The evaluation of `topo`'s vertices (prepared) as plain arrays: see [`EvaluationPlan`].
+    pub(crate) fn plan(&self, topo: &Topology) -> EvaluationPlan {
+        let mut plan = EvaluationPlan { cage_len: self.positions[0].len() as u32, ..EvaluationPlan::default() };
+        // Each level's first point in the one array of points.
+        let mut starts = Vec::with_capacity(self.positions.len());
+        let mut total = 0u32;
+        for level in &self.positions {
+            starts.push(total);
+            total += level.len() as u32;
+        }
+        if let Some(refiner) = &self.refiner {
+            plan.refine_rows.push(0);
+            for (l, stencils) in refiner.levels().iter().enumerate() {
+                for child in 0..stencils.child_count() {
+                    for (parent, w) in stencils.row(child) {
+                        plan.refine_ids.push(starts[l] + parent as u32);
+                        plan.refine_weights.push(w);
+                    }
+                    plan.refine_rows.push(plan.refine_ids.len() as u32);
+                }
+                plan.levels.push(starts[l + 1]..starts[l + 1] + stencils.child_count() as u32);
+            }
+        }
+        const UNSET: u32 = u32::MAX;
+        let entry = |kind: u32, index: usize| kind << PLAN_KIND_SHIFT | index as u32;
+        plan.vertices = vec![UNSET; topo.sites.len()];
+        let mut face_patches: HashMap<u32, u32> = HashMap::new();
+        for block in &topo.blocks {
+            if let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] {
+                let at = plan.points.len() as u32;
+                plan.points.extend_from_slice(cv);
+                face_patches.insert(block.face, at);
+                let base = block.base as usize;
+                let end = base + (block.rate * block.rate) as usize;
+                plan.vertices[base..end].fill(entry(PLAN_BLOCK, plan.blocks.len()));
+                plan.blocks.push(PlanBlock { base: block.base, rate: block.rate, points: at });
+            }
+        }
+        for g in &self.patch_grids {
+            let at = plan.points.len() as u32;
+            plan.points.extend(g.cv.iter().map(|&c| starts[g.level as usize] + c));
+            let (ns, nt) = (g.s as usize, g.t as usize);
+            let params = &self.grid_params[g.basis as usize..g.basis as usize + ns + nt];
+            for b in 0..nt {
+                for a in 0..ns {
+                    let v = self.grid_vertices[g.vertices as usize + b * ns + a];
+                    plan.vertices[v as usize] = entry(PLAN_BICUBIC, plan.bicubic.len());
+                    plan.bicubic.push(PlanBicubic { points: at, s: params[a], t: params[ns + b], ju: g.ju, jv: g.jv });
+                }
+            }
+        }
+        // The general records' patches and weights, each once.
+        let mut patches: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut weights: HashMap<(u32, u32), u32> = HashMap::new();
+        for v in 0..topo.sites.len() {
+            if plan.vertices[v] != UNSET {
+                continue;
+            }
+            let kind = self.kinds[v];
+            if kind == BICUBIC {
+                let site = topo.sites[v];
+                let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
+                let at = *face_patches.entry(site.face).or_insert_with(|| {
+                    plan.points.extend_from_slice(cv);
+                    plan.points.len() as u32 - 16
+                });
+                let (s, t) = site.point.to_f64();
+                plan.vertices[v] = entry(PLAN_BICUBIC, plan.bicubic.len());
+                plan.bicubic.push(PlanBicubic { points: at, s, t, ju: [1.0, 0.0], jv: [0.0, 1.0] });
+                continue;
+            }
+            debug_assert!(kind < IN_PATCH_GRID, "vertex {v} has no plan");
+            let r = &self.records[kind as usize];
+            let len = r.len as usize;
+            let points = *patches.entry((r.level, r.ids)).or_insert_with(|| {
+                let ids = &self.ids[r.ids as usize..r.ids as usize + len];
+                plan.points.extend(ids.iter().map(|&i| starts[r.level as usize] + i));
+                plan.points.len() as u32 - r.len
+            });
+            let w = *weights.entry((r.table, r.weights)).or_insert_with(|| {
+                let at = plan.weights.len() as u32;
+                if r.table == NO_TABLE {
+                    let pad = padded(len);
+                    for row in 0..3 {
+                        let start = r.weights as usize + row * pad;
+                        plan.weights.extend_from_slice(&self.weights[start..start + len]);
+                    }
+                } else {
+                    let stencil = self.tables.tables[r.table as usize].stencil(Grid::Dual, r.weights as usize);
+                    for row in [&stencil.position, &stencil.du, &stencil.dv] {
+                        plan.weights.extend_from_slice(row);
+                    }
+                }
+                at
+            });
+            plan.vertices[v] = entry(PLAN_GENERAL, plan.general.len());
+            plan.general.push(PlanGeneral { points, len: r.len, weights: w, ju: r.ju, jv: r.jv });
+        }
+        plan
     }
 }
 

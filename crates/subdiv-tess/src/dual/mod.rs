@@ -56,6 +56,7 @@
 //! positions and normals for a moved cage without any topology or stencil work.
 
 mod eval;
+mod plan;
 mod topology;
 
 use glam::DVec3;
@@ -64,6 +65,9 @@ use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{Scheme, Split};
 
 use self::eval::Evaluator;
+pub use self::plan::{
+    EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
+};
 use self::topology::{Builder, Topology};
 use crate::rates::RingDepths;
 use crate::{SurfaceParameter, TessError, TessMesh};
@@ -351,6 +355,13 @@ impl DualTessellator {
             return Err(TessError::CagePosition { vertex, value: format!("{p}") });
         }
         Ok(())
+    }
+
+    /// The last tessellation's evaluation as plain arrays (for a GPU, or any evaluator
+    /// elsewhere): every output vertex as a linear function of the cage, with the refined
+    /// levels it goes through. See [`EvaluationPlan`]; empty before the first tessellation.
+    pub fn evaluation_plan(&self) -> EvaluationPlan {
+        self.evaluator.plan(&self.topology)
     }
 
     /// The last output, keeping nothing else (a one-shot tessellation without a copy).

@@ -1,0 +1,201 @@
+//! A tessellation's evaluation as plain arrays: the linear map from a cage to every output
+//! vertex's position and tangents, for evaluators elsewhere (a GPU's compute shader, paper 003
+//! §7.2's buffers) and as a portable reference.
+//!
+//! The arrays mirror the paper's: the **points** (the cage, rewritten every frame, then the
+//! refined levels that some patches live on, each level a sparse combination of the one
+//! before), the **patches** (point indices, flattened: [`EvaluationPlan::points`]) and, per
+//! output vertex, which patch and which **combination** of its points (weights of the position
+//! and both derivatives) give it. Three kinds of vertices:
+//! - [`PLAN_BLOCK`]: a cell point `((i+½)/n, (j+½)/n)` of a regular bicubic face, found from the
+//!   vertex's offset in its face's block: the uniform bicubic B-spline there (no weights
+//!   stored).
+//! - [`PLAN_BICUBIC`]: any other point of a bicubic patch (on the cage or on a refined level),
+//!   at a stored `(s, t)` with the chain-rule rows that turn the patch's derivatives into the
+//!   face's.
+//! - [`PLAN_GENERAL`]: an exact stencil over its patch's points (extraordinary patches,
+//!   boundaries, vertex limit points); points at the same place of the same patch shape share
+//!   their weights.
+
+use std::ops::Range;
+
+use glam::DVec3;
+
+/// Kind of an [`EvaluationPlan::vertices`] entry: a [`PlanBlock`] number below the kind bits.
+pub const PLAN_BLOCK: u32 = 0;
+/// Kind of an [`EvaluationPlan::vertices`] entry: a [`PlanBicubic`] number below the kind bits.
+pub const PLAN_BICUBIC: u32 = 1;
+/// Kind of an [`EvaluationPlan::vertices`] entry: a [`PlanGeneral`] number below the kind bits.
+pub const PLAN_GENERAL: u32 = 2;
+/// Where the kind sits in an [`EvaluationPlan::vertices`] entry: `kind << PLAN_KIND_SHIFT | index`.
+pub const PLAN_KIND_SHIFT: u32 = 30;
+
+/// The cell points of a regular bicubic face at rate `n`: output vertex `base + j · n + i` is
+/// the patch at `((i+½)/n, (j+½)/n)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PlanBlock {
+    /// The first vertex.
+    pub base: u32,
+    /// The face's rate `n`.
+    pub rate: u32,
+    /// The first of the patch's 16 point indices in [`EvaluationPlan::points`] (`k = j · 4 + i`
+    /// is the control point at `(i − 1, j − 1)` in the face's frame).
+    pub points: u32,
+}
+
+/// A point of a bicubic patch at `(s, t)` in the patch's frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanBicubic {
+    /// The first of the patch's 16 point indices in [`EvaluationPlan::points`], as in
+    /// [`PlanBlock::points`].
+    pub points: u32,
+    /// The parameter in the patch's frame.
+    pub s: f64,
+    /// The parameter in the patch's frame.
+    pub t: f64,
+    /// `∂/∂u = ju[0] · ∂/∂s + ju[1] · ∂/∂t` for the input face's `u`.
+    pub ju: [f64; 2],
+    /// `∂/∂v = jv[0] · ∂/∂s + jv[1] · ∂/∂t`.
+    pub jv: [f64; 2],
+}
+
+/// A point given by an exact stencil over its patch's points.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanGeneral {
+    /// The first of the patch's `len` point indices in [`EvaluationPlan::points`].
+    pub points: u32,
+    /// The number of points.
+    pub len: u32,
+    /// The first of three rows of `len` weights in [`EvaluationPlan::weights`]: position,
+    /// `∂/∂s`, `∂/∂t`.
+    pub weights: u32,
+    /// As [`PlanBicubic::ju`].
+    pub ju: [f64; 2],
+    /// As [`PlanBicubic::jv`].
+    pub jv: [f64; 2],
+}
+
+/// Every output vertex of a tessellation as a linear function of the cage; made by
+/// [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan).
+///
+/// Points are numbered in one array: the cage's vertices first (`0..cage_len`), then each
+/// refined level's points ([`levels`](Self::levels), in order).
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{DualOptions, DualTessellator};
+///
+/// let mesh = Mesh::build(shapes::ngon_prism(5))?;
+/// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())?;
+/// let out = tess.tessellate(&vec![4; mesh.face_count()])?.clone();
+/// let plan = tess.evaluation_plan();
+/// let (mut positions, mut normals) = (Vec::new(), Vec::new());
+/// plan.evaluate(mesh.positions(), &mut positions, &mut normals);
+/// for (a, b) in positions.iter().zip(&out.positions) {
+///     assert!(a.distance(*b) < 1e-12);
+/// }
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EvaluationPlan {
+    /// The cage's vertex count: points `0..cage_len`.
+    pub cage_len: u32,
+    /// The refined levels' point ranges, in order; each level's points combine the points of
+    /// the level before.
+    pub levels: Vec<Range<u32>>,
+    /// Refined point `cage_len + k` is `Σ refine_weights[e] · point[refine_ids[e]]` over
+    /// `e ∈ refine_rows[k]..refine_rows[k + 1]` (empty when there are no refined levels).
+    pub refine_rows: Vec<u32>,
+    /// See [`refine_rows`](Self::refine_rows).
+    pub refine_ids: Vec<u32>,
+    /// See [`refine_rows`](Self::refine_rows).
+    pub refine_weights: Vec<f64>,
+    /// Per output vertex, `kind << PLAN_KIND_SHIFT | index` ([`PLAN_BLOCK`], [`PLAN_BICUBIC`],
+    /// [`PLAN_GENERAL`]).
+    pub vertices: Vec<u32>,
+    /// Bicubic faces' cell grids.
+    pub blocks: Vec<PlanBlock>,
+    /// Other points of bicubic patches.
+    pub bicubic: Vec<PlanBicubic>,
+    /// Points on exact stencils.
+    pub general: Vec<PlanGeneral>,
+    /// Patches' point indices.
+    pub points: Vec<u32>,
+    /// Exact stencils' weights.
+    pub weights: Vec<f64>,
+}
+
+impl EvaluationPlan {
+    /// The number of points: the cage's and every refined level's.
+    pub fn point_count(&self) -> usize {
+        self.cage_len as usize + self.refine_rows.len().saturating_sub(1)
+    }
+
+    /// Evaluates every output vertex on `cage` (one position per cage vertex): positions and
+    /// unit normals (zero where the tangents are parallel), in f64: the tessellator's own
+    /// values, to rounding.
+    ///
+    /// # Panics
+    /// If `cage` is not [`cage_len`](Self::cage_len) long.
+    pub fn evaluate(&self, cage: &[DVec3], positions: &mut Vec<DVec3>, normals: &mut Vec<DVec3>) {
+        assert_eq!(cage.len(), self.cage_len as usize, "one position per cage vertex");
+        let mut points = Vec::with_capacity(self.point_count());
+        points.extend_from_slice(cage);
+        for row in self.refine_rows.windows(2) {
+            let e = row[0] as usize..row[1] as usize;
+            let p = self.refine_ids[e.clone()]
+                .iter()
+                .zip(&self.refine_weights[e])
+                .fold(DVec3::ZERO, |acc, (&i, &w)| acc + w * points[i as usize]);
+            points.push(p);
+        }
+        positions.clear();
+        normals.clear();
+        for (v, &entry) in self.vertices.iter().enumerate() {
+            let index = (entry & ((1 << PLAN_KIND_SHIFT) - 1)) as usize;
+            let (p, du, dv) = match entry >> PLAN_KIND_SHIFT {
+                PLAN_BLOCK => {
+                    let b = &self.blocks[index];
+                    let local = v as u32 - b.base;
+                    let n = f64::from(b.rate);
+                    let (s, t) = ((f64::from(local % b.rate) + 0.5) / n, (f64::from(local / b.rate) + 0.5) / n);
+                    self.bicubic_at(&points, b.points, s, t, [1.0, 0.0], [0.0, 1.0])
+                }
+                PLAN_BICUBIC => {
+                    let b = &self.bicubic[index];
+                    self.bicubic_at(&points, b.points, b.s, b.t, b.ju, b.jv)
+                }
+                _ => {
+                    let g = &self.general[index];
+                    let (len, w) = (g.len as usize, g.weights as usize);
+                    let ids = &self.points[g.points as usize..g.points as usize + len];
+                    let row = |r: usize| {
+                        ids.iter()
+                            .zip(&self.weights[w + r * len..w + (r + 1) * len])
+                            .fold(DVec3::ZERO, |acc, (&i, &x)| acc + x * points[i as usize])
+                    };
+                    let (p, s, t) = (row(0), row(1), row(2));
+                    (p, g.ju[0] * s + g.ju[1] * t, g.jv[0] * s + g.jv[1] * t)
+                }
+            };
+            positions.push(p);
+            normals.push(du.cross(dv).normalize_or_zero());
+        }
+    }
+
+    /// A bicubic patch at `(s, t)`: position and the face's two derivatives.
+    fn bicubic_at(
+        &self,
+        points: &[DVec3],
+        at: u32,
+        s: f64,
+        t: f64,
+        ju: [f64; 2],
+        jv: [f64; 2],
+    ) -> (DVec3, DVec3, DVec3) {
+        let cv = &self.points[at as usize..at as usize + 16];
+        let (p, a, b) = super::eval::bicubic_at(|k| points[cv[k] as usize], s, t);
+        (p, ju[0] * a + ju[1] * b, jv[0] * a + jv[1] * b)
+    }
+}
