@@ -13,4 +13,44 @@ pub enum GpuError {
         /// wgpu's message.
         reason: String,
     },
+    /// A cage whose length is not the control mesh's vertex count.
+    #[error("the cage has {got} positions, the control mesh {expected} vertices")]
+    CageLength {
+        /// The control mesh's vertex count.
+        expected: usize,
+        /// The cage's length.
+        got: usize,
+    },
+    /// A cage position that is not finite.
+    #[error("control point {vertex} is not finite: {value}")]
+    CagePosition {
+        /// The vertex.
+        vertex: usize,
+        /// Its value, printed.
+        value: String,
+    },
+    /// An index past the tessellation's vertices.
+    #[error("index {index} names no vertex (there are {vertices})")]
+    Indices {
+        /// The index.
+        index: u32,
+        /// The number of vertices.
+        vertices: usize,
+    },
+    /// Data larger than the device can hold in one buffer.
+    #[error("the {what} take {bytes} bytes, more than the device's limit of {limit}")]
+    TooLarge {
+        /// What did not fit.
+        what: &'static str,
+        /// Its size.
+        bytes: u64,
+        /// The device's limit.
+        limit: u64,
+    },
+    /// Reading a buffer back failed (the device was lost).
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+    /// The CPU tessellator refused the input.
+    #[error(transparent)]
+    Tessellation(#[from] subdiv_tess::TessError),
 }

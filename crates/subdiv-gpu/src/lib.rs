@@ -6,6 +6,8 @@
 
 mod adapter;
 mod error;
+mod evaluate;
 
 pub use adapter::{Gpu, GpuOptions};
 pub use error::GpuError;
+pub use evaluate::{GpuEvalOptions, GpuTessellation, RateCache};

@@ -488,6 +488,14 @@ fn check_plan(name: &str, tess: &DualTessellator, cage: &[DVec3], out: &TessMesh
     assert_eq!(plan.vertices.len(), out.positions.len(), "{name}: one entry per vertex");
     let (mut positions, mut normals) = (Vec::new(), Vec::new());
     plan.evaluate(cage, &mut positions, &mut normals);
+    // Over the cage's own points: the same values.
+    let flat = plan.over_cage();
+    assert!(flat.levels.is_empty() && flat.point_count() == cage.len(), "{name}: refined points left");
+    let (mut flat_positions, mut flat_normals) = (Vec::new(), Vec::new());
+    flat.evaluate(cage, &mut flat_positions, &mut flat_normals);
+    positions.iter().zip(&flat_positions).chain(normals.iter().zip(&flat_normals)).for_each(|(a, b)| {
+        assert!(a.distance(*b) <= 1e-12 * (1.0 + a.length()), "{name}: over the cage {a} vs {b}");
+    });
     let scale = cage.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
     for (k, (p, n)) in positions.iter().zip(&normals).enumerate() {
         assert!(p.distance(out.positions[k]) <= 1e-12 * scale, "{name}: vertex {k} {p} vs {}", out.positions[k]);

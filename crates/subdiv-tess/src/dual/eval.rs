@@ -206,7 +206,7 @@ impl RateBasis {
 
 /// The uniform cubic B-spline basis at `t ∈ [0, 1]`.
 #[inline]
-fn basis(t: f64) -> [f64; 4] {
+pub(super) fn basis(t: f64) -> [f64; 4] {
     let s = 1.0 - t;
     let (t2, t3) = (t * t, t * t * t);
     [s * s * s / 6.0, (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0, (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t3 / 6.0]
@@ -214,7 +214,7 @@ fn basis(t: f64) -> [f64; 4] {
 
 /// The derivative of [`basis`].
 #[inline]
-fn derivative(t: f64) -> [f64; 4] {
+pub(super) fn derivative(t: f64) -> [f64; 4] {
     let s = 1.0 - t;
     [-0.5 * s * s, (3.0 * t * t - 4.0 * t) * 0.5, (-3.0 * t * t + 2.0 * t + 1.0) * 0.5, 0.5 * t * t]
 }

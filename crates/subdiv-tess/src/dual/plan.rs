@@ -20,6 +20,7 @@
 use std::ops::Range;
 
 use glam::DVec3;
+use hashbrown::HashMap;
 
 /// Kind of an [`EvaluationPlan::vertices`] entry: a [`PlanBlock`] number below the kind bits.
 pub const PLAN_BLOCK: u32 = 0;
@@ -184,6 +185,119 @@ impl EvaluationPlan {
         }
     }
 
+    /// The same evaluation with every combination over the cage's own points: no refined
+    /// levels, so one pass evaluates everything, and each stencil's weights (composed through
+    /// the levels in f64) apply to the cage's exact positions. This is what evaluators in f32
+    /// (GPUs) want: refined points stored in f32 carry an error of the model's size times
+    /// 2^-24, which tangents on small patches magnify; combinations over the cage do not.
+    /// Bicubic points on refined levels become exact-stencil points; the cage's bicubic
+    /// faces and points stay as they are.
+    pub fn over_cage(&self) -> EvaluationPlan {
+        if self.levels.is_empty() {
+            return self.clone();
+        }
+        let cage = self.cage_len as usize;
+        let mut scratch = Composer::new(cage);
+        // Each refined point's row over the cage, level after level.
+        let mut rows: Vec<Vec<(u32, f64)>> = Vec::with_capacity(self.point_count() - cage);
+        for r in self.refine_rows.windows(2) {
+            for e in r[0] as usize..r[1] as usize {
+                let (id, w) = (self.refine_ids[e] as usize, self.refine_weights[e]);
+                if id < cage {
+                    scratch.add(0, id as u32, w);
+                } else {
+                    for &(c, x) in &rows[id - cage] {
+                        scratch.add(0, c, w * x);
+                    }
+                }
+            }
+            let (ids, weights) = scratch.take(1);
+            rows.push(ids.into_iter().zip(weights).collect());
+        }
+        let mut out = EvaluationPlan { cage_len: self.cage_len, ..EvaluationPlan::default() };
+        let mut patches: HashMap<(u32, u32), u32> = HashMap::new();
+        let mut patch = |out: &mut EvaluationPlan, at: u32, len: u32| {
+            *patches.entry((at, len)).or_insert_with(|| {
+                out.points.extend_from_slice(&self.points[at as usize..(at + len) as usize]);
+                out.points.len() as u32 - len
+            })
+        };
+        // Composed stencils, each once: per source (patch, weights or parameter).
+        // Key: the source patch and length, and its weights' offset or its `(s, t)` bits;
+        // value: the new patch, its length and weights.
+        type Source = (u32, u32, u64, u64);
+        let mut composed: HashMap<Source, (u32, u32, u32)> = HashMap::new();
+        let mut blocks: HashMap<usize, u32> = HashMap::new();
+        let entry = |kind: u32, index: usize| kind << PLAN_KIND_SHIFT | index as u32;
+        for &e in &self.vertices {
+            let index = (e & ((1 << PLAN_KIND_SHIFT) - 1)) as usize;
+            let new = match e >> PLAN_KIND_SHIFT {
+                PLAN_BLOCK => {
+                    let k = *blocks.entry(index).or_insert_with(|| {
+                        let b = self.blocks[index];
+                        let points = patch(&mut out, b.points, 16);
+                        out.blocks.push(PlanBlock { points, ..b });
+                        out.blocks.len() as u32 - 1
+                    });
+                    entry(PLAN_BLOCK, k as usize)
+                }
+                PLAN_BICUBIC => {
+                    let b = self.bicubic[index];
+                    let cv = &self.points[b.points as usize..b.points as usize + 16];
+                    if cv.iter().all(|&c| (c as usize) < cage) {
+                        let points = patch(&mut out, b.points, 16);
+                        out.bicubic.push(PlanBicubic { points, ..b });
+                        entry(PLAN_BICUBIC, out.bicubic.len() - 1)
+                    } else {
+                        let key = (b.points, 16, b.s.to_bits(), b.t.to_bits());
+                        let (points, len, weights) = *composed.entry(key).or_insert_with(|| {
+                            let (bs, ds, bt, dt) = (
+                                super::eval::basis(b.s),
+                                super::eval::derivative(b.s),
+                                super::eval::basis(b.t),
+                                super::eval::derivative(b.t),
+                            );
+                            for (k, &c) in cv.iter().enumerate() {
+                                let (i, j) = (k % 4, k / 4);
+                                let w = [bs[i] * bt[j], ds[i] * bt[j], bs[i] * dt[j]];
+                                scratch.add_point(&rows, c, w);
+                            }
+                            scratch.push_to(&mut out)
+                        });
+                        out.general.push(PlanGeneral { points, len, weights, ju: b.ju, jv: b.jv });
+                        entry(PLAN_GENERAL, out.general.len() - 1)
+                    }
+                }
+                _ => {
+                    let g = self.general[index];
+                    let ids = &self.points[g.points as usize..(g.points + g.len) as usize];
+                    let key = (g.points, g.len, u64::from(g.weights), u64::MAX);
+                    let (points, len, weights) = if ids.iter().all(|&c| (c as usize) < cage) {
+                        let points = patch(&mut out, g.points, g.len);
+                        *composed.entry(key).or_insert_with(|| {
+                            let w = &self.weights[g.weights as usize..(g.weights + 3 * g.len) as usize];
+                            out.weights.extend_from_slice(w);
+                            (points, g.len, out.weights.len() as u32 - 3 * g.len)
+                        })
+                    } else {
+                        *composed.entry(key).or_insert_with(|| {
+                            let (len, w) = (g.len as usize, g.weights as usize);
+                            for (i, &c) in ids.iter().enumerate() {
+                                let row = |r: usize| self.weights[w + r * len + i];
+                                scratch.add_point(&rows, c, [row(0), row(1), row(2)]);
+                            }
+                            scratch.push_to(&mut out)
+                        })
+                    };
+                    out.general.push(PlanGeneral { points, len, weights, ju: g.ju, jv: g.jv });
+                    entry(PLAN_GENERAL, out.general.len() - 1)
+                }
+            };
+            out.vertices.push(new);
+        }
+        out
+    }
+
     /// A bicubic patch at `(s, t)`: position and the face's two derivatives.
     fn bicubic_at(
         &self,
@@ -197,5 +311,73 @@ impl EvaluationPlan {
         let cv = &self.points[at as usize..at as usize + 16];
         let (p, a, b) = super::eval::bicubic_at(|k| points[cv[k] as usize], s, t);
         (p, ju[0] * a + ju[1] * b, jv[0] * a + jv[1] * b)
+    }
+}
+
+/// Sparse sums over the cage's points, three rows at once (position, `∂/∂s`, `∂/∂t`), with a
+/// dense scratch row and the list of touched points.
+struct Composer {
+    dense: [Vec<f64>; 3],
+    seen: Vec<bool>,
+    touched: Vec<u32>,
+}
+
+impl Composer {
+    fn new(cage: usize) -> Self {
+        Self {
+            dense: [vec![0.0; cage], vec![0.0; cage], vec![0.0; cage]],
+            seen: vec![false; cage],
+            touched: Vec::new(),
+        }
+    }
+
+    fn add(&mut self, row: usize, point: u32, w: f64) {
+        let p = point as usize;
+        if !self.seen[p] {
+            self.seen[p] = true;
+            self.touched.push(point);
+        }
+        self.dense[row][p] += w;
+    }
+
+    /// Adds point `c` (a cage point, or a refined one through its row) with weights `w`.
+    fn add_point(&mut self, rows: &[Vec<(u32, f64)>], c: u32, w: [f64; 3]) {
+        let cage = self.seen.len();
+        if (c as usize) < cage {
+            for (r, &x) in w.iter().enumerate() {
+                self.add(r, c, x);
+            }
+        } else {
+            for &(p, x) in &rows[c as usize - cage] {
+                for (r, &y) in w.iter().enumerate() {
+                    self.add(r, p, x * y);
+                }
+            }
+        }
+    }
+
+    /// The touched points (sorted) and the first `count` rows' values there, cleared.
+    fn take(&mut self, count: usize) -> (Vec<u32>, Vec<f64>) {
+        self.touched.sort_unstable();
+        let mut weights = Vec::with_capacity(count * self.touched.len());
+        for r in 0..count {
+            weights.extend(self.touched.iter().map(|&p| self.dense[r][p as usize]));
+        }
+        for &p in &self.touched {
+            self.seen[p as usize] = false;
+            for row in &mut self.dense {
+                row[p as usize] = 0.0;
+            }
+        }
+        (std::mem::take(&mut self.touched), weights)
+    }
+
+    /// The three rows as a new patch and combination of `out`: `(points, len, weights)`.
+    fn push_to(&mut self, out: &mut EvaluationPlan) -> (u32, u32, u32) {
+        let (ids, weights) = self.take(3);
+        let (points, len) = (out.points.len() as u32, ids.len() as u32);
+        out.points.extend_from_slice(&ids);
+        out.weights.extend_from_slice(&weights);
+        (points, len, out.weights.len() as u32 - 3 * len)
     }
 }

@@ -1,0 +1,603 @@
+//! GPU evaluation of a tessellation: the buffers of paper 003 §7.2 and one compute pass that
+//! fills the vertex buffer a render pass draws from.
+//!
+//! The CPU tessellator hands over an [`EvaluationPlan`] (every output vertex as a fixed
+//! combination of the cage's points, through the refined levels some patches need) and the
+//! triangles. They are uploaded once per rate configuration:
+//! - the **control points** buffer (rewritten every frame by
+//!   [`GpuTessellation::update_control_points`]); every combination is taken over the cage's
+//!   own points ([`EvaluationPlan::over_cage`]: the refined levels some patches live on are
+//!   composed into the weights in f64), so one pass evaluates everything, and f32 refined
+//!   points, whose error of the model's size × 2^-24 small patches' tangents would magnify,
+//!   never exist;
+//! - per range of output vertices, the **entries** (a vertex's kind and record), the records
+//!   (bicubic faces' cell grids, bicubic points, exact-stencil points), the **patches** (their
+//!   point indices) and the **combinations** (stencil weights), each a storage buffer of at most
+//!   [`GpuEvalOptions::max_buffer_bytes`] (128 MiB by default): a range ends where one of them
+//!   would outgrow it, and each range is one dispatch of `evaluate.wgsl`;
+//! - the **vertex buffer** (interleaved `px py pz nx ny nz`, f32, the layout of
+//!   [`FlatMesh`](subdiv_tess::FlatMesh)) and the **index buffer** (the CPU tessellator's
+//!   triangles).
+//!
+//! Positions are f32 on the GPU; the control points are stored relative to the cage's centre
+//! and each combination is summed relative to its first point, so the values agree with the
+//! CPU's f64 ones to a few f32 roundings of the model's size (measured: positions within
+//! 6e-8 of the bounding-box diagonal, normals within 1e-6 on the test meshes).
+
+use glam::{DVec3, Vec3};
+use hashbrown::HashMap;
+use subdiv_tess::dual::{EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_KIND_SHIFT};
+use wgpu::util::DeviceExt;
+
+use crate::{Gpu, GpuError};
+
+/// Invocations per workgroup of both shaders.
+const WORKGROUP: u32 = 64;
+/// Bytes per output vertex: position and normal, f32.
+const VERTEX_BYTES: u64 = 24;
+
+/// Options of [`GpuTessellation`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuEvalOptions {
+    /// The largest storage buffer made for the stencil data (entries, records, patches,
+    /// weights, refinement rows); larger data is split over several buffers and dispatches.
+    /// Clamped to the device's binding limit. Default: 128 MiB.
+    pub max_buffer_bytes: u64,
+}
+
+impl Default for GpuEvalOptions {
+    fn default() -> Self {
+        Self { max_buffer_bytes: 128 << 20 }
+    }
+}
+
+/// Per dispatch: where it writes and how the invocations are laid out (`Params` in the
+/// shaders).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct Params {
+    first: u32,
+    count: u32,
+    stride: u32,
+    pad: u32,
+    origin: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuBlock {
+    base: u32,
+    rate: u32,
+    points: u32,
+    pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuBicubic {
+    points: u32,
+    s: f32,
+    t: f32,
+    pad: u32,
+    ju: [f32; 2],
+    jv: [f32; 2],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+struct GpuGeneral {
+    points: u32,
+    len: u32,
+    weights: u32,
+    pad: u32,
+    ju: [f32; 2],
+    jv: [f32; 2],
+}
+
+/// One dispatch: its bind group and its invocation count.
+#[derive(Debug)]
+struct Dispatch {
+    bind_group: wgpu::BindGroup,
+    count: u32,
+}
+
+/// One range of output vertices with its own records, re-indexed.
+#[derive(Debug, Default)]
+struct Range {
+    first: u32,
+    count: u32,
+    entries: Vec<u32>,
+    blocks: Vec<GpuBlock>,
+    bicubic: Vec<GpuBicubic>,
+    general: Vec<GpuGeneral>,
+    patches: Vec<u32>,
+    weights: Vec<f32>,
+}
+
+impl Range {
+    /// The largest of its buffers, in bytes.
+    fn largest(&self) -> u64 {
+        [
+            4 * self.entries.len(),
+            16 * self.blocks.len(),
+            32 * self.bicubic.len(),
+            32 * self.general.len(),
+            4 * self.patches.len(),
+            4 * self.weights.len(),
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0) as u64
+    }
+}
+
+/// A tessellation evaluated on the GPU: the plan's buffers, the vertex and index buffers, and
+/// the dispatches that refill the vertex buffer from the control points.
+///
+/// ```no_run
+/// use subdiv_gpu::{Gpu, GpuOptions, GpuTessellation, GpuEvalOptions};
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+///
+/// let gpu = Gpu::new(&GpuOptions::default())?;
+/// let mesh = Mesh::build(shapes::default_model())?;
+/// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())?;
+/// let mut flat = FlatMesh::default();
+/// tess.tessellate_flat(&vec![8; mesh.face_count()], &mut flat)?;
+/// let mut on_gpu =
+///     GpuTessellation::new(&gpu, &tess.evaluation_plan(), &flat.indices, mesh.positions(), &GpuEvalOptions::default())?;
+/// // Every frame: a moved cage, one dispatch per vertex range; the vertex buffer is ready to draw.
+/// let cage: Vec<glam::Vec3> = mesh.positions().iter().map(|p| p.as_vec3() * 1.1).collect();
+/// on_gpu.update_control_points(&gpu, &cage)?;
+/// let vertices = on_gpu.read_vertices(&gpu)?; // px py pz nx ny nz per vertex
+/// assert_eq!(vertices.len(), flat.vertices.len());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct GpuTessellation {
+    cage_len: usize,
+    origin: DVec3,
+    points: wgpu::Buffer,
+    vertices: wgpu::Buffer,
+    indices: wgpu::Buffer,
+    vertex_count: u32,
+    index_count: u32,
+    pipeline: wgpu::ComputePipeline,
+    dispatches: Vec<Dispatch>,
+}
+
+impl GpuTessellation {
+    /// Uploads `plan` (from [`DualTessellator::evaluation_plan`](subdiv_tess::DualTessellator::evaluation_plan))
+    /// and `indices` (its triangles, three per triangle), and evaluates every vertex on `cage`.
+    ///
+    /// # Errors
+    /// [`GpuError::CageLength`] / [`GpuError::CagePosition`] for a cage that does not fit the
+    /// plan, [`GpuError::TooLarge`] when the points or the vertex buffer exceed what the device
+    /// can bind or allocate, [`GpuError::Indices`] for an index past the vertices.
+    pub fn new(
+        gpu: &Gpu,
+        plan: &EvaluationPlan,
+        indices: &[u32],
+        cage: &[DVec3],
+        options: &GpuEvalOptions,
+    ) -> Result<Self, GpuError> {
+        check_cage(plan.cage_len as usize, cage.iter().map(|p| p.to_array()))?;
+        // Every combination over the cage itself (composed in f64): f32 refined points would
+        // carry errors of the model's size that small patches' tangents magnify.
+        let plan = &plan.over_cage();
+        let vertex_count = plan.vertices.len();
+        if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
+            return Err(GpuError::Indices { index: bad, vertices: vertex_count });
+        }
+        let limits = gpu.limits();
+        let binding = limits.max_storage_buffer_binding_size.min(limits.max_buffer_size);
+        let budget = options.max_buffer_bytes.min(binding).max(1 << 12);
+        let points_bytes = 16 * plan.point_count() as u64;
+        if points_bytes > binding {
+            return Err(GpuError::TooLarge { what: "control points", bytes: points_bytes, limit: binding });
+        }
+        let vertex_bytes = VERTEX_BYTES * vertex_count as u64;
+        if vertex_bytes > limits.max_buffer_size {
+            return Err(GpuError::TooLarge {
+                what: "vertex buffer",
+                bytes: vertex_bytes,
+                limit: limits.max_buffer_size,
+            });
+        }
+        let device = &gpu.device;
+        let (min, max) =
+            cage.iter().fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(a, b), p| (a.min(*p), b.max(*p)));
+        let origin = if cage.is_empty() { DVec3::ZERO } else { 0.5 * (min + max) };
+
+        let storage = |label: &str, bytes: &[u8], usage: wgpu::BufferUsages| {
+            // A binding may not be empty: one zero word stands for an empty array.
+            let contents: &[u8] = if bytes.is_empty() { &[0; 32] } else { bytes };
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
+        let points = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("subdiv control points"),
+            size: points_bytes.max(16),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let vertices = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("subdiv vertices"),
+            size: vertex_bytes.max(VERTEX_BYTES),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let index_buffer = storage(
+            "subdiv indices",
+            bytemuck::cast_slice(indices),
+            wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST,
+        );
+
+        let evaluate_pipeline = pipeline(device, "evaluate", include_str!("../shaders/evaluate.wgsl"));
+        let origin32 = origin.as_vec3().extend(0.0).to_array();
+        let max_groups = limits.max_compute_workgroups_per_dimension;
+        let params = |first: u32, count: u32| {
+            let groups = count.div_ceil(WORKGROUP).max(1);
+            let x = groups.min(max_groups);
+            Params { first, count, stride: x * WORKGROUP, pad: 0, origin: origin32 }
+        };
+        let uniform = |p: &Params| storage("subdiv params", bytemuck::bytes_of(p), wgpu::BufferUsages::UNIFORM);
+
+        // Evaluation: ranges of vertices whose buffers fit the budget, starting where the
+        // vertex buffer may be bound (offsets aligned for storage bindings).
+        let align = u64::from(limits.min_storage_buffer_offset_alignment);
+        let step = (lcm(VERTEX_BYTES, align) / VERTEX_BYTES) as usize;
+        let mut evaluate = Vec::new();
+        for range in split(plan, budget, step) {
+            let p = params(range.first, range.count);
+            let buffers = [
+                storage("subdiv entries", bytemuck::cast_slice(&range.entries), wgpu::BufferUsages::STORAGE),
+                storage("subdiv blocks", bytemuck::cast_slice(&range.blocks), wgpu::BufferUsages::STORAGE),
+                storage("subdiv bicubic points", bytemuck::cast_slice(&range.bicubic), wgpu::BufferUsages::STORAGE),
+                storage("subdiv stencil points", bytemuck::cast_slice(&range.general), wgpu::BufferUsages::STORAGE),
+                storage("subdiv patches", bytemuck::cast_slice(&range.patches), wgpu::BufferUsages::STORAGE),
+                storage("subdiv combinations", bytemuck::cast_slice(&range.weights), wgpu::BufferUsages::STORAGE),
+                uniform(&p),
+            ];
+            let out = wgpu::BufferBinding {
+                buffer: &vertices,
+                offset: VERTEX_BYTES * u64::from(range.first),
+                size: wgpu::BufferSize::new(VERTEX_BYTES * u64::from(range.count)),
+            };
+            let mut entries = vec![wgpu::BindGroupEntry { binding: 0, resource: points.as_entire_binding() }];
+            entries.extend(
+                buffers[..6]
+                    .iter()
+                    .enumerate()
+                    .map(|(k, b)| wgpu::BindGroupEntry { binding: k as u32 + 1, resource: b.as_entire_binding() }),
+            );
+            entries.push(wgpu::BindGroupEntry { binding: 7, resource: wgpu::BindingResource::Buffer(out) });
+            entries.push(wgpu::BindGroupEntry { binding: 8, resource: buffers[6].as_entire_binding() });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("subdiv evaluate"),
+                layout: &evaluate_pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+            evaluate.push(Dispatch { bind_group, count: range.count });
+        }
+
+        let this = Self {
+            cage_len: plan.cage_len as usize,
+            origin,
+            points,
+            vertices,
+            indices: index_buffer,
+            vertex_count: vertex_count as u32,
+            index_count: indices.len() as u32,
+            pipeline: evaluate_pipeline,
+            dispatches: evaluate,
+        };
+        this.write_cage(gpu, cage.iter().map(|p| *p - this.origin));
+        this.dispatch(gpu);
+        Ok(this)
+    }
+
+    /// The animation path: a new cage (one finite position per control point), refined and
+    /// evaluated on the GPU; the vertex buffer holds the new surface when the queue gets to
+    /// it. Indices and stencil data stay.
+    ///
+    /// # Errors
+    /// [`GpuError::CageLength`], [`GpuError::CagePosition`].
+    pub fn update_control_points(&mut self, gpu: &Gpu, cage: &[Vec3]) -> Result<(), GpuError> {
+        check_cage(self.cage_len, cage.iter().map(|p| p.as_dvec3().to_array()))?;
+        let origin = self.origin;
+        self.write_cage(gpu, cage.iter().map(|p| p.as_dvec3() - origin));
+        self.dispatch(gpu);
+        Ok(())
+    }
+
+    /// As [`update_control_points`](Self::update_control_points), from f64 positions.
+    ///
+    /// # Errors
+    /// As [`update_control_points`](Self::update_control_points).
+    pub fn update_control_points_f64(&mut self, gpu: &Gpu, cage: &[DVec3]) -> Result<(), GpuError> {
+        check_cage(self.cage_len, cage.iter().map(|p| p.to_array()))?;
+        let origin = self.origin;
+        self.write_cage(gpu, cage.iter().map(|p| *p - origin));
+        self.dispatch(gpu);
+        Ok(())
+    }
+
+    fn write_cage(&self, gpu: &Gpu, cage: impl Iterator<Item = DVec3>) {
+        let data: Vec<[f32; 4]> = cage.map(|p| p.as_vec3().extend(1.0).to_array()).collect();
+        if !data.is_empty() {
+            gpu.queue.write_buffer(&self.points, 0, bytemuck::cast_slice(&data));
+        }
+    }
+
+    /// Records and submits the refinement and evaluation dispatches.
+    fn dispatch(&self, gpu: &Gpu) {
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("subdiv evaluate") });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("subdiv evaluate"),
+                timestamp_writes: None,
+            });
+            let max_groups = gpu.limits().max_compute_workgroups_per_dimension;
+            pass.set_pipeline(&self.pipeline);
+            for d in &self.dispatches {
+                let groups = d.count.div_ceil(WORKGROUP).max(1);
+                let x = groups.min(max_groups);
+                pass.set_bind_group(0, &d.bind_group, &[]);
+                pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+            }
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+
+    /// The vertex buffer: per vertex `px py pz nx ny nz` (f32, 24 bytes), usable as a vertex
+    /// buffer and a storage buffer.
+    pub fn vertex_buffer(&self) -> &wgpu::Buffer {
+        &self.vertices
+    }
+
+    /// The index buffer: u32 triangles, counter-clockwise.
+    pub fn index_buffer(&self) -> &wgpu::Buffer {
+        &self.indices
+    }
+
+    /// The number of vertices.
+    pub fn vertex_count(&self) -> u32 {
+        self.vertex_count
+    }
+
+    /// The number of indices (three per triangle).
+    pub fn index_count(&self) -> u32 {
+        self.index_count
+    }
+
+    /// The number of compute dispatches per update: one per range of vertices whose stencil
+    /// data fits [`GpuEvalOptions::max_buffer_bytes`] (usually one).
+    pub fn dispatch_count(&self) -> usize {
+        self.dispatches.len()
+    }
+
+    /// Waits for the GPU and copies the vertex buffer back: `6 ·` [`vertex_count`](Self::vertex_count)
+    /// floats, the layout of [`FlatMesh::vertices`](subdiv_tess::FlatMesh::vertices).
+    ///
+    /// # Errors
+    /// [`GpuError::Readback`] if the copy cannot be mapped.
+    pub fn read_vertices(&self, gpu: &Gpu) -> Result<Vec<f32>, GpuError> {
+        let bytes = VERTEX_BYTES * u64::from(self.vertex_count);
+        if bytes == 0 {
+            return Ok(Vec::new());
+        }
+        let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("subdiv readback"),
+            size: bytes,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder =
+            gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("subdiv readback") });
+        encoder.copy_buffer_to_buffer(&self.vertices, 0, &staging, 0, bytes);
+        gpu.queue.submit([encoder.finish()]);
+        let (send, receive) = std::sync::mpsc::channel();
+        staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            // The receiver waits below; a closed channel means it gave up.
+            let _ = send.send(r);
+        });
+        gpu.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
+        receive
+            .recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let data = {
+            let view = staging.slice(..).get_mapped_range().map_err(|e| GpuError::Readback(e.to_string()))?;
+            bytemuck::cast_slice::<u8, f32>(&view).to_vec()
+        };
+        staging.unmap();
+        Ok(data)
+    }
+
+    /// Waits until the GPU has done all submitted work (for timing).
+    ///
+    /// # Errors
+    /// [`GpuError::Readback`] when the device is lost.
+    pub fn wait(&self, gpu: &Gpu) -> Result<(), GpuError> {
+        gpu.device.poll(wgpu::PollType::wait_indefinitely()).map(|_| ()).map_err(|e| GpuError::Readback(e.to_string()))
+    }
+}
+
+fn pipeline(device: &wgpu::Device, entry: &str, source: &str) -> wgpu::ComputePipeline {
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(entry),
+        source: wgpu::ShaderSource::Wgsl(source.into()),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(entry),
+        layout: None,
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+fn check_cage(expected: usize, cage: impl ExactSizeIterator<Item = [f64; 3]>) -> Result<(), GpuError> {
+    if cage.len() != expected {
+        return Err(GpuError::CageLength { expected, got: cage.len() });
+    }
+    for (vertex, p) in cage.enumerate() {
+        if !p.iter().all(|x| x.is_finite()) {
+            return Err(GpuError::CagePosition { vertex, value: format!("{p:?}") });
+        }
+    }
+    Ok(())
+}
+
+fn lcm(a: u64, b: u64) -> u64 {
+    let (mut x, mut y) = (a, b);
+    while y != 0 {
+        (x, y) = (y, x % y);
+    }
+    a / x * b
+}
+
+/// The plan's vertices in ranges of whole `step`s whose buffers stay within `budget` bytes,
+/// each with its own records, patches and weights (shared ones copied once per range).
+fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
+    // The most one vertex can add to any buffer: a record, a patch, its weights.
+    let widest = plan.general.iter().map(|g| u64::from(g.len)).max().unwrap_or(16).max(16);
+    let per_vertex = (12 * widest).max(32);
+    let reserve = per_vertex * step as u64;
+    let output = |r: &Range| VERTEX_BYTES * u64::from(r.count);
+    let mut ranges = Vec::new();
+    let mut range = Range::default();
+    let (mut blocks, mut patches, mut weights) = (HashMap::new(), HashMap::new(), HashMap::new());
+    let n = plan.vertices.len();
+    let mut v = 0;
+    while v < n {
+        if range.count > 0
+            && (range.largest() + reserve > budget || output(&range) + VERTEX_BYTES * step as u64 > budget)
+        {
+            ranges.push(std::mem::take(&mut range));
+            range.first = v as u32;
+            blocks.clear();
+            patches.clear();
+            weights.clear();
+        }
+        for v in v..(v + step).min(n) {
+            let entry = plan.vertices[v];
+            let index = (entry & ((1 << PLAN_KIND_SHIFT) - 1)) as usize;
+            let kind = entry >> PLAN_KIND_SHIFT;
+            let mut patch = |at: u32, len: u32, range: &mut Range| {
+                *patches.entry(at).or_insert_with(|| {
+                    let local = range.patches.len() as u32;
+                    range.patches.extend_from_slice(&plan.points[at as usize..(at + len) as usize]);
+                    local
+                })
+            };
+            let local = match kind {
+                PLAN_BLOCK => *blocks.entry(index).or_insert_with(|| {
+                    let b = plan.blocks[index];
+                    let points = patch(b.points, 16, &mut range);
+                    range.blocks.push(GpuBlock { base: b.base, rate: b.rate, points, pad: 0 });
+                    range.blocks.len() as u32 - 1
+                }),
+                PLAN_BICUBIC => {
+                    let b = plan.bicubic[index];
+                    let points = patch(b.points, 16, &mut range);
+                    range.bicubic.push(GpuBicubic {
+                        points,
+                        s: b.s as f32,
+                        t: b.t as f32,
+                        pad: 0,
+                        ju: b.ju.map(|x| x as f32),
+                        jv: b.jv.map(|x| x as f32),
+                    });
+                    range.bicubic.len() as u32 - 1
+                }
+                _ => {
+                    let g = plan.general[index];
+                    let points = patch(g.points, g.len, &mut range);
+                    let w = *weights.entry(g.weights).or_insert_with(|| {
+                        let local = range.weights.len() as u32;
+                        let rows = &plan.weights[g.weights as usize..(g.weights + 3 * g.len) as usize];
+                        range.weights.extend(rows.iter().map(|&x| x as f32));
+                        local
+                    });
+                    range.general.push(GpuGeneral {
+                        points,
+                        len: g.len,
+                        weights: w,
+                        pad: 0,
+                        ju: g.ju.map(|x| x as f32),
+                        jv: g.jv.map(|x| x as f32),
+                    });
+                    range.general.len() as u32 - 1
+                }
+            };
+            range.entries.push(kind << PLAN_KIND_SHIFT | local);
+            range.count += 1;
+        }
+        v += step;
+    }
+    if range.count > 0 {
+        ranges.push(range);
+    }
+    ranges
+}
+
+/// Several tessellations of one cage kept on the GPU, one per rate configuration (screen-space
+/// rates that come back, level-of-detail steps): switching to a configuration seen before
+/// re-uses its stencil data and index buffer and only re-evaluates.
+#[derive(Debug)]
+pub struct RateCache {
+    capacity: usize,
+    /// Most recently used last.
+    entries: Vec<(Vec<u32>, GpuTessellation)>,
+}
+
+impl RateCache {
+    /// A cache keeping at most `capacity` (at least 1) configurations.
+    pub fn new(capacity: usize) -> Self {
+        Self { capacity: capacity.max(1), entries: Vec::new() }
+    }
+
+    /// The tessellation at `rates` on `cage`: the cached one, re-evaluated on `cage`, or a new
+    /// one made by `make` (which returns the plan and the triangles of a CPU tessellation at
+    /// `rates`); the least recently used configuration goes when the cache is full.
+    ///
+    /// # Errors
+    /// What `make` returns, and as [`GpuTessellation::new`].
+    pub fn get(
+        &mut self,
+        gpu: &Gpu,
+        rates: &[u32],
+        cage: &[DVec3],
+        options: &GpuEvalOptions,
+        make: impl FnOnce() -> Result<(EvaluationPlan, Vec<u32>), GpuError>,
+    ) -> Result<&mut GpuTessellation, GpuError> {
+        if let Some(k) = self.entries.iter().position(|(r, _)| r == rates) {
+            let entry = self.entries.remove(k);
+            self.entries.push(entry);
+            let t = &mut self.entries.last_mut().expect("just pushed").1;
+            t.update_control_points_f64(gpu, cage)?;
+            return Ok(t);
+        }
+        let (plan, indices) = make()?;
+        let t = GpuTessellation::new(gpu, &plan, &indices, cage, options)?;
+        if self.entries.len() == self.capacity {
+            self.entries.remove(0);
+        }
+        self.entries.push((rates.to_vec(), t));
+        Ok(&mut self.entries.last_mut().expect("just pushed").1)
+    }
+
+    /// The number of configurations held.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether none is held.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+}

@@ -1,0 +1,184 @@
+//! GPU evaluation against the CPU tessellator: positions and normals to 1e-5 of the model's
+//! size (f32 against f64), on procedural and shared meshes, at several rates, over animation
+//! frames, with the stencil data split over many buffers, and through the rate cache.
+
+#![allow(clippy::print_stderr)]
+
+use glam::{DVec3, Vec3};
+use subdiv_gpu::{Gpu, GpuError, GpuEvalOptions, GpuTessellation, RateCache};
+use subdiv_mesh::{Mesh, shapes};
+use subdiv_schemes::Builtin;
+use subdiv_tess::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, TessMesh};
+
+fn diagonal(cage: &[DVec3]) -> f64 {
+    let (min, max) =
+        cage.iter().fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(a, b), p| (a.min(*p), b.max(*p)));
+    (max - min).length()
+}
+
+/// The worst position distance / bbox diagonal and the worst normal distance.
+fn compare(gpu_vertices: &[f32], cpu: &TessMesh, diag: f64) -> (f64, f64) {
+    assert_eq!(gpu_vertices.len(), 6 * cpu.positions.len());
+    let (mut dp, mut dn) = (0.0f64, 0.0f64);
+    for (k, v) in gpu_vertices.chunks_exact(6).enumerate() {
+        let p = DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]));
+        let n = DVec3::new(f64::from(v[3]), f64::from(v[4]), f64::from(v[5]));
+        dp = dp.max(p.distance(cpu.positions[k]) / diag);
+        dn = dn.max(n.distance(cpu.normals[k]));
+    }
+    (dp, dn)
+}
+
+/// A twist of the cage about its vertical axis, growing with the frame.
+fn twisted(cage: &[DVec3], frame: usize) -> Vec<DVec3> {
+    let (lo, hi) = cage.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.y), b.max(p.y)));
+    cage.iter()
+        .map(|p| {
+            let a = 0.3 * frame as f64 * (p.y - lo) / (hi - lo).max(1e-12);
+            let (s, c) = a.sin_cos();
+            DVec3::new(c * p.x - s * p.z, p.y + 0.05 * frame as f64, s * p.x + c * p.z)
+        })
+        .collect()
+}
+
+struct Case {
+    tess: DualTessellator,
+    plan: EvaluationPlan,
+    flat: FlatMesh,
+}
+
+fn case(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> Case {
+    let mut tess = DualTessellator::new(builtin.scheme(), mesh, &DualOptions::default()).unwrap();
+    let mut flat = FlatMesh::default();
+    tess.tessellate(rates).unwrap();
+    tess.write_flat(&mut flat);
+    let plan = tess.evaluation_plan();
+    Case { tess, plan, flat }
+}
+
+/// GPU against CPU on `mesh` at `rates`, then over three animation frames.
+fn check(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
+    let Case { mut tess, plan, flat } = case(builtin, mesh, rates);
+    let diag = diagonal(mesh.positions());
+    let mut on_gpu =
+        GpuTessellation::new(gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
+    assert_eq!(on_gpu.vertex_count() as usize, flat.vertices.len() / 6);
+    assert_eq!(on_gpu.index_count() as usize, flat.indices.len());
+    let (dp, dn) = compare(&on_gpu.read_vertices(gpu).unwrap(), tess.mesh(), diag);
+    eprintln!("{name} at {:?}..: position {dp:.1e} × bbox, normal {dn:.1e}", &rates[..rates.len().min(3)]);
+    assert!(dp <= 1e-5 && dn <= 1e-5, "{name}: position {dp:e}, normal {dn:e}");
+    for frame in 1..=3 {
+        let cage = twisted(mesh.positions(), frame);
+        let cpu = tess.update_cage(&cage).unwrap();
+        let cage32: Vec<Vec3> = cage.iter().map(|p| p.as_vec3()).collect();
+        on_gpu.update_control_points(gpu, &cage32).unwrap();
+        let (dp, dn) = compare(&on_gpu.read_vertices(gpu).unwrap(), cpu, diag);
+        assert!(dp <= 1e-5 && dn <= 1e-5, "{name}, frame {frame}: position {dp:e}, normal {dn:e}");
+    }
+}
+
+#[test]
+fn procedural_meshes_match_the_cpu() {
+    let Some(gpu) = Gpu::for_tests() else { return };
+    eprintln!("adapter: {}", gpu.adapter_name());
+    for (builtin, name, soup) in [
+        (Builtin::CatmullClark, "cube", shapes::cube()),
+        (Builtin::CatmullClark, "pentagonal prism", shapes::ngon_prism(5)),
+        (Builtin::CatmullClark, "torus", shapes::quad_torus(8, 6)),
+        (Builtin::CatmullClark, "open grid", shapes::quad_grid(4, 3)),
+        (Builtin::CatmullClark, "default model", shapes::default_model()),
+        (Builtin::Loop, "icosahedron", shapes::icosahedron()),
+    ] {
+        let mesh = Mesh::build(soup).unwrap();
+        for rate in [1, 5, 16] {
+            check(&gpu, name, builtin, &mesh, &vec![rate; mesh.face_count()]);
+        }
+        // Independent rates per face.
+        let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 1 + (f * 7) % 12).collect();
+        check(&gpu, name, builtin, &mesh, &rates);
+    }
+}
+
+#[test]
+fn shared_meshes_match_the_cpu() {
+    let Some(gpu) = Gpu::for_tests() else { return };
+    for (file, builtin, rates) in [
+        ("opensubdiv/catmark_cube.obj", Builtin::CatmullClark, [4, 8, 32]),
+        ("keenan/spot_control_mesh.obj", Builtin::CatmullClark, [2, 8, 16]),
+        ("opensubdiv/catmark_nonquads.obj", Builtin::CatmullClark, [3, 8, 12]),
+        ("opensubdiv/catmark_hole_test1.obj", Builtin::CatmullClark, [2, 6, 9]),
+        ("opensubdiv/loop_cube.obj", Builtin::Loop, [2, 7, 12]),
+    ] {
+        let Some(path) = subdiv_testkit::shared_mesh(file) else { return };
+        let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
+        for rate in rates {
+            check(&gpu, file, builtin, &mesh, &vec![rate; mesh.face_count()]);
+        }
+    }
+}
+
+/// Tiny buffers split the stencil data over many dispatches; the output is the same, bit for
+/// bit (each vertex is computed alone, from the same data).
+#[test]
+fn split_buffers_give_the_same_bits() {
+    let Some(gpu) = Gpu::for_tests() else { return };
+    let mesh = Mesh::build(shapes::default_model()).unwrap();
+    let Case { plan, flat, .. } = case(Builtin::CatmullClark, &mesh, &vec![6; mesh.face_count()]);
+    let whole = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
+    let small = GpuEvalOptions { max_buffer_bytes: 16 << 10 };
+    let split = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &small).unwrap();
+    assert!(split.dispatch_count() > whole.dispatch_count() + 4, "{} dispatches", split.dispatch_count());
+    assert_eq!(whole.read_vertices(&gpu).unwrap(), split.read_vertices(&gpu).unwrap());
+}
+
+#[test]
+fn the_rate_cache_switches_configurations() {
+    let Some(gpu) = Gpu::for_tests() else { return };
+    let mesh = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
+    let mut cache = RateCache::new(2);
+    let diag = diagonal(mesh.positions());
+    let mut made = 0;
+    for (step, rate) in [3u32, 7, 3, 7, 11, 3].into_iter().enumerate() {
+        let rates = vec![rate; mesh.face_count()];
+        let cage = twisted(mesh.positions(), step);
+        let t = cache
+            .get(&gpu, &rates, &cage, &GpuEvalOptions::default(), || {
+                made += 1;
+                let mut flat = FlatMesh::default();
+                tess.tessellate_flat(&rates, &mut flat)?;
+                Ok((tess.evaluation_plan(), flat.indices))
+            })
+            .unwrap();
+        let vertices = t.read_vertices(&gpu).unwrap();
+        let mut cpu = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
+        cpu.tessellate(&rates).unwrap();
+        let (dp, dn) = compare(&vertices, cpu.update_cage(&cage).unwrap(), diag);
+        assert!(dp <= 1e-5 && dn <= 1e-5, "step {step}: position {dp:e}, normal {dn:e}");
+    }
+    // 3 and 7 made once each, 11 made, then 3 again (evicted by 11 with capacity 2).
+    assert_eq!(made, 4);
+    assert_eq!(cache.len(), 2);
+}
+
+#[test]
+fn bad_input_is_a_typed_error() {
+    let Some(gpu) = Gpu::for_tests() else { return };
+    let mesh = Mesh::build(shapes::cube()).unwrap();
+    let Case { plan, flat, .. } = case(Builtin::CatmullClark, &mesh, &vec![2; mesh.face_count()]);
+    let options = GpuEvalOptions::default();
+    let short = &mesh.positions()[..3];
+    assert!(matches!(
+        GpuTessellation::new(&gpu, &plan, &flat.indices, short, &options),
+        Err(GpuError::CageLength { expected: 8, got: 3 })
+    ));
+    let mut t = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &options).unwrap();
+    let mut cage: Vec<Vec3> = mesh.positions().iter().map(|p| p.as_vec3()).collect();
+    cage[5].y = f32::NAN;
+    assert!(matches!(t.update_control_points(&gpu, &cage), Err(GpuError::CagePosition { vertex: 5, .. })));
+    let bad = [0, 1, u32::MAX];
+    assert!(matches!(
+        GpuTessellation::new(&gpu, &plan, &bad, mesh.positions(), &options),
+        Err(GpuError::Indices { index: u32::MAX, .. })
+    ));
+}
