@@ -73,6 +73,10 @@ pub(crate) struct TessellateArgs {
     /// Also write `vertex,face,u,v` per output vertex, in output order (Bfr parameters), as CSV.
     #[arg(long, value_name = "OUT.csv")]
     params: Option<PathBuf>,
+    /// Dual: evaluate the vertices on the GPU (wgpu, any Vulkan adapter) in f32 instead of on
+    /// the CPU in f64; the same tessellation, positions and normals to f32 precision.
+    #[arg(long)]
+    gpu: bool,
 }
 
 /// `--method`.
@@ -101,6 +105,9 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         return Err(UserError("--polygons needs an .obj output (GLB holds triangles)".to_string()));
     }
     let tolerance = args.tolerance.map(|t| if args.relative { Tolerance::Relative(t) } else { Tolerance::Absolute(t) });
+    if args.gpu && args.method == Method::Quadtree {
+        return Err(UserError("--gpu evaluates the dual method's vertices; --method quadtree has no GPU path".to_string()));
+    }
     if args.method == Method::Quadtree && (args.rate.is_some() || args.pixels.is_some()) {
         return Err(UserError("--method quadtree takes --tolerance, not --rate or --pixels".to_string()));
     }
@@ -129,9 +136,24 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
                 None => tess.tessellate(&rates),
             }
             .map_err(|e| located(&e))?;
-            let result = tess.into_mesh();
+            let gpu = if args.gpu {
+                bar.say("evaluating on the GPU");
+                Some(gpu_evaluate(&tess, &mesh)?)
+            } else {
+                None
+            };
+            let mut result = tess.into_mesh();
+            let mut detail = String::new();
+            if let Some((vertices, adapter)) = gpu {
+                // The GPU's f32 values replace the CPU's f64 ones.
+                for (k, v) in vertices.chunks_exact(6).enumerate() {
+                    let wide = |a: usize| DVec3::new(f64::from(v[a]), f64::from(v[a + 1]), f64::from(v[a + 2]));
+                    (result.positions[k], result.normals[k]) = (wide(0), wide(3));
+                }
+                detail = format!(", evaluated on {adapter}");
+            }
             let (lo, hi) = rates.iter().fold((u32::MAX, 0), |(lo, hi), &r| (lo.min(r), hi.max(r)));
-            (result, format!("{policy}, rates {lo}..={hi}"))
+            (result, format!("{policy}, rates {lo}..={hi}{detail}"))
         }
     };
     let seconds = start.elapsed().as_secs_f64();
@@ -169,6 +191,25 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         args.output.display(),
     );
     Ok(())
+}
+
+/// Evaluates `tess`'s last tessellation on the GPU: per vertex `px py pz nx ny nz` (f32), and
+/// the adapter's name.
+fn gpu_evaluate(tess: &DualTessellator, mesh: &Mesh) -> Result<(Vec<f32>, String), UserError> {
+    use subdiv_gpu::{Gpu, GpuEvalOptions, GpuOptions, GpuTessellation};
+    let gpu_error = |e: subdiv_gpu::GpuError| UserError(format!("--gpu: {e}"));
+    let gpu = Gpu::new(&GpuOptions::default()).map_err(gpu_error)?;
+    let indices = tess.mesh().triangle_indices();
+    let on_gpu = GpuTessellation::new(
+        &gpu,
+        &tess.evaluation_plan(),
+        &indices,
+        mesh.positions(),
+        &GpuEvalOptions::default(),
+    )
+    .map_err(gpu_error)?;
+    let vertices = on_gpu.read_vertices(&gpu).map_err(gpu_error)?;
+    Ok((vertices, gpu.adapter_name()))
 }
 
 /// The per-face rates of the dual method, the rings around extraordinary points (for a
