@@ -8,6 +8,10 @@
 //!   tessellation into welded flat buffers (default: the peer harness's torus_big, cube and
 //!   valence56 at rates 8, 16, 32, on one thread and on all), beside OpenSubdiv's Bfr when
 //!   `SUBDIV_OSD_BENCH` names the harness's `osd_bench`.
+//! - `cargo xtask bench gpu [--mesh M]… [--rate N]… [--frames K]` measures milliseconds per
+//!   animation frame to re-evaluate a tessellation on the GPU (default: the built-in model and
+//!   a 100 000-face torus at rates 8 and 16), beside the CPU's animation path, with the
+//!   adapter's name.
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
@@ -23,6 +27,7 @@
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod adaptive;
+mod bench_gpu;
 mod bench_tess;
 mod osd;
 mod paper;
@@ -31,7 +36,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -39,6 +44,7 @@ fn main() -> ExitCode {
     let result = match args.first().map(String::as_str) {
         Some("ci") => ci(),
         Some("bench") if args.get(1).is_some_and(|a| a == "tess") => bench_tess::run(&args[2..]),
+        Some("bench") if args.get(1).is_some_and(|a| a == "gpu") => bench_gpu::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("paper") => paper::run(),
         Some("rates") => rates_table::run(),

@@ -106,7 +106,9 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     }
     let tolerance = args.tolerance.map(|t| if args.relative { Tolerance::Relative(t) } else { Tolerance::Absolute(t) });
     if args.gpu && args.method == Method::Quadtree {
-        return Err(UserError("--gpu evaluates the dual method's vertices; --method quadtree has no GPU path".to_string()));
+        return Err(UserError(
+            "--gpu evaluates the dual method's vertices; --method quadtree has no GPU path".to_string(),
+        ));
     }
     if args.method == Method::Quadtree && (args.rate.is_some() || args.pixels.is_some()) {
         return Err(UserError("--method quadtree takes --tolerance, not --rate or --pixels".to_string()));
@@ -200,14 +202,9 @@ fn gpu_evaluate(tess: &DualTessellator, mesh: &Mesh) -> Result<(Vec<f32>, String
     let gpu_error = |e: subdiv_gpu::GpuError| UserError(format!("--gpu: {e}"));
     let gpu = Gpu::new(&GpuOptions::default()).map_err(gpu_error)?;
     let indices = tess.mesh().triangle_indices();
-    let on_gpu = GpuTessellation::new(
-        &gpu,
-        &tess.evaluation_plan(),
-        &indices,
-        mesh.positions(),
-        &GpuEvalOptions::default(),
-    )
-    .map_err(gpu_error)?;
+    let on_gpu =
+        GpuTessellation::new(&gpu, &tess.evaluation_plan(), &indices, mesh.positions(), &GpuEvalOptions::default())
+            .map_err(gpu_error)?;
     let vertices = on_gpu.read_vertices(&gpu).map_err(gpu_error)?;
     Ok((vertices, gpu.adapter_name()))
 }
