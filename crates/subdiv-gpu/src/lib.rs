@@ -6,6 +6,11 @@
 
 mod adapter;
 mod error;
+mod render;
 
 pub use adapter::{Gpu, GpuOptions};
 pub use error::GpuError;
+pub use render::{
+    CAGE_VERTEX_STRIDE, Cage, GpuCage, GpuMesh, Lines, MAX_IMAGE_SIDE, RenderOptions, Renderer, Scene, VERTEX_STRIDE,
+    View, bounds, unique_edges,
+};
