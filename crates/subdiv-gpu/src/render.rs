@@ -142,11 +142,17 @@ impl View {
     /// The vertical field of view of [`framing`](Self::framing), in degrees.
     pub const FRAMING_FOVY_DEGREES: f32 = 30.0;
 
+    /// The fraction of the image's width and height that [`framing`](Self::framing) lets the
+    /// box's projection reach, centred (a margin for deformations).
+    pub const FRAMING_FILL: f32 = 0.9;
+
     /// A camera that fits the box `bounds_min..=bounds_max` in an image of `aspect` (width over
-    /// height), seen from [`FRAMING_DIRECTION`](Self::FRAMING_DIRECTION) with y up: the box's
-    /// bounding sphere fills about 90% of the image's shorter side. Depth range: the sphere,
-    /// twice over (a shape deformed within it stays drawn). An empty or non-finite box
-    /// (`min > max`) is framed as the unit cube; a point as a box of side 1 around it.
+    /// height), seen from [`FRAMING_DIRECTION`](Self::FRAMING_DIRECTION) with y up, looking at
+    /// the box's centre: the nearest distance at which every corner of the box lies within the
+    /// middle [`FRAMING_FILL`](Self::FRAMING_FILL) of the image's width and height. Depth
+    /// range: the box's bounding sphere, twice over (a shape deformed within it stays drawn).
+    /// An empty or non-finite box (`min > max`) is framed as the unit cube; a point as a box of
+    /// side 1 around it.
     pub fn framing(bounds_min: Vec3, bounds_max: Vec3, aspect: f32) -> Self {
         let (lo, hi) = if bounds_min.is_finite() && bounds_max.is_finite() && bounds_min.cmple(bounds_max).all() {
             (bounds_min, bounds_max)
@@ -154,17 +160,28 @@ impl View {
             (Vec3::ZERO, Vec3::ONE)
         };
         let centre = 0.5 * (lo + hi);
-        let radius = match 0.5 * (hi - lo).length() {
-            r if r > 0.0 => r,
-            _ => 0.5,
-        };
-        let half_fovy = 0.5 * Self::FRAMING_FOVY_DEGREES.to_radians();
+        let (lo, hi) = if lo == hi { (centre - 0.5, centre + 0.5) } else { (lo, hi) };
+        let radius = 0.5 * (hi - lo).length();
         let aspect = if aspect.is_finite() && aspect > 0.0 { aspect } else { 1.0 };
-        // The narrower of the two half-angles bounds the sphere.
-        let half_angle = half_fovy.min((half_fovy.tan() * aspect).atan());
-        let distance = radius / (0.9 * half_angle.sin());
+        let back = Self::FRAMING_DIRECTION;
+        let right = Vec3::Y.cross(back).normalize();
+        let up = back.cross(right);
+        // Half the image's height and width at unit distance, times the fill.
+        let tan_y = Self::FRAMING_FILL * (0.5 * Self::FRAMING_FOVY_DEGREES.to_radians()).tan();
+        let tan_x = aspect * tan_y;
+        // A corner at offset o is inside when |o·right| ≤ tan_x (d − o·back), and so for up.
+        let distance = (0..8)
+            .map(|corner| {
+                let o = Vec3::new(
+                    if corner & 1 == 0 { lo.x } else { hi.x },
+                    if corner & 2 == 0 { lo.y } else { hi.y },
+                    if corner & 4 == 0 { lo.z } else { hi.z },
+                ) - centre;
+                o.dot(back) + (o.dot(right).abs() / tan_x).max(o.dot(up).abs() / tan_y)
+            })
+            .fold(radius, f32::max);
         Self {
-            eye: centre + distance * Self::FRAMING_DIRECTION,
+            eye: centre + distance * back,
             target: centre,
             up: Vec3::Y,
             fovy_degrees: Self::FRAMING_FOVY_DEGREES,
@@ -947,7 +964,10 @@ mod tests {
                     if corner & 4 == 0 { lo.z } else { hi.z },
                 );
                 let q = clip.project_point3(p);
-                assert!(q.x.abs() <= 0.95 && q.y.abs() <= 0.95, "{p} at {q} for {lo}..{hi}");
+                assert!(
+                    q.x.abs() <= View::FRAMING_FILL + 1e-4 && q.y.abs() <= View::FRAMING_FILL + 1e-4,
+                    "{p} at {q} for {lo}..{hi}"
+                );
                 assert!(q.z > 0.0 && q.z < 1.0, "{p} at depth {}", q.z);
             }
             assert!(view.frame().is_ok());
