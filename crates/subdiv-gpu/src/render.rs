@@ -296,7 +296,7 @@ impl Scene<'_> {
         if !fits(self.vertices, self.vertex_count, VERTEX_STRIDE) {
             return bad(format!("{} vertices do not fit a {}-byte buffer", self.vertex_count, self.vertices.size()));
         }
-        if self.index_count % 3 != 0 || !fits(self.triangles, self.index_count, 4) {
+        if !self.index_count.is_multiple_of(3) || !fits(self.triangles, self.index_count, 4) {
             return bad(format!(
                 "{} triangle indices: not a multiple of 3, or more than the {}-byte buffer holds",
                 self.index_count,
@@ -304,7 +304,7 @@ impl Scene<'_> {
             ));
         }
         let lines = |what: &str, lines: &Lines<'_>| {
-            if lines.index_count % 2 != 0 || !fits(lines.indices, lines.index_count, 4) {
+            if !lines.index_count.is_multiple_of(2) || !fits(lines.indices, lines.index_count, 4) {
                 return bad(format!(
                     "{} {what} line indices: odd, or more than the {}-byte buffer holds",
                     lines.index_count,
@@ -420,6 +420,29 @@ impl ErrorScopes {
 
 /// Renders [`Scene`]s into images of one size: the pipelines, targets and readback buffer are
 /// made once, and each [`render`](Self::render) writes the camera and draws.
+///
+/// A CPU tessellation drawn in two calls (`no_run`: it needs an adapter):
+///
+/// ```no_run
+/// use subdiv_gpu::{Gpu, GpuMesh, GpuOptions, RenderOptions, Renderer, View};
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+///
+/// let mesh = Mesh::build(shapes::default_model())?;
+/// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())?;
+/// let mut flat = FlatMesh::default();
+/// tess.tessellate_flat(&vec![8; mesh.face_count()], &mut flat)?;
+///
+/// let gpu = Gpu::new(&GpuOptions::default())?;
+/// let options = RenderOptions::default().with_size(640, 480).with_wireframe(true);
+/// let renderer = Renderer::new(&gpu, &options)?;
+/// let surface = GpuMesh::upload_with_edges(&gpu, &flat)?;
+/// let [lo, hi] = subdiv_gpu::bounds(&flat.vertices).expect("a surface");
+/// let image = renderer.render(&gpu, &surface.scene(View::framing(lo, hi, options.aspect())))?;
+/// assert_eq!(image.dimensions(), (640, 480));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug)]
 pub struct Renderer {
     options: RenderOptions,
@@ -787,10 +810,10 @@ impl GpuMesh {
 
     fn make(gpu: &Gpu, mesh: &FlatMesh, with_edges: bool) -> Result<Self, GpuError> {
         let bad = |what: String| Err(GpuError::Scene(format!("flat mesh: {what}")));
-        if mesh.vertices.len() % 6 != 0 {
+        if !mesh.vertices.len().is_multiple_of(6) {
             return bad(format!("{} floats are not six per vertex", mesh.vertices.len()));
         }
-        if mesh.indices.len() % 3 != 0 {
+        if !mesh.indices.len().is_multiple_of(3) {
             return bad(format!("{} indices are not three per triangle", mesh.indices.len()));
         }
         let count = |n: usize, what: &str| {
