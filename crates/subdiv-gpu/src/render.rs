@@ -395,8 +395,10 @@ pub(crate) fn unpad(data: &[u8], width: u32, height: u32, padded: u32) -> Vec<u8
 
 /// Turns wgpu's captured errors into [`GpuError::Wgpu`].
 struct ErrorScopes {
-    validation: wgpu::ErrorScopeGuard,
+    // Pushed after `validation`, so declared first: fields drop in order, and scopes must be
+    // popped in reverse order of their pushes (an early return drops both).
     memory: wgpu::ErrorScopeGuard,
+    validation: wgpu::ErrorScopeGuard,
     during: &'static str,
 }
 
@@ -653,11 +655,10 @@ impl Renderer {
             Ok(Err(e)) => return Err(GpuError::Readback(e.to_string())),
             Err(e) => return Err(GpuError::Readback(format!("the map callback did not run: {e}"))),
         }
-        let pixels = {
-            let data = self.readback.get_mapped_range(..).map_err(|e| GpuError::Readback(e.to_string()))?;
-            unpad(&data, options.width, options.height, padded)
-        };
+        // Unmapped whatever happens, so that the next render can map it again.
+        let pixels = self.readback.get_mapped_range(..).map(|data| unpad(&data, options.width, options.height, padded));
         self.readback.unmap();
+        let pixels = pixels.map_err(|e| GpuError::Readback(e.to_string()))?;
         image::RgbaImage::from_raw(options.width, options.height, pixels)
             .ok_or_else(|| GpuError::Readback("the image has the wrong length; please report".to_string()))
     }
