@@ -648,17 +648,23 @@ impl Renderer {
             // The receiver waits below; a failed send only means it is gone.
             let _ = sender.send(result);
         });
-        device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()))?;
+        let polled = device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()));
+        // Unmapped on every path (even when wgpu reported an error), so that the next render can
+        // map it again.
+        let pixels = match receiver.try_recv() {
+            Ok(Ok(())) => {
+                let pixels =
+                    self.readback.get_mapped_range(..).map(|data| unpad(&data, options.width, options.height, padded));
+                self.readback.unmap();
+                pixels.map_err(|e| GpuError::Readback(e.to_string()))
+            }
+            Ok(Err(e)) => Err(GpuError::Readback(e.to_string())),
+            Err(e) => Err(GpuError::Readback(format!("the map callback did not run: {e}"))),
+        };
+        // wgpu's own error first: it explains a failed map.
         scopes.pop()?;
-        match receiver.try_recv() {
-            Ok(Ok(())) => {}
-            Ok(Err(e)) => return Err(GpuError::Readback(e.to_string())),
-            Err(e) => return Err(GpuError::Readback(format!("the map callback did not run: {e}"))),
-        }
-        // Unmapped whatever happens, so that the next render can map it again.
-        let pixels = self.readback.get_mapped_range(..).map(|data| unpad(&data, options.width, options.height, padded));
-        self.readback.unmap();
-        let pixels = pixels.map_err(|e| GpuError::Readback(e.to_string()))?;
+        polled?;
+        let pixels = pixels?;
         image::RgbaImage::from_raw(options.width, options.height, pixels)
             .ok_or_else(|| GpuError::Readback("the image has the wrong length; please report".to_string()))
     }
