@@ -1,5 +1,5 @@
 //! `subdiv`: inspect subdivision-surface control meshes (and, as the workspace grows, refine,
-//! evaluate and tessellate them).
+//! evaluate, tessellate and render them).
 //!
 //! Exit status: 0 on success, 2 on bad input (unreadable or invalid mesh, bad arguments) with
 //! one line on stderr naming the file, the place and the rule.
@@ -7,11 +7,13 @@
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod analyze;
+mod args;
 mod eval;
 mod info;
 mod input;
 mod plot;
 mod refine;
+mod render;
 mod scheme_arg;
 mod stencil;
 mod tessellate;
@@ -54,6 +56,10 @@ enum Command {
     /// Tessellate the limit surface so that every triangle lies within a tolerance of it
     /// (error-driven quadtree, watertight), written as GLB or OBJ.
     Tessellate(tessellate::TessellateArgs),
+    /// Render the limit surface offscreen on the GPU to PNG: shaded with its exact normals,
+    /// optionally with the tessellation's wireframe and the control cage, framed automatically;
+    /// --frames renders an animation of a twisted cage.
+    Render(render::RenderArgs),
 }
 
 /// A failure the user can act on: printed as one line, exit status 2.
@@ -79,6 +85,7 @@ fn main() -> ExitCode {
         Command::Eval(args) => eval::run(args, &mut out),
         Command::PlotBasis(args) => plot::run(args, &mut out),
         Command::Tessellate(args) => tessellate::run(args, &mut out),
+        Command::Render(args) => render::run(args, &mut out),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

@@ -168,7 +168,7 @@ fn plot(samples: &[(f64, f64)], width: u32, height: u32) -> RgbImage {
 
 /// Encodes the PNG and writes it atomically ([`subdiv::io::write_atomic`]: `<path>.tmp`, synced,
 /// renamed), so a failure leaves `path` as it was.
-fn write_png(path: &Path, image: &RgbImage) -> Result<(), UserError> {
+pub(crate) fn write_png(path: &Path, image: &RgbImage) -> Result<(), UserError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     image.write_to(&mut bytes, ImageFormat::Png).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
     subdiv::io::write_atomic(path, |writer| writer.write_all(bytes.get_ref()))?;

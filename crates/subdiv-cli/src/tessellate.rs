@@ -13,6 +13,7 @@ use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE, DualRates, ErrorRates, RingD
 use subdiv::tess::{DualOptions, DualTessellator, TessMesh, TessOptions, Tessellator, Tolerance};
 
 use crate::UserError;
+use crate::args::{parse_list, parse_size};
 use crate::input::LoadedMesh;
 use crate::scheme_arg::SchemeArgs;
 
@@ -20,7 +21,7 @@ use crate::scheme_arg::SchemeArgs;
 pub(crate) const DEFAULT_OUTPUT: &str = "tessellation.glb";
 
 /// The rate of every face when no rate policy is given.
-const DEFAULT_RATE: u32 = 8;
+pub(crate) const DEFAULT_RATE: u32 = 8;
 
 /// Arguments of `subdiv tessellate`.
 #[derive(Debug, clap::Args)]
@@ -228,16 +229,8 @@ fn dual_rates(
     }
     if let Some(pixels) = args.pixels {
         let camera = parse_camera(args.camera.as_deref().unwrap_or_default())?;
-        let viewport = parse_list(&args.viewport, "--viewport", 2, 2)?;
-        let size = |x: f64| {
-            (x >= 1.0 && x <= f64::from(u32::MAX) && x.fract() == 0.0)
-                .then_some(x as u32)
-                .ok_or_else(|| UserError(format!("--viewport {}: sides must be positive integers", args.viewport)))
-        };
-        let policy = ScreenSpace {
-            max_rate: args.max_rate,
-            ..ScreenSpace::new(camera, [size(viewport[0])?, size(viewport[1])?], pixels)
-        };
+        let viewport = parse_size(&args.viewport, "--viewport", u32::MAX)?;
+        let policy = ScreenSpace { max_rate: args.max_rate, ..ScreenSpace::new(camera, viewport, pixels) };
         return Ok((policy.face_rates(mesh).map_err(located)?, None, format!("{pixels} pixels per edge")));
     }
     let rate = args.rate.unwrap_or(DEFAULT_RATE);
@@ -250,20 +243,6 @@ fn parse_camera(text: &str) -> Result<Camera, UserError> {
     let camera =
         Camera::look_at(DVec3::new(v[0], v[1], v[2]), DVec3::new(v[3], v[4], v[5]), DVec3::new(v[6], v[7], v[8]));
     Ok(v.get(9).map_or(camera, |&fovy| camera.with_fovy_degrees(fovy)))
-}
-
-/// A comma-separated list of `min..=max` finite numbers.
-fn parse_list(text: &str, option: &str, min: usize, max: usize) -> Result<Vec<f64>, UserError> {
-    let values: Vec<f64> = text
-        .split(',')
-        .map(|x| x.trim().parse::<f64>().ok().filter(|x| x.is_finite()))
-        .collect::<Option<_>>()
-        .ok_or_else(|| UserError(format!("{option} {text}: expected comma-separated finite numbers")))?;
-    if values.len() < min || values.len() > max {
-        let count = if min == max { format!("{min}") } else { format!("{min} or {max}") };
-        return Err(UserError(format!("{option} {text}: expected {count} numbers, got {}", values.len())));
-    }
-    Ok(values)
 }
 
 /// A spinner on stderr for long jobs (indicatif draws nothing when stderr is not a terminal).

@@ -364,3 +364,57 @@ fn tessellate_rejects_bad_tolerances_and_schemes() {
         assert!(!dir.path().join("x.glb").exists(), "{bad:?} wrote a file");
     }
 }
+
+/// `subdiv render`: bad arguments fail with the rule before anything is written (no device
+/// needed); with a device, a two-frame animation writes two numbered PNGs of the asked size,
+/// the first (undeformed) equal to a plain render, the second different.
+#[test]
+fn render_writes_numbered_frames_and_rejects_bad_arguments() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("spin.png");
+    let out_arg = out.to_str().unwrap();
+    for (args, expect) in [
+        (&["--size", "0,48"][..], "--size 0,48: sides must be integers from 1 to 16384"),
+        (&["--size", "16385,48"][..], "sides must be integers from 1 to 16384"),
+        (&["--size", "64"][..], "--size 64: expected 2 numbers"),
+        (&["--frames", "0"][..], "--frames 0: the number of frames must be at least 1"),
+        (&["--rate", "0"][..], "--rate 0: rates are integers from 1 to 128"),
+        (&["--rate", "129"][..], "rates are integers from 1 to 128"),
+        (&["--pixels", "-1"][..], "--pixels -1: pixels per edge must be a positive finite number"),
+    ] {
+        let mut all = vec!["render", "-o", out_arg];
+        all.extend_from_slice(args);
+        let output = subdiv(&all);
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(expect), "{args:?}: expected {expect:?} in {stderr:?}");
+    }
+    let jpg = dir.path().join("x.jpg");
+    let output = subdiv(&["render", "-o", jpg.to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&output.stderr).contains("the output must end in .png"));
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written on bad input");
+
+    // The rest draws: skipped (saying so) without an adapter, unless SUBDIV_REQUIRE_GPU=1.
+    if subdiv_gpu::Gpu::for_tests().is_none() {
+        return;
+    }
+    let size = ["--size", "64,48"];
+    let output = subdiv(&["render", "-o", out_arg, "--frames", "2", "--wireframe", "--cage", size[0], size[1]]);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(output.status.success(), "{stderr}");
+    assert!(stderr.contains("60 faces") && stderr.contains("2 frames") && stderr.contains("64×48"), "{stderr}");
+    let frame = |k: u32| image::open(dir.path().join(format!("spin_{k:04}.png"))).unwrap().to_rgb8();
+    let (first, second) = (frame(0), frame(1));
+    assert_eq!(first.dimensions(), (64, 48));
+    assert_eq!(second.dimensions(), (64, 48));
+    assert_ne!(first, second, "frame 1 is twisted");
+    let plain = dir.path().join("plain.png");
+    let output = subdiv(&["render", "-o", plain.to_str().unwrap(), "--wireframe", "--cage", size[0], size[1]]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(image::open(&plain).unwrap().to_rgb8(), first, "frame 0 is the undeformed model");
+    // Only the three PNGs: no temporary files left behind.
+    let mut names: Vec<String> =
+        std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert_eq!(names, ["plain.png", "spin_0000.png", "spin_0001.png"]);
+}

@@ -53,4 +53,26 @@ pub enum GpuError {
     /// The CPU tessellator refused the input.
     #[error(transparent)]
     Tessellation(#[from] subdiv_tess::TessError),
+    /// An image size outside what the renderer takes.
+    #[error("image size {width}×{height}: each side must be from 1 to {max} pixels")]
+    ImageSize {
+        /// The width asked for.
+        width: u32,
+        /// The height asked for.
+        height: u32,
+        /// The largest side ([`MAX_IMAGE_SIDE`](crate::MAX_IMAGE_SIDE), or the device's texture
+        /// limit if lower).
+        max: u32,
+    },
+    /// A mesh or scene whose data or buffers do not hold what its counts say.
+    #[error("{0}")]
+    Scene(String),
+    /// wgpu reported an error (validation, out of memory) during an operation.
+    #[error("wgpu error while {during}: {message}")]
+    Wgpu {
+        /// What was being done.
+        during: &'static str,
+        /// wgpu's message.
+        message: String,
+    },
 }

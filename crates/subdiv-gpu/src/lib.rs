@@ -7,7 +7,12 @@
 mod adapter;
 mod error;
 mod evaluate;
+mod render;
 
 pub use adapter::{Gpu, GpuOptions};
 pub use error::GpuError;
 pub use evaluate::{GpuEvalOptions, GpuTessellation, RateCache};
+pub use render::{
+    CAGE_VERTEX_STRIDE, Cage, GpuCage, GpuMesh, Lines, MAX_IMAGE_SIDE, RenderOptions, Renderer, Scene, VERTEX_STRIDE,
+    View, bounds, unique_edges,
+};

@@ -1,0 +1,233 @@
+//! `subdiv render`: the limit surface tessellated on the CPU (dual grid), drawn offscreen on the
+//! GPU (subdiv-gpu) and written as PNG; optionally its wireframe and the control cage, and an
+//! animated sequence of a twisted cage.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use subdiv::mesh::DVec3;
+use subdiv::tess::rates::ScreenSpace;
+use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE};
+use subdiv_gpu::{Gpu, GpuCage, GpuMesh, GpuOptions, MAX_IMAGE_SIDE, RenderOptions, Renderer, View};
+
+use crate::UserError;
+use crate::args::parse_size;
+use crate::input::LoadedMesh;
+use crate::scheme_arg::SchemeArgs;
+use crate::tessellate::DEFAULT_RATE;
+
+/// The output file when `-o` is not given.
+const DEFAULT_OUTPUT: &str = "render.png";
+
+/// The uniform rate of the tessellation whose bounding box frames the camera (for every rate
+/// policy, so that `--rate` and `--pixels` frame a mesh alike, and before `--pixels` needs the
+/// camera).
+const FRAMING_RATE: u32 = 4;
+
+/// The twist of the last frame of `--frames`, top against bottom, in degrees.
+const TWIST_DEGREES: f64 = 90.0;
+
+/// Arguments of `subdiv render`.
+#[derive(Debug, clap::Args)]
+pub(crate) struct RenderArgs {
+    /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
+    mesh: Option<PathBuf>,
+    #[command(flatten)]
+    scheme: SchemeArgs,
+    /// Output PNG; written atomically. With --frames, numbered next to it: OUT_0000.png, …
+    #[arg(short, long, value_name = "OUT.png", default_value = DEFAULT_OUTPUT)]
+    output: PathBuf,
+    /// The image size in pixels (sides from 1 to 16384).
+    #[arg(long, value_name = "W,H", default_value = "800,600")]
+    size: String,
+    /// Every face at this rate (1 to 128). The default policy, at 8.
+    #[arg(long, value_name = "N", conflicts_with = "pixels")]
+    rate: Option<u32>,
+    /// Screen-space rates: output edges about P pixels long in the image, from the automatic
+    /// framing's camera.
+    #[arg(long, value_name = "P", allow_negative_numbers = true)]
+    pixels: Option<f64>,
+    /// Draw the tessellation's edges over the surface.
+    #[arg(long)]
+    wireframe: bool,
+    /// Draw the control cage (orange; hidden parts faint).
+    #[arg(long)]
+    cage: bool,
+    /// Render K frames of a built-in animation (the cage twisted about its vertical axis,
+    /// frame 0 undeformed) as a numbered PNG sequence.
+    #[arg(long, value_name = "K")]
+    frames: Option<u32>,
+}
+
+/// Checks every argument that needs no mesh and no device, so that bad input fails before any
+/// work and before anything is written.
+fn check(args: &RenderArgs) -> Result<([u32; 2], Option<u32>), UserError> {
+    let is_png = args.output.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !is_png {
+        return Err(UserError(format!("{}: the output must end in .png", args.output.display())));
+    }
+    let size = parse_size(&args.size, "--size", MAX_IMAGE_SIDE)?;
+    if let Some(rate) = args.rate
+        && !(1..=MAX_DUAL_RATE).contains(&rate)
+    {
+        return Err(UserError(format!("--rate {rate}: rates are integers from 1 to {MAX_DUAL_RATE}")));
+    }
+    if let Some(pixels) = args.pixels
+        && !(pixels.is_finite() && pixels > 0.0)
+    {
+        return Err(UserError(format!("--pixels {pixels}: pixels per edge must be a positive finite number")));
+    }
+    if args.frames == Some(0) {
+        return Err(UserError("--frames 0: the number of frames must be at least 1".to_string()));
+    }
+    Ok((size, args.frames))
+}
+
+pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserError> {
+    let ([width, height], frames) = check(args)?;
+    let options = RenderOptions { wireframe: args.wireframe, ..RenderOptions::default().with_size(width, height) };
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
+    let scheme = args.scheme.resolve()?;
+    let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", loaded.name));
+    let start = Instant::now();
+    let mut tess = DualTessellator::new(&scheme, &mesh, &DualOptions { quads: false, ..DualOptions::default() })
+        .map_err(|e| located(&e))?;
+    let mut flat = FlatMesh::default();
+
+    // The camera, from the undeformed surface (so that frames do not jump).
+    tess.tessellate_flat(&vec![FRAMING_RATE; mesh.face_count()], &mut flat).map_err(|e| located(&e))?;
+    let [lo, hi] =
+        subdiv_gpu::bounds(&flat.vertices).ok_or_else(|| located(&"the surface is empty (every face a hole)"))?;
+    let view = View::framing(lo, hi, options.aspect());
+
+    let (rates, policy) = match args.pixels {
+        Some(pixels) => {
+            let policy = ScreenSpace::new(view.camera(), [width, height], pixels);
+            (policy.face_rates(&mesh).map_err(|e| located(&e))?, format!("{pixels} pixels per edge"))
+        }
+        None => {
+            let rate = args.rate.unwrap_or(DEFAULT_RATE);
+            (vec![rate; mesh.face_count()], format!("uniform rate {rate}"))
+        }
+    };
+    tess.tessellate_flat(&rates, &mut flat).map_err(|e| located(&e))?;
+    let tessellated = start.elapsed();
+
+    let gpu = Gpu::new(&GpuOptions::default())?;
+    let renderer = Renderer::new(&gpu, &options)?;
+    let surface = if args.wireframe { GpuMesh::upload_with_edges(&gpu, &flat)? } else { GpuMesh::upload(&gpu, &flat)? };
+    let cage = if args.cage { Some(GpuCage::upload(&gpu, &mesh)?) } else { None };
+    let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
+
+    let drawing = Instant::now();
+    let written = match frames {
+        None => {
+            write_png(&args.output, &renderer.render(&gpu, &scene)?)?;
+            args.output.display().to_string()
+        }
+        Some(frames) => {
+            let paths: Vec<PathBuf> = (0..frames).map(|k| numbered(&args.output, k)).collect();
+            for (k, path) in (0..frames).zip(&paths) {
+                let moved = twist(mesh.positions(), k, frames);
+                update_frame(&mut tess, &moved, &mut flat, &gpu, &surface).map_err(|e| located(&e))?;
+                if let Some(cage) = &cage {
+                    cage.write_positions(&gpu, &moved)?;
+                }
+                write_png(path, &renderer.render(&gpu, &scene)?)?;
+            }
+            format!("{} … {}", paths[0].display(), paths[paths.len() - 1].display())
+        }
+    };
+    let per_image = drawing.elapsed().as_secs_f64() * 1e3 / f64::from(frames.unwrap_or(1));
+    let (rate_lo, rate_hi) = rates.iter().fold((u32::MAX, 0), |(lo, hi), &r| (lo.min(r), hi.max(r)));
+    let frames_note = frames.map_or(String::new(), |k| format!(", {k} frames"));
+    let _ = writeln!(
+        std::io::stderr(),
+        "subdiv render: {} with {scheme} ({policy}, rates {rate_lo}..={rate_hi}): {} faces, {} vertices, {} triangles \
+         tessellated in {:.1} ms; {width}×{height} on {}{frames_note}, {per_image:.1} ms per image -> {written}",
+        loaded.name,
+        mesh.face_count(),
+        surface.vertex_count,
+        surface.index_count / 3,
+        tessellated.as_secs_f64() * 1e3,
+        gpu.adapter_name(),
+    );
+    Ok(())
+}
+
+/// One animation frame's vertices: the surface re-evaluated for the moved cage on the CPU
+/// (same topology) and written into the vertex buffer. The GPU evaluation replaces this.
+fn update_frame(
+    tess: &mut DualTessellator,
+    cage: &[DVec3],
+    flat: &mut FlatMesh,
+    gpu: &Gpu,
+    surface: &GpuMesh,
+) -> Result<(), Box<dyn std::error::Error>> {
+    tess.update_cage_flat(cage, flat)?;
+    surface.write_vertices(gpu, &flat.vertices)?;
+    Ok(())
+}
+
+/// `OUT.png` as `OUT_0007.png` for frame 7, in the same folder.
+fn numbered(output: &Path, frame: u32) -> PathBuf {
+    let stem = output.file_stem().map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    let extension = output.extension().map_or_else(String::new, |e| e.to_string_lossy().into_owned());
+    output.with_file_name(format!("{stem}_{frame:04}.{extension}"))
+}
+
+/// The built-in deformation, frame `k` of `frames`: the cage twisted about the vertical (y) axis
+/// through its bounding box's centre, by an angle growing linearly from 0 at the box's bottom
+/// to `k / frames × 90°` at its top. Frame 0 is the cage itself.
+fn twist(cage: &[DVec3], k: u32, frames: u32) -> Vec<DVec3> {
+    let (lo, hi) = cage.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let centre = 0.5 * (lo + hi);
+    let height = hi.y - lo.y;
+    let top = TWIST_DEGREES.to_radians() * f64::from(k) / f64::from(frames.max(1));
+    cage.iter()
+        .map(|&p| {
+            let t = if height > 0.0 { (p.y - lo.y) / height } else { 0.0 };
+            let (sin, cos) = (top * t).sin_cos();
+            let (x, z) = (p.x - centre.x, p.z - centre.z);
+            DVec3::new(centre.x + cos * x + sin * z, p.y, centre.z - sin * x + cos * z)
+        })
+        .collect()
+}
+
+/// The image as an RGB PNG, written atomically.
+fn write_png(path: &Path, image: &image::RgbaImage) -> Result<(), UserError> {
+    let rgb = image::DynamicImage::ImageRgba8(image.clone()).into_rgb8();
+    crate::plot::write_png(path, &rgb)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn twist_keeps_heights_and_axis_distances_and_frame_zero() {
+        let cage: Vec<DVec3> =
+            (0..27).map(|i| DVec3::new(f64::from(i % 3), f64::from(i / 3 % 3), f64::from(i / 9) + 0.5)).collect();
+        assert_eq!(twist(&cage, 0, 5), cage);
+        let moved = twist(&cage, 4, 5);
+        let axis = DVec3::new(1.0, 0.0, 1.5);
+        for (p, q) in cage.iter().zip(&moved) {
+            assert_eq!(p.y, q.y);
+            let (a, b) = ((*p - axis).with_y(0.0).length(), (*q - axis).with_y(0.0).length());
+            assert!((a - b).abs() < 1e-12, "{p} -> {q}");
+        }
+        // The bottom stays, the top turns by 4/5 of 90°.
+        let top = cage.iter().position(|p| p.y == 2.0 && p.x == 2.0 && p.z == 1.5).unwrap();
+        let angle = (moved[top] - axis).with_y(0.0).angle_between((cage[top] - axis).with_y(0.0));
+        assert!((angle - 72f64.to_radians()).abs() < 1e-12);
+        let bottom = cage.iter().position(|p| p.y == 0.0).unwrap();
+        assert_eq!(moved[bottom], cage[bottom]);
+    }
+
+    #[test]
+    fn frames_are_numbered_next_to_the_output() {
+        assert_eq!(numbered(Path::new("out/spin.png"), 7), Path::new("out/spin_0007.png"));
+        assert_eq!(numbered(Path::new("render.png"), 12), Path::new("render_0012.png"));
+    }
+}

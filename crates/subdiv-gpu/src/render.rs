@@ -1,0 +1,1049 @@
+//! Offscreen rendering to an image: the surface shaded from its exact per-vertex normals, the
+//! tessellation's wireframe, and the control cage.
+//!
+//! The renderer draws from **wgpu buffers**, so that a vertex buffer written on the device (the
+//! GPU evaluation's output) is drawn without a copy. The layout is [`FlatMesh`]'s: per vertex
+//! `px py pz nx ny nz` as `f32` ([`VERTEX_STRIDE`] bytes), triangles as `u32` indices,
+//! counter-clockwise seen from the side the normals point to. [`GpuMesh::upload`] makes such
+//! buffers from a CPU tessellation.
+//!
+//! Shading: Lambert and Blinn-Phong with a key and a fill light placed relative to the camera
+//! (upper left and right), a light grey-blue material, both sides lit (the back of an open
+//! surface too), depth-tested in `Depth32Float`, 4× MSAA. Wireframe lines are dark and pulled a
+//! little towards the eye so that they win the depth test against their own triangles. Cage
+//! lines are orange and depth-tested against the surface: visible parts solid, hidden parts
+//! faint.
+
+use std::sync::mpsc;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{DVec3, Mat4, Vec3, Vec4};
+use subdiv_mesh::Mesh;
+use subdiv_tess::FlatMesh;
+use subdiv_tess::rates::Camera;
+use wgpu::util::DeviceExt;
+
+use crate::{Gpu, GpuError};
+
+/// Bytes per vertex of a surface vertex buffer: `px py pz nx ny nz` as `f32`.
+pub const VERTEX_STRIDE: u64 = 24;
+
+/// Bytes per vertex of a cage position buffer: `x y z` as `f32`.
+pub const CAGE_VERTEX_STRIDE: u64 = 12;
+
+/// The largest image side [`Renderer::new`] takes (lower if the device's limit is lower).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
+const COLOR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8UnormSrgb;
+const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// How lines are kept in front of the triangles they lie on: each line vertex moves this
+/// fraction of its distance towards the eye.
+const LINE_PULL: f32 = 2e-3;
+
+/// What [`Renderer`] draws and how. Colours are sRGB bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    /// Image width in pixels, `1..=`[`MAX_IMAGE_SIDE`]. Default: 800.
+    pub width: u32,
+    /// Image height in pixels, `1..=`[`MAX_IMAGE_SIDE`]. Default: 600.
+    pub height: u32,
+    /// Draw the scene's wireframe lines ([`Scene::wireframe`], which must then be given).
+    /// Default: `false`.
+    pub wireframe: bool,
+    /// 4× multisampling (which WebGPU guarantees for the formats used). Default: `true`.
+    pub msaa: bool,
+    /// The background. Default: a very light grey, `[247, 247, 249]`.
+    pub background: [u8; 3],
+    /// The surface's colour. Default: a light grey-blue, `[176, 190, 212]`.
+    pub surface: [u8; 3],
+    /// The wireframe's colour and opacity (0–255). Default: `[28, 32, 44, 150]`.
+    pub wire: [u8; 4],
+    /// The cage's colour and opacity; hidden parts are drawn at a third of it. Default: orange,
+    /// `[255, 128, 0, 255]`.
+    pub cage: [u8; 4],
+}
+
+impl RenderOptions {
+    /// The defaults, as documented on each field.
+    pub const DEFAULT: Self = Self {
+        width: 800,
+        height: 600,
+        wireframe: false,
+        msaa: true,
+        background: [247, 247, 249],
+        surface: [176, 190, 212],
+        wire: [28, 32, 44, 150],
+        cage: [255, 128, 0, 255],
+    };
+
+    /// The options with another image size.
+    #[must_use]
+    pub fn with_size(self, width: u32, height: u32) -> Self {
+        Self { width, height, ..self }
+    }
+
+    /// The options with the wireframe drawn or not.
+    #[must_use]
+    pub fn with_wireframe(self, wireframe: bool) -> Self {
+        Self { wireframe, ..self }
+    }
+
+    /// Width over height.
+    pub fn aspect(&self) -> f32 {
+        self.width as f32 / self.height.max(1) as f32
+    }
+
+    /// Checks the image size against [`MAX_IMAGE_SIDE`] (no device needed).
+    ///
+    /// # Errors
+    /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`].
+    pub fn check(&self) -> Result<(), GpuError> {
+        check_size(self.width, self.height, MAX_IMAGE_SIDE)
+    }
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+fn check_size(width: u32, height: u32, max: u32) -> Result<(), GpuError> {
+    if (1..=max).contains(&width) && (1..=max).contains(&height) {
+        Ok(())
+    } else {
+        Err(GpuError::ImageSize { width, height, max })
+    }
+}
+
+/// A pinhole camera: eye, target, up, vertical field of view, and the depth range drawn.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct View {
+    /// The eye.
+    pub eye: Vec3,
+    /// The point at the image's centre.
+    pub target: Vec3,
+    /// Up: any vector not parallel to the view direction.
+    pub up: Vec3,
+    /// The vertical field of view in degrees, in `(0, 180)`.
+    pub fovy_degrees: f32,
+    /// The near clipping distance (> 0).
+    pub near: f32,
+    /// The far clipping distance (> `near`).
+    pub far: f32,
+}
+
+impl View {
+    /// The direction from the target to the eye of [`framing`](Self::framing): a three-quarter
+    /// view from the front right, 35° round from +z and 25° above the horizon (y is up).
+    pub const FRAMING_DIRECTION: Vec3 = Vec3::new(0.519_837_5, 0.422_618_26, 0.742_403_85);
+
+    /// The vertical field of view of [`framing`](Self::framing), in degrees.
+    pub const FRAMING_FOVY_DEGREES: f32 = 30.0;
+
+    /// The fraction of the image's width and height that [`framing`](Self::framing) lets the
+    /// box's projection reach, centred (a margin for deformations).
+    pub const FRAMING_FILL: f32 = 0.9;
+
+    /// A camera that fits the box `bounds_min..=bounds_max` in an image of `aspect` (width over
+    /// height), seen from [`FRAMING_DIRECTION`](Self::FRAMING_DIRECTION) with y up, looking at
+    /// the box's centre: the nearest distance at which every corner of the box lies within the
+    /// middle [`FRAMING_FILL`](Self::FRAMING_FILL) of the image's width and height. Depth
+    /// range: the box's bounding sphere, twice over (a shape deformed within it stays drawn).
+    /// An empty or non-finite box (`min > max`) is framed as the unit cube; a point as a box of
+    /// side 1 around it.
+    pub fn framing(bounds_min: Vec3, bounds_max: Vec3, aspect: f32) -> Self {
+        let (lo, hi) = if bounds_min.is_finite() && bounds_max.is_finite() && bounds_min.cmple(bounds_max).all() {
+            (bounds_min, bounds_max)
+        } else {
+            (Vec3::ZERO, Vec3::ONE)
+        };
+        let centre = 0.5 * (lo + hi);
+        let (lo, hi) = if lo == hi { (centre - 0.5, centre + 0.5) } else { (lo, hi) };
+        let radius = 0.5 * (hi - lo).length();
+        let aspect = if aspect.is_finite() && aspect > 0.0 { aspect } else { 1.0 };
+        let back = Self::FRAMING_DIRECTION;
+        let right = Vec3::Y.cross(back).normalize();
+        let up = back.cross(right);
+        // Half the image's height and width at unit distance, times the fill.
+        let tan_y = Self::FRAMING_FILL * (0.5 * Self::FRAMING_FOVY_DEGREES.to_radians()).tan();
+        let tan_x = aspect * tan_y;
+        // A corner at offset o is inside when |o·right| ≤ tan_x (d − o·back), and so for up.
+        let distance = (0..8)
+            .map(|corner| {
+                let o = Vec3::new(
+                    if corner & 1 == 0 { lo.x } else { hi.x },
+                    if corner & 2 == 0 { lo.y } else { hi.y },
+                    if corner & 4 == 0 { lo.z } else { hi.z },
+                ) - centre;
+                o.dot(back) + (o.dot(right).abs() / tan_x).max(o.dot(up).abs() / tan_y)
+            })
+            .fold(radius, f32::max);
+        Self {
+            eye: centre + distance * back,
+            target: centre,
+            up: Vec3::Y,
+            fovy_degrees: Self::FRAMING_FOVY_DEGREES,
+            near: (distance - 2.0 * radius).max(0.01 * distance),
+            far: distance + 2.0 * radius,
+        }
+    }
+
+    /// The same camera for the screen-space rate policy ([`ScreenSpace`](subdiv_tess::rates::ScreenSpace)).
+    pub fn camera(&self) -> Camera {
+        Camera::look_at(self.eye.as_dvec3(), self.target.as_dvec3(), self.up.as_dvec3())
+            .with_fovy_degrees(f64::from(self.fovy_degrees))
+    }
+
+    /// The view frame `[right, up, back]` (unit, right-handed), or the reason there is none.
+    fn frame(&self) -> Result<[Vec3; 3], GpuError> {
+        let bad = |reason: &str| Err(GpuError::Scene(format!("view: {reason}")));
+        if ![self.eye, self.target, self.up].iter().all(|v| v.is_finite()) {
+            return bad("eye, target and up must be finite");
+        }
+        if !(self.fovy_degrees > 0.0 && self.fovy_degrees < 180.0) {
+            return bad("the field of view must be in (0°, 180°)");
+        }
+        if !(self.near > 0.0 && self.far > self.near && self.far.is_finite()) {
+            return bad("the depth range must have 0 < near < far");
+        }
+        let back = (self.eye - self.target).normalize_or_zero();
+        let right = self.up.cross(back).normalize_or_zero();
+        if back == Vec3::ZERO || right == Vec3::ZERO {
+            return bad("the eye is on the target, or up is along the view direction");
+        }
+        Ok([right, back.cross(right), back])
+    }
+
+    /// World to clip space (right-handed view, depth in `[0, 1]`) for the view frame `frame`.
+    fn view_projection(&self, aspect: f32, frame: [Vec3; 3]) -> Mat4 {
+        let [right, up, back] = frame;
+        let e = self.eye;
+        let view = Mat4::from_cols(
+            Vec4::new(right.x, up.x, back.x, 0.0),
+            Vec4::new(right.y, up.y, back.y, 0.0),
+            Vec4::new(right.z, up.z, back.z, 0.0),
+            Vec4::new(-right.dot(e), -up.dot(e), -back.dot(e), 1.0),
+        );
+        let f = 1.0 / (0.5 * self.fovy_degrees.to_radians()).tan();
+        let (near, far) = (self.near, self.far);
+        let projection = Mat4::from_cols(
+            Vec4::new(f / aspect, 0.0, 0.0, 0.0),
+            Vec4::new(0.0, f, 0.0, 0.0),
+            Vec4::new(0.0, 0.0, far / (near - far), -1.0),
+            Vec4::new(0.0, 0.0, near * far / (near - far), 0.0),
+        );
+        projection * view
+    }
+}
+
+/// The bounding box `[min, max]` of a vertex buffer's positions in [`FlatMesh`] layout (six
+/// floats per vertex), or `None` when it has no vertex.
+pub fn bounds(vertices: &[f32]) -> Option<[Vec3; 2]> {
+    let mut points = vertices.chunks_exact(6).map(|v| Vec3::new(v[0], v[1], v[2]));
+    let first = points.next()?;
+    Some(points.fold([first, first], |[lo, hi], p| [lo.min(p), hi.max(p)]))
+}
+
+/// A line list: `index_count` `u32` indices, two per line.
+#[derive(Clone, Copy, Debug)]
+pub struct Lines<'a> {
+    /// The index buffer (usage `INDEX`).
+    pub indices: &'a wgpu::Buffer,
+    /// How many indices to draw (even).
+    pub index_count: u32,
+}
+
+/// The control cage: its own positions and its edges.
+#[derive(Clone, Copy, Debug)]
+pub struct Cage<'a> {
+    /// `x y z` per vertex as `f32` ([`CAGE_VERTEX_STRIDE`] bytes; usage `VERTEX`).
+    pub positions: &'a wgpu::Buffer,
+    /// The number of cage vertices in `positions`.
+    pub vertex_count: u32,
+    /// The edges, over `positions`.
+    pub lines: Lines<'a>,
+}
+
+/// What one image shows. Borrows the buffers, so that buffers written on the device are
+/// drawn as they are.
+#[derive(Clone, Copy, Debug)]
+pub struct Scene<'a> {
+    /// The surface's vertices in [`FlatMesh`] layout ([`VERTEX_STRIDE`] bytes; usage `VERTEX`).
+    pub vertices: &'a wgpu::Buffer,
+    /// The number of vertices in `vertices`.
+    pub vertex_count: u32,
+    /// The surface's triangles: `u32` indices into `vertices`, three per triangle (usage
+    /// `INDEX`).
+    pub triangles: &'a wgpu::Buffer,
+    /// How many triangle indices to draw (a multiple of 3).
+    pub index_count: u32,
+    /// The wireframe, a line list over `vertices`, drawn when [`RenderOptions::wireframe`] is
+    /// set.
+    pub wireframe: Option<Lines<'a>>,
+    /// The control cage, drawn when given.
+    pub cage: Option<Cage<'a>>,
+    /// The camera.
+    pub view: View,
+}
+
+impl Scene<'_> {
+    /// Checks that the buffers hold what the counts say.
+    fn check(&self, options: &RenderOptions) -> Result<(), GpuError> {
+        let bad = |what: String| Err(GpuError::Scene(format!("scene: {what}")));
+        let fits = |buffer: &wgpu::Buffer, count: u32, stride: u64| u64::from(count) * stride <= buffer.size();
+        if !fits(self.vertices, self.vertex_count, VERTEX_STRIDE) {
+            return bad(format!("{} vertices do not fit a {}-byte buffer", self.vertex_count, self.vertices.size()));
+        }
+        if !self.index_count.is_multiple_of(3) || !fits(self.triangles, self.index_count, 4) {
+            return bad(format!(
+                "{} triangle indices: not a multiple of 3, or more than the {}-byte buffer holds",
+                self.index_count,
+                self.triangles.size()
+            ));
+        }
+        let lines = |what: &str, lines: &Lines<'_>| {
+            if !lines.index_count.is_multiple_of(2) || !fits(lines.indices, lines.index_count, 4) {
+                return bad(format!(
+                    "{} {what} line indices: odd, or more than the {}-byte buffer holds",
+                    lines.index_count,
+                    lines.indices.size()
+                ));
+            }
+            Ok(())
+        };
+        match (&self.wireframe, options.wireframe) {
+            (Some(wire), true) => lines("wireframe", wire)?,
+            (None, true) => return bad("the wireframe is asked for but the scene has no line indices".to_string()),
+            _ => {}
+        }
+        if let Some(cage) = &self.cage {
+            if !fits(cage.positions, cage.vertex_count, CAGE_VERTEX_STRIDE) {
+                return bad(format!(
+                    "{} cage vertices do not fit a {}-byte buffer",
+                    cage.vertex_count,
+                    cage.positions.size()
+                ));
+            }
+            lines("cage", &cage.lines)?;
+        }
+        self.view.frame().map(|_| ())
+    }
+}
+
+/// The uniform block of `shaders/render.wgsl`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct Uniforms {
+    view_proj: [[f32; 4]; 4],
+    eye: [f32; 4],
+    key: [f32; 4],
+    fill: [f32; 4],
+    surface: [f32; 4],
+    wire: [f32; 4],
+    cage: [f32; 4],
+    specular: [f32; 4],
+}
+
+/// An sRGB byte as a linear intensity.
+fn linear(c: u8) -> f32 {
+    let c = f32::from(c) / 255.0;
+    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
+}
+
+fn linear_rgb(c: [u8; 3]) -> [f32; 3] {
+    c.map(linear)
+}
+
+impl Uniforms {
+    fn new(options: &RenderOptions, view: &View, frame: [Vec3; 3]) -> Self {
+        let [right, up, back] = frame;
+        // Lights fixed to the camera: the key from the upper left, the fill from the right.
+        let key = (-0.45 * right + 0.6 * up + 0.65 * back).normalize();
+        let fill = (0.7 * right - 0.1 * up + 0.7 * back).normalize();
+        let [r, g, b] = linear_rgb(options.surface);
+        let rgba = |c: [u8; 4]| {
+            let [r, g, b] = linear_rgb([c[0], c[1], c[2]]);
+            [r, g, b, f32::from(c[3]) / 255.0]
+        };
+        Self {
+            view_proj: view.view_projection(options.aspect(), frame).to_cols_array_2d(),
+            eye: view.eye.extend(LINE_PULL).to_array(),
+            key: key.extend(0.78).to_array(),
+            fill: fill.extend(0.3).to_array(),
+            surface: [r, g, b, 0.16],
+            wire: rgba(options.wire),
+            cage: rgba(options.cage),
+            specular: [0.22, 48.0, 0.0, 0.0],
+        }
+    }
+}
+
+/// The bytes per row of a texture-to-buffer copy of `width` RGBA8 pixels: padded to
+/// [`wgpu::COPY_BYTES_PER_ROW_ALIGNMENT`].
+pub(crate) fn padded_bytes_per_row(width: u32) -> u32 {
+    let align = wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+    (4 * width).div_ceil(align) * align
+}
+
+/// The `height` rows of `4 * width` bytes of a buffer with `padded` bytes per row.
+pub(crate) fn unpad(data: &[u8], width: u32, height: u32, padded: u32) -> Vec<u8> {
+    let row = 4 * width as usize;
+    data.chunks(padded as usize).take(height as usize).flat_map(|r| &r[..row]).copied().collect()
+}
+
+/// Turns wgpu's captured errors into [`GpuError::Wgpu`].
+struct ErrorScopes {
+    // Pushed after `validation`, so declared first: fields drop in order, and scopes must be
+    // popped in reverse order of their pushes (an early return drops both).
+    memory: wgpu::ErrorScopeGuard,
+    validation: wgpu::ErrorScopeGuard,
+    during: &'static str,
+}
+
+impl ErrorScopes {
+    fn push(device: &wgpu::Device, during: &'static str) -> Self {
+        let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        Self { validation, memory, during }
+    }
+
+    fn pop(self) -> Result<(), GpuError> {
+        // Reverse order of the pushes.
+        let memory = pollster::block_on(self.memory.pop());
+        let validation = pollster::block_on(self.validation.pop());
+        match memory.or(validation) {
+            Some(e) => Err(GpuError::Wgpu { during: self.during, message: e.to_string() }),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Renders [`Scene`]s into images of one size: the pipelines, targets and readback buffer are
+/// made once, and each [`render`](Self::render) writes the camera and draws.
+///
+/// A CPU tessellation drawn in two calls (`no_run`: it needs an adapter):
+///
+/// ```no_run
+/// use subdiv_gpu::{Gpu, GpuMesh, GpuOptions, RenderOptions, Renderer, View};
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+///
+/// let mesh = Mesh::build(shapes::default_model())?;
+/// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())?;
+/// let mut flat = FlatMesh::default();
+/// tess.tessellate_flat(&vec![8; mesh.face_count()], &mut flat)?;
+///
+/// let gpu = Gpu::new(&GpuOptions::default())?;
+/// let options = RenderOptions::default().with_size(640, 480).with_wireframe(true);
+/// let renderer = Renderer::new(&gpu, &options)?;
+/// let surface = GpuMesh::upload_with_edges(&gpu, &flat)?;
+/// let [lo, hi] = subdiv_gpu::bounds(&flat.vertices).expect("a surface");
+/// let image = renderer.render(&gpu, &surface.scene(View::framing(lo, hi, options.aspect())))?;
+/// assert_eq!(image.dimensions(), (640, 480));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Debug)]
+pub struct Renderer {
+    options: RenderOptions,
+    uniforms: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    surface: wgpu::RenderPipeline,
+    wire: wgpu::RenderPipeline,
+    cage: wgpu::RenderPipeline,
+    cage_hidden: wgpu::RenderPipeline,
+    /// The multisampled colour target (`None` without MSAA).
+    multisampled: Option<wgpu::TextureView>,
+    /// The single-sample colour target that is read back (the resolve target with MSAA).
+    resolved: wgpu::Texture,
+    resolved_view: wgpu::TextureView,
+    depth: wgpu::TextureView,
+    readback: wgpu::Buffer,
+}
+
+impl Renderer {
+    /// Makes the pipelines and targets for `options`.
+    ///
+    /// # Errors
+    /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`] (or the device's
+    /// texture limit); [`GpuError::Wgpu`] if the device refuses a resource.
+    pub fn new(gpu: &Gpu, options: &RenderOptions) -> Result<Self, GpuError> {
+        check_size(options.width, options.height, MAX_IMAGE_SIDE.min(gpu.limits().max_texture_dimension_2d))?;
+        let device = &gpu.device;
+        let scopes = ErrorScopes::push(device, "creating the renderer");
+        let shader = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("render.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("../shaders/render.wgsl").into()),
+        });
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("render uniforms"),
+            size: std::mem::size_of::<Uniforms>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("render uniforms"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("render uniforms"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry { binding: 0, resource: uniforms.as_entire_binding() }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("render"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let samples = if options.msaa { 4 } else { 1 };
+        let pipelines = Pipelines { device, shader: &shader, layout: &pipeline_layout, samples };
+        let surface = pipelines.surface();
+        let wire = pipelines.lines("wireframe", VERTEX_STRIDE, "fs_wire", wgpu::CompareFunction::LessEqual);
+        let cage = pipelines.lines("cage", CAGE_VERTEX_STRIDE, "fs_cage", wgpu::CompareFunction::LessEqual);
+        let cage_hidden =
+            pipelines.lines("hidden cage", CAGE_VERTEX_STRIDE, "fs_cage_hidden", wgpu::CompareFunction::Greater);
+
+        let size = wgpu::Extent3d { width: options.width, height: options.height, depth_or_array_layers: 1 };
+        let texture = |label, format, sample_count, usage| {
+            device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size,
+                mip_level_count: 1,
+                sample_count,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+        let multisampled = options.msaa.then(|| {
+            texture("colour (multisampled)", COLOR_FORMAT, samples, attachment)
+                .create_view(&wgpu::TextureViewDescriptor::default())
+        });
+        let resolved = texture("colour", COLOR_FORMAT, 1, attachment | wgpu::TextureUsages::COPY_SRC);
+        let resolved_view = resolved.create_view(&wgpu::TextureViewDescriptor::default());
+        let depth =
+            texture("depth", DEPTH_FORMAT, samples, attachment).create_view(&wgpu::TextureViewDescriptor::default());
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: u64::from(padded_bytes_per_row(options.width)) * u64::from(options.height),
+            usage: wgpu::BufferUsages::COPY_DST | wgpu::BufferUsages::MAP_READ,
+            mapped_at_creation: false,
+        });
+        scopes.pop()?;
+        Ok(Self {
+            options: options.clone(),
+            uniforms,
+            bind_group,
+            surface,
+            wire,
+            cage,
+            cage_hidden,
+            multisampled,
+            resolved,
+            resolved_view,
+            depth,
+            readback,
+        })
+    }
+
+    /// The options this renderer was made for.
+    pub fn options(&self) -> &RenderOptions {
+        &self.options
+    }
+
+    /// Draws `scene` and reads the image back (waiting for the device).
+    ///
+    /// # Errors
+    /// [`GpuError::Scene`] when a buffer is smaller than its count says, an index count is not a
+    /// multiple of 3 (triangles) or 2 (lines), the wireframe is asked for without lines, or the
+    /// view is degenerate; [`GpuError::Wgpu`] for an error wgpu reports (e.g. a buffer without
+    /// the `VERTEX` or `INDEX` usage); [`GpuError::Readback`] if mapping the image fails.
+    pub fn render(&self, gpu: &Gpu, scene: &Scene<'_>) -> Result<image::RgbaImage, GpuError> {
+        let options = &self.options;
+        scene.check(options)?;
+        let frame = scene.view.frame()?;
+        let (device, queue) = (&gpu.device, &gpu.queue);
+        let scopes = ErrorScopes::push(device, "rendering");
+        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&Uniforms::new(options, &scene.view, frame)));
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render") });
+        {
+            let [r, g, b] = linear_rgb(options.background).map(f64::from);
+            let (view, resolve_target) = match &self.multisampled {
+                Some(multisampled) => (multisampled, Some(&self.resolved_view)),
+                None => (&self.resolved_view, None),
+            };
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("render"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view,
+                    depth_slice: None,
+                    resolve_target,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color { r, g, b, a: 1.0 }),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &self.depth,
+                    depth_ops: Some(wgpu::Operations { load: wgpu::LoadOp::Clear(1.0), store: wgpu::StoreOp::Discard }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_pipeline(&self.surface);
+            pass.set_vertex_buffer(0, scene.vertices.slice(..));
+            pass.set_index_buffer(scene.triangles.slice(..), wgpu::IndexFormat::Uint32);
+            pass.draw_indexed(0..scene.index_count, 0, 0..1);
+            if let (Some(wire), true) = (&scene.wireframe, options.wireframe) {
+                pass.set_pipeline(&self.wire);
+                pass.set_index_buffer(wire.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..wire.index_count, 0, 0..1);
+            }
+            if let Some(cage) = &scene.cage {
+                pass.set_vertex_buffer(0, cage.positions.slice(..));
+                pass.set_index_buffer(cage.lines.indices.slice(..), wgpu::IndexFormat::Uint32);
+                for pipeline in [&self.cage_hidden, &self.cage] {
+                    pass.set_pipeline(pipeline);
+                    pass.draw_indexed(0..cage.lines.index_count, 0, 0..1);
+                }
+            }
+        }
+        let padded = padded_bytes_per_row(options.width);
+        encoder.copy_texture_to_buffer(
+            wgpu::TexelCopyTextureInfo {
+                texture: &self.resolved,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.readback,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(padded),
+                    rows_per_image: Some(options.height),
+                },
+            },
+            wgpu::Extent3d { width: options.width, height: options.height, depth_or_array_layers: 1 },
+        );
+        queue.submit([encoder.finish()]);
+        let (sender, receiver) = mpsc::channel();
+        self.readback.map_async(wgpu::MapMode::Read, .., move |result| {
+            // The receiver waits below; a failed send only means it is gone.
+            let _ = sender.send(result);
+        });
+        let polled = device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Readback(e.to_string()));
+        // Unmapped on every path (even when wgpu reported an error), so that the next render can
+        // map it again.
+        let pixels = match receiver.try_recv() {
+            Ok(Ok(())) => {
+                let pixels =
+                    self.readback.get_mapped_range(..).map(|data| unpad(&data, options.width, options.height, padded));
+                self.readback.unmap();
+                pixels.map_err(|e| GpuError::Readback(e.to_string()))
+            }
+            Ok(Err(e)) => Err(GpuError::Readback(e.to_string())),
+            Err(e) => Err(GpuError::Readback(format!("the map callback did not run: {e}"))),
+        };
+        // wgpu's own error first: it explains a failed map.
+        scopes.pop()?;
+        polled?;
+        let pixels = pixels?;
+        image::RgbaImage::from_raw(options.width, options.height, pixels)
+            .ok_or_else(|| GpuError::Readback("the image has the wrong length; please report".to_string()))
+    }
+}
+
+/// What the pipelines share.
+struct Pipelines<'a> {
+    device: &'a wgpu::Device,
+    shader: &'a wgpu::ShaderModule,
+    layout: &'a wgpu::PipelineLayout,
+    samples: u32,
+}
+
+impl Pipelines<'_> {
+    fn pipeline(
+        &self,
+        label: &str,
+        vertex: (&str, wgpu::VertexBufferLayout<'_>),
+        fragment: (&str, Option<wgpu::BlendState>),
+        topology: wgpu::PrimitiveTopology,
+        depth: (bool, wgpu::CompareFunction),
+    ) -> wgpu::RenderPipeline {
+        self.device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(label),
+            layout: Some(self.layout),
+            vertex: wgpu::VertexState {
+                module: self.shader,
+                entry_point: Some(vertex.0),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                buffers: &[Some(vertex.1)],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology,
+                front_face: wgpu::FrontFace::Ccw,
+                cull_mode: None,
+                ..wgpu::PrimitiveState::default()
+            },
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(depth.0),
+                depth_compare: Some(depth.1),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample: wgpu::MultisampleState { count: self.samples, ..wgpu::MultisampleState::default() },
+            fragment: Some(wgpu::FragmentState {
+                module: self.shader,
+                entry_point: Some(fragment.0),
+                compilation_options: wgpu::PipelineCompilationOptions::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: COLOR_FORMAT,
+                    blend: fragment.1,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+    }
+
+    fn surface(&self) -> wgpu::RenderPipeline {
+        const ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+        let layout = wgpu::VertexBufferLayout {
+            array_stride: VERTEX_STRIDE,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &ATTRIBUTES,
+        };
+        self.pipeline(
+            "surface",
+            ("vs_surface", layout),
+            ("fs_surface", None),
+            wgpu::PrimitiveTopology::TriangleList,
+            (true, wgpu::CompareFunction::Less),
+        )
+    }
+
+    /// Lines over positions at the start of each `stride`-byte vertex, blended, depth-tested
+    /// with `compare` without writing depth.
+    fn lines(&self, label: &str, stride: u64, fragment: &str, compare: wgpu::CompareFunction) -> wgpu::RenderPipeline {
+        const ATTRIBUTES: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![0 => Float32x3];
+        let layout = wgpu::VertexBufferLayout {
+            array_stride: stride,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &ATTRIBUTES,
+        };
+        self.pipeline(
+            label,
+            ("vs_line", layout),
+            (fragment, Some(wgpu::BlendState::ALPHA_BLENDING)),
+            wgpu::PrimitiveTopology::LineList,
+            (false, compare),
+        )
+    }
+}
+
+/// Each edge of `triangles` (three `u32` indices per triangle) once, as a line list: the edges
+/// as `(low, high)` index pairs in increasing order.
+pub fn unique_edges(triangles: &[u32]) -> Vec<u32> {
+    let mut keys: Vec<u64> = triangles
+        .chunks_exact(3)
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (u64::from(a.min(b)) << 32) | u64::from(a.max(b)))
+        .collect();
+    keys.sort_unstable();
+    keys.dedup();
+    keys.iter().flat_map(|&k| [(k >> 32) as u32, k as u32]).collect()
+}
+
+/// A [`FlatMesh`] on the device: the vertex and triangle index buffers a [`Scene`] draws, and on
+/// request the wireframe's line list.
+///
+/// The vertex buffer's usage is `VERTEX | STORAGE | COPY_DST | COPY_SRC`, so that it can be
+/// rewritten per animation frame ([`write_vertices`](Self::write_vertices)) or by a compute
+/// pass.
+#[derive(Debug)]
+pub struct GpuMesh {
+    /// Per vertex `px py pz nx ny nz` as `f32`.
+    pub vertices: wgpu::Buffer,
+    /// The number of vertices.
+    pub vertex_count: u32,
+    /// Three `u32` indices per triangle.
+    pub triangles: wgpu::Buffer,
+    /// The number of triangle indices.
+    pub index_count: u32,
+    /// Each edge of the triangles once, as a line list (from
+    /// [`upload_with_edges`](Self::upload_with_edges)).
+    pub edges: Option<wgpu::Buffer>,
+    /// The number of edge indices (0 without edges).
+    pub edge_index_count: u32,
+}
+
+impl GpuMesh {
+    /// Uploads `mesh`'s vertices and triangles.
+    ///
+    /// # Errors
+    /// [`GpuError::Scene`] when the vertex array is not six floats per vertex, the index array
+    /// not three per triangle, an index is out of range, or a count exceeds `u32`;
+    /// [`GpuError::Wgpu`] if the device refuses the buffers.
+    pub fn upload(gpu: &Gpu, mesh: &FlatMesh) -> Result<Self, GpuError> {
+        Self::make(gpu, mesh, false)
+    }
+
+    /// As [`upload`](Self::upload), with the wireframe's line list ([`unique_edges`]).
+    ///
+    /// # Errors
+    /// As [`upload`](Self::upload).
+    pub fn upload_with_edges(gpu: &Gpu, mesh: &FlatMesh) -> Result<Self, GpuError> {
+        Self::make(gpu, mesh, true)
+    }
+
+    fn make(gpu: &Gpu, mesh: &FlatMesh, with_edges: bool) -> Result<Self, GpuError> {
+        let bad = |what: String| Err(GpuError::Scene(format!("flat mesh: {what}")));
+        if !mesh.vertices.len().is_multiple_of(6) {
+            return bad(format!("{} floats are not six per vertex", mesh.vertices.len()));
+        }
+        if !mesh.indices.len().is_multiple_of(3) {
+            return bad(format!("{} indices are not three per triangle", mesh.indices.len()));
+        }
+        let count = |n: usize, what: &str| {
+            u32::try_from(n).map_err(|_| GpuError::Scene(format!("flat mesh: {n} {what} exceed u32")))
+        };
+        let vertex_count = count(mesh.vertices.len() / 6, "vertices")?;
+        let index_count = count(mesh.indices.len(), "indices")?;
+        if let Some(&i) = mesh.indices.iter().find(|&&i| i >= vertex_count) {
+            return bad(format!("index {i} is not below the vertex count {vertex_count}"));
+        }
+        let device = &gpu.device;
+        let scopes = ErrorScopes::push(device, "uploading a mesh");
+        let buffer = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
+        let vertex_usage = wgpu::BufferUsages::VERTEX
+            | wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_DST
+            | wgpu::BufferUsages::COPY_SRC;
+        let index_usage = wgpu::BufferUsages::INDEX | wgpu::BufferUsages::COPY_DST;
+        let vertices = buffer("vertices", bytemuck::cast_slice(&mesh.vertices), vertex_usage);
+        let triangles = buffer("triangles", bytemuck::cast_slice(&mesh.indices), index_usage);
+        let (edges, edge_index_count) = if with_edges {
+            let edges = unique_edges(&mesh.indices);
+            let n = count(edges.len(), "edge indices")?;
+            (Some(buffer("edges", bytemuck::cast_slice(&edges), index_usage)), n)
+        } else {
+            (None, 0)
+        };
+        scopes.pop()?;
+        Ok(Self { vertices, vertex_count, triangles, index_count, edges, edge_index_count })
+    }
+
+    /// Rewrites the vertex buffer (the animation path: same topology, new positions and
+    /// normals). Takes effect with the next submission.
+    ///
+    /// # Errors
+    /// [`GpuError::Scene`] unless `vertices` has six floats per vertex of this mesh.
+    pub fn write_vertices(&self, gpu: &Gpu, vertices: &[f32]) -> Result<(), GpuError> {
+        if vertices.len() != 6 * self.vertex_count as usize {
+            return Err(GpuError::Scene(format!(
+                "flat mesh: {} floats for {} vertices (six each)",
+                vertices.len(),
+                self.vertex_count
+            )));
+        }
+        gpu.queue.write_buffer(&self.vertices, 0, bytemuck::cast_slice(vertices));
+        Ok(())
+    }
+
+    /// A scene of this mesh (with its wireframe, if uploaded) seen by `view`, without a cage.
+    pub fn scene(&self, view: View) -> Scene<'_> {
+        Scene {
+            vertices: &self.vertices,
+            vertex_count: self.vertex_count,
+            triangles: &self.triangles,
+            index_count: self.index_count,
+            wireframe: self.edges.as_ref().map(|indices| Lines { indices, index_count: self.edge_index_count }),
+            cage: None,
+            view,
+        }
+    }
+}
+
+/// A control cage on the device: its positions and its edges.
+#[derive(Debug)]
+pub struct GpuCage {
+    /// `x y z` per vertex as `f32`.
+    pub positions: wgpu::Buffer,
+    /// The number of vertices.
+    pub vertex_count: u32,
+    /// Two `u32` indices per edge.
+    pub edges: wgpu::Buffer,
+    /// The number of edge indices.
+    pub edge_index_count: u32,
+}
+
+impl GpuCage {
+    /// Uploads `mesh`'s vertices and edges.
+    ///
+    /// # Errors
+    /// [`GpuError::Scene`] if the mesh is too large for `u32` counts; [`GpuError::Wgpu`] if
+    /// the device refuses the buffers.
+    pub fn upload(gpu: &Gpu, mesh: &Mesh) -> Result<Self, GpuError> {
+        let positions: Vec<f32> = mesh.positions().iter().flat_map(|p| p.as_vec3().to_array()).collect();
+        let edges: Vec<u32> = mesh
+            .edges()
+            .flat_map(|e| {
+                let [a, b] = mesh.edge_vertices(e);
+                [a.index() as u32, b.index() as u32]
+            })
+            .collect();
+        let too_large = || GpuError::Scene("cage: more than u32::MAX vertices or edges".to_string());
+        let vertex_count = u32::try_from(mesh.vertex_count()).map_err(|_| too_large())?;
+        let edge_index_count = u32::try_from(edges.len()).map_err(|_| too_large())?;
+        let device = &gpu.device;
+        let scopes = ErrorScopes::push(device, "uploading a cage");
+        let buffer = |label, contents: &[u8], usage| {
+            device.create_buffer_init(&wgpu::util::BufferInitDescriptor { label: Some(label), contents, usage })
+        };
+        let positions = buffer(
+            "cage positions",
+            bytemuck::cast_slice(&positions),
+            wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+        );
+        let edges = buffer("cage edges", bytemuck::cast_slice(&edges), wgpu::BufferUsages::INDEX);
+        scopes.pop()?;
+        Ok(Self { positions, vertex_count, edges, edge_index_count })
+    }
+
+    /// Rewrites the positions (an animated cage).
+    ///
+    /// # Errors
+    /// [`GpuError::Scene`] unless there is one position per cage vertex.
+    pub fn write_positions(&self, gpu: &Gpu, positions: &[DVec3]) -> Result<(), GpuError> {
+        if positions.len() != self.vertex_count as usize {
+            return Err(GpuError::Scene(format!(
+                "cage: {} positions for {} vertices",
+                positions.len(),
+                self.vertex_count
+            )));
+        }
+        let data: Vec<f32> = positions.iter().flat_map(|p| p.as_vec3().to_array()).collect();
+        gpu.queue.write_buffer(&self.positions, 0, bytemuck::cast_slice(&data));
+        Ok(())
+    }
+
+    /// The cage as a [`Scene`]'s part.
+    pub fn lines(&self) -> Cage<'_> {
+        Cage {
+            positions: &self.positions,
+            vertex_count: self.vertex_count,
+            lines: Lines { indices: &self.edges, index_count: self.edge_index_count },
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unique_edges_lists_each_edge_once_and_all_of_them() {
+        // Two triangles sharing the edge 1-2, and a third sharing 2-3 with the second.
+        let triangles = [0, 1, 2, 2, 1, 3, 3, 4, 2];
+        let edges = unique_edges(&triangles);
+        let pairs: Vec<[u32; 2]> = edges.chunks_exact(2).map(|e| [e[0], e[1]]).collect();
+        assert_eq!(pairs, [[0, 1], [0, 2], [1, 2], [1, 3], [2, 3], [2, 4], [3, 4]]);
+        // Complete: every triangle side is there.
+        for t in triangles.chunks_exact(3) {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                assert!(pairs.contains(&[a.min(b), a.max(b)]), "{a}-{b}");
+            }
+        }
+        assert!(unique_edges(&[]).is_empty());
+    }
+
+    #[test]
+    fn framing_contains_the_box() {
+        for (lo, hi, aspect) in [
+            (Vec3::new(-1.0, -1.0, -1.0), Vec3::ONE, 4.0 / 3.0),
+            (Vec3::new(10.0, 0.0, -3.0), Vec3::new(12.0, 7.0, -2.5), 0.5),
+            (Vec3::new(0.0, 0.0, 0.0), Vec3::new(100.0, 1.0, 1.0), 2.0),
+        ] {
+            let view = View::framing(lo, hi, aspect);
+            let clip = view.view_projection(aspect, view.frame().unwrap());
+            for corner in 0..8 {
+                let p = Vec3::new(
+                    if corner & 1 == 0 { lo.x } else { hi.x },
+                    if corner & 2 == 0 { lo.y } else { hi.y },
+                    if corner & 4 == 0 { lo.z } else { hi.z },
+                );
+                let q = clip.project_point3(p);
+                assert!(
+                    q.x.abs() <= View::FRAMING_FILL + 1e-4 && q.y.abs() <= View::FRAMING_FILL + 1e-4,
+                    "{p} at {q} for {lo}..{hi}"
+                );
+                assert!(q.z > 0.0 && q.z < 1.0, "{p} at depth {}", q.z);
+            }
+            assert!(view.frame().is_ok());
+            // The same camera for the rate policy.
+            assert_eq!(view.camera().eye, view.eye.as_dvec3());
+        }
+        // Degenerate boxes still give a usable camera.
+        for (lo, hi) in [(Vec3::ONE, Vec3::ZERO), (Vec3::ONE, Vec3::ONE), (Vec3::NAN, Vec3::ONE)] {
+            assert!(View::framing(lo, hi, 1.0).frame().is_ok());
+        }
+    }
+
+    #[test]
+    fn rows_are_padded_and_unpadded() {
+        assert_eq!(padded_bytes_per_row(1), 256);
+        assert_eq!(padded_bytes_per_row(64), 256);
+        assert_eq!(padded_bytes_per_row(65), 512);
+        let (width, height) = (3, 2);
+        let padded = padded_bytes_per_row(width);
+        let mut data = vec![0xee; (padded * height) as usize];
+        for y in 0..height as usize {
+            for x in 0..4 * width as usize {
+                data[y * padded as usize + x] = (10 * y + x) as u8;
+            }
+        }
+        let pixels = unpad(&data, width, height, padded);
+        assert_eq!(pixels.len(), (4 * width * height) as usize);
+        assert_eq!(&pixels[..12], &(0..12).collect::<Vec<u8>>()[..]);
+        assert_eq!(&pixels[12..], &(10..22).collect::<Vec<u8>>()[..]);
+    }
+
+    #[test]
+    fn bounds_and_sizes() {
+        assert_eq!(bounds(&[]), None);
+        let b = bounds(&[1.0, 2.0, 3.0, 0.0, 0.0, 1.0, -1.0, 5.0, 0.0, 0.0, 1.0, 0.0]).unwrap();
+        assert_eq!(b, [Vec3::new(-1.0, 2.0, 0.0), Vec3::new(1.0, 5.0, 3.0)]);
+        assert!(RenderOptions::default().check().is_ok());
+        for (w, h) in [(0, 10), (10, 0), (MAX_IMAGE_SIDE + 1, 1)] {
+            assert!(matches!(RenderOptions::default().with_size(w, h).check(), Err(GpuError::ImageSize { .. })));
+        }
+    }
+
+    #[test]
+    fn srgb_to_linear_ends() {
+        assert_eq!(linear(0), 0.0);
+        assert!((linear(255) - 1.0).abs() < 1e-6);
+        assert!((linear(188) - 0.5).abs() < 0.01);
+    }
+}

@@ -1,0 +1,158 @@
+//! Image tests: shared meshes tessellated on the CPU (dual grid, rate 8), rendered offscreen at
+//! a fixed camera and compared with reference PNGs under the repository's `testdata/render/`
+//! (mean absolute difference over RGB below 1% of 255), plus structural checks that a broken
+//! renderer fails whatever the references say.
+//!
+//! The references are made on Mesa's lavapipe (as CI runs) and regenerated only on request:
+//! `SUBDIV_BLESS=1 cargo test -p subdiv-gpu --test images`. A failed comparison writes the
+//! actual image and a difference image next to the test's temporary folder and names them.
+
+#![allow(clippy::print_stderr)]
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use image::{Rgba, RgbaImage};
+use subdiv_gpu::{Gpu, GpuMesh, RenderOptions, Renderer, View};
+use subdiv_mesh::BuildOptions;
+use subdiv_schemes::Builtin;
+use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+use subdiv_testkit::shared_mesh;
+
+const WIDTH: u32 = 320;
+const HEIGHT: u32 = 240;
+const RATE: u32 = 8;
+
+/// The largest mean absolute difference over RGB, as a fraction of 255.
+const TOLERANCE: f64 = 0.01;
+
+/// The CPU tessellation of a shared mesh at [`RATE`].
+fn tessellate(relative: &str) -> Option<FlatMesh> {
+    let path = shared_mesh(relative)?;
+    let mesh = subdiv_io::load_mesh(&path, &BuildOptions::default()).expect("the shared mesh loads");
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())
+        .expect("Catmull-Clark takes the mesh");
+    let mut flat = FlatMesh::default();
+    tess.tessellate_flat(&vec![RATE; mesh.face_count()], &mut flat).expect("rate 8 is valid");
+    Some(flat)
+}
+
+fn render(gpu: &Gpu, flat: &FlatMesh, view: View, wireframe: bool) -> RgbaImage {
+    let options = RenderOptions::default().with_size(WIDTH, HEIGHT).with_wireframe(wireframe);
+    let renderer = Renderer::new(gpu, &options).expect("a renderer");
+    let mesh = GpuMesh::upload_with_edges(gpu, flat).expect("the mesh uploads");
+    renderer.render(gpu, &mesh.scene(view)).expect("the scene renders")
+}
+
+/// A fixed camera looking at the origin with y up (not the automatic framing, so that a change
+/// there does not move the references).
+fn camera(eye: [f32; 3], near: f32, far: f32) -> View {
+    View { eye: Vec3::from(eye), target: Vec3::ZERO, up: Vec3::Y, fovy_degrees: 30.0, near, far }
+}
+
+fn reference_path(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../testdata/render").join(format!("{name}.png"))
+}
+
+fn luminance(p: &Rgba<u8>) -> f64 {
+    0.2126 * f64::from(p[0]) + 0.7152 * f64::from(p[1]) + 0.0722 * f64::from(p[2])
+}
+
+fn is_background(p: &Rgba<u8>) -> bool {
+    let [r, g, b] = RenderOptions::DEFAULT.background;
+    p[0].abs_diff(r) <= 1 && p[1].abs_diff(g) <= 1 && p[2].abs_diff(b) <= 1
+}
+
+/// Checks what any correct render of a closed object in the middle of the image shows: the
+/// corners are the background, the centre is not, and the left (towards the key light) is
+/// brighter than the right.
+fn check_structure(name: &str, image: &RgbaImage) {
+    let (w, h) = image.dimensions();
+    for (x, y) in [(0, 0), (w - 1, 0), (0, h - 1), (w - 1, h - 1)] {
+        assert!(is_background(image.get_pixel(x, y)), "{name}: corner ({x}, {y}) is {:?}", image.get_pixel(x, y));
+    }
+    assert!(!is_background(image.get_pixel(w / 2, h / 2)), "{name}: the centre is background");
+    let object: Vec<(u32, f64)> =
+        image.enumerate_pixels().filter(|(_, _, p)| !is_background(p)).map(|(x, _, p)| (x, luminance(p))).collect();
+    let covered = object.len() as f64 / f64::from(w * h);
+    assert!((0.1..0.8).contains(&covered), "{name}: the object covers {covered:.2} of the image");
+    let centre_x = object.iter().map(|&(x, _)| f64::from(x)).sum::<f64>() / object.len() as f64;
+    let mean = |left: bool| {
+        let side: Vec<f64> =
+            object.iter().filter(|&&(x, _)| (f64::from(x) < centre_x) == left).map(|&(_, l)| l).collect();
+        side.iter().sum::<f64>() / side.len() as f64
+    };
+    let (left, right) = (mean(true), mean(false));
+    assert!(left > right + 5.0, "{name}: the lit side (left, {left:.1}) is not brighter than the right ({right:.1})");
+}
+
+/// Compares with the reference, or writes it under `SUBDIV_BLESS=1`.
+fn compare(name: &str, image: &RgbaImage) {
+    let path = reference_path(name);
+    if std::env::var("SUBDIV_BLESS").is_ok_and(|v| v == "1") {
+        std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+        image.save(&path).expect("the reference is written");
+        eprintln!("blessed {}", path.display());
+        return;
+    }
+    let reference = image::open(&path)
+        .unwrap_or_else(|e| panic!("{}: {e} (make it with SUBDIV_BLESS=1)", path.display()))
+        .to_rgba8();
+    assert_eq!(reference.dimensions(), image.dimensions(), "{name}: size differs from the reference");
+    let mut total = 0u64;
+    let diff = RgbaImage::from_fn(image.width(), image.height(), |x, y| {
+        let (a, b) = (image.get_pixel(x, y), reference.get_pixel(x, y));
+        let d = [0, 1, 2].map(|c| a[c].abs_diff(b[c]));
+        total += d.iter().map(|&v| u64::from(v)).sum::<u64>();
+        // Differences amplified eight times, on black.
+        Rgba([d[0].saturating_mul(8), d[1].saturating_mul(8), d[2].saturating_mul(8), 255])
+    });
+    let mean = total as f64 / (3.0 * f64::from(image.width() * image.height()) * 255.0);
+    if mean >= TOLERANCE {
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("images");
+        std::fs::create_dir_all(&dir).unwrap();
+        let (actual, difference) = (dir.join(format!("{name}.actual.png")), dir.join(format!("{name}.diff.png")));
+        image.save(&actual).unwrap();
+        diff.save(&difference).unwrap();
+        panic!(
+            "{name}: mean absolute difference {:.3}% of 255 ≥ {:.1}%; actual {}, difference {}, reference {}",
+            100.0 * mean,
+            100.0 * TOLERANCE,
+            actual.display(),
+            difference.display(),
+            path.display()
+        );
+    }
+}
+
+#[test]
+fn catmark_cube_shaded_and_wireframe() {
+    let Some(flat) = tessellate("opensubdiv/catmark_cube.obj") else { return };
+    let Some(gpu) = Gpu::for_tests() else { return };
+    let view = camera([3.3, 2.7, 4.7], 2.0, 10.0);
+    let shaded = render(&gpu, &flat, view, false);
+    check_structure("catmark_cube", &shaded);
+    compare("catmark_cube", &shaded);
+
+    let wired = render(&gpu, &flat, view, true);
+    check_structure("catmark_cube_wireframe", &wired);
+    compare("catmark_cube_wireframe", &wired);
+    // The lines darken the surface under them, and only there: many pixels darker, none lighter.
+    let (mut darker, mut lighter) = (0, 0);
+    for (a, b) in wired.pixels().zip(shaded.pixels()) {
+        let d = luminance(a) - luminance(b);
+        darker += usize::from(d < -20.0);
+        lighter += usize::from(d > 20.0);
+    }
+    assert!(darker > 2000 && lighter == 0, "the wireframe made {darker} pixels darker and {lighter} lighter");
+}
+
+#[test]
+fn spot_shaded() {
+    let Some(flat) = tessellate("keenan/spot_control_mesh.obj") else { return };
+    let Some(gpu) = Gpu::for_tests() else { return };
+    let view = View { target: Vec3::new(0.0, 0.1, 0.15), ..camera([3.2, 1.9, -2.6], 2.0, 7.5) };
+    let image = render(&gpu, &flat, view, false);
+    check_structure("spot_control_mesh", &image);
+    compare("spot_control_mesh", &image);
+}
