@@ -1,6 +1,7 @@
-//! `subdiv render`: the limit surface tessellated on the CPU (dual grid), drawn offscreen on the
-//! GPU (subdiv-gpu) and written as PNG; optionally its wireframe and the control cage, and an
-//! animated sequence of a twisted cage.
+//! `subdiv render`: the limit surface tessellated on the CPU (dual grid: topology and stencils),
+//! its vertices evaluated on the GPU from the control points (one compute dispatch), drawn
+//! offscreen and written as PNG; optionally its wireframe and the control cage, and an animated
+//! sequence of a twisted cage (only the control points change per frame).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -9,7 +10,9 @@ use std::time::Instant;
 use subdiv::mesh::DVec3;
 use subdiv::tess::rates::ScreenSpace;
 use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE};
-use subdiv_gpu::{Gpu, GpuCage, GpuMesh, GpuOptions, MAX_IMAGE_SIDE, RenderOptions, Renderer, View};
+use subdiv_gpu::{
+    Gpu, GpuCage, GpuEvalOptions, GpuOptions, GpuTessellation, MAX_IMAGE_SIDE, RenderOptions, Renderer, View,
+};
 
 use crate::UserError;
 use crate::args::parse_size;
@@ -116,13 +119,15 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
 
     let gpu = Gpu::new(&GpuOptions::default())?;
     let renderer = Renderer::new(&gpu, &options)?;
-    let surface = if args.wireframe { GpuMesh::upload_with_edges(&gpu, &flat)? } else { GpuMesh::upload(&gpu, &flat)? };
+    let eval_options = GpuEvalOptions { edges: args.wireframe, ..GpuEvalOptions::default() };
+    let mut surface =
+        GpuTessellation::new(&gpu, &tess.evaluation_plan(), &flat.indices, mesh.positions(), &eval_options)?;
     let cage = if args.cage { Some(GpuCage::upload(&gpu, &mesh)?) } else { None };
-    let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
 
     let drawing = Instant::now();
     let written = match frames {
         None => {
+            let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
             write_png(&args.output, &renderer.render(&gpu, &scene)?)?;
             args.output.display().to_string()
         }
@@ -130,10 +135,12 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
             let paths: Vec<PathBuf> = (0..frames).map(|k| numbered(&args.output, k)).collect();
             for (k, path) in (0..frames).zip(&paths) {
                 let moved = twist(mesh.positions(), k, frames);
-                update_frame(&mut tess, &moved, &mut flat, &gpu, &surface).map_err(|e| located(&e))?;
+                // The animation path: new control points, one dispatch re-evaluates the vertices.
+                surface.update_control_points_f64(&gpu, &moved).map_err(|e| located(&e))?;
                 if let Some(cage) = &cage {
                     cage.write_positions(&gpu, &moved)?;
                 }
+                let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
                 write_png(path, &renderer.render(&gpu, &scene)?)?;
             }
             format!("{} … {}", paths[0].display(), paths[paths.len() - 1].display())
@@ -148,25 +155,11 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
          tessellated in {:.1} ms; {width}×{height} on {}{frames_note}, {per_image:.1} ms per image -> {written}",
         loaded.name,
         mesh.face_count(),
-        surface.vertex_count,
-        surface.index_count / 3,
+        surface.vertex_count(),
+        surface.index_count() / 3,
         tessellated.as_secs_f64() * 1e3,
         gpu.adapter_name(),
     );
-    Ok(())
-}
-
-/// One animation frame's vertices: the surface re-evaluated for the moved cage on the CPU
-/// (same topology) and written into the vertex buffer. The GPU evaluation replaces this.
-fn update_frame(
-    tess: &mut DualTessellator,
-    cage: &[DVec3],
-    flat: &mut FlatMesh,
-    gpu: &Gpu,
-    surface: &GpuMesh,
-) -> Result<(), Box<dyn std::error::Error>> {
-    tess.update_cage_flat(cage, flat)?;
-    surface.write_vertices(gpu, &flat.vertices)?;
     Ok(())
 }
 

@@ -43,11 +43,15 @@ pub struct GpuEvalOptions {
     /// weights, refinement rows); larger data is split over several buffers and dispatches.
     /// Clamped to the device's binding limit. Default: 128 MiB.
     pub max_buffer_bytes: u64,
+    /// Also upload the wireframe's line list (each triangle edge once, built on the CPU), which
+    /// [`GpuTessellation::scene`] then draws with [`RenderOptions::wireframe`](crate::RenderOptions::wireframe).
+    /// Default: `false`.
+    pub edges: bool,
 }
 
 impl Default for GpuEvalOptions {
     fn default() -> Self {
-        Self { max_buffer_bytes: 128 << 20 }
+        Self { max_buffer_bytes: 128 << 20, edges: false }
     }
 }
 
@@ -163,6 +167,8 @@ pub struct GpuTessellation {
     indices: wgpu::Buffer,
     vertex_count: u32,
     index_count: u32,
+    /// The wireframe's line list and its index count, on request.
+    edges: Option<(wgpu::Buffer, u32)>,
     pipeline: wgpu::ComputePipeline,
     dispatches: Vec<Dispatch>,
 }
@@ -206,6 +212,7 @@ impl GpuTessellation {
             });
         }
         let device = &gpu.device;
+        let scopes = crate::render::ErrorScopes::push(device, "uploading a tessellation");
         let (min, max) =
             cage.iter().fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(a, b), p| (a.min(*p), b.max(*p)));
         let origin = if cage.is_empty() { DVec3::ZERO } else { 0.5 * (min + max) };
@@ -281,7 +288,13 @@ impl GpuTessellation {
             evaluate.push(Dispatch { bind_group, count: range.count });
         }
 
+        let edges = options.edges.then(|| {
+            let lines = crate::unique_edges(indices);
+            let buffer = storage("subdiv edges", bytemuck::cast_slice(&lines), wgpu::BufferUsages::INDEX);
+            (buffer, lines.len() as u32)
+        });
         let this = Self {
+            edges,
             cage_len: plan.cage_len as usize,
             origin,
             points,
@@ -294,6 +307,7 @@ impl GpuTessellation {
         };
         this.write_cage(gpu, cage.iter().map(|p| *p - this.origin));
         this.dispatch(gpu);
+        scopes.pop()?;
         Ok(this)
     }
 
@@ -360,6 +374,24 @@ impl GpuTessellation {
     /// The index buffer: u32 triangles, counter-clockwise.
     pub fn index_buffer(&self) -> &wgpu::Buffer {
         &self.indices
+    }
+
+    /// A scene of the evaluated surface (with its wireframe when [`GpuEvalOptions::edges`] was
+    /// set) seen by `view`, without a cage: the vertex buffer is drawn where the compute pass
+    /// wrote it.
+    pub fn scene(&self, view: crate::View) -> crate::Scene<'_> {
+        crate::Scene {
+            vertices: &self.vertices,
+            vertex_count: self.vertex_count,
+            triangles: &self.indices,
+            index_count: self.index_count,
+            wireframe: self
+                .edges
+                .as_ref()
+                .map(|(indices, index_count)| crate::Lines { indices, index_count: *index_count }),
+            cage: None,
+            view,
+        }
     }
 
     /// The number of vertices.

@@ -394,7 +394,7 @@ pub(crate) fn unpad(data: &[u8], width: u32, height: u32, padded: u32) -> Vec<u8
 }
 
 /// Turns wgpu's captured errors into [`GpuError::Wgpu`].
-struct ErrorScopes {
+pub(crate) struct ErrorScopes {
     // Pushed after `validation`, so declared first: fields drop in order, and scopes must be
     // popped in reverse order of their pushes (an early return drops both).
     memory: wgpu::ErrorScopeGuard,
@@ -403,13 +403,13 @@ struct ErrorScopes {
 }
 
 impl ErrorScopes {
-    fn push(device: &wgpu::Device, during: &'static str) -> Self {
+    pub(crate) fn push(device: &wgpu::Device, during: &'static str) -> Self {
         let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         Self { validation, memory, during }
     }
 
-    fn pop(self) -> Result<(), GpuError> {
+    pub(crate) fn pop(self) -> Result<(), GpuError> {
         // Reverse order of the pushes.
         let memory = pollster::block_on(self.memory.pop());
         let validation = pollster::block_on(self.validation.pop());

@@ -125,7 +125,7 @@ fn split_buffers_give_the_same_bits() {
     let mesh = Mesh::build(shapes::default_model()).unwrap();
     let Case { plan, flat, .. } = case(Builtin::CatmullClark, &mesh, &vec![6; mesh.face_count()]);
     let whole = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
-    let small = GpuEvalOptions { max_buffer_bytes: 16 << 10 };
+    let small = GpuEvalOptions { max_buffer_bytes: 16 << 10, ..GpuEvalOptions::default() };
     let split = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &small).unwrap();
     assert!(split.dispatch_count() > whole.dispatch_count() + 4, "{} dispatches", split.dispatch_count());
     assert_eq!(whole.read_vertices(&gpu).unwrap(), split.read_vertices(&gpu).unwrap());

@@ -1,4 +1,5 @@
-//! Image tests: shared meshes tessellated on the CPU (dual grid, rate 8), rendered offscreen at
+//! Image tests: shared meshes tessellated on the CPU (dual grid, rate 8), their vertices
+//! evaluated on the GPU (`GpuTessellation`, the path `subdiv render` takes), rendered offscreen at
 //! a fixed camera and compared with reference PNGs under the repository's `testdata/render/`
 //! (mean absolute difference over RGB below 1% of 255), plus structural checks that a broken
 //! renderer fails whatever the references say.
@@ -13,10 +14,10 @@ use std::path::{Path, PathBuf};
 
 use glam::Vec3;
 use image::{Rgba, RgbaImage};
-use subdiv_gpu::{Gpu, GpuMesh, RenderOptions, Renderer, View};
+use subdiv_gpu::{Gpu, GpuEvalOptions, GpuMesh, GpuTessellation, RenderOptions, Renderer, View};
 use subdiv_mesh::BuildOptions;
 use subdiv_schemes::Builtin;
-use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+use subdiv_tess::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh};
 use subdiv_testkit::shared_mesh;
 
 const WIDTH: u32 = 320;
@@ -26,22 +27,46 @@ const RATE: u32 = 8;
 /// The largest mean absolute difference over RGB, as a fraction of 255.
 const TOLERANCE: f64 = 0.01;
 
-/// The CPU tessellation of a shared mesh at [`RATE`].
-fn tessellate(relative: &str) -> Option<FlatMesh> {
+/// A shared mesh tessellated at [`RATE`]: its cage, the evaluation plan, and the CPU's flat
+/// buffers (f64 values rounded to f32).
+struct Tessellated {
+    cage: Vec<glam::DVec3>,
+    plan: EvaluationPlan,
+    flat: FlatMesh,
+}
+
+fn tessellate(relative: &str) -> Option<Tessellated> {
     let path = shared_mesh(relative)?;
     let mesh = subdiv_io::load_mesh(&path, &BuildOptions::default()).expect("the shared mesh loads");
     let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())
         .expect("Catmull-Clark takes the mesh");
     let mut flat = FlatMesh::default();
     tess.tessellate_flat(&vec![RATE; mesh.face_count()], &mut flat).expect("rate 8 is valid");
-    Some(flat)
+    Some(Tessellated { cage: mesh.positions().to_vec(), plan: tess.evaluation_plan(), flat })
 }
 
-fn render(gpu: &Gpu, flat: &FlatMesh, view: View, wireframe: bool) -> RgbaImage {
+/// The surface evaluated on the GPU, drawn.
+fn render(gpu: &Gpu, t: &Tessellated, view: View, wireframe: bool) -> RgbaImage {
     let options = RenderOptions::default().with_size(WIDTH, HEIGHT).with_wireframe(wireframe);
     let renderer = Renderer::new(gpu, &options).expect("a renderer");
-    let mesh = GpuMesh::upload_with_edges(gpu, flat).expect("the mesh uploads");
+    let eval = GpuEvalOptions { edges: wireframe, ..GpuEvalOptions::default() };
+    let surface = GpuTessellation::new(gpu, &t.plan, &t.flat.indices, &t.cage, &eval).expect("the plan uploads");
+    renderer.render(gpu, &surface.scene(view)).expect("the scene renders")
+}
+
+/// The CPU's values uploaded and drawn: the GPU evaluation must look the same.
+fn render_cpu(gpu: &Gpu, t: &Tessellated, view: View) -> RgbaImage {
+    let options = RenderOptions::default().with_size(WIDTH, HEIGHT);
+    let renderer = Renderer::new(gpu, &options).expect("a renderer");
+    let mesh = GpuMesh::upload(gpu, &t.flat).expect("the mesh uploads");
     renderer.render(gpu, &mesh.scene(view)).expect("the scene renders")
+}
+
+/// The mean absolute difference over RGB as a fraction of 255.
+fn mean_difference(a: &RgbaImage, b: &RgbaImage) -> f64 {
+    let total: u64 =
+        a.pixels().zip(b.pixels()).map(|(p, q)| (0..3).map(|c| u64::from(p[c].abs_diff(q[c]))).sum::<u64>()).sum();
+    total as f64 / (3.0 * f64::from(a.width() * a.height()) * 255.0)
 }
 
 /// A fixed camera looking at the origin with y up (not the automatic framing, so that a change
@@ -127,14 +152,17 @@ fn compare(name: &str, image: &RgbaImage) {
 
 #[test]
 fn catmark_cube_shaded_and_wireframe() {
-    let Some(flat) = tessellate("opensubdiv/catmark_cube.obj") else { return };
+    let Some(t) = tessellate("opensubdiv/catmark_cube.obj") else { return };
     let Some(gpu) = Gpu::for_tests() else { return };
     let view = camera([3.3, 2.7, 4.7], 2.0, 10.0);
-    let shaded = render(&gpu, &flat, view, false);
+    let shaded = render(&gpu, &t, view, false);
     check_structure("catmark_cube", &shaded);
     compare("catmark_cube", &shaded);
+    let cpu = render_cpu(&gpu, &t, view);
+    let d = mean_difference(&shaded, &cpu);
+    assert!(d < 1e-3, "catmark_cube: GPU and CPU evaluation differ by {:.4}% of 255", 100.0 * d);
 
-    let wired = render(&gpu, &flat, view, true);
+    let wired = render(&gpu, &t, view, true);
     check_structure("catmark_cube_wireframe", &wired);
     compare("catmark_cube_wireframe", &wired);
     // The lines darken the surface under them, and only there: many pixels darker, none lighter.
@@ -149,10 +177,12 @@ fn catmark_cube_shaded_and_wireframe() {
 
 #[test]
 fn spot_shaded() {
-    let Some(flat) = tessellate("keenan/spot_control_mesh.obj") else { return };
+    let Some(t) = tessellate("keenan/spot_control_mesh.obj") else { return };
     let Some(gpu) = Gpu::for_tests() else { return };
     let view = View { target: Vec3::new(0.0, 0.1, 0.15), ..camera([3.2, 1.9, -2.6], 2.0, 7.5) };
-    let image = render(&gpu, &flat, view, false);
+    let image = render(&gpu, &t, view, false);
     check_structure("spot_control_mesh", &image);
     compare("spot_control_mesh", &image);
+    let d = mean_difference(&image, &render_cpu(&gpu, &t, view));
+    assert!(d < 1e-3, "spot: GPU and CPU evaluation differ by {:.4}% of 255", 100.0 * d);
 }
