@@ -59,18 +59,6 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-/// A twist about the vertical axis growing with the frame: a new cage per frame.
-fn twist(cage: &[DVec3], frame: usize) -> Vec<DVec3> {
-    let (lo, hi) = cage.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.y), b.max(p.y)));
-    cage.iter()
-        .map(|p| {
-            let a = 0.02 * frame as f64 * (p.y - lo) / (hi - lo).max(1e-12);
-            let (s, c) = a.sin_cos();
-            DVec3::new(c * p.x - s * p.z, p.y, s * p.x + c * p.z)
-        })
-        .collect()
-}
-
 fn median(mut samples: Vec<f64>) -> f64 {
     samples.sort_by(f64::total_cmp);
     samples[samples.len() / 2]
@@ -89,7 +77,7 @@ fn measure(gpu: &Gpu, adapter: &str, name: &str, mesh: &Mesh, rate: u32, frames:
         .map_err(|e| err(&e))?;
     on_gpu.wait(gpu).map_err(|e| err(&e))?;
     let setup = start.elapsed().as_secs_f64();
-    let cages: Vec<Vec<DVec3>> = (0..frames).map(|k| twist(mesh.positions(), k + 1)).collect();
+    let cages: Vec<Vec<DVec3>> = (0..frames).map(|k| shapes::twist(mesh.positions(), 0.02 * (k + 1) as f64)).collect();
     let cages32: Vec<Vec<glam::Vec3>> = cages.iter().map(|c| c.iter().map(|p| p.as_vec3()).collect()).collect();
     let mut gpu_ms = Vec::with_capacity(frames);
     for (k, cage) in cages32.iter().enumerate() {

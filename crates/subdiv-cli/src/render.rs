@@ -7,7 +7,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use subdiv::mesh::DVec3;
+use subdiv::mesh::shapes::twist;
 use subdiv::tess::rates::ScreenSpace;
 use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE};
 use subdiv_gpu::{
@@ -134,7 +134,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
         Some(frames) => {
             let paths: Vec<PathBuf> = (0..frames).map(|k| numbered(&args.output, k)).collect();
             for (k, path) in (0..frames).zip(&paths) {
-                let moved = twist(mesh.positions(), k, frames);
+                let moved = twist(mesh.positions(), TWIST_DEGREES.to_radians() * f64::from(k) / f64::from(frames));
                 // The animation path: new control points, one dispatch re-evaluates the vertices.
                 surface.update_control_points_f64(&gpu, &moved).map_err(|e| located(&e))?;
                 if let Some(cage) = &cage {
@@ -170,24 +170,6 @@ fn numbered(output: &Path, frame: u32) -> PathBuf {
     output.with_file_name(format!("{stem}_{frame:04}.{extension}"))
 }
 
-/// The built-in deformation, frame `k` of `frames`: the cage twisted about the vertical (y) axis
-/// through its bounding box's centre, by an angle growing linearly from 0 at the box's bottom
-/// to `k / frames × 90°` at its top. Frame 0 is the cage itself.
-fn twist(cage: &[DVec3], k: u32, frames: u32) -> Vec<DVec3> {
-    let (lo, hi) = cage.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-    let centre = 0.5 * (lo + hi);
-    let height = hi.y - lo.y;
-    let top = TWIST_DEGREES.to_radians() * f64::from(k) / f64::from(frames.max(1));
-    cage.iter()
-        .map(|&p| {
-            let t = if height > 0.0 { (p.y - lo.y) / height } else { 0.0 };
-            let (sin, cos) = (top * t).sin_cos();
-            let (x, z) = (p.x - centre.x, p.z - centre.z);
-            DVec3::new(centre.x + cos * x + sin * z, p.y, centre.z - sin * x + cos * z)
-        })
-        .collect()
-}
-
 /// The image as an RGB PNG, written atomically.
 fn write_png(path: &Path, image: &image::RgbaImage) -> Result<(), UserError> {
     let rgb = image::DynamicImage::ImageRgba8(image.clone()).into_rgb8();
@@ -197,26 +179,6 @@ fn write_png(path: &Path, image: &image::RgbaImage) -> Result<(), UserError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn twist_keeps_heights_and_axis_distances_and_frame_zero() {
-        let cage: Vec<DVec3> =
-            (0..27).map(|i| DVec3::new(f64::from(i % 3), f64::from(i / 3 % 3), f64::from(i / 9) + 0.5)).collect();
-        assert_eq!(twist(&cage, 0, 5), cage);
-        let moved = twist(&cage, 4, 5);
-        let axis = DVec3::new(1.0, 0.0, 1.5);
-        for (p, q) in cage.iter().zip(&moved) {
-            assert_eq!(p.y, q.y);
-            let (a, b) = ((*p - axis).with_y(0.0).length(), (*q - axis).with_y(0.0).length());
-            assert!((a - b).abs() < 1e-12, "{p} -> {q}");
-        }
-        // The bottom stays, the top turns by 4/5 of 90°.
-        let top = cage.iter().position(|p| p.y == 2.0 && p.x == 2.0 && p.z == 1.5).unwrap();
-        let angle = (moved[top] - axis).with_y(0.0).angle_between((cage[top] - axis).with_y(0.0));
-        assert!((angle - 72f64.to_radians()).abs() < 1e-12);
-        let bottom = cage.iter().position(|p| p.y == 0.0).unwrap();
-        assert_eq!(moved[bottom], cage[bottom]);
-    }
 
     #[test]
     fn frames_are_numbered_next_to_the_output() {

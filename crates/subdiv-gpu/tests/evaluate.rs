@@ -29,16 +29,9 @@ fn compare(gpu_vertices: &[f32], cpu: &TessMesh, diag: f64) -> (f64, f64) {
     (dp, dn)
 }
 
-/// A twist of the cage about its vertical axis, growing with the frame.
+/// The cage of animation frame `frame`: twisted about its vertical axis, more each frame.
 fn twisted(cage: &[DVec3], frame: usize) -> Vec<DVec3> {
-    let (lo, hi) = cage.iter().fold((f64::MAX, f64::MIN), |(a, b), p| (a.min(p.y), b.max(p.y)));
-    cage.iter()
-        .map(|p| {
-            let a = 0.3 * frame as f64 * (p.y - lo) / (hi - lo).max(1e-12);
-            let (s, c) = a.sin_cos();
-            DVec3::new(c * p.x - s * p.z, p.y + 0.05 * frame as f64, s * p.x + c * p.z)
-        })
-        .collect()
+    shapes::twist(cage, 0.3 * frame as f64)
 }
 
 struct Case {

@@ -284,6 +284,34 @@ pub fn default_model() -> PolygonSoup {
     soup
 }
 
+/// `positions` twisted about the vertical (y) axis through their bounding box's centre, by an
+/// angle growing linearly from 0 at the box's bottom to `top` radians at its top (heights and
+/// distances to the axis are kept): the built-in deformation that animates a cage in
+/// `subdiv render --frames`, the GPU tests and benches.
+///
+/// ```
+/// use subdiv_mesh::{shapes, DVec3};
+///
+/// let cage = [DVec3::new(1.0, 0.0, 0.0), DVec3::new(1.0, 1.0, 0.0), DVec3::new(-1.0, 1.0, 0.0)];
+/// let moved = shapes::twist(&cage, std::f64::consts::FRAC_PI_2);
+/// assert_eq!(moved[0], cage[0]); // the bottom stays
+/// assert!(moved[1].distance(DVec3::new(0.0, 1.0, -1.0)) < 1e-12); // the top turns by 90°
+/// ```
+pub fn twist(positions: &[DVec3], top: f64) -> Vec<DVec3> {
+    let (lo, hi) = positions.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+    let centre = 0.5 * (lo + hi);
+    let height = hi.y - lo.y;
+    positions
+        .iter()
+        .map(|&p| {
+            let t = if height > 0.0 { (p.y - lo.y) / height } else { 0.0 };
+            let (sin, cos) = (top * t).sin_cos();
+            let (x, z) = (p.x - centre.x, p.z - centre.z);
+            DVec3::new(centre.x + cos * x + sin * z, p.y, centre.z - sin * x + cos * z)
+        })
+        .collect()
+}
+
 /// Builds a soup that is valid by construction.
 fn built(soup: PolygonSoup) -> Mesh {
     match Mesh::build(soup) {
@@ -297,6 +325,26 @@ fn built(soup: PolygonSoup) -> Mesh {
 mod tests {
     use super::*;
     use crate::RegularValence;
+
+    #[test]
+    fn twist_keeps_heights_and_axis_distances() {
+        let cage: Vec<DVec3> =
+            (0..27).map(|i| DVec3::new(f64::from(i % 3), f64::from(i / 3 % 3), f64::from(i / 9) + 0.5)).collect();
+        assert_eq!(twist(&cage, 0.0), cage);
+        let moved = twist(&cage, 72f64.to_radians());
+        let axis = DVec3::new(1.0, 0.0, 1.5);
+        for (p, q) in cage.iter().zip(&moved) {
+            assert_eq!(p.y, q.y);
+            let (a, b) = ((*p - axis).with_y(0.0).length(), (*q - axis).with_y(0.0).length());
+            assert!((a - b).abs() < 1e-12, "{p} -> {q}");
+        }
+        // The bottom stays, the top turns by the whole angle.
+        let top = cage.iter().position(|p| p.y == 2.0 && p.x == 2.0 && p.z == 1.5).unwrap();
+        let angle = (moved[top] - axis).with_y(0.0).angle_between((cage[top] - axis).with_y(0.0));
+        assert!((angle - 72f64.to_radians()).abs() < 1e-12);
+        let bottom = cage.iter().position(|p| p.y == 0.0).unwrap();
+        assert_eq!(moved[bottom], cage[bottom]);
+    }
 
     fn counts(soup: PolygonSoup) -> (usize, usize, usize, i64, usize) {
         let mesh = Mesh::build(soup).unwrap();
