@@ -123,6 +123,9 @@ struct Place {
 
 /// A vertex evaluated by a [`PatchGrid`].
 const IN_PATCH_GRID: u32 = u32::MAX - 2;
+/// A cell point of a face whose records are copied from an earlier face of the same type
+/// (see [`Evaluator::prepare_records`]); replaced by its record before the patch grids.
+const COPIED: u32 = u32::MAX - 3;
 
 /// The points of one bicubic patch on a refined level that form a grid `s × t` in its frame
 /// (the dual grid of a quad face over a regular descendant): evaluated separably, as the
@@ -449,6 +452,14 @@ impl Evaluator {
                 ensure_table(&mut self.tables, patch, rates[f.index()])?;
             }
         }
+        // Faces of one type (the same resolution tree up to vertex labels) at one rate have the
+        // same cell records but for their patches' control points: only the first face of each
+        // type goes through the chunks, the others copy its records below.
+        let copies = self.face_types(topo, rates);
+        for &(block, _, _) in &copies {
+            let b = &topo.blocks[block as usize];
+            self.kinds[b.base as usize..(b.base + b.rate * b.rate) as usize].fill(COPIED);
+        }
         // Stencil records by chunks of vertices, in parallel; each chunk borrows a set of
         // stencil evaluators from the pool (their results do not depend on what they solved
         // before, so neither does the output on the thread count).
@@ -487,7 +498,121 @@ impl Evaluator {
             self.weights.extend_from_slice(&chunk.weights);
             self.spare.push(chunk);
         }
+        self.copy_records(topo, &copies);
         Ok(())
+    }
+
+    /// The blocks of general faces whose records can be copied from an earlier block: per
+    /// such block, the template block and both faces' patches (level, face) in the order of
+    /// [`Self::face_type`].
+    #[allow(clippy::type_complexity)]
+    fn face_types(&self, topo: &Topology, rates: &[u32]) -> Vec<(u32, u32, Vec<(u32, u32)>)> {
+        let mut copies = Vec::new();
+        if self.levels.split() != Split::Quad {
+            return copies;
+        }
+        let mut seen: HashMap<(u32, Vec<u64>), (u32, Vec<(u32, u32)>)> = HashMap::new();
+        let mut signature = Vec::new();
+        for (b, block) in topo.blocks.iter().enumerate() {
+            if !matches!(self.faces[block.face as usize], FacePlan::General) {
+                continue;
+            }
+            debug_assert_eq!(rates[block.face as usize], block.rate);
+            signature.clear();
+            let mut patches = Vec::new();
+            if !self.face_type(0, FaceId::new(block.face), &mut signature, &mut patches) {
+                continue;
+            }
+            match seen.entry((block.rate, signature.clone())) {
+                hashbrown::hash_map::Entry::Occupied(e) => {
+                    let (template, ref template_patches) = *e.get();
+                    let pairs = template_patches.iter().zip(&patches).flat_map(|(&t, &p)| [t, p]).collect();
+                    copies.push((b as u32, template, pairs));
+                }
+                hashbrown::hash_map::Entry::Vacant(e) => {
+                    e.insert((b as u32, patches));
+                }
+            }
+        }
+        copies
+    }
+
+    /// Appends the resolution tree of `face` on `level` to `signature` (depth first: each
+    /// node's kind; a patch's matrices, shape, size and frame), its patches to `patches`.
+    /// Two quad faces with equal signatures reach every cell point through the same children
+    /// to patches of the same shapes at the same points with the same derivative maps.
+    /// `false` if the tree holds a face that is not a quad under a quad split.
+    fn face_type(&self, level: usize, face: FaceId, signature: &mut Vec<u64>, patches: &mut Vec<(u32, u32)>) -> bool {
+        match self.levels.resolve(level, face) {
+            Some(Resolved::Children { children, domain }) => {
+                if domain != FaceDomain::Quad {
+                    return false;
+                }
+                signature.extend([1, children.len() as u64]);
+                children.into_iter().all(|c| self.face_type(level + 1, FaceId::new(c as u32), signature, patches))
+            }
+            Some(Resolved::Patch { patch, frame, .. }) => {
+                // The frame as the images of three points (it is affine).
+                let code = [(0, 0), (1, 0), (0, 1)].iter().fold(0u64, |code, &(u, v)| {
+                    let p = frame.to_patch(Dyadic::new(u, v, 1));
+                    code << 8 | ((p.u + 4) as u64) << 4 | (p.v + 4) as u64
+                });
+                signature.extend([
+                    2,
+                    Arc::as_ptr(&patch.matrices) as usize as u64,
+                    patch.shape as u64,
+                    patch.vertices.len() as u64,
+                    code,
+                ]);
+                patches.push((level as u32, face.index() as u32));
+                true
+            }
+            Some(Resolved::Hole) => {
+                signature.push(3);
+                true
+            }
+            None => {
+                signature.push(4);
+                true
+            }
+        }
+    }
+
+    /// Gives each block of `copies` its template's records with its own patches' control
+    /// points (the same weights, tables, points and derivative maps: the same bits as its own
+    /// descent would give).
+    fn copy_records(&mut self, topo: &Topology, copies: &[(u32, u32, Vec<(u32, u32)>)]) {
+        let mut ids_of: Vec<u32> = Vec::new();
+        for (block, template, pairs) in copies {
+            let (to, from) = (&topo.blocks[*block as usize], &topo.blocks[*template as usize]);
+            ids_of.clear();
+            ids_of.resize(pairs.len() / 2, u32::MAX);
+            let mut last = (u32::MAX, u32::MAX);
+            let mut k = 0;
+            for i in 0..(to.rate * to.rate) as usize {
+                let kind = self.kinds[from.base as usize + i] as usize;
+                let (record, place) = (self.records[kind], self.places[kind]);
+                if place.patch != last {
+                    k = (0..pairs.len() / 2).find(|&k| pairs[2 * k] == place.patch).expect("a template patch");
+                    last = place.patch;
+                }
+                if ids_of[k] == u32::MAX {
+                    let (level, face) = pairs[2 * k + 1];
+                    let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face))
+                    else {
+                        unreachable!("the same resolution tree")
+                    };
+                    ids_of[k] = self.ids.len() as u32;
+                    self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                    // Padded as the chunks pad.
+                    let first = self.ids[ids_of[k] as usize];
+                    self.ids.resize(ids_of[k] as usize + padded(patch.vertices.len()), first);
+                }
+                self.kinds[to.base as usize + i] = self.records.len() as u32;
+                self.records.push(Record { ids: ids_of[k], ..record });
+                self.places.push(Place { patch: pairs[2 * k + 1], ..place });
+            }
+        }
     }
 
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
@@ -640,7 +765,7 @@ impl Evaluator {
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for i in range {
-            if self.kinds[i] == IN_BLOCK {
+            if self.kinds[i] == IN_BLOCK || self.kinds[i] == COPIED {
                 continue;
             }
             let site = topo.sites[i];
