@@ -106,8 +106,14 @@ struct Chunk {
     /// Per record: where it is, for gathering the points of one bicubic patch into a grid.
     places: Vec<Place>,
     ids: Vec<u32>,
+    /// Weights of stencils not in the evaluator's `stencil_index` (records name them by
+    /// [`FRESH`]` | k`), and per such stencil its key and first weight here.
     weights: Vec<f64>,
+    fresh: Vec<((usize, usize, Dyadic), u32)>,
 }
+
+/// Marks a chunk record's `weights` as the number of one of the chunk's fresh stencils.
+const FRESH: u32 = 1 << 31;
 
 /// A record's patch and parameter there, for [`Evaluator::patch_grids`].
 #[derive(Clone, Copy, Debug)]
@@ -272,13 +278,19 @@ pub(crate) struct Evaluator {
     patch_grids: Vec<PatchGrid>,
     /// Per block of the topology, its range of `patch_grids`.
     block_grids: Vec<(u32, u32)>,
+    /// Per block of the topology, the earlier block whose records it copied (`u32::MAX`:
+    /// none).
+    templates: Vec<u32>,
     /// The patch grids' bases and vertices.
     grid_basis: Vec<[[f64; 4]; 2]>,
     /// The parameters of `grid_basis`'s entries.
     grid_params: Vec<f64>,
     grid_vertices: Vec<u32>,
     ids: Vec<u32>,
+    /// The exact stencils' weights, kept across calls (only growing): `stencil_index` gives
+    /// each (matrices, shape, point in the patch's frame)'s first weight.
     weights: Vec<f64>,
+    stencil_index: HashMap<(usize, usize, Dyadic), u32>,
     tables: DualTables,
     /// Sets of exact stencil evaluators per matrices, one per chunk at work, kept across calls
     /// (they remember what they solved, so a second tessellation at the same rates solves
@@ -342,11 +354,13 @@ impl Evaluator {
             places: Vec::new(),
             patch_grids: Vec::new(),
             block_grids: Vec::new(),
+            templates: Vec::new(),
             grid_basis: Vec::new(),
             grid_params: Vec::new(),
             grid_vertices: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
+            stencil_index: HashMap::new(),
             tables: DualTables::default(),
             pool: Vec::new(),
             spare: Vec::new(),
@@ -428,7 +442,6 @@ impl Evaluator {
         self.kinds.resize(n, BICUBIC);
         self.records.clear();
         self.ids.clear();
-        self.weights.clear();
         for block in &topo.blocks {
             if let FacePlan::Bicubic { .. } = self.faces[block.face as usize] {
                 let r = block.rate as usize;
@@ -482,23 +495,43 @@ impl Evaluator {
         self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.spare = spare.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.places.clear();
+        let mut fresh = Vec::new();
         for chunk in results {
             let chunk = chunk?;
             self.places.extend_from_slice(&chunk.places);
-            let (records, ids, weights) = (self.records.len() as u32, self.ids.len() as u32, self.weights.len() as u32);
+            let (records, ids) = (self.records.len() as u32, self.ids.len() as u32);
             for &(vertex, record) in &chunk.assigned {
                 self.kinds[vertex as usize] = records + record;
             }
+            // The chunk's fresh stencils join the kept ones (a key an earlier chunk added
+            // takes that copy: the same weights).
+            fresh.clear();
+            for (k, &(key, at)) in chunk.fresh.iter().enumerate() {
+                let end = chunk.fresh.get(k + 1).map_or(chunk.weights.len(), |&(_, next)| next as usize);
+                let weights = &mut self.weights;
+                fresh.push(*self.stencil_index.entry(key).or_insert_with(|| {
+                    weights.extend_from_slice(&chunk.weights[at as usize..end]);
+                    (weights.len() - (end - at as usize)) as u32
+                }));
+            }
             self.records.extend(chunk.records.iter().map(|r| Record {
                 ids: r.ids + ids,
-                weights: if r.table == NO_TABLE { r.weights + weights } else { r.weights },
+                weights: if r.table == NO_TABLE && r.weights & FRESH != 0 {
+                    fresh[(r.weights & !FRESH) as usize]
+                } else {
+                    r.weights
+                },
                 ..*r
             }));
             self.ids.extend_from_slice(&chunk.ids);
-            self.weights.extend_from_slice(&chunk.weights);
             self.spare.push(chunk);
         }
         self.copy_records(topo, &copies);
+        self.templates.clear();
+        self.templates.resize(topo.blocks.len(), u32::MAX);
+        for &(block, template, _) in &copies {
+            self.templates[block as usize] = template;
+        }
         Ok(())
     }
 
@@ -629,9 +662,12 @@ impl Evaluator {
         // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
         // by a counting sort (in vertex order within each).
         let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for block in &topo.blocks {
+        for (b, block) in topo.blocks.iter().enumerate() {
             let first = self.patch_grids.len() as u32;
-            if let FacePlan::General = self.faces[block.face as usize] {
+            let template = self.templates.get(b).copied().unwrap_or(u32::MAX);
+            if template != u32::MAX {
+                self.copy_patch_grids(block, &topo.blocks[template as usize], self.block_grids[template as usize]);
+            } else if let FacePlan::General = self.faces[block.face as usize] {
                 keys.clear();
                 group.clear();
                 let base = block.base as usize;
@@ -676,6 +712,32 @@ impl Evaluator {
                 }
             }
             self.block_grids.push((first, self.patch_grids.len() as u32));
+        }
+    }
+
+    /// The patch grids of `block`, whose records were copied from `from`'s, from `from`'s
+    /// `grids`: the same grids (what [`Self::patch_grid`] finds depends only on the records'
+    /// places, levels, patches and derivative maps) over `block`'s vertices and patches.
+    fn copy_patch_grids(&mut self, block: &super::topology::Block, from: &super::topology::Block, grids: (u32, u32)) {
+        let shift = |v: u32| v - from.base + block.base;
+        for g in grids.0..grids.1 {
+            let g = self.patch_grids[g as usize].clone();
+            let n = (g.s * g.t) as usize;
+            let first = self.grid_vertices.len();
+            for k in 0..n {
+                let v = shift(self.grid_vertices[g.vertices as usize + k]);
+                self.grid_vertices.push(v);
+            }
+            let v0 = self.grid_vertices[first] as usize;
+            let (r, place) = (&self.records[self.kinds[v0] as usize], &self.places[self.kinds[v0] as usize]);
+            let grid = place.grid.expect("a bicubic patch, as in the template");
+            let ids = &self.ids[r.ids as usize..];
+            let cv = std::array::from_fn(|k| ids[usize::from(grid[k])]);
+            for k in first..first + n {
+                let v = self.grid_vertices[k] as usize;
+                self.kinds[v] = IN_PATCH_GRID;
+            }
+            self.patch_grids.push(PatchGrid { cv, vertices: first as u32, ..g });
         }
     }
 
@@ -761,6 +823,7 @@ impl Evaluator {
         out.places.clear();
         out.ids.clear();
         out.weights.clear();
+        out.fresh.clear();
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
@@ -821,7 +884,8 @@ impl Evaluator {
                         // point on every face of the cube) share one copy of their weights.
                         let matrices = Arc::as_ptr(&patch.matrices) as usize;
                         let at = frame.to_patch(p);
-                        let weights = match shared.get(&(matrices, patch.shape, at)) {
+                        let key = (matrices, patch.shape, at);
+                        let weights = match self.stencil_index.get(&key).or_else(|| shared.get(&key)) {
                             Some(&w) => w,
                             None => {
                                 let evaluator = evaluators
@@ -829,13 +893,14 @@ impl Evaluator {
                                     .entry(matrices)
                                     .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
                                 let stencil = evaluator.stencil(patch.shape, at)?;
-                                let w = out.weights.len() as u32;
+                                let w = FRESH | out.fresh.len() as u32;
+                                out.fresh.push((key, out.weights.len() as u32));
                                 let pad = padded(stencil.position.len());
                                 for row in [&stencil.position, &stencil.du, &stencil.dv] {
                                     out.weights.extend_from_slice(row);
                                     out.weights.resize(out.weights.len() + pad - row.len(), 0.0);
                                 }
-                                shared.insert((matrices, patch.shape, at), w);
+                                shared.insert(key, w);
                                 w
                             }
                         };
