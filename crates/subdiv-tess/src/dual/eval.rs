@@ -139,6 +139,9 @@ const COPIED: u32 = u32::MAX - 3;
 #[derive(Clone, Debug)]
 struct PatchGrid {
     level: u32,
+    /// The patch (level, face on it), and its 4 × 4 grid (as [`Place::grid`]).
+    patch: (u32, u32),
+    grid: [u8; 16],
     /// Control points, `cv[j * 4 + i]` at `(i − 1, j − 1)` in the patch's frame.
     cv: [u32; 16],
     /// The rows turning `(∂/∂s, ∂/∂t)` into the face's `(∂/∂u, ∂/∂v)`.
@@ -278,9 +281,13 @@ pub(crate) struct Evaluator {
     patch_grids: Vec<PatchGrid>,
     /// Per block of the topology, its range of `patch_grids`.
     block_grids: Vec<(u32, u32)>,
-    /// Per block of the topology, the earlier block whose records it copied (`u32::MAX`:
-    /// none).
-    templates: Vec<u32>,
+    /// The blocks of general faces that copy an earlier block's records and patch grids (per
+    /// such block: the template block, and the template's and the block's patches, in pairs),
+    /// and per block of the topology its entry there (`u32::MAX`: none).
+    copies: Vec<(u32, u32, Vec<(u32, u32)>)>,
+    copy_of: Vec<u32>,
+    /// Whether faces of one type copy the first one's records (off: each descends, for tests).
+    copy_faces: bool,
     /// The patch grids' bases and vertices.
     grid_basis: Vec<[[f64; 4]; 2]>,
     /// The parameters of `grid_basis`'s entries.
@@ -354,7 +361,9 @@ impl Evaluator {
             places: Vec::new(),
             patch_grids: Vec::new(),
             block_grids: Vec::new(),
-            templates: Vec::new(),
+            copies: Vec::new(),
+            copy_of: Vec::new(),
+            copy_faces: true,
             grid_basis: Vec::new(),
             grid_params: Vec::new(),
             grid_vertices: Vec::new(),
@@ -468,7 +477,7 @@ impl Evaluator {
         // Faces of one type (the same resolution tree up to vertex labels) at one rate have the
         // same cell records but for their patches' control points: only the first face of each
         // type goes through the chunks, the others copy its records below.
-        let copies = self.face_types(topo, rates);
+        let copies = if self.copy_faces { self.face_types(topo, rates) } else { Vec::new() };
         for &(block, _, _) in &copies {
             let b = &topo.blocks[block as usize];
             self.kinds[b.base as usize..(b.base + b.rate * b.rate) as usize].fill(COPIED);
@@ -526,12 +535,12 @@ impl Evaluator {
             self.ids.extend_from_slice(&chunk.ids);
             self.spare.push(chunk);
         }
-        self.copy_records(topo, &copies);
-        self.templates.clear();
-        self.templates.resize(topo.blocks.len(), u32::MAX);
-        for &(block, template, _) in &copies {
-            self.templates[block as usize] = template;
+        self.copy_of.clear();
+        self.copy_of.resize(topo.blocks.len(), u32::MAX);
+        for (k, &(block, _, _)) in copies.iter().enumerate() {
+            self.copy_of[block as usize] = k as u32;
         }
+        self.copies = copies;
         Ok(())
     }
 
@@ -611,40 +620,61 @@ impl Evaluator {
         }
     }
 
-    /// Gives each block of `copies` its template's records with its own patches' control
-    /// points (the same weights, tables, points and derivative maps: the same bits as its own
-    /// descent would give).
-    fn copy_records(&mut self, topo: &Topology, copies: &[(u32, u32, Vec<(u32, u32)>)]) {
-        let mut ids_of: Vec<u32> = Vec::new();
-        for (block, template, pairs) in copies {
-            let (to, from) = (&topo.blocks[*block as usize], &topo.blocks[*template as usize]);
-            ids_of.clear();
-            ids_of.resize(pairs.len() / 2, u32::MAX);
-            let mut last = (u32::MAX, u32::MAX);
-            let mut k = 0;
-            for i in 0..(to.rate * to.rate) as usize {
-                let kind = self.kinds[from.base as usize + i] as usize;
-                let (record, place) = (self.records[kind], self.places[kind]);
-                if place.patch != last {
-                    k = (0..pairs.len() / 2).find(|&k| pairs[2 * k] == place.patch).expect("a template patch");
-                    last = place.patch;
-                }
-                if ids_of[k] == u32::MAX {
-                    let (level, face) = pairs[2 * k + 1];
-                    let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face))
-                    else {
-                        unreachable!("the same resolution tree")
-                    };
-                    ids_of[k] = self.ids.len() as u32;
-                    self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
-                    // Padded as the chunks pad.
-                    let first = self.ids[ids_of[k] as usize];
-                    self.ids.resize(ids_of[k] as usize + padded(patch.vertices.len()), first);
-                }
-                self.kinds[to.base as usize + i] = self.records.len() as u32;
-                self.records.push(Record { ids: ids_of[k], ..record });
-                self.places.push(Place { patch: pairs[2 * k + 1], ..place });
+    /// Gives `block` (copying `template`'s records: see [`Self::face_types`], `pairs`: the
+    /// template's and the block's patches) the template's patch grids over its own vertices
+    /// and patches, and to its other cell points the template's records with its own patches'
+    /// control points: the same weights, tables, points and derivative maps, and the same
+    /// grids (what [`Self::patch_grid`] finds depends only on those), so the same bits as its
+    /// own descent would give.
+    fn copy_block(&mut self, topo: &Topology, to: &super::topology::Block, template: u32, pairs: &[(u32, u32)]) {
+        let from = &topo.blocks[template as usize];
+        fn patch_of(levels: &PatchLevels, (level, face): (u32, u32)) -> &subdiv_schemes::FoundPatch {
+            let Some(Resolved::Patch { patch, .. }) = levels.resolve(level as usize, FaceId::new(face)) else {
+                unreachable!("the same resolution tree")
+            };
+            patch
+        }
+        let index =
+            |patch: (u32, u32)| (0..pairs.len() / 2).find(|&k| pairs[2 * k] == patch).expect("a template patch");
+        let (first, last) = self.block_grids[template as usize];
+        for g in first..last {
+            let g = self.patch_grids[g as usize].clone();
+            let own = pairs[2 * index(g.patch) + 1];
+            let vertices = &patch_of(&self.levels, own).vertices;
+            let cv = std::array::from_fn(|k| vertices[usize::from(g.grid[k])].index() as u32);
+            let at = self.grid_vertices.len();
+            for k in 0..(g.s * g.t) as usize {
+                let v = self.grid_vertices[g.vertices as usize + k] - from.base + to.base;
+                self.grid_vertices.push(v);
+                self.kinds[v as usize] = IN_PATCH_GRID;
             }
+            self.patch_grids.push(PatchGrid { patch: own, cv, vertices: at as u32, ..g });
+        }
+        let mut ids_of = vec![u32::MAX; pairs.len() / 2];
+        let mut last = (u32::MAX, u32::MAX);
+        let mut k = 0;
+        for i in 0..(to.rate * to.rate) as usize {
+            let kind = self.kinds[from.base as usize + i];
+            if kind == IN_PATCH_GRID {
+                continue;
+            }
+            let (record, place) = (self.records[kind as usize], self.places[kind as usize]);
+            if place.patch != last {
+                k = index(place.patch);
+                last = place.patch;
+            }
+            if ids_of[k] == u32::MAX {
+                let patch = patch_of(&self.levels, pairs[2 * k + 1]);
+                let start = self.ids.len();
+                self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                // Padded as the chunks pad.
+                let first = self.ids[start];
+                self.ids.resize(start + padded(patch.vertices.len()), first);
+                ids_of[k] = start as u32;
+            }
+            self.kinds[to.base as usize + i] = self.records.len() as u32;
+            self.records.push(Record { ids: ids_of[k], ..record });
+            self.places.push(Place { patch: pairs[2 * k + 1], ..place });
         }
     }
 
@@ -664,9 +694,11 @@ impl Evaluator {
         let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (b, block) in topo.blocks.iter().enumerate() {
             let first = self.patch_grids.len() as u32;
-            let template = self.templates.get(b).copied().unwrap_or(u32::MAX);
-            if template != u32::MAX {
-                self.copy_patch_grids(block, &topo.blocks[template as usize], self.block_grids[template as usize]);
+            let copy = self.copy_of.get(b).copied().unwrap_or(u32::MAX);
+            if copy != u32::MAX {
+                let (_, template, pairs) = std::mem::take(&mut self.copies[copy as usize]);
+                self.copy_block(topo, block, template, &pairs);
+                self.copies[copy as usize] = (b as u32, template, pairs);
             } else if let FacePlan::General = self.faces[block.face as usize] {
                 keys.clear();
                 group.clear();
@@ -712,32 +744,6 @@ impl Evaluator {
                 }
             }
             self.block_grids.push((first, self.patch_grids.len() as u32));
-        }
-    }
-
-    /// The patch grids of `block`, whose records were copied from `from`'s, from `from`'s
-    /// `grids`: the same grids (what [`Self::patch_grid`] finds depends only on the records'
-    /// places, levels, patches and derivative maps) over `block`'s vertices and patches.
-    fn copy_patch_grids(&mut self, block: &super::topology::Block, from: &super::topology::Block, grids: (u32, u32)) {
-        let shift = |v: u32| v - from.base + block.base;
-        for g in grids.0..grids.1 {
-            let g = self.patch_grids[g as usize].clone();
-            let n = (g.s * g.t) as usize;
-            let first = self.grid_vertices.len();
-            for k in 0..n {
-                let v = shift(self.grid_vertices[g.vertices as usize + k]);
-                self.grid_vertices.push(v);
-            }
-            let v0 = self.grid_vertices[first] as usize;
-            let (r, place) = (&self.records[self.kinds[v0] as usize], &self.places[self.kinds[v0] as usize]);
-            let grid = place.grid.expect("a bicubic patch, as in the template");
-            let ids = &self.ids[r.ids as usize..];
-            let cv = std::array::from_fn(|k| ids[usize::from(grid[k])]);
-            for k in first..first + n {
-                let v = self.grid_vertices[k] as usize;
-                self.kinds[v] = IN_PATCH_GRID;
-            }
-            self.patch_grids.push(PatchGrid { cv, vertices: first as u32, ..g });
         }
     }
 
@@ -800,6 +806,8 @@ impl Evaluator {
         self.grid_params.extend(s.iter().chain(t.iter()));
         Some(PatchGrid {
             level: r0.level,
+            patch: place(vertices[0]).patch,
+            grid,
             cv: std::array::from_fn(|k| ids0[usize::from(grid[k])]),
             ju: r0.ju,
             jv: r0.jv,
@@ -1464,6 +1472,8 @@ mod tests {
         for (soup, rate) in [(shapes::cube(), 12u32), (shapes::default_model(), 8), (shapes::ngon_prism(5), 9)] {
             let mesh = Mesh::build(soup).unwrap();
             let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+            // Every face on its own records (copied faces have none under their grids).
+            ev.copy_faces = false;
             let moved: Vec<DVec3> =
                 mesh.positions().iter().enumerate().map(|(i, p)| *p * 1.3 + DVec3::splat((i as f64).sin())).collect();
             ev.set_cage(&moved);
@@ -1486,6 +1496,61 @@ mod tests {
                 }
             }
             assert!(worst < 1e-12, "patch grids off the records by {worst:e}");
+        }
+    }
+
+    /// Faces that copy an earlier face's records and patch grids ([`Evaluator::face_types`])
+    /// evaluate to the same bits as their own descents, at even and odd, equal and mixed
+    /// rates, on meshes with extraordinary vertices (on the cube some faces copy others),
+    /// N-gons and borders; the plans agree too.
+    #[test]
+    fn copied_faces_equal_their_own_descent() {
+        let meshes = [
+            shapes::cube(),
+            shapes::pole(5),
+            shapes::pole(6),
+            shapes::ngon_prism(5),
+            shapes::default_model(),
+            shapes::quad_grid(3, 2),
+        ];
+        for (m, soup) in meshes.into_iter().enumerate() {
+            let first = m == 0;
+            let mesh = Mesh::build(soup).unwrap();
+            let nf = mesh.face_count();
+            let moved: Vec<DVec3> =
+                mesh.positions().iter().enumerate().map(|(i, p)| *p * 0.7 + DVec3::splat((i as f64).cos())).collect();
+            let uniform = |n: u32| vec![n; nf];
+            for rates in [
+                uniform(1),
+                uniform(2),
+                uniform(5),
+                uniform(8),
+                uniform(12),
+                (0..nf as u32).map(|f| 2 + f % 3).collect(),
+            ] {
+                let mut outputs = Vec::new();
+                for copy in [false, true] {
+                    let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+                    ev.copy_faces = copy;
+                    ev.set_cage(&moved);
+                    let domains = ev.domains().unwrap();
+                    let mut topo = Topology::default();
+                    super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
+                    ev.prepare(&topo, &rates, true).unwrap();
+                    if copy && first && rates == uniform(8) {
+                        assert!(!ev.copies.is_empty(), "some of the cube's faces copy others");
+                    }
+                    let (mut ps, mut ns) = (Vec::new(), Vec::new());
+                    ev.evaluate(&topo, true, &mut ps, &mut ns);
+                    let bits = |v: &[DVec3]| v.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+                    let (mut plan, mut normals) = (Vec::new(), Vec::new());
+                    ev.plan(&topo).evaluate(&ev.positions[0], &mut plan, &mut normals);
+                    outputs.push((bits(&ps), bits(&ns), plan));
+                }
+                assert!(outputs[0].0 == outputs[1].0 && outputs[0].1 == outputs[1].1, "rates {rates:?}");
+                let worst = outputs[0].2.iter().zip(&outputs[1].2).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+                assert!(worst < 1e-12, "plans off by {worst:e}");
+            }
         }
     }
 
