@@ -26,7 +26,11 @@
 //!   the whole mesh: `O(4^L)` times the cage for `L` levels, `L ≤ 2` for N-gons and double
 //!   extraordinary quads), and each point is then a dot product (4 fixed f64 lanes, weights
 //!   padded with zeros): no topology work, no allocation per vertex. The records are prepared
-//!   in parallel by chunks of vertices. **Patch grids**: the cell points of a quad face that
+//!   in parallel by chunks of vertices; the exact stencils' weights are kept across calls.
+//!   **Face types**: quad faces with the same resolution tree up to vertex labels (the same
+//!   children, patch shapes and frames) at the same rate have the same cell records but for
+//!   their patches' control points, so only the first of each type descends; the others copy
+//!   its records and patch grids with their own control points (the same bits). **Patch grids**: the cell points of a quad face that
 //!   fall in one regular (bicubic) patch on a refined level form a grid `s × t` in its frame;
 //!   they are then evaluated separably, as the level-0 blocks are (the shape's stencils checked
 //!   once to be the tensor products over its grid), instead of one 16-point stencil each.
@@ -106,14 +110,16 @@ struct Chunk {
     /// Per record: where it is, for gathering the points of one bicubic patch into a grid.
     places: Vec<Place>,
     ids: Vec<u32>,
-    /// Weights of stencils not in the evaluator's `stencil_index` (records name them by
-    /// [`FRESH`]` | k`), and per such stencil its key and first weight here.
+    /// Weights of stencils not in the evaluator's `stencil_index` (records name them by their
+    /// number `k` here, with `table` [`FRESH`]), and per such stencil its key and first weight
+    /// here.
     weights: Vec<f64>,
     fresh: Vec<((usize, usize, Dyadic), u32)>,
 }
 
-/// Marks a chunk record's `weights` as the number of one of the chunk's fresh stencils.
-const FRESH: u32 = 1 << 31;
+/// The `table` of a chunk record whose `weights` is the number of one of the chunk's fresh
+/// stencils.
+const FRESH: u32 = u32::MAX - 1;
 
 /// A record's patch and parameter there, for [`Evaluator::patch_grids`].
 #[derive(Clone, Copy, Debug)]
@@ -127,10 +133,17 @@ struct Place {
     grid: Option<[u8; 16]>,
 }
 
+/// A block that copies an earlier one's records: the block, the template block, and the
+/// template's and the block's patches (level, face), in pairs.
+type FaceCopy = (u32, u32, Patches);
+
+/// Patches as (level, face on that level).
+type Patches = Vec<(u32, u32)>;
+
 /// A vertex evaluated by a [`PatchGrid`].
 const IN_PATCH_GRID: u32 = u32::MAX - 2;
-/// A cell point of a face whose records are copied from an earlier face of the same type
-/// (see [`Evaluator::prepare_records`]); replaced by its record before the patch grids.
+/// A cell point of a face that copies an earlier face's records (see
+/// [`Evaluator::face_types`]) until [`Evaluator::patch_grids`] copies them.
 const COPIED: u32 = u32::MAX - 3;
 
 /// The points of one bicubic patch on a refined level that form a grid `s × t` in its frame
@@ -284,7 +297,7 @@ pub(crate) struct Evaluator {
     /// The blocks of general faces that copy an earlier block's records and patch grids (per
     /// such block: the template block, and the template's and the block's patches, in pairs),
     /// and per block of the topology its entry there (`u32::MAX`: none).
-    copies: Vec<(u32, u32, Vec<(u32, u32)>)>,
+    copies: Vec<FaceCopy>,
     copy_of: Vec<u32>,
     /// Whether faces of one type copy the first one's records (off: each descends, for tests).
     copy_faces: bool,
@@ -444,7 +457,8 @@ impl Evaluator {
         Ok(())
     }
 
-    /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record.
+    /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record,
+    /// but the cell points of faces that copy an earlier face's ([`COPIED`]).
     fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.sites.len();
         self.kinds.clear();
@@ -476,7 +490,8 @@ impl Evaluator {
         }
         // Faces of one type (the same resolution tree up to vertex labels) at one rate have the
         // same cell records but for their patches' control points: only the first face of each
-        // type goes through the chunks, the others copy its records below.
+        // type goes through the chunks, the others copy its records and patch grids in
+        // `patch_grids`.
         let copies = if self.copy_faces { self.face_types(topo, rates) } else { Vec::new() };
         for &(block, _, _) in &copies {
             let b = &topo.blocks[block as usize];
@@ -525,11 +540,8 @@ impl Evaluator {
             }
             self.records.extend(chunk.records.iter().map(|r| Record {
                 ids: r.ids + ids,
-                weights: if r.table == NO_TABLE && r.weights & FRESH != 0 {
-                    fresh[(r.weights & !FRESH) as usize]
-                } else {
-                    r.weights
-                },
+                weights: if r.table == FRESH { fresh[r.weights as usize] } else { r.weights },
+                table: if r.table == FRESH { NO_TABLE } else { r.table },
                 ..*r
             }));
             self.ids.extend_from_slice(&chunk.ids);
@@ -547,13 +559,13 @@ impl Evaluator {
     /// The blocks of general faces whose records can be copied from an earlier block: per
     /// such block, the template block and both faces' patches (level, face) in the order of
     /// [`Self::face_type`].
-    #[allow(clippy::type_complexity)]
-    fn face_types(&self, topo: &Topology, rates: &[u32]) -> Vec<(u32, u32, Vec<(u32, u32)>)> {
+    fn face_types(&self, topo: &Topology, rates: &[u32]) -> Vec<FaceCopy> {
         let mut copies = Vec::new();
         if self.levels.split() != Split::Quad {
             return copies;
         }
-        let mut seen: HashMap<(u32, Vec<u64>), (u32, Vec<(u32, u32)>)> = HashMap::new();
+        // Per (rate, signature): the first block and its patches.
+        let mut seen: HashMap<(u32, Vec<u64>), (u32, Patches)> = HashMap::new();
         let mut signature = Vec::new();
         for (b, block) in topo.blocks.iter().enumerate() {
             if !matches!(self.faces[block.face as usize], FacePlan::General) {
@@ -681,7 +693,8 @@ impl Evaluator {
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
     /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
     /// (the patch shapes' stencils checked once against the tensor products), and marks them
-    /// [`IN_PATCH_GRID`].
+    /// [`IN_PATCH_GRID`]; faces that copy an earlier face's records take its grids and records
+    /// ([`Self::copy_block`]).
     fn patch_grids(&mut self, topo: &Topology) {
         self.patch_grids.clear();
         self.block_grids.clear();
@@ -893,26 +906,27 @@ impl Evaluator {
                         let matrices = Arc::as_ptr(&patch.matrices) as usize;
                         let at = frame.to_patch(p);
                         let key = (matrices, patch.shape, at);
-                        let weights = match self.stencil_index.get(&key).or_else(|| shared.get(&key)) {
-                            Some(&w) => w,
-                            None => {
+                        let (weights, table) = match (self.stencil_index.get(&key), shared.get(&key)) {
+                            (Some(&w), _) => (w, NO_TABLE),
+                            (None, Some(&k)) => (k, FRESH),
+                            (None, None) => {
                                 let evaluator = evaluators
                                     .stencils
                                     .entry(matrices)
                                     .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
                                 let stencil = evaluator.stencil(patch.shape, at)?;
-                                let w = FRESH | out.fresh.len() as u32;
+                                let k = out.fresh.len() as u32;
                                 out.fresh.push((key, out.weights.len() as u32));
                                 let pad = padded(stencil.position.len());
                                 for row in [&stencil.position, &stencil.du, &stencil.dv] {
                                     out.weights.extend_from_slice(row);
                                     out.weights.resize(out.weights.len() + pad - row.len(), 0.0);
                                 }
-                                shared.insert(key, w);
-                                w
+                                shared.insert(key, k);
+                                (k, FRESH)
                             }
                         };
-                        out.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
+                        out.records.push(Record { level: level as u32, ids, len, weights, table, ju, jv });
                         let grid = if level > 0 && len == 16 {
                             match evaluators.grids.get(&(matrices, patch.shape)) {
                                 Some(&grid) => grid,
