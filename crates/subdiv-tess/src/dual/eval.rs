@@ -26,7 +26,11 @@
 //!   the whole mesh: `O(4^L)` times the cage for `L` levels, `L ≤ 2` for N-gons and double
 //!   extraordinary quads), and each point is then a dot product (4 fixed f64 lanes, weights
 //!   padded with zeros): no topology work, no allocation per vertex. The records are prepared
-//!   in parallel by chunks of vertices. **Patch grids**: the cell points of a quad face that
+//!   in parallel by chunks of vertices; the exact stencils' weights are kept across calls.
+//!   **Face types**: quad faces with the same resolution tree up to vertex labels (the same
+//!   children, patch shapes and frames) at the same rate have the same cell records but for
+//!   their patches' control points, so only the first of each type descends; the others copy
+//!   its records and patch grids with their own control points (the same bits). **Patch grids**: the cell points of a quad face that
 //!   fall in one regular (bicubic) patch on a refined level form a grid `s × t` in its frame;
 //!   they are then evaluated separably, as the level-0 blocks are (the shape's stencils checked
 //!   once to be the tensor products over its grid), instead of one 16-point stencil each.
@@ -106,8 +110,16 @@ struct Chunk {
     /// Per record: where it is, for gathering the points of one bicubic patch into a grid.
     places: Vec<Place>,
     ids: Vec<u32>,
+    /// Weights of stencils not in the evaluator's `stencil_index` (records name them by their
+    /// number `k` here, with `table` [`FRESH`]), and per such stencil its key and first weight
+    /// here.
     weights: Vec<f64>,
+    fresh: Vec<((usize, usize, Dyadic), u32)>,
 }
+
+/// The `table` of a chunk record whose `weights` is the number of one of the chunk's fresh
+/// stencils.
+const FRESH: u32 = u32::MAX - 1;
 
 /// A record's patch and parameter there, for [`Evaluator::patch_grids`].
 #[derive(Clone, Copy, Debug)]
@@ -121,8 +133,18 @@ struct Place {
     grid: Option<[u8; 16]>,
 }
 
+/// A block that copies an earlier one's records: the block, the template block, and the
+/// template's and the block's patches (level, face), in pairs.
+type FaceCopy = (u32, u32, Patches);
+
+/// Patches as (level, face on that level).
+type Patches = Vec<(u32, u32)>;
+
 /// A vertex evaluated by a [`PatchGrid`].
 const IN_PATCH_GRID: u32 = u32::MAX - 2;
+/// A cell point of a face that copies an earlier face's records (see
+/// [`Evaluator::face_types`]) until [`Evaluator::patch_grids`] copies them.
+const COPIED: u32 = u32::MAX - 3;
 
 /// The points of one bicubic patch on a refined level that form a grid `s × t` in its frame
 /// (the dual grid of a quad face over a regular descendant): evaluated separably, as the
@@ -130,6 +152,9 @@ const IN_PATCH_GRID: u32 = u32::MAX - 2;
 #[derive(Clone, Debug)]
 struct PatchGrid {
     level: u32,
+    /// The patch (level, face on it), and its 4 × 4 grid (as [`Place::grid`]).
+    patch: (u32, u32),
+    grid: [u8; 16],
     /// Control points, `cv[j * 4 + i]` at `(i − 1, j − 1)` in the patch's frame.
     cv: [u32; 16],
     /// The rows turning `(∂/∂s, ∂/∂t)` into the face's `(∂/∂u, ∂/∂v)`.
@@ -269,13 +294,23 @@ pub(crate) struct Evaluator {
     patch_grids: Vec<PatchGrid>,
     /// Per block of the topology, its range of `patch_grids`.
     block_grids: Vec<(u32, u32)>,
+    /// The blocks of general faces that copy an earlier block's records and patch grids (per
+    /// such block: the template block, and the template's and the block's patches, in pairs),
+    /// and per block of the topology its entry there (`u32::MAX`: none).
+    copies: Vec<FaceCopy>,
+    copy_of: Vec<u32>,
+    /// Whether faces of one type copy the first one's records (off: each descends, for tests).
+    copy_faces: bool,
     /// The patch grids' bases and vertices.
     grid_basis: Vec<[[f64; 4]; 2]>,
     /// The parameters of `grid_basis`'s entries.
     grid_params: Vec<f64>,
     grid_vertices: Vec<u32>,
     ids: Vec<u32>,
+    /// The exact stencils' weights, kept across calls (only growing): `stencil_index` gives
+    /// each (matrices, shape, point in the patch's frame)'s first weight.
     weights: Vec<f64>,
+    stencil_index: HashMap<(usize, usize, Dyadic), u32>,
     tables: DualTables,
     /// Sets of exact stencil evaluators per matrices, one per chunk at work, kept across calls
     /// (they remember what they solved, so a second tessellation at the same rates solves
@@ -339,11 +374,15 @@ impl Evaluator {
             places: Vec::new(),
             patch_grids: Vec::new(),
             block_grids: Vec::new(),
+            copies: Vec::new(),
+            copy_of: Vec::new(),
+            copy_faces: true,
             grid_basis: Vec::new(),
             grid_params: Vec::new(),
             grid_vertices: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
+            stencil_index: HashMap::new(),
             tables: DualTables::default(),
             pool: Vec::new(),
             spare: Vec::new(),
@@ -418,14 +457,14 @@ impl Evaluator {
         Ok(())
     }
 
-    /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record.
+    /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record,
+    /// but the cell points of faces that copy an earlier face's ([`COPIED`]).
     fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.sites.len();
         self.kinds.clear();
         self.kinds.resize(n, BICUBIC);
         self.records.clear();
         self.ids.clear();
-        self.weights.clear();
         for block in &topo.blocks {
             if let FacePlan::Bicubic { .. } = self.faces[block.face as usize] {
                 let r = block.rate as usize;
@@ -449,6 +488,15 @@ impl Evaluator {
                 ensure_table(&mut self.tables, patch, rates[f.index()])?;
             }
         }
+        // Faces of one type (the same resolution tree up to vertex labels) at one rate have the
+        // same cell records but for their patches' control points: only the first face of each
+        // type goes through the chunks, the others copy its records and patch grids in
+        // `patch_grids`.
+        let copies = if self.copy_faces { self.face_types(topo, rates) } else { Vec::new() };
+        for &(block, _, _) in &copies {
+            let b = &topo.blocks[block as usize];
+            self.kinds[b.base as usize..(b.base + b.rate * b.rate) as usize].fill(COPIED);
+        }
         // Stencil records by chunks of vertices, in parallel; each chunk borrows a set of
         // stencil evaluators from the pool (their results do not depend on what they solved
         // before, so neither does the output on the thread count).
@@ -471,29 +519,182 @@ impl Evaluator {
         self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.spare = spare.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.places.clear();
+        let mut fresh = Vec::new();
         for chunk in results {
             let chunk = chunk?;
             self.places.extend_from_slice(&chunk.places);
-            let (records, ids, weights) = (self.records.len() as u32, self.ids.len() as u32, self.weights.len() as u32);
+            let (records, ids) = (self.records.len() as u32, self.ids.len() as u32);
             for &(vertex, record) in &chunk.assigned {
                 self.kinds[vertex as usize] = records + record;
             }
+            // The chunk's fresh stencils join the kept ones (a key an earlier chunk added
+            // takes that copy: the same weights).
+            fresh.clear();
+            for (k, &(key, at)) in chunk.fresh.iter().enumerate() {
+                let end = chunk.fresh.get(k + 1).map_or(chunk.weights.len(), |&(_, next)| next as usize);
+                let weights = &mut self.weights;
+                fresh.push(*self.stencil_index.entry(key).or_insert_with(|| {
+                    weights.extend_from_slice(&chunk.weights[at as usize..end]);
+                    (weights.len() - (end - at as usize)) as u32
+                }));
+            }
             self.records.extend(chunk.records.iter().map(|r| Record {
                 ids: r.ids + ids,
-                weights: if r.table == NO_TABLE { r.weights + weights } else { r.weights },
+                weights: if r.table == FRESH { fresh[r.weights as usize] } else { r.weights },
+                table: if r.table == FRESH { NO_TABLE } else { r.table },
                 ..*r
             }));
             self.ids.extend_from_slice(&chunk.ids);
-            self.weights.extend_from_slice(&chunk.weights);
             self.spare.push(chunk);
         }
+        self.copy_of.clear();
+        self.copy_of.resize(topo.blocks.len(), u32::MAX);
+        for (k, &(block, _, _)) in copies.iter().enumerate() {
+            self.copy_of[block as usize] = k as u32;
+        }
+        self.copies = copies;
         Ok(())
+    }
+
+    /// The blocks of general faces whose records can be copied from an earlier block: per
+    /// such block, the template block and both faces' patches (level, face) in the order of
+    /// [`Self::face_type`].
+    fn face_types(&self, topo: &Topology, rates: &[u32]) -> Vec<FaceCopy> {
+        let mut copies = Vec::new();
+        if self.levels.split() != Split::Quad {
+            return copies;
+        }
+        // Per (rate, signature): the first block and its patches.
+        let mut seen: HashMap<(u32, Vec<u64>), (u32, Patches)> = HashMap::new();
+        let mut signature = Vec::new();
+        for (b, block) in topo.blocks.iter().enumerate() {
+            if !matches!(self.faces[block.face as usize], FacePlan::General) {
+                continue;
+            }
+            debug_assert_eq!(rates[block.face as usize], block.rate);
+            signature.clear();
+            let mut patches = Vec::new();
+            if !self.face_type(0, FaceId::new(block.face), &mut signature, &mut patches) {
+                continue;
+            }
+            match seen.entry((block.rate, signature.clone())) {
+                hashbrown::hash_map::Entry::Occupied(e) => {
+                    let (template, ref template_patches) = *e.get();
+                    let pairs = template_patches.iter().zip(&patches).flat_map(|(&t, &p)| [t, p]).collect();
+                    copies.push((b as u32, template, pairs));
+                }
+                hashbrown::hash_map::Entry::Vacant(e) => {
+                    e.insert((b as u32, patches));
+                }
+            }
+        }
+        copies
+    }
+
+    /// Appends the resolution tree of `face` on `level` to `signature` (depth first: each
+    /// node's kind; a patch's matrices, shape, size and frame), its patches to `patches`.
+    /// Two quad faces with equal signatures reach every cell point through the same children
+    /// to patches of the same shapes at the same points with the same derivative maps.
+    /// `false` if the tree holds a face that is not a quad under a quad split.
+    fn face_type(&self, level: usize, face: FaceId, signature: &mut Vec<u64>, patches: &mut Vec<(u32, u32)>) -> bool {
+        match self.levels.resolve(level, face) {
+            Some(Resolved::Children { children, domain }) => {
+                if domain != FaceDomain::Quad {
+                    return false;
+                }
+                signature.extend([1, children.len() as u64]);
+                children.into_iter().all(|c| self.face_type(level + 1, FaceId::new(c as u32), signature, patches))
+            }
+            Some(Resolved::Patch { patch, frame, .. }) => {
+                // The frame as the images of three points (it is affine).
+                let code = [(0, 0), (1, 0), (0, 1)].iter().fold(0u64, |code, &(u, v)| {
+                    let p = frame.to_patch(Dyadic::new(u, v, 1));
+                    code << 8 | ((p.u + 4) as u64) << 4 | (p.v + 4) as u64
+                });
+                signature.extend([
+                    2,
+                    Arc::as_ptr(&patch.matrices) as usize as u64,
+                    patch.shape as u64,
+                    patch.vertices.len() as u64,
+                    code,
+                ]);
+                patches.push((level as u32, face.index() as u32));
+                true
+            }
+            Some(Resolved::Hole) => {
+                signature.push(3);
+                true
+            }
+            None => {
+                signature.push(4);
+                true
+            }
+        }
+    }
+
+    /// Gives `block` (copying `template`'s records: see [`Self::face_types`], `pairs`: the
+    /// template's and the block's patches) the template's patch grids over its own vertices
+    /// and patches, and to its other cell points the template's records with its own patches'
+    /// control points: the same weights, tables, points and derivative maps, and the same
+    /// grids (what [`Self::patch_grid`] finds depends only on those), so the same bits as its
+    /// own descent would give.
+    fn copy_block(&mut self, topo: &Topology, to: &super::topology::Block, template: u32, pairs: &[(u32, u32)]) {
+        let from = &topo.blocks[template as usize];
+        fn patch_of(levels: &PatchLevels, (level, face): (u32, u32)) -> &subdiv_schemes::FoundPatch {
+            let Some(Resolved::Patch { patch, .. }) = levels.resolve(level as usize, FaceId::new(face)) else {
+                unreachable!("the same resolution tree")
+            };
+            patch
+        }
+        let index =
+            |patch: (u32, u32)| (0..pairs.len() / 2).find(|&k| pairs[2 * k] == patch).expect("a template patch");
+        let (first, last) = self.block_grids[template as usize];
+        for g in first..last {
+            let g = self.patch_grids[g as usize].clone();
+            let own = pairs[2 * index(g.patch) + 1];
+            let vertices = &patch_of(&self.levels, own).vertices;
+            let cv = std::array::from_fn(|k| vertices[usize::from(g.grid[k])].index() as u32);
+            let at = self.grid_vertices.len();
+            for k in 0..(g.s * g.t) as usize {
+                let v = self.grid_vertices[g.vertices as usize + k] - from.base + to.base;
+                self.grid_vertices.push(v);
+                self.kinds[v as usize] = IN_PATCH_GRID;
+            }
+            self.patch_grids.push(PatchGrid { patch: own, cv, vertices: at as u32, ..g });
+        }
+        let mut ids_of = vec![u32::MAX; pairs.len() / 2];
+        let mut last = (u32::MAX, u32::MAX);
+        let mut k = 0;
+        for i in 0..(to.rate * to.rate) as usize {
+            let kind = self.kinds[from.base as usize + i];
+            if kind == IN_PATCH_GRID {
+                continue;
+            }
+            let (record, place) = (self.records[kind as usize], self.places[kind as usize]);
+            if place.patch != last {
+                k = index(place.patch);
+                last = place.patch;
+            }
+            if ids_of[k] == u32::MAX {
+                let patch = patch_of(&self.levels, pairs[2 * k + 1]);
+                let start = self.ids.len();
+                self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                // Padded as the chunks pad.
+                let first = self.ids[start];
+                self.ids.resize(start + padded(patch.vertices.len()), first);
+                ids_of[k] = start as u32;
+            }
+            self.kinds[to.base as usize + i] = self.records.len() as u32;
+            self.records.push(Record { ids: ids_of[k], ..record });
+            self.places.push(Place { patch: pairs[2 * k + 1], ..place });
+        }
     }
 
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
     /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
     /// (the patch shapes' stencils checked once against the tensor products), and marks them
-    /// [`IN_PATCH_GRID`].
+    /// [`IN_PATCH_GRID`]; faces that copy an earlier face's records take its grids and records
+    /// ([`Self::copy_block`]).
     fn patch_grids(&mut self, topo: &Topology) {
         self.patch_grids.clear();
         self.block_grids.clear();
@@ -504,9 +705,14 @@ impl Evaluator {
         // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
         // by a counting sort (in vertex order within each).
         let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        for block in &topo.blocks {
+        for (b, block) in topo.blocks.iter().enumerate() {
             let first = self.patch_grids.len() as u32;
-            if let FacePlan::General = self.faces[block.face as usize] {
+            let copy = self.copy_of.get(b).copied().unwrap_or(u32::MAX);
+            if copy != u32::MAX {
+                let (_, template, pairs) = std::mem::take(&mut self.copies[copy as usize]);
+                self.copy_block(topo, block, template, &pairs);
+                self.copies[copy as usize] = (b as u32, template, pairs);
+            } else if let FacePlan::General = self.faces[block.face as usize] {
                 keys.clear();
                 group.clear();
                 let base = block.base as usize;
@@ -613,6 +819,8 @@ impl Evaluator {
         self.grid_params.extend(s.iter().chain(t.iter()));
         Some(PatchGrid {
             level: r0.level,
+            patch: place(vertices[0]).patch,
+            grid,
             cv: std::array::from_fn(|k| ids0[usize::from(grid[k])]),
             ju: r0.ju,
             jv: r0.jv,
@@ -636,11 +844,12 @@ impl Evaluator {
         out.places.clear();
         out.ids.clear();
         out.weights.clear();
+        out.fresh.clear();
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for i in range {
-            if self.kinds[i] == IN_BLOCK {
+            if self.kinds[i] == IN_BLOCK || self.kinds[i] == COPIED {
                 continue;
             }
             let site = topo.sites[i];
@@ -696,25 +905,28 @@ impl Evaluator {
                         // point on every face of the cube) share one copy of their weights.
                         let matrices = Arc::as_ptr(&patch.matrices) as usize;
                         let at = frame.to_patch(p);
-                        let weights = match shared.get(&(matrices, patch.shape, at)) {
-                            Some(&w) => w,
-                            None => {
+                        let key = (matrices, patch.shape, at);
+                        let (weights, table) = match (self.stencil_index.get(&key), shared.get(&key)) {
+                            (Some(&w), _) => (w, NO_TABLE),
+                            (None, Some(&k)) => (k, FRESH),
+                            (None, None) => {
                                 let evaluator = evaluators
                                     .stencils
                                     .entry(matrices)
                                     .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
                                 let stencil = evaluator.stencil(patch.shape, at)?;
-                                let w = out.weights.len() as u32;
+                                let k = out.fresh.len() as u32;
+                                out.fresh.push((key, out.weights.len() as u32));
                                 let pad = padded(stencil.position.len());
                                 for row in [&stencil.position, &stencil.du, &stencil.dv] {
                                     out.weights.extend_from_slice(row);
                                     out.weights.resize(out.weights.len() + pad - row.len(), 0.0);
                                 }
-                                shared.insert((matrices, patch.shape, at), w);
-                                w
+                                shared.insert(key, k);
+                                (k, FRESH)
                             }
                         };
-                        out.records.push(Record { level: level as u32, ids, len, weights, table: NO_TABLE, ju, jv });
+                        out.records.push(Record { level: level as u32, ids, len, weights, table, ju, jv });
                         let grid = if level > 0 && len == 16 {
                             match evaluators.grids.get(&(matrices, patch.shape)) {
                                 Some(&grid) => grid,
@@ -1274,6 +1486,8 @@ mod tests {
         for (soup, rate) in [(shapes::cube(), 12u32), (shapes::default_model(), 8), (shapes::ngon_prism(5), 9)] {
             let mesh = Mesh::build(soup).unwrap();
             let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+            // Every face on its own records (copied faces have none under their grids).
+            ev.copy_faces = false;
             let moved: Vec<DVec3> =
                 mesh.positions().iter().enumerate().map(|(i, p)| *p * 1.3 + DVec3::splat((i as f64).sin())).collect();
             ev.set_cage(&moved);
@@ -1296,6 +1510,61 @@ mod tests {
                 }
             }
             assert!(worst < 1e-12, "patch grids off the records by {worst:e}");
+        }
+    }
+
+    /// Faces that copy an earlier face's records and patch grids ([`Evaluator::face_types`])
+    /// evaluate to the same bits as their own descents, at even and odd, equal and mixed
+    /// rates, on meshes with extraordinary vertices (on the cube some faces copy others),
+    /// N-gons and borders; the plans agree too.
+    #[test]
+    fn copied_faces_equal_their_own_descent() {
+        let meshes = [
+            shapes::cube(),
+            shapes::pole(5),
+            shapes::pole(6),
+            shapes::ngon_prism(5),
+            shapes::default_model(),
+            shapes::quad_grid(3, 2),
+        ];
+        for (m, soup) in meshes.into_iter().enumerate() {
+            let first = m == 0;
+            let mesh = Mesh::build(soup).unwrap();
+            let nf = mesh.face_count();
+            let moved: Vec<DVec3> =
+                mesh.positions().iter().enumerate().map(|(i, p)| *p * 0.7 + DVec3::splat((i as f64).cos())).collect();
+            let uniform = |n: u32| vec![n; nf];
+            for rates in [
+                uniform(1),
+                uniform(2),
+                uniform(5),
+                uniform(8),
+                uniform(12),
+                (0..nf as u32).map(|f| 2 + f % 3).collect(),
+            ] {
+                let mut outputs = Vec::new();
+                for copy in [false, true] {
+                    let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+                    ev.copy_faces = copy;
+                    ev.set_cage(&moved);
+                    let domains = ev.domains().unwrap();
+                    let mut topo = Topology::default();
+                    super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
+                    ev.prepare(&topo, &rates, true).unwrap();
+                    if copy && first && rates == uniform(8) {
+                        assert!(!ev.copies.is_empty(), "some of the cube's faces copy others");
+                    }
+                    let (mut ps, mut ns) = (Vec::new(), Vec::new());
+                    ev.evaluate(&topo, true, &mut ps, &mut ns);
+                    let bits = |v: &[DVec3]| v.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+                    let (mut plan, mut normals) = (Vec::new(), Vec::new());
+                    ev.plan(&topo).evaluate(&ev.positions[0], &mut plan, &mut normals);
+                    outputs.push((bits(&ps), bits(&ns), plan));
+                }
+                assert!(outputs[0].0 == outputs[1].0 && outputs[0].1 == outputs[1].1, "rates {rates:?}");
+                let worst = outputs[0].2.iter().zip(&outputs[1].2).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+                assert!(worst < 1e-12, "plans off by {worst:e}");
+            }
         }
     }
 
