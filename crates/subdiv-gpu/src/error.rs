@@ -13,22 +13,6 @@ pub enum GpuError {
         /// wgpu's message.
         reason: String,
     },
-    /// A cage whose length is not the control mesh's vertex count.
-    #[error("the cage has {got} positions, the control mesh {expected} vertices")]
-    CageLength {
-        /// The control mesh's vertex count.
-        expected: usize,
-        /// The cage's length.
-        got: usize,
-    },
-    /// A cage position that is not finite.
-    #[error("control point {vertex} is not finite: {value}")]
-    CagePosition {
-        /// The vertex.
-        vertex: usize,
-        /// Its value, printed.
-        value: String,
-    },
     /// An index past the tessellation's vertices.
     #[error("index {index} names no vertex (there are {vertices})")]
     Indices {
@@ -50,7 +34,9 @@ pub enum GpuError {
     /// Reading a buffer back failed (the device was lost).
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
-    /// The CPU tessellator refused the input.
+    /// The CPU tessellator refused the input, or a cage broke its rules
+    /// ([`TessError::CageLength`](subdiv_tess::TessError::CageLength),
+    /// [`TessError::CagePosition`](subdiv_tess::TessError::CagePosition)).
     #[error(transparent)]
     Tessellation(#[from] subdiv_tess::TessError),
     /// An image size outside what the renderer takes.

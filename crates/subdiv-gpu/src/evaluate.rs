@@ -26,7 +26,7 @@
 
 use glam::{DVec3, Vec3};
 use hashbrown::HashMap;
-use subdiv_tess::dual::{EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_KIND_SHIFT};
+use subdiv_tess::dual::{EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_KIND_SHIFT, check_cage};
 use wgpu::util::DeviceExt;
 
 use crate::{Gpu, GpuError};
@@ -98,11 +98,12 @@ struct GpuGeneral {
     jv: [f32; 2],
 }
 
-/// One dispatch: its bind group and its invocation count.
+/// One dispatch: its bind group and its workgroups along x and y (the shader's `stride` is
+/// `x · WORKGROUP` invocations per row).
 #[derive(Debug)]
 struct Dispatch {
     bind_group: wgpu::BindGroup,
-    count: u32,
+    groups: [u32; 2],
 }
 
 /// One range of output vertices with its own records, re-indexed.
@@ -178,9 +179,10 @@ impl GpuTessellation {
     /// and `indices` (its triangles, three per triangle), and evaluates every vertex on `cage`.
     ///
     /// # Errors
-    /// [`GpuError::CageLength`] / [`GpuError::CagePosition`] for a cage that does not fit the
+    /// [`GpuError::Tessellation`] for a cage that does not fit the
     /// plan, [`GpuError::TooLarge`] when the points or the vertex buffer exceed what the device
-    /// can bind or allocate, [`GpuError::Indices`] for an index past the vertices.
+    /// can bind or allocate, [`GpuError::Indices`] for an index past the vertices,
+    /// [`GpuError::Wgpu`] when the device refuses a buffer or the shader.
     pub fn new(
         gpu: &Gpu,
         plan: &EvaluationPlan,
@@ -188,10 +190,10 @@ impl GpuTessellation {
         cage: &[DVec3],
         options: &GpuEvalOptions,
     ) -> Result<Self, GpuError> {
-        check_cage(plan.cage_len as usize, cage.iter().map(|p| p.to_array()))?;
+        check_cage(plan.cage_len as usize, cage)?;
         // Every combination over the cage itself (composed in f64): f32 refined points would
         // carry errors of the model's size that small patches' tangents magnify.
-        let plan = &plan.over_cage();
+        let plan = &*plan.over_cage();
         let vertex_count = plan.vertices.len();
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
             return Err(GpuError::Indices { index: bad, vertices: vertex_count });
@@ -243,10 +245,11 @@ impl GpuTessellation {
         let evaluate_pipeline = pipeline(device, "evaluate", include_str!("../shaders/evaluate.wgsl"));
         let origin32 = origin.as_vec3().extend(0.0).to_array();
         let max_groups = limits.max_compute_workgroups_per_dimension;
-        let params = |first: u32, count: u32| {
+        // Workgroups in rows of at most the device's limit along x.
+        let layout = |count: u32| {
             let groups = count.div_ceil(WORKGROUP).max(1);
             let x = groups.min(max_groups);
-            Params { first, count, stride: x * WORKGROUP, pad: 0, origin: origin32 }
+            [x, groups.div_ceil(x)]
         };
         let uniform = |p: &Params| storage("subdiv params", bytemuck::bytes_of(p), wgpu::BufferUsages::UNIFORM);
 
@@ -256,7 +259,14 @@ impl GpuTessellation {
         let step = (lcm(VERTEX_BYTES, align) / VERTEX_BYTES) as usize;
         let mut evaluate = Vec::new();
         for range in split(plan, budget, step) {
-            let p = params(range.first, range.count);
+            let groups = layout(range.count);
+            let p = Params {
+                first: range.first,
+                count: range.count,
+                stride: groups[0] * WORKGROUP,
+                pad: 0,
+                origin: origin32,
+            };
             let buffers = [
                 storage("subdiv entries", bytemuck::cast_slice(&range.entries), wgpu::BufferUsages::STORAGE),
                 storage("subdiv blocks", bytemuck::cast_slice(&range.blocks), wgpu::BufferUsages::STORAGE),
@@ -285,7 +295,7 @@ impl GpuTessellation {
                 layout: &evaluate_pipeline.get_bind_group_layout(0),
                 entries: &entries,
             });
-            evaluate.push(Dispatch { bind_group, count: range.count });
+            evaluate.push(Dispatch { bind_group, groups });
         }
 
         let edges = options.edges.then(|| {
@@ -305,24 +315,22 @@ impl GpuTessellation {
             pipeline: evaluate_pipeline,
             dispatches: evaluate,
         };
-        this.write_cage(gpu, cage.iter().map(|p| *p - this.origin));
+        this.write_cage(gpu, cage);
         this.dispatch(gpu);
         scopes.pop()?;
         Ok(this)
     }
 
-    /// The animation path: a new cage (one finite position per control point), refined and
-    /// evaluated on the GPU; the vertex buffer holds the new surface when the queue gets to
-    /// it. Indices and stencil data stay.
+    /// The animation path: a new cage (one finite position per control point), evaluated on
+    /// the GPU; the vertex buffer holds the new surface when the queue gets to it. Indices and
+    /// stencil data stay.
     ///
     /// # Errors
-    /// [`GpuError::CageLength`], [`GpuError::CagePosition`].
+    /// [`GpuError::Tessellation`] with [`TessError::CageLength`](subdiv_tess::TessError::CageLength)
+    /// or [`TessError::CagePosition`](subdiv_tess::TessError::CagePosition).
     pub fn update_control_points(&mut self, gpu: &Gpu, cage: &[Vec3]) -> Result<(), GpuError> {
-        check_cage(self.cage_len, cage.iter().map(|p| p.as_dvec3().to_array()))?;
-        let origin = self.origin;
-        self.write_cage(gpu, cage.iter().map(|p| p.as_dvec3() - origin));
-        self.dispatch(gpu);
-        Ok(())
+        let wide: Vec<DVec3> = cage.iter().map(|p| p.as_dvec3()).collect();
+        self.update_control_points_f64(gpu, &wide)
     }
 
     /// As [`update_control_points`](Self::update_control_points), from f64 positions.
@@ -330,15 +338,15 @@ impl GpuTessellation {
     /// # Errors
     /// As [`update_control_points`](Self::update_control_points).
     pub fn update_control_points_f64(&mut self, gpu: &Gpu, cage: &[DVec3]) -> Result<(), GpuError> {
-        check_cage(self.cage_len, cage.iter().map(|p| p.to_array()))?;
-        let origin = self.origin;
-        self.write_cage(gpu, cage.iter().map(|p| *p - origin));
+        check_cage(self.cage_len, cage)?;
+        self.write_cage(gpu, cage);
         self.dispatch(gpu);
         Ok(())
     }
 
-    fn write_cage(&self, gpu: &Gpu, cage: impl Iterator<Item = DVec3>) {
-        let data: Vec<[f32; 4]> = cage.map(|p| p.as_vec3().extend(1.0).to_array()).collect();
+    /// Writes the cage, relative to the centre, into the control-point buffer.
+    fn write_cage(&self, gpu: &Gpu, cage: &[DVec3]) {
+        let data: Vec<[f32; 4]> = cage.iter().map(|p| (*p - self.origin).as_vec3().extend(1.0).to_array()).collect();
         if !data.is_empty() {
             gpu.queue.write_buffer(&self.points, 0, bytemuck::cast_slice(&data));
         }
@@ -353,13 +361,10 @@ impl GpuTessellation {
                 label: Some("subdiv evaluate"),
                 timestamp_writes: None,
             });
-            let max_groups = gpu.limits().max_compute_workgroups_per_dimension;
             pass.set_pipeline(&self.pipeline);
             for d in &self.dispatches {
-                let groups = d.count.div_ceil(WORKGROUP).max(1);
-                let x = groups.min(max_groups);
                 pass.set_bind_group(0, &d.bind_group, &[]);
-                pass.dispatch_workgroups(x, groups.div_ceil(x), 1);
+                pass.dispatch_workgroups(d.groups[0], d.groups[1], 1);
             }
         }
         gpu.queue.submit([encoder.finish()]);
@@ -472,18 +477,6 @@ fn pipeline(device: &wgpu::Device, entry: &str, source: &str) -> wgpu::ComputePi
     })
 }
 
-fn check_cage(expected: usize, cage: impl ExactSizeIterator<Item = [f64; 3]>) -> Result<(), GpuError> {
-    if cage.len() != expected {
-        return Err(GpuError::CageLength { expected, got: cage.len() });
-    }
-    for (vertex, p) in cage.enumerate() {
-        if !p.iter().all(|x| x.is_finite()) {
-            return Err(GpuError::CagePosition { vertex, value: format!("{p:?}") });
-        }
-    }
-    Ok(())
-}
-
 fn lcm(a: u64, b: u64) -> u64 {
     let (mut x, mut y) = (a, b);
     while y != 0 {
@@ -502,7 +495,9 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
     let output = |r: &Range| VERTEX_BYTES * u64::from(r.count);
     let mut ranges = Vec::new();
     let mut range = Range::default();
-    let (mut blocks, mut patches, mut weights) = (HashMap::new(), HashMap::new(), HashMap::new());
+    let (mut patches, mut weights) = (HashMap::new(), HashMap::new());
+    // A block's vertices are consecutive: the last block taken is the only one to look for.
+    let mut last_block: Option<usize> = None;
     let n = plan.vertices.len();
     let mut v = 0;
     while v < n {
@@ -511,7 +506,7 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
         {
             ranges.push(std::mem::take(&mut range));
             range.first = v as u32;
-            blocks.clear();
+            last_block = None;
             patches.clear();
             weights.clear();
         }
@@ -527,12 +522,15 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
                 })
             };
             let local = match kind {
-                PLAN_BLOCK => *blocks.entry(index).or_insert_with(|| {
-                    let b = plan.blocks[index];
-                    let points = patch(b.points, 16, &mut range);
-                    range.blocks.push(GpuBlock { base: b.base, rate: b.rate, points, pad: 0 });
+                PLAN_BLOCK => {
+                    if last_block != Some(index) {
+                        let b = plan.blocks[index];
+                        let points = patch(b.points, 16, &mut range);
+                        range.blocks.push(GpuBlock { base: b.base, rate: b.rate, points, pad: 0 });
+                        last_block = Some(index);
+                    }
                     range.blocks.len() as u32 - 1
-                }),
+                }
                 PLAN_BICUBIC => {
                     let b = plan.bicubic[index];
                     let points = patch(b.points, 16, &mut range);

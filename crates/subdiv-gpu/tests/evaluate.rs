@@ -8,12 +8,11 @@ use glam::{DVec3, Vec3};
 use subdiv_gpu::{Gpu, GpuError, GpuEvalOptions, GpuTessellation, RateCache};
 use subdiv_mesh::{Mesh, shapes};
 use subdiv_schemes::Builtin;
-use subdiv_tess::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, TessMesh};
+use subdiv_tess::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, TessError, TessMesh};
 
-fn diagonal(cage: &[DVec3]) -> f64 {
-    let (min, max) =
-        cage.iter().fold((DVec3::splat(f64::MAX), DVec3::splat(f64::MIN)), |(a, b), p| (a.min(*p), b.max(*p)));
-    (max - min).length()
+fn diagonal(mesh: &Mesh) -> f64 {
+    let (lo, hi) = mesh.bounding_box().expect("a mesh with vertices");
+    (hi - lo).length()
 }
 
 /// The worst position distance / bbox diagonal and the worst normal distance.
@@ -52,7 +51,7 @@ fn case(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> Case {
 /// GPU against CPU on `mesh` at `rates`, then over three animation frames.
 fn check(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     let Case { mut tess, plan, flat } = case(builtin, mesh, rates);
-    let diag = diagonal(mesh.positions());
+    let diag = diagonal(mesh);
     let mut on_gpu =
         GpuTessellation::new(gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
     assert_eq!(on_gpu.vertex_count() as usize, flat.vertices.len() / 6);
@@ -130,7 +129,7 @@ fn the_rate_cache_switches_configurations() {
     let mesh = Mesh::build(shapes::ngon_prism(5)).unwrap();
     let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
     let mut cache = RateCache::new(2);
-    let diag = diagonal(mesh.positions());
+    let diag = diagonal(&mesh);
     let mut made = 0;
     for (step, rate) in [3u32, 7, 3, 7, 11, 3].into_iter().enumerate() {
         let rates = vec![rate; mesh.face_count()];
@@ -163,12 +162,15 @@ fn bad_input_is_a_typed_error() {
     let short = &mesh.positions()[..3];
     assert!(matches!(
         GpuTessellation::new(&gpu, &plan, &flat.indices, short, &options),
-        Err(GpuError::CageLength { expected: 8, got: 3 })
+        Err(GpuError::Tessellation(TessError::CageLength { expected: 8, got: 3 }))
     ));
     let mut t = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &options).unwrap();
     let mut cage: Vec<Vec3> = mesh.positions().iter().map(|p| p.as_vec3()).collect();
     cage[5].y = f32::NAN;
-    assert!(matches!(t.update_control_points(&gpu, &cage), Err(GpuError::CagePosition { vertex: 5, .. })));
+    assert!(matches!(
+        t.update_control_points(&gpu, &cage),
+        Err(GpuError::Tessellation(TessError::CagePosition { vertex: 5, .. }))
+    ));
     let bad = [0, 1, u32::MAX];
     assert!(matches!(
         GpuTessellation::new(&gpu, &plan, &bad, mesh.positions(), &options),

@@ -348,13 +348,7 @@ impl DualTessellator {
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
-        if positions.len() != self.vertex_count {
-            return Err(TessError::CageLength { expected: self.vertex_count, got: positions.len() });
-        }
-        if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-            return Err(TessError::CagePosition { vertex, value: format!("{p}") });
-        }
-        Ok(())
+        check_cage(self.vertex_count, positions)
     }
 
     /// The last tessellation's evaluation as plain arrays (for a GPU, or any evaluator
@@ -417,6 +411,22 @@ impl DualTessellator {
             out.triangle_parameters.extend(out.triangles.iter().map(corners));
         }
     }
+}
+
+/// The rules a new cage meets ([`DualTessellator::update_cage`], and evaluators of an
+/// [`EvaluationPlan`] elsewhere): one finite position per vertex of a control mesh with
+/// `expected` vertices.
+///
+/// # Errors
+/// [`TessError::CageLength`], [`TessError::CagePosition`] naming the first non-finite position.
+pub fn check_cage(expected: usize, positions: &[DVec3]) -> Result<(), TessError> {
+    if positions.len() != expected {
+        return Err(TessError::CageLength { expected, got: positions.len() });
+    }
+    if let Some((vertex, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
+        return Err(TessError::CagePosition { vertex, value: format!("{p}") });
+    }
+    Ok(())
 }
 
 /// The number of output vertices the construction makes for `mesh` under a quad (or, with

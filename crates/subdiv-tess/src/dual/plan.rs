@@ -17,6 +17,7 @@
 //!   boundaries, vertex limit points); points at the same place of the same patch shape share
 //!   their weights.
 
+use std::borrow::Cow;
 use std::ops::Range;
 
 use glam::DVec3;
@@ -191,10 +192,10 @@ impl EvaluationPlan {
     /// (GPUs) want: refined points stored in f32 carry an error of the model's size times
     /// 2^-24, which tangents on small patches magnify; combinations over the cage do not.
     /// Bicubic points on refined levels become exact-stencil points; the cage's bicubic
-    /// faces and points stay as they are.
-    pub fn over_cage(&self) -> EvaluationPlan {
+    /// faces and points stay as they are. Borrowed when there are no refined levels.
+    pub fn over_cage(&self) -> Cow<'_, EvaluationPlan> {
         if self.levels.is_empty() {
-            return self.clone();
+            return Cow::Borrowed(self);
         }
         let cage = self.cage_len as usize;
         let mut scratch = Composer::new(cage);
@@ -295,7 +296,7 @@ impl EvaluationPlan {
             };
             out.vertices.push(new);
         }
-        out
+        Cow::Owned(out)
     }
 
     /// A bicubic patch at `(s, t)`: position and the face's two derivatives.
