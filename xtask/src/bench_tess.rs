@@ -1,4 +1,4 @@
-//! `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]…`: dual-grid tessellation
+//! `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]… [--mode MODE]…`: dual-grid tessellation
 //! throughput into welded flat buffers (f32 positions and normals, u32 indices), one
 //! `key=value` line per measurement; with `SUBDIV_OSD_BENCH` pointing at the peer harness's
 //! `osd_bench`, OpenSubdiv's Bfr on the same meshes and rates, side by side.
@@ -37,6 +37,7 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let mut meshes: Vec<PathBuf> = Vec::new();
     let mut rates: Vec<u32> = Vec::new();
     let mut threads: Vec<usize> = Vec::new();
+    let mut modes: Vec<&'static str> = Vec::new();
     let mut rest = args.iter();
     while let Some(a) = rest.next() {
         let value = rest.next().ok_or_else(|| format!("{a} needs a value; {USAGE}"))?;
@@ -49,6 +50,9 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                     .ok()
                     .filter(|&t| t > 0)
                     .ok_or_else(|| format!("--threads {value}: not a count; {USAGE}"))?,
+            ),
+            "--mode" => modes.push(
+                MODES.iter().copied().find(|m| m == value).ok_or_else(|| format!("--mode {value}: not one of {MODES:?}"))?,
             ),
             _ => return Err(format!("unknown option {a:?}; {USAGE}")),
         }
@@ -64,13 +68,16 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
         threads = vec![1, std::thread::available_parallelism().map_or(1, usize::from)];
         threads.dedup();
     }
+    if modes.is_empty() {
+        modes = MODES.to_vec();
+    }
     let peer = std::env::var_os("SUBDIV_OSD_BENCH").map(PathBuf::from);
     for path in &meshes {
         let mesh = load_mesh(path, &Default::default()).map_err(|e| format!("{}: {e}", path.display()))?;
         let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
         for &rate in &rates {
             for &t in &threads {
-                measure(&mesh, &name, rate, t)?;
+                measure(&mesh, &name, rate, t, &modes)?;
             }
             if let Some(osd) = &peer {
                 osd_bench(osd, path, &name, rate)?;
@@ -80,10 +87,13 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-const USAGE: &str = "usage: cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]...";
+const USAGE: &str = "usage: cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]...";
+
+/// What is measured (see the module docs).
+const MODES: [&str; 4] = ["full", "animate", "full_mesh", "animate_mesh"];
 
 /// Our lines for one mesh, rate and thread count.
-fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize) -> Result<(), String> {
+fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
     let options = DualOptions { quads: false, parallel: threads > 1 };
     let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), mesh, &options).map_err(|e| e.to_string())?;
@@ -95,7 +105,7 @@ fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize) -> Result<(), Str
         tess.write_flat(&mut flat);
         let (vertices, tris) = (flat.vertices.len() / 6, flat.indices.len() / 3);
         let bytes_per_tri = (24 * vertices + 12 * tris) as f64 / tris as f64;
-        for mode in ["full", "animate", "full_mesh", "animate_mesh"] {
+        for &mode in modes {
             let seconds = median_seconds(|| {
                 match mode {
                     "full" => tess.tessellate_flat(&rates, &mut flat),

@@ -283,6 +283,7 @@ impl StencilTable {
     /// # Panics
     /// If `index` is not below [`len`](Self::len) or `points` is shorter than
     /// [`control_points`](Self::control_points).
+    #[inline]
     pub fn apply(&self, grid: Grid, index: usize, points: &[DVec3]) -> [DVec3; 3] {
         let g = self.grid(grid);
         let slot = g.slots[index];

@@ -133,12 +133,48 @@ struct Place {
     grid: Option<[u8; 16]>,
 }
 
-/// A block that copies an earlier one's records: the block, the template block, and the
-/// template's and the block's patches (level, face), in pairs.
-type FaceCopy = (u32, u32, Patches);
+/// A face's patch in [`Evaluator::face_types`]' order: the patch (level, face on that level),
+/// and its control points' ids (padded to [`LANES`], as the chunks pad) in
+/// [`Evaluator::face_ids`].
+#[derive(Clone, Copy, Debug)]
+struct FacePatch {
+    patch: (u32, u32),
+    ids: u32,
+    len: u32,
+}
 
-/// Patches as (level, face on that level).
-type Patches = Vec<(u32, u32)>;
+/// A quad face's type ([`Evaluator::face_type`]): its number, and its range of
+/// [`Evaluator::face_patches`].
+#[derive(Clone, Copy, Debug)]
+struct FaceType {
+    id: u32,
+    patches: (u32, u32),
+}
+
+/// The cell records of one face type at one rate, made by the first face of the type that
+/// descends and kept across calls: every later face of the type copies them with its own
+/// patches' control points (the patches named by their number `k` in the face's
+/// [`FacePatch`]es: a record's `ids` is `k`, a place's and a grid's `patch` is
+/// `(u32::MAX, k)`).
+#[derive(Clone, Debug, Default)]
+struct Template {
+    /// Per cell point (`rate²`, in the block's order): its record and place, or `None` for a
+    /// patch-grid point.
+    cells: Vec<Option<(Record, Place)>>,
+    /// The patch grids (bases in the kept part of `grid_basis`), their `vertices` into
+    /// `grid_vertices`, which are relative to the block's first vertex.
+    grids: Vec<PatchGrid>,
+    grid_vertices: Vec<u32>,
+}
+
+/// The most template cells [`Evaluator`] keeps (about 100 bytes each); past it the templates
+/// are dropped and made again as needed.
+const MAX_TEMPLATE_CELLS: usize = 1 << 20;
+
+/// In `Evaluator::copy_of`: the block copies its type's template.
+const COPY: u8 = 1;
+/// In `Evaluator::copy_of`: the block descends, and its records become its type's template.
+const MAKE: u8 = 2;
 
 /// A vertex evaluated by a [`PatchGrid`].
 const IN_PATCH_GRID: u32 = u32::MAX - 2;
@@ -230,7 +266,7 @@ impl RateBasis {
 }
 
 /// The uniform cubic B-spline basis at `t ∈ [0, 1]`.
-#[inline]
+#[inline(always)]
 pub(super) fn basis(t: f64) -> [f64; 4] {
     let s = 1.0 - t;
     let (t2, t3) = (t * t, t * t * t);
@@ -238,7 +274,7 @@ pub(super) fn basis(t: f64) -> [f64; 4] {
 }
 
 /// The derivative of [`basis`].
-#[inline]
+#[inline(always)]
 pub(super) fn derivative(t: f64) -> [f64; 4] {
     let s = 1.0 - t;
     [-0.5 * s * s, (3.0 * t * t - 4.0 * t) * 0.5, (-3.0 * t * t + 2.0 * t + 1.0) * 0.5, 0.5 * t * t]
@@ -246,14 +282,14 @@ pub(super) fn derivative(t: f64) -> [f64; 4] {
 
 /// The bicubic patch with control points `cv` (face frame) at `(u, v)`: position, `∂/∂u`,
 /// `∂/∂v`.
-#[inline]
+#[inline(always)]
 fn bicubic(cv: &[u32; 16], cage: &[DVec3], u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
     bicubic_at(|k| cage[cv[k] as usize], u, v)
 }
 
 /// The bicubic patch with control point `k = j · 4 + i` at `(i − 1, j − 1)` given by
 /// `point(k)`, at `(u, v)`: position, `∂/∂u`, `∂/∂v`.
-#[inline]
+#[inline(always)]
 pub(super) fn bicubic_at(point: impl Fn(usize) -> DVec3, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
     let (bu, du, bv, dv) = (basis(u), derivative(u), basis(v), derivative(v));
     let (mut p, mut a, mut b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
@@ -294,17 +330,25 @@ pub(crate) struct Evaluator {
     patch_grids: Vec<PatchGrid>,
     /// Per block of the topology, its range of `patch_grids`.
     block_grids: Vec<(u32, u32)>,
-    /// The blocks of general faces that copy an earlier block's records and patch grids (per
-    /// such block: the template block, and the template's and the block's patches, in pairs),
-    /// and per block of the topology its entry there (`u32::MAX`: none).
-    copies: Vec<FaceCopy>,
-    copy_of: Vec<u32>,
-    /// Whether faces of one type copy the first one's records (off: each descends, for tests).
+    /// Per input face, its type if it has one ([`Self::face_type`]: quad faces on the general
+    /// route whose resolution tree holds only quads), fixed by the mesh; the types' patches and
+    /// their control points' ids.
+    face_types: Vec<Option<FaceType>>,
+    face_patches: Vec<FacePatch>,
+    face_ids: Vec<u32>,
+    /// Per (face type, rate), the cell records every face of the type copies, kept across calls
+    /// (as `OpenSubdiv`'s `Bfr` keeps its topology cache), and how many cells they hold.
+    templates: HashMap<(u32, u32), Template>,
+    template_cells: usize,
+    /// Per block of the last [`prepare`](Self::prepare): [`COPY`], [`MAKE`] or 0.
+    copy_of: Vec<u8>,
+    /// Whether faces of one type copy a template (off: each descends, for tests).
     copy_faces: bool,
-    /// The patch grids' bases and vertices.
+    /// The patch grids' bases and vertices; the first `kept_basis` bases are the templates'.
     grid_basis: Vec<[[f64; 4]; 2]>,
     /// The parameters of `grid_basis`'s entries.
     grid_params: Vec<f64>,
+    kept_basis: usize,
     grid_vertices: Vec<u32>,
     ids: Vec<u32>,
     /// The exact stencils' weights, kept across calls (only growing): `stencil_index` gives
@@ -374,11 +418,16 @@ impl Evaluator {
             places: Vec::new(),
             patch_grids: Vec::new(),
             block_grids: Vec::new(),
-            copies: Vec::new(),
+            face_types: Vec::new(),
+            face_patches: Vec::new(),
+            face_ids: Vec::new(),
+            templates: HashMap::new(),
+            template_cells: 0,
             copy_of: Vec::new(),
             copy_faces: true,
             grid_basis: Vec::new(),
             grid_params: Vec::new(),
+            kept_basis: 0,
             grid_vertices: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
@@ -388,12 +437,15 @@ impl Evaluator {
             spare: Vec::new(),
         };
         evaluator.set_cage(mesh.positions());
+        evaluator.find_face_types();
         Ok(evaluator)
     }
 
     /// Seeds the dual-grid tables with precomputed interior-patch tables (those of the level-0
     /// patches' types; the scheme was checked by the caller). Returns how many were taken.
     pub(crate) fn seed_tables(&mut self, tables: &subdiv_stencil::StencilTables) -> usize {
+        // A template made before may hold exact stencils where a face would now read a table.
+        self.drop_templates();
         let mut seen = hashbrown::HashSet::new();
         let mut taken = 0;
         for f in self.levels.mesh(0).face_ids() {
@@ -489,14 +541,10 @@ impl Evaluator {
             }
         }
         // Faces of one type (the same resolution tree up to vertex labels) at one rate have the
-        // same cell records but for their patches' control points: only the first face of each
-        // type goes through the chunks, the others copy its records and patch grids in
-        // `patch_grids`.
-        let copies = if self.copy_faces { self.face_types(topo, rates) } else { Vec::new() };
-        for &(block, _, _) in &copies {
-            let b = &topo.blocks[block as usize];
-            self.kinds[b.base as usize..(b.base + b.rate * b.rate) as usize].fill(COPIED);
-        }
+        // same cell records but for their patches' control points: they copy their type's
+        // template in `patch_grids`, which the first face of the type without one makes from its
+        // own descent through the chunks.
+        self.plan_copies(topo);
         // Stencil records by chunks of vertices, in parallel; each chunk borrows a set of
         // stencil evaluators from the pool (their results do not depend on what they solved
         // before, so neither does the output on the thread count).
@@ -547,48 +595,81 @@ impl Evaluator {
             self.ids.extend_from_slice(&chunk.ids);
             self.spare.push(chunk);
         }
-        self.copy_of.clear();
-        self.copy_of.resize(topo.blocks.len(), u32::MAX);
-        for (k, &(block, _, _)) in copies.iter().enumerate() {
-            self.copy_of[block as usize] = k as u32;
-        }
-        self.copies = copies;
         Ok(())
     }
 
-    /// The blocks of general faces whose records can be copied from an earlier block: per
-    /// such block, the template block and both faces' patches (level, face) in the order of
-    /// [`Self::face_type`].
-    fn face_types(&self, topo: &Topology, rates: &[u32]) -> Vec<FaceCopy> {
-        let mut copies = Vec::new();
+    /// Finds every quad face's type ([`Self::face_type`]; faces on the general route under a
+    /// quad split), with its patches' control points.
+    fn find_face_types(&mut self) {
+        let mesh = self.levels.mesh(0);
+        self.face_types = vec![None; mesh.face_count()];
         if self.levels.split() != Split::Quad {
-            return copies;
+            return;
         }
-        // Per (rate, signature): the first block and its patches.
-        let mut seen: HashMap<(u32, Vec<u64>), (u32, Patches)> = HashMap::new();
-        let mut signature = Vec::new();
-        for (b, block) in topo.blocks.iter().enumerate() {
-            if !matches!(self.faces[block.face as usize], FacePlan::General) {
+        let mut types: HashMap<Vec<u64>, u32> = HashMap::new();
+        let (mut signature, mut patches) = (Vec::new(), Vec::new());
+        for f in mesh.face_ids() {
+            if !matches!(self.faces[f.index()], FacePlan::General) {
                 continue;
             }
-            debug_assert_eq!(rates[block.face as usize], block.rate);
             signature.clear();
-            let mut patches = Vec::new();
-            if !self.face_type(0, FaceId::new(block.face), &mut signature, &mut patches) {
+            patches.clear();
+            if !self.face_type(0, f, &mut signature, &mut patches) {
                 continue;
             }
-            match seen.entry((block.rate, signature.clone())) {
-                hashbrown::hash_map::Entry::Occupied(e) => {
-                    let (template, ref template_patches) = *e.get();
-                    let pairs = template_patches.iter().zip(&patches).flat_map(|(&t, &p)| [t, p]).collect();
-                    copies.push((b as u32, template, pairs));
-                }
-                hashbrown::hash_map::Entry::Vacant(e) => {
-                    e.insert((b as u32, patches));
-                }
+            let next = types.len() as u32;
+            let id = *types.entry_ref(&signature).or_insert(next);
+            let first = self.face_patches.len() as u32;
+            for &(level, face) in &patches {
+                let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face)) else {
+                    unreachable!("face_type lists patches")
+                };
+                let ids = self.face_ids.len();
+                self.face_ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+                // Padded with the first id (its weights are 0), as the chunks pad.
+                self.face_ids.resize(ids + padded(patch.vertices.len()), self.face_ids[ids]);
+                self.face_patches.push(FacePatch {
+                    patch: (level, face),
+                    ids: ids as u32,
+                    len: patch.vertices.len() as u32,
+                });
+            }
+            self.face_types[f.index()] = Some(FaceType { id, patches: (first, self.face_patches.len() as u32) });
+        }
+    }
+
+    /// Marks, per block of `topo`, whether it copies its type's template ([`COPY`]: its cell
+    /// points [`COPIED`], out of the chunks), makes it ([`MAKE`]: the first block of a type
+    /// without one at its rate) or neither.
+    fn plan_copies(&mut self, topo: &Topology) {
+        self.copy_of.clear();
+        self.copy_of.resize(topo.blocks.len(), 0);
+        if !self.copy_faces {
+            return;
+        }
+        if self.template_cells > MAX_TEMPLATE_CELLS {
+            self.drop_templates();
+        }
+        let mut made = hashbrown::HashSet::new();
+        for (b, block) in topo.blocks.iter().enumerate() {
+            let Some(ty) = self.face_types[block.face as usize] else { continue };
+            let key = (ty.id, block.rate);
+            if self.templates.contains_key(&key) || !made.insert(key) {
+                self.copy_of[b] = COPY;
+                self.kinds[block.base as usize..(block.base + block.rate * block.rate) as usize].fill(COPIED);
+            } else {
+                self.copy_of[b] = MAKE;
             }
         }
-        copies
+    }
+
+    /// Forgets the templates (and the grid bases they use).
+    fn drop_templates(&mut self) {
+        self.templates.clear();
+        self.template_cells = 0;
+        self.kept_basis = 0;
+        self.grid_basis.clear();
+        self.grid_params.clear();
     }
 
     /// Appends the resolution tree of `face` on `level` to `signature` (depth first: each
@@ -632,74 +713,97 @@ impl Evaluator {
         }
     }
 
-    /// Gives `block` (copying `template`'s records: see [`Self::face_types`], `pairs`: the
-    /// template's and the block's patches) the template's patch grids over its own vertices
-    /// and patches, and to its other cell points the template's records with its own patches'
+    /// Makes the template of `block`'s face type at its rate from its records and patch grids
+    /// (`grids`, a range of `patch_grids`), just made by its own descent.
+    fn make_template(&mut self, block: &super::topology::Block, (first, last): (u32, u32)) {
+        let ty = self.face_types[block.face as usize].expect("a typed face");
+        let patches = &self.face_patches[ty.patches.0 as usize..ty.patches.1 as usize];
+        let index = |patch: (u32, u32)| {
+            patches.iter().position(|p| p.patch == patch).expect("the face's own patch") as u32
+        };
+        let base = block.base as usize;
+        let mut template = Template::default();
+        for g in &self.patch_grids[first as usize..last as usize] {
+            let at = template.grid_vertices.len() as u32;
+            let vertices = &self.grid_vertices[g.vertices as usize..(g.vertices + g.s * g.t) as usize];
+            template.grid_vertices.extend(vertices.iter().map(|&v| v - block.base));
+            template.grids.push(PatchGrid { patch: (u32::MAX, index(g.patch)), vertices: at, ..g.clone() });
+        }
+        template.cells = self.kinds[base..base + (block.rate * block.rate) as usize]
+            .iter()
+            .map(|&kind| {
+                (kind != IN_PATCH_GRID).then(|| {
+                    let (record, place) = (self.records[kind as usize], self.places[kind as usize]);
+                    let k = index(place.patch);
+                    (Record { ids: k, ..record }, Place { patch: (u32::MAX, k), ..place })
+                })
+            })
+            .collect();
+        // The grids' bases stay until the templates are dropped.
+        self.kept_basis = self.grid_basis.len();
+        self.template_cells += template.cells.len();
+        self.templates.insert((ty.id, block.rate), template);
+    }
+
+    /// Gives `block` its type's template: the template's patch grids over its own vertices and
+    /// patches, and to its other cell points the template's records with its own patches'
     /// control points: the same weights, tables, points and derivative maps, and the same
     /// grids (what [`Self::patch_grid`] finds depends only on those), so the same bits as its
     /// own descent would give.
-    fn copy_block(&mut self, topo: &Topology, to: &super::topology::Block, template: u32, pairs: &[(u32, u32)]) {
-        let from = &topo.blocks[template as usize];
-        fn patch_of(levels: &PatchLevels, (level, face): (u32, u32)) -> &subdiv_schemes::FoundPatch {
-            let Some(Resolved::Patch { patch, .. }) = levels.resolve(level as usize, FaceId::new(face)) else {
-                unreachable!("the same resolution tree")
-            };
-            patch
-        }
-        let index =
-            |patch: (u32, u32)| (0..pairs.len() / 2).find(|&k| pairs[2 * k] == patch).expect("a template patch");
-        let (first, last) = self.block_grids[template as usize];
-        for g in first..last {
-            let g = self.patch_grids[g as usize].clone();
-            let own = pairs[2 * index(g.patch) + 1];
-            let vertices = &patch_of(&self.levels, own).vertices;
-            let cv = std::array::from_fn(|k| vertices[usize::from(g.grid[k])].index() as u32);
-            let at = self.grid_vertices.len();
-            for k in 0..(g.s * g.t) as usize {
-                let v = self.grid_vertices[g.vertices as usize + k] - from.base + to.base;
+    fn copy_template(&mut self, block: &super::topology::Block) {
+        let ty = self.face_types[block.face as usize].expect("a typed face");
+        let key = (ty.id, block.rate);
+        let template = self.templates.remove(&key).expect("made before its copies");
+        let patches = &self.face_patches[ty.patches.0 as usize..ty.patches.1 as usize];
+        for g in &template.grids {
+            let own = patches[g.patch.1 as usize];
+            let ids = &self.face_ids[own.ids as usize..];
+            let cv = std::array::from_fn(|k| ids[usize::from(g.grid[k])]);
+            let at = self.grid_vertices.len() as u32;
+            for &v in &template.grid_vertices[g.vertices as usize..(g.vertices + g.s * g.t) as usize] {
+                let v = v + block.base;
                 self.grid_vertices.push(v);
                 self.kinds[v as usize] = IN_PATCH_GRID;
             }
-            self.patch_grids.push(PatchGrid { patch: own, cv, vertices: at as u32, ..g });
+            self.patch_grids.push(PatchGrid { patch: own.patch, cv, vertices: at, ..g.clone() });
         }
-        let mut ids_of = vec![u32::MAX; pairs.len() / 2];
-        let mut last = (u32::MAX, u32::MAX);
-        let mut k = 0;
-        for i in 0..(to.rate * to.rate) as usize {
-            let kind = self.kinds[from.base as usize + i];
-            if kind == IN_PATCH_GRID {
-                continue;
-            }
-            let (record, place) = (self.records[kind as usize], self.places[kind as usize]);
-            if place.patch != last {
-                k = index(place.patch);
-                last = place.patch;
-            }
+        // Each patch's ids go to `ids` once, when a record first needs them.
+        let mut ids_of = [u32::MAX; 64];
+        let mut more = Vec::new();
+        let ids_of = if patches.len() <= ids_of.len() {
+            &mut ids_of[..patches.len()]
+        } else {
+            more.resize(patches.len(), u32::MAX);
+            &mut more[..]
+        };
+        for (i, cell) in template.cells.iter().enumerate() {
+            let Some((record, place)) = cell else { continue };
+            let k = record.ids as usize;
             if ids_of[k] == u32::MAX {
-                let patch = patch_of(&self.levels, pairs[2 * k + 1]);
-                let start = self.ids.len();
-                self.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
-                // Padded as the chunks pad.
-                let first = self.ids[start];
-                self.ids.resize(start + padded(patch.vertices.len()), first);
-                ids_of[k] = start as u32;
+                let own = patches[k];
+                ids_of[k] = self.ids.len() as u32;
+                let start = own.ids as usize;
+                self.ids.extend_from_slice(&self.face_ids[start..start + padded(own.len as usize)]);
             }
-            self.kinds[to.base as usize + i] = self.records.len() as u32;
-            self.records.push(Record { ids: ids_of[k], ..record });
-            self.places.push(Place { patch: pairs[2 * k + 1], ..place });
+            self.kinds[block.base as usize + i] = self.records.len() as u32;
+            self.records.push(Record { ids: ids_of[k], ..*record });
+            self.places.push(Place { patch: patches[k].patch, ..*place });
         }
+        self.templates.insert(key, template);
     }
 
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
     /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
     /// (the patch shapes' stencils checked once against the tensor products), and marks them
     /// [`IN_PATCH_GRID`]; faces that copy an earlier face's records take its grids and records
-    /// ([`Self::copy_block`]).
+    /// ([`Self::copy_template`]), and the first face of a type without a template makes it
+    /// ([`Self::make_template`]).
     fn patch_grids(&mut self, topo: &Topology) {
         self.patch_grids.clear();
         self.block_grids.clear();
-        self.grid_basis.clear();
-        self.grid_params.clear();
+        // The templates' bases stay.
+        self.grid_basis.truncate(self.kept_basis);
+        self.grid_params.truncate(self.kept_basis);
         self.grid_vertices.clear();
         let (mut s, mut t) = (Vec::new(), Vec::new());
         // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
@@ -707,11 +811,9 @@ impl Evaluator {
         let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (b, block) in topo.blocks.iter().enumerate() {
             let first = self.patch_grids.len() as u32;
-            let copy = self.copy_of.get(b).copied().unwrap_or(u32::MAX);
-            if copy != u32::MAX {
-                let (_, template, pairs) = std::mem::take(&mut self.copies[copy as usize]);
-                self.copy_block(topo, block, template, &pairs);
-                self.copies[copy as usize] = (b as u32, template, pairs);
+            let copy = self.copy_of.get(b).copied().unwrap_or(0);
+            if copy == COPY {
+                self.copy_template(block);
             } else if let FacePlan::General = self.faces[block.face as usize] {
                 keys.clear();
                 group.clear();
@@ -755,6 +857,9 @@ impl Evaluator {
                         self.patch_grids.push(grid);
                     }
                 }
+            }
+            if copy == MAKE {
+                self.make_template(block, (first, self.patch_grids.len() as u32));
             }
             self.block_grids.push((first, self.patch_grids.len() as u32));
         }
@@ -1020,7 +1125,13 @@ impl Evaluator {
         }
         push_run(&mut rest, &mut at, topo.sites.len(), &mut pieces);
         let cage = &self.positions[0];
-        let run = |piece: Piece<'_, S>| match piece {
+        // The widest vector instructions the CPU has (AVX2 on x86-64), chosen at run time: the
+        // same operations in the same order (Rust never fuses a product and a sum), so the same
+        // bits as the baseline build.
+        let arch = pulp::Arch::new();
+        // The body is inlined into the dispatched function, which compiles it for the CPU's
+        // features.
+        let run = |piece: Piece<'_, S>| arch.dispatch(#[inline(always)] || match piece {
             Piece::Block { cv, rate, mut out } => {
                 let basis = self.bases[rate as usize].as_deref().expect("prepared");
                 grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
@@ -1060,7 +1171,7 @@ impl Evaluator {
                     }
                 }
             }
-        };
+        });
         if parallel {
             pieces.into_par_iter().for_each(run);
         } else {
@@ -1069,7 +1180,7 @@ impl Evaluator {
     }
 
     /// A [`PatchGrid`] on its level's points, row by row: `put(vertex, position, normal)`.
-    #[inline]
+    #[inline(always)]
     fn patch_grid_eval(
         &self,
         g: &PatchGrid,
@@ -1110,7 +1221,7 @@ impl Evaluator {
     }
 
     /// A general-route vertex on the current cage.
-    #[inline]
+    #[inline(always)]
     fn general(&self, r: &Record) -> (DVec3, DVec3, DVec3) {
         let points = &self.positions[r.level as usize];
         let len = r.len as usize;
@@ -1284,7 +1395,7 @@ fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dy
 
 /// The dual grid of a bicubic face, row by row: `put(k, position, normal)` for point
 /// `k = j · n + i`.
-#[inline]
+#[inline(always)]
 fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl FnMut(usize, DVec3, DVec3)) {
     let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
     let n = basis.b.len();
@@ -1513,10 +1624,11 @@ mod tests {
         }
     }
 
-    /// Faces that copy an earlier face's records and patch grids ([`Evaluator::face_types`])
+    /// Faces that copy their type's template (records and patch grids, [`Evaluator::plan_copies`])
     /// evaluate to the same bits as their own descents, at even and odd, equal and mixed
     /// rates, on meshes with extraordinary vertices (on the cube some faces copy others),
-    /// N-gons and borders; the plans agree too.
+    /// N-gons and borders, with templates made in the same call or kept from earlier calls at
+    /// other rates; the plans agree too.
     #[test]
     fn copied_faces_equal_their_own_descent() {
         let meshes = [
@@ -1534,37 +1646,47 @@ mod tests {
             let moved: Vec<DVec3> =
                 mesh.positions().iter().enumerate().map(|(i, p)| *p * 0.7 + DVec3::splat((i as f64).cos())).collect();
             let uniform = |n: u32| vec![n; nf];
+            let new = |copy: bool| {
+                let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+                ev.copy_faces = copy;
+                ev.set_cage(&moved);
+                ev
+            };
+            // Kept across the rate sets below, with its templates.
+            let mut kept = new(true);
             for rates in [
                 uniform(1),
                 uniform(2),
                 uniform(5),
                 uniform(8),
-                uniform(12),
                 (0..nf as u32).map(|f| 2 + f % 3).collect(),
+                uniform(12),
+                uniform(5),
+                (0..nf as u32).map(|f| 3 + f % 4).collect(),
             ] {
-                let mut outputs = Vec::new();
-                for copy in [false, true] {
-                    let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
-                    ev.copy_faces = copy;
-                    ev.set_cage(&moved);
-                    let domains = ev.domains().unwrap();
-                    let mut topo = Topology::default();
-                    super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
+                let domains = kept.domains().unwrap();
+                let mut topo = Topology::default();
+                super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
+                let run = |ev: &mut Evaluator| {
                     ev.prepare(&topo, &rates, true).unwrap();
-                    if copy && first && rates == uniform(8) {
-                        assert!(!ev.copies.is_empty(), "some of the cube's faces copy others");
-                    }
                     let (mut ps, mut ns) = (Vec::new(), Vec::new());
                     ev.evaluate(&topo, true, &mut ps, &mut ns);
                     let bits = |v: &[DVec3]| v.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>();
                     let (mut plan, mut normals) = (Vec::new(), Vec::new());
                     ev.plan(&topo).evaluate(&ev.positions[0], &mut plan, &mut normals);
-                    outputs.push((bits(&ps), bits(&ns), plan));
+                    (bits(&ps), bits(&ns), plan)
+                };
+                let own = run(&mut new(false));
+                for (k, copied) in [run(&mut new(true)), run(&mut kept), run(&mut kept)].into_iter().enumerate() {
+                    assert!(own.0 == copied.0 && own.1 == copied.1, "rates {rates:?}, run {k}");
+                    let worst = own.2.iter().zip(&copied.2).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+                    assert!(worst < 1e-12, "plans off by {worst:e}");
                 }
-                assert!(outputs[0].0 == outputs[1].0 && outputs[0].1 == outputs[1].1, "rates {rates:?}");
-                let worst = outputs[0].2.iter().zip(&outputs[1].2).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
-                assert!(worst < 1e-12, "plans off by {worst:e}");
+                if first && rates == uniform(8) {
+                    assert!(kept.copy_of.contains(&COPY), "some of the cube's faces copy others");
+                }
             }
+            assert!(!first || !kept.templates.is_empty(), "the cube's faces have templates");
         }
     }
 
