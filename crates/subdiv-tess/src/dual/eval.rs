@@ -319,6 +319,8 @@ pub(crate) struct Evaluator {
     levels: PatchLevels,
     refiner: Option<Refiner>,
     faces: Vec<FacePlan>,
+    /// Per input face, its domain (`None`: a hole).
+    domains: Vec<Option<FaceDomain>>,
     /// Per refinement level, the current cage refined to it (level 0: the cage).
     positions: Vec<Vec<DVec3>>,
     bases: Vec<Option<Arc<RateBasis>>>,
@@ -407,10 +409,18 @@ impl Evaluator {
             };
             faces.push(plan);
         }
+        let domains = mesh
+            .face_ids()
+            .map(|f| match faces[f.index()] {
+                FacePlan::Hole => Ok(None),
+                _ => Ok(Some(levels.domain(f)?)),
+            })
+            .collect::<Result<_, TessError>>()?;
         let mut evaluator = Self {
             levels,
             refiner,
             faces,
+            domains,
             positions: vec![Vec::new(); count],
             bases: Vec::new(),
             kinds: Vec::new(),
@@ -479,14 +489,8 @@ impl Evaluator {
     }
 
     /// The faces' domains, `None` for holes.
-    pub(crate) fn domains(&self) -> Result<Vec<Option<FaceDomain>>, TessError> {
-        let mesh = self.levels.mesh(0);
-        mesh.face_ids()
-            .map(|f| match self.faces[f.index()] {
-                FacePlan::Hole => Ok(None),
-                _ => Ok(Some(self.levels.domain(f)?)),
-            })
-            .collect()
+    pub(crate) fn domains(&self) -> &[Option<FaceDomain>] {
+        &self.domains
     }
 
     /// Takes a new cage (checked by the caller) and refines it to every level.
@@ -532,8 +536,8 @@ impl Evaluator {
         }
         // The dual-grid tables the level-0 patches need, first: the chunks below only read them.
         for f in self.levels.mesh(0).face_ids() {
-            if let (FacePlan::General, Some(Resolved::Patch { patch, .. })) =
-                (self.faces[f.index()], self.levels.resolve(0, f))
+            if let FacePlan::General = self.faces[f.index()]
+                && let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(0, f)
                 && patch.shape == 0
                 && patch.vertices.len() <= MAX_GATHER
             {
@@ -1577,7 +1581,7 @@ mod tests {
     fn level_zero_patches_read_dual_tables() {
         let mesh = Mesh::build(shapes::triangle_torus(6, 4)).unwrap();
         let mut ev = Evaluator::new(Builtin::Loop.scheme(), &mesh).unwrap();
-        let domains = ev.domains().unwrap();
+        let domains = ev.domains().to_vec();
         let mut topo = Topology::default();
         let faces = mesh.face_count();
         super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], None, &mut topo);
@@ -1602,7 +1606,7 @@ mod tests {
             let moved: Vec<DVec3> =
                 mesh.positions().iter().enumerate().map(|(i, p)| *p * 1.3 + DVec3::splat((i as f64).sin())).collect();
             ev.set_cage(&moved);
-            let domains = ev.domains().unwrap();
+            let domains = ev.domains().to_vec();
             let mut topo = Topology::default();
             let rates = vec![rate; mesh.face_count()];
             super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
@@ -1664,7 +1668,7 @@ mod tests {
                 uniform(5),
                 (0..nf as u32).map(|f| 3 + f % 4).collect(),
             ] {
-                let domains = kept.domains().unwrap();
+                let domains = kept.domains().to_vec();
                 let mut topo = Topology::default();
                 super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
                 let run = |ev: &mut Evaluator| {

@@ -280,9 +280,8 @@ impl DualTessellator {
         if let Some((face, &rate)) = rates.iter().enumerate().find(|(_, r)| !(1..=MAX_DUAL_RATE).contains(*r)) {
             return Err(TessError::Rate { face, rate, rule: "rates are integers from 1 to MAX_DUAL_RATE = 128" });
         }
-        let domains = self.evaluator.domains()?;
         let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
-        builder.build(&domains, rates, rings, &mut self.topology);
+        builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
