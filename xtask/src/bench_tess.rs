@@ -52,7 +52,11 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                     .ok_or_else(|| format!("--threads {value}: not a count; {USAGE}"))?,
             ),
             "--mode" => modes.push(
-                MODES.iter().copied().find(|m| m == value).ok_or_else(|| format!("--mode {value}: not one of {MODES:?}"))?,
+                MODES
+                    .iter()
+                    .copied()
+                    .find(|m| m == value)
+                    .ok_or_else(|| format!("--mode {value}: not one of {MODES:?}"))?,
             ),
             _ => return Err(format!("unknown option {a:?}; {USAGE}")),
         }

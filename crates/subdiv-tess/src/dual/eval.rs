@@ -516,7 +516,7 @@ impl Evaluator {
     /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record,
     /// but the cell points of faces that copy an earlier face's ([`COPIED`]).
     fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
-        let n = topo.sites.len();
+        let n = topo.vertex_count as usize;
         self.kinds.clear();
         self.kinds.resize(n, BICUBIC);
         self.records.clear();
@@ -722,9 +722,8 @@ impl Evaluator {
     fn make_template(&mut self, block: &super::topology::Block, (first, last): (u32, u32)) {
         let ty = self.face_types[block.face as usize].expect("a typed face");
         let patches = &self.face_patches[ty.patches.0 as usize..ty.patches.1 as usize];
-        let index = |patch: (u32, u32)| {
-            patches.iter().position(|p| p.patch == patch).expect("the face's own patch") as u32
-        };
+        let index =
+            |patch: (u32, u32)| patches.iter().position(|p| p.patch == patch).expect("the face's own patch") as u32;
         let base = block.base as usize;
         let mut template = Template::default();
         for g in &self.patch_grids[first as usize..last as usize] {
@@ -961,7 +960,7 @@ impl Evaluator {
             if self.kinds[i] == IN_BLOCK || self.kinds[i] == COPIED {
                 continue;
             }
-            let site = topo.sites[i];
+            let site = topo.site(i as u32);
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
             }
@@ -1084,7 +1083,7 @@ impl Evaluator {
         positions: &mut Vec<DVec3>,
         normals: &mut Vec<DVec3>,
     ) {
-        let n = topo.sites.len();
+        let n = topo.vertex_count as usize;
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
         self.evaluate_into(topo, parallel, WideSink(positions, normals));
@@ -1127,7 +1126,7 @@ impl Evaluator {
             at += len;
             pieces.push(Piece::Block { cv, rate: block.rate, out: piece });
         }
-        push_run(&mut rest, &mut at, topo.sites.len(), &mut pieces);
+        push_run(&mut rest, &mut at, topo.vertex_count as usize, &mut pieces);
         let cage = &self.positions[0];
         // The widest vector instructions the CPU has (AVX2 on x86-64), chosen at run time: the
         // same operations in the same order (Rust never fuses a product and a sum), so the same
@@ -1135,47 +1134,54 @@ impl Evaluator {
         let arch = pulp::Arch::new();
         // The body is inlined into the dispatched function, which compiles it for the CPU's
         // features.
-        let run = |piece: Piece<'_, S>| arch.dispatch(#[inline(always)] || match piece {
-            Piece::Block { cv, rate, mut out } => {
-                let basis = self.bases[rate as usize].as_deref().expect("prepared");
-                grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
-            }
-            Piece::Run { start, mut out, grids } => {
-                // By batches: first the positions and the tangents' cross products, then the
-                // normalisations (their square roots and divisions overlap).
-                let mut xs = [DVec3::ZERO; BATCH];
-                let mut cs = [DVec3::ZERO; BATCH];
-                for grid in grids {
-                    let points = &self.positions[grid.level as usize];
-                    self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| out.put(v as usize - start, p, n));
-                }
-                let mut ks = [0usize; BATCH];
-                let kinds = &self.kinds[start..start + out.len()];
-                for (b, batch) in kinds.chunks(BATCH).enumerate() {
-                    let mut m = 0;
-                    for (k, &kind) in batch.iter().enumerate() {
-                        if kind == IN_PATCH_GRID {
-                            continue;
+        let run = |piece: Piece<'_, S>| {
+            arch.dispatch(
+                #[inline(always)]
+                || match piece {
+                    Piece::Block { cv, rate, mut out } => {
+                        let basis = self.bases[rate as usize].as_deref().expect("prepared");
+                        grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
+                    }
+                    Piece::Run { start, mut out, grids } => {
+                        // By batches: first the positions and the tangents' cross products, then the
+                        // normalisations (their square roots and divisions overlap).
+                        let mut xs = [DVec3::ZERO; BATCH];
+                        let mut cs = [DVec3::ZERO; BATCH];
+                        for grid in grids {
+                            let points = &self.positions[grid.level as usize];
+                            self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| {
+                                out.put(v as usize - start, p, n)
+                            });
                         }
-                        let (x, du, dv) = if kind == BICUBIC {
-                            let site = topo.sites[start + b * BATCH + k];
-                            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
-                                unreachable!("bicubic face")
-                            };
-                            let (u, v) = site.point.to_f64();
-                            bicubic(cv, cage, u, v)
-                        } else {
-                            self.general(&self.records[kind as usize])
-                        };
-                        (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
-                        m += 1;
+                        let mut ks = [0usize; BATCH];
+                        let kinds = &self.kinds[start..start + out.len()];
+                        for (b, batch) in kinds.chunks(BATCH).enumerate() {
+                            let mut m = 0;
+                            for (k, &kind) in batch.iter().enumerate() {
+                                if kind == IN_PATCH_GRID {
+                                    continue;
+                                }
+                                let (x, du, dv) = if kind == BICUBIC {
+                                    let site = topo.site((start + b * BATCH + k) as u32);
+                                    let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
+                                        unreachable!("bicubic face")
+                                    };
+                                    let (u, v) = site.point.to_f64();
+                                    bicubic(cv, cage, u, v)
+                                } else {
+                                    self.general(&self.records[kind as usize])
+                                };
+                                (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
+                                m += 1;
+                            }
+                            for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
+                                out.put(k, *x, c.normalize_or_zero());
+                            }
+                        }
                     }
-                    for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
-                        out.put(k, *x, c.normalize_or_zero());
-                    }
-                }
-            }
-        });
+                },
+            )
+        };
         if parallel {
             pieces.into_par_iter().for_each(run);
         } else {
@@ -1273,7 +1279,7 @@ impl Evaluator {
         }
         const UNSET: u32 = u32::MAX;
         let entry = |kind: u32, index: usize| kind << PLAN_KIND_SHIFT | index as u32;
-        plan.vertices = vec![UNSET; topo.sites.len()];
+        plan.vertices = vec![UNSET; topo.vertex_count as usize];
         let mut face_patches: HashMap<u32, u32> = HashMap::new();
         for block in &topo.blocks {
             if let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] {
@@ -1302,13 +1308,13 @@ impl Evaluator {
         // The general records' patches and weights, each once.
         let mut patches: HashMap<(u32, u32), u32> = HashMap::new();
         let mut weights: HashMap<(u32, u32), u32> = HashMap::new();
-        for v in 0..topo.sites.len() {
+        for v in 0..topo.vertex_count as usize {
             if plan.vertices[v] != UNSET {
                 continue;
             }
             let kind = self.kinds[v];
             if kind == BICUBIC {
-                let site = topo.sites[v];
+                let site = topo.site(v as u32);
                 let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
                 let at = *face_patches.entry(site.face).or_insert_with(|| {
                     plan.points.extend_from_slice(cv);
@@ -1588,7 +1594,7 @@ mod tests {
         ev.prepare(&topo, &vec![4; faces], true).unwrap();
         let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
         assert_eq!(tabled, faces * 16);
-        assert_eq!(ev.records.len(), topo.sites.len());
+        assert_eq!(ev.records.len(), topo.vertex_count as usize);
         // One table: one patch type, one rate.
         assert_eq!(ev.tables.tables.len(), 1);
     }

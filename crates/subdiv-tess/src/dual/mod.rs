@@ -313,7 +313,7 @@ impl DualTessellator {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
         // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
-        out.vertices.resize(6 * self.topology.sites.len(), 0.0);
+        out.vertices.resize(6 * self.topology.vertex_count as usize, 0.0);
         self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
         out.indices.clear();
         out.indices.extend_from_slice(self.output.triangles.as_flattened());
@@ -333,7 +333,7 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate).
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.rebuild(rates, None)?;
-        out.vertices.resize(6 * self.topology.sites.len(), 0.0);
+        out.vertices.resize(6 * self.topology.vertex_count as usize, 0.0);
         self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
         let (t, m) = (&mut self.topology, &mut self.output);
         out.indices.clear();
@@ -390,16 +390,12 @@ impl DualTessellator {
         let t = &mut self.topology;
         let out = &mut self.output;
         self.evaluator.evaluate(t, self.options.parallel, &mut out.positions, &mut out.normals);
-        let parameter = |s: &topology::Site| {
-            let (u, v) = s.point.to_f64();
-            SurfaceParameter { face: FaceId::new(s.face), u, v }
-        };
         out.parameters.clear();
-        if self.options.parallel {
-            out.parameters.par_extend(t.sites.par_iter().map(parameter));
-        } else {
-            out.parameters.extend(t.sites.iter().map(parameter));
-        }
+        out.parameters.reserve(t.vertex_count as usize);
+        t.for_each_site(|s| {
+            let (u, v) = s.point.to_f64();
+            out.parameters.push(SurfaceParameter { face: FaceId::new(s.face), u, v });
+        });
         move_connectivity(t, out);
         out.triangle_parameters.clear();
         let params = &out.parameters;

@@ -37,12 +37,28 @@ pub(crate) struct Site {
 }
 
 /// The dual grid of a whole quad face (not a sub-face): its points are `base + j·n + i` at
-/// `((i+½)/n, (j+½)/n)`, which the regular fast path evaluates row by row.
+/// `((i+½)/n, (j+½)/n)`, which the regular fast path evaluates row by row. Their sites are
+/// implicit ([`Topology::site`]); `sites` is the number of explicit sites before `base`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Block {
     pub face: u32,
     pub rate: u32,
     pub base: u32,
+    pub sites: u32,
+}
+
+impl Block {
+    /// The number of points.
+    pub(super) fn len(&self) -> u32 {
+        self.rate * self.rate
+    }
+
+    /// The site of its point `k = j · rate + i`.
+    #[inline]
+    pub(super) fn site(&self, k: u32) -> Site {
+        let (i, j, q) = (i64::from(k % self.rate), i64::from(k / self.rate), 2 * i64::from(self.rate));
+        Site { face: self.face, point: Dyadic::new(2 * i + 1, 2 * j + 1, q) }
+    }
 }
 
 /// A point of a row beside an edge, with its parameter `num / den` along the edge.
@@ -59,6 +75,10 @@ struct RowPoint {
 /// The output's vertices and connectivity.
 #[derive(Debug, Default)]
 pub(crate) struct Topology {
+    /// The number of output vertices.
+    pub vertex_count: u32,
+    /// The sites of the vertices outside the blocks, in vertex order (a block's are implicit,
+    /// which spares writing most of them: [`Self::site`]).
     pub sites: Vec<Site>,
     pub blocks: Vec<Block>,
     pub triangles: Vec<[u32; 3]>,
@@ -77,6 +97,31 @@ pub(crate) struct Topology {
 enum RingCorner {
     Vertex { face: u32, corner: u32 },
     Centre { face: u32, sub: u32 },
+}
+
+impl Topology {
+    /// Vertex `v`'s site.
+    pub(super) fn site(&self, v: u32) -> Site {
+        // The last block starting at or before `v`.
+        let k = self.blocks.partition_point(|b| b.base <= v);
+        match k.checked_sub(1).map(|k| &self.blocks[k]) {
+            Some(b) if v < b.base + b.len() => b.site(v - b.base),
+            Some(b) => self.sites[(b.sites + v - b.base - b.len()) as usize],
+            None => self.sites[v as usize],
+        }
+    }
+
+    /// Every vertex's site, in vertex order.
+    pub(super) fn for_each_site(&self, mut put: impl FnMut(Site)) {
+        let mut explicit = self.sites.iter();
+        let mut v = 0;
+        for b in &self.blocks {
+            explicit.by_ref().take((b.base - v) as usize).for_each(|&s| put(s));
+            (0..b.len()).for_each(|k| put(b.site(k)));
+            v = b.base + b.len();
+        }
+        explicit.for_each(|&s| put(s));
+    }
 }
 
 impl RingCorner {
@@ -189,6 +234,7 @@ impl<'a> Builder<'a> {
         }
         std::mem::swap(&mut self.out, out);
         let o = &mut self.out;
+        o.vertex_count = 0;
         o.sites.clear();
         o.blocks.clear();
         o.triangles.clear();
@@ -218,8 +264,9 @@ impl<'a> Builder<'a> {
     }
 
     fn push_site(&mut self, face: usize, point: Dyadic) -> u32 {
-        let id = self.out.sites.len() as u32;
+        let id = self.out.vertex_count;
         self.out.sites.push(Site { face: face as u32, point });
+        self.out.vertex_count += 1;
         id
     }
 
@@ -267,10 +314,11 @@ impl<'a> Builder<'a> {
             self.faces.push(None);
             return;
         };
-        let base = self.out.sites.len() as u32;
+        let base = self.out.vertex_count;
         match domain {
             FaceDomain::Quad => {
-                self.out.blocks.push(Block { face: f as u32, rate: n, base });
+                let sites = self.out.sites.len() as u32;
+                self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
                 self.quad_cell(f, domain, None, n);
                 self.faces.push(Some(FaceCells { base, m: n, domain }));
             }
@@ -359,14 +407,18 @@ impl<'a> Builder<'a> {
     /// The `m × m` dual points of a quad cell (a whole quad face, or sub-face `sub`) and the
     /// quads between them.
     fn quad_cell(&mut self, f: usize, domain: FaceDomain, sub: Option<usize>, m: u32) {
-        let base = self.out.sites.len() as u32;
+        let base = self.out.vertex_count;
         let q = 2 * i64::from(m);
-        for j in 0..m {
-            for i in 0..m {
-                let a = Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, q);
-                let point = sub.map_or(a, |s| domain.from_sub_face(s, a));
-                self.push_site(f, point);
+        if let Some(s) = sub {
+            for j in 0..m {
+                for i in 0..m {
+                    let a = Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, q);
+                    self.push_site(f, domain.from_sub_face(s, a));
+                }
             }
+        } else {
+            // A whole face: a block, whose sites are implicit.
+            self.out.vertex_count += m * m;
         }
         for j in 0..m.saturating_sub(1) {
             for i in 0..m - 1 {
@@ -515,7 +567,7 @@ impl<'a> Builder<'a> {
             }
         } else {
             other.clear();
-            let first = self.out.sites.len() as u32;
+            let first = self.out.vertex_count;
             for p in row.iter().filter(|p| p.near) {
                 let point = self.on_side(f, c, p.num, p.den);
                 let vertex = self.push_site(f, point);
@@ -701,7 +753,7 @@ impl<'a> Builder<'a> {
             .unwrap_or(1);
         let first = first_depth(self.triangle, finest);
         let count = ring_count(first, depth);
-        let base = self.out.sites.len() as u32;
+        let base = self.out.vertex_count;
         // Per face: the point on its first edge at r, and the inner one: the diagonal point
         // (r, r) of a quad corner; (r/2, r/2) of a triangle corner, on the segment between the
         // corner's two edge points (the triangle's region between rings is a trapezoid).
@@ -814,6 +866,42 @@ mod tests {
         assert_eq!(b.out.triangles, [[10, 11, 0], [10 + 1, 1, 0], [11, 12, 1]]);
     }
 
+    /// The implicit sites of blocks and the explicit ones of the other vertices read the same
+    /// by vertex ([`Topology::site`]) and in order ([`Topology::for_each_site`]): a block's
+    /// point `(i, j)` at `((2i+1)/2n, (2j+1)/2n)` of its face, every other site where it was
+    /// made, on meshes with N-gons and borders at mixed rates.
+    #[test]
+    fn block_sites_are_implicit() {
+        for soup in [shapes::ngon_prism(5), shapes::quad_grid(3, 2), shapes::default_model()] {
+            let mesh = Mesh::build(soup).unwrap();
+            let domains: Vec<_> = mesh
+                .face_ids()
+                .map(|f| Some(FaceDomain::of(subdiv_schemes::Split::Quad, mesh.face_size(f)).unwrap()))
+                .collect();
+            let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 1 + f % 4).collect();
+            let mut out = Topology::default();
+            Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut out);
+            assert_eq!(out.vertex_count as usize, predicted_vertices(&mesh, false, &rates, None));
+            let mut walked = Vec::new();
+            out.for_each_site(|s| walked.push(s));
+            assert_eq!(walked.len(), out.vertex_count as usize);
+            for (v, s) in walked.iter().enumerate() {
+                assert_eq!(*s, out.site(v as u32), "vertex {v}");
+            }
+            let in_blocks: u32 = out.blocks.iter().map(Block::len).sum();
+            assert_eq!(out.sites.len() as u32 + in_blocks, out.vertex_count);
+            for b in &out.blocks {
+                let n = i64::from(b.rate);
+                for j in 0..n {
+                    for i in 0..n {
+                        let s = out.site(b.base + (j * n + i) as u32);
+                        assert_eq!((s.face, s.point), (b.face, Dyadic::new(2 * i + 1, 2 * j + 1, 2 * n)));
+                    }
+                }
+            }
+        }
+    }
+
     /// A triangle's cell points come in `Grid::Dual`'s order (the tables' order, which the
     /// closed-form indices of the evaluator and the hexagons rely on).
     #[test]
@@ -826,7 +914,7 @@ mod tests {
             let dual = Grid::Dual.points(3, n);
             let face0: Vec<Dyadic> = out.sites.iter().take(dual.len()).map(|s| s.point).collect();
             assert_eq!(face0, dual, "rate {n}");
-            assert_eq!(out.sites.len(), predicted_vertices(&mesh, true, &vec![n; mesh.face_count()], None));
+            assert_eq!(out.vertex_count as usize, predicted_vertices(&mesh, true, &vec![n; mesh.face_count()], None));
         }
     }
 }
