@@ -29,15 +29,17 @@
 //!   in parallel by chunks of vertices; the exact stencils' weights are kept across calls.
 //!   **Face types**: quad faces with the same resolution tree up to vertex labels (the same
 //!   children, patch shapes and frames) at the same rate have the same cell records but for
-//!   their patches' control points, so only the first of each type descends; the others copy
-//!   its records and patch grids with their own control points (the same bits). **Patch grids**: the cell points of a quad face that
+//!   their patches' control points, so each (type, rate) has a template, made by the first face
+//!   of the type that descends and kept across calls; the others copy its records and patch
+//!   grids with their own control points (the same bits). **Patch grids**: the cell points of a quad face that
 //!   fall in one regular (bicubic) patch on a refined level form a grid `s × t` in its frame;
 //!   they are then evaluated separably, as the level-0 blocks are (the shape's stencils checked
 //!   once to be the tensor products over its grid), instead of one 16-point stencil each.
 //!
 //! One pass writes every vertex (f64 arrays or interleaved f32), over disjoint pieces of the
 //! vertex range (blocks, faces with patch grids, runs of other vertices) shared among threads;
-//! each vertex is computed alone, so the bits do not depend on the thread count. Normals are
+//! each vertex is computed alone, so the bits do not depend on the thread count, nor on the
+//! vector width the pieces are compiled for at run time (`pulp`: no fused products). Normals are
 //! normalised by batches (cross products first), which lets the square roots and divisions
 //! overlap.
 
@@ -1127,65 +1129,68 @@ impl Evaluator {
             pieces.push(Piece::Block { cv, rate: block.rate, out: piece });
         }
         push_run(&mut rest, &mut at, topo.vertex_count as usize, &mut pieces);
-        let cage = &self.positions[0];
         // The widest vector instructions the CPU has (AVX2 on x86-64), chosen at run time: the
         // same operations in the same order (Rust never fuses a product and a sum), so the same
-        // bits as the baseline build.
+        // bits as the baseline build. The piece's work is inlined into the dispatched function,
+        // which compiles it for the CPU's features.
         let arch = pulp::Arch::new();
-        // The body is inlined into the dispatched function, which compiles it for the CPU's
-        // features.
         let run = |piece: Piece<'_, S>| {
             arch.dispatch(
                 #[inline(always)]
-                || match piece {
-                    Piece::Block { cv, rate, mut out } => {
-                        let basis = self.bases[rate as usize].as_deref().expect("prepared");
-                        grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
-                    }
-                    Piece::Run { start, mut out, grids } => {
-                        // By batches: first the positions and the tangents' cross products, then the
-                        // normalisations (their square roots and divisions overlap).
-                        let mut xs = [DVec3::ZERO; BATCH];
-                        let mut cs = [DVec3::ZERO; BATCH];
-                        for grid in grids {
-                            let points = &self.positions[grid.level as usize];
-                            self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| {
-                                out.put(v as usize - start, p, n)
-                            });
-                        }
-                        let mut ks = [0usize; BATCH];
-                        let kinds = &self.kinds[start..start + out.len()];
-                        for (b, batch) in kinds.chunks(BATCH).enumerate() {
-                            let mut m = 0;
-                            for (k, &kind) in batch.iter().enumerate() {
-                                if kind == IN_PATCH_GRID {
-                                    continue;
-                                }
-                                let (x, du, dv) = if kind == BICUBIC {
-                                    let site = topo.site((start + b * BATCH + k) as u32);
-                                    let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
-                                        unreachable!("bicubic face")
-                                    };
-                                    let (u, v) = site.point.to_f64();
-                                    bicubic(cv, cage, u, v)
-                                } else {
-                                    self.general(&self.records[kind as usize])
-                                };
-                                (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
-                                m += 1;
-                            }
-                            for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
-                                out.put(k, *x, c.normalize_or_zero());
-                            }
-                        }
-                    }
-                },
-            )
+                || self.evaluate_piece(topo, piece),
+            );
         };
         if parallel {
             pieces.into_par_iter().for_each(run);
         } else {
             pieces.into_iter().for_each(run);
+        }
+    }
+
+    /// One piece of [`evaluate_into`](Self::evaluate_into)'s work.
+    #[inline(always)]
+    fn evaluate_piece<S: Sink>(&self, topo: &Topology, piece: Piece<'_, S>) {
+        let cage = &self.positions[0];
+        match piece {
+            Piece::Block { cv, rate, mut out } => {
+                let basis = self.bases[rate as usize].as_deref().expect("prepared");
+                grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
+            }
+            Piece::Run { start, mut out, grids } => {
+                // By batches: first the positions and the tangents' cross products, then the
+                // normalisations (their square roots and divisions overlap).
+                let mut xs = [DVec3::ZERO; BATCH];
+                let mut cs = [DVec3::ZERO; BATCH];
+                for grid in grids {
+                    let points = &self.positions[grid.level as usize];
+                    self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| out.put(v as usize - start, p, n));
+                }
+                let mut ks = [0usize; BATCH];
+                let kinds = &self.kinds[start..start + out.len()];
+                for (b, batch) in kinds.chunks(BATCH).enumerate() {
+                    let mut m = 0;
+                    for (k, &kind) in batch.iter().enumerate() {
+                        if kind == IN_PATCH_GRID {
+                            continue;
+                        }
+                        let (x, du, dv) = if kind == BICUBIC {
+                            let site = topo.site((start + b * BATCH + k) as u32);
+                            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
+                                unreachable!("bicubic face")
+                            };
+                            let (u, v) = site.point.to_f64();
+                            bicubic(cv, cage, u, v)
+                        } else {
+                            self.general(&self.records[kind as usize])
+                        };
+                        (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
+                        m += 1;
+                    }
+                    for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
+                        out.put(k, *x, c.normalize_or_zero());
+                    }
+                }
+            }
         }
     }
 

@@ -208,7 +208,8 @@ impl DualTessellator {
     /// checked), on the latest cage (the mesh's, or the last [`update_cage`](Self::update_cage)'s).
     /// An N-gon (N ≠ 4) under a quad split takes `⌈n/2⌉` steps per side of each of its `Bfr`
     /// sub-faces. Rebuilds the topology and the stencil records; the tables and stencils solved
-    /// by earlier calls are kept.
+    /// by earlier calls are kept, and so are the records of each face type at each rate (faces
+    /// with the same resolution tree copy them).
     ///
     /// # Errors
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
