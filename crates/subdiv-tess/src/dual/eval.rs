@@ -31,8 +31,9 @@
 //!   children, patch shapes and frames) at the same rate have the same cell records but for
 //!   their patches' control points, so each (type, rate) has a template, made by the first face
 //!   of the type that descends and kept across calls; the others copy its records and patch
-//!   grids with their own control points (the same bits). **Patch grids**: the cell points of a quad face that
-//!   fall in one regular (bicubic) patch on a refined level form a grid `s × t` in its frame;
+//!   grids with their own control points (the same bits). **Patch grids**: the cell points of
+//!   a quad face that fall in one regular (bicubic) patch on a refined level form a grid
+//!   `s × t` in its frame;
 //!   they are then evaluated separably, as the level-0 blocks are (the shape's stencils checked
 //!   once to be the tensor products over its grid), instead of one 16-point stencil each.
 //!
@@ -135,7 +136,7 @@ struct Place {
     grid: Option<[u8; 16]>,
 }
 
-/// A face's patch in [`Evaluator::face_types`]' order: the patch (level, face on that level),
+/// A face's patch, in the order of [`Evaluator::face_type`]: the patch (level, face on that level),
 /// and its control points' ids (padded to [`LANES`], as the chunks pad) in
 /// [`Evaluator::face_ids`].
 #[derive(Clone, Copy, Debug)]
@@ -169,8 +170,9 @@ struct Template {
     grid_vertices: Vec<u32>,
 }
 
-/// The most template cells [`Evaluator`] keeps (about 100 bytes each); past it the templates
-/// are dropped and made again as needed.
+/// The most template cells (about 100 bytes each) [`Evaluator`] takes into a new call; past it
+/// the templates are dropped at the start of the call and made again as needed (within one
+/// call they hold at most the records the call makes anyway).
 const MAX_TEMPLATE_CELLS: usize = 1 << 20;
 
 /// In `Evaluator::copy_of`: the block copies its type's template.
