@@ -62,7 +62,8 @@ use crate::quadtree::{check_bicubic, regular_grid};
 
 /// A vertex evaluated by its face's block (the separable route).
 const IN_BLOCK: u32 = u32::MAX;
-/// A vertex of a regular face outside its block: the bicubic polynomial at its parameter.
+/// A vertex of a regular face outside its block: the bicubic polynomial at its parameter
+/// (listed in [`Evaluator::pointwise`]).
 const BICUBIC: u32 = u32::MAX - 1;
 
 /// How an input face is evaluated.
@@ -325,6 +326,9 @@ pub(crate) struct Evaluator {
     faces: Vec<FacePlan>,
     /// Per input face, its domain (`None`: a hole).
     domains: Vec<Option<FaceDomain>>,
+    /// The [`BICUBIC`] vertices in vertex order, with their face and parameter (made once per
+    /// tessellation: no site lookups per frame).
+    pointwise: Vec<(u32, u32, [f64; 2])>,
     /// Per refinement level, the current cage refined to it (level 0: the cage).
     positions: Vec<Vec<DVec3>>,
     bases: Vec<Option<Arc<RateBasis>>>,
@@ -425,6 +429,7 @@ impl Evaluator {
             refiner,
             faces,
             domains,
+            pointwise: Vec::new(),
             positions: vec![Vec::new(); count],
             bases: Vec::new(),
             kinds: Vec::new(),
@@ -514,6 +519,14 @@ impl Evaluator {
     pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         self.prepare_records(topo, rates, parallel)?;
         self.patch_grids(topo);
+        // Only vertices outside the blocks can be pointwise: their sites are the explicit ones.
+        self.pointwise.clear();
+        self.pointwise.extend(topo.explicit_sites().filter(|&(v, _)| self.kinds[v as usize] == BICUBIC).map(
+            |(v, site)| {
+                let (u, w) = site.point.to_f64();
+                (v, site.face, [u, w])
+            },
+        ));
         Ok(())
     }
 
@@ -1139,7 +1152,7 @@ impl Evaluator {
         let run = |piece: Piece<'_, S>| {
             arch.dispatch(
                 #[inline(always)]
-                || self.evaluate_piece(topo, piece),
+                || self.evaluate_piece(piece),
             );
         };
         if parallel {
@@ -1151,7 +1164,7 @@ impl Evaluator {
 
     /// One piece of [`evaluate_into`](Self::evaluate_into)'s work.
     #[inline(always)]
-    fn evaluate_piece<S: Sink>(&self, topo: &Topology, piece: Piece<'_, S>) {
+    fn evaluate_piece<S: Sink>(&self, piece: Piece<'_, S>) {
         let cage = &self.positions[0];
         match piece {
             Piece::Block { cv, rate, mut out } => {
@@ -1168,6 +1181,8 @@ impl Evaluator {
                     self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| out.put(v as usize - start, p, n));
                 }
                 let mut ks = [0usize; BATCH];
+                // The piece's first pointwise vertex; the others follow in order.
+                let mut next = self.pointwise.partition_point(|&(v, ..)| (v as usize) < start);
                 let kinds = &self.kinds[start..start + out.len()];
                 for (b, batch) in kinds.chunks(BATCH).enumerate() {
                     let mut m = 0;
@@ -1176,11 +1191,12 @@ impl Evaluator {
                             continue;
                         }
                         let (x, du, dv) = if kind == BICUBIC {
-                            let site = topo.site((start + b * BATCH + k) as u32);
-                            let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else {
+                            let (vertex, face, [u, v]) = self.pointwise[next];
+                            debug_assert_eq!(vertex as usize, start + b * BATCH + k);
+                            next += 1;
+                            let FacePlan::Bicubic { cv } = &self.faces[face as usize] else {
                                 unreachable!("bicubic face")
                             };
-                            let (u, v) = site.point.to_f64();
                             bicubic(cv, cage, u, v)
                         } else {
                             self.general(&self.records[kind as usize])
@@ -1312,6 +1328,15 @@ impl Evaluator {
                 }
             }
         }
+        for &(v, face, [s, t]) in &self.pointwise {
+            let FacePlan::Bicubic { cv } = &self.faces[face as usize] else { unreachable!("bicubic face") };
+            let at = *face_patches.entry(face).or_insert_with(|| {
+                plan.points.extend_from_slice(cv);
+                plan.points.len() as u32 - 16
+            });
+            plan.vertices[v as usize] = entry(PLAN_BICUBIC, plan.bicubic.len());
+            plan.bicubic.push(PlanBicubic { points: at, s, t, ju: [1.0, 0.0], jv: [0.0, 1.0] });
+        }
         // The general records' patches and weights, each once.
         let mut patches: HashMap<(u32, u32), u32> = HashMap::new();
         let mut weights: HashMap<(u32, u32), u32> = HashMap::new();
@@ -1320,18 +1345,6 @@ impl Evaluator {
                 continue;
             }
             let kind = self.kinds[v];
-            if kind == BICUBIC {
-                let site = topo.site(v as u32);
-                let FacePlan::Bicubic { cv } = &self.faces[site.face as usize] else { unreachable!("bicubic face") };
-                let at = *face_patches.entry(site.face).or_insert_with(|| {
-                    plan.points.extend_from_slice(cv);
-                    plan.points.len() as u32 - 16
-                });
-                let (s, t) = site.point.to_f64();
-                plan.vertices[v] = entry(PLAN_BICUBIC, plan.bicubic.len());
-                plan.bicubic.push(PlanBicubic { points: at, s, t, ju: [1.0, 0.0], jv: [0.0, 1.0] });
-                continue;
-            }
             debug_assert!(kind < IN_PATCH_GRID, "vertex {v} has no plan");
             let r = &self.records[kind as usize];
             let len = r.len as usize;
@@ -1484,8 +1497,7 @@ impl Sink for FlatSink<'_> {
     }
     #[inline]
     fn put(&mut self, k: usize, p: DVec3, n: DVec3) {
-        self.0[6 * k..6 * k + 6]
-            .copy_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
+        self.0[6 * k..6 * k + 6].copy_from_slice(&super::flat_vertex(p, n));
     }
 }
 

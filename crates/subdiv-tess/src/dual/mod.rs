@@ -377,7 +377,7 @@ impl DualTessellator {
         out.vertices.clear();
         out.vertices.reserve(6 * m.positions.len());
         for (p, n) in m.positions.iter().zip(&m.normals) {
-            out.vertices.extend_from_slice(&[p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]);
+            out.vertices.extend_from_slice(&flat_vertex(*p, *n));
         }
         out.indices.clear();
         out.indices.extend_from_slice(m.triangles.as_flattened());
@@ -440,6 +440,12 @@ pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usi
 pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u32], rings: &RingDepths) -> usize {
     assert!(rings.vertices.len() == mesh.vertex_count() && rings.centres.len() == mesh.face_count(), "ring depths");
     topology::predicted_vertices(mesh, triangle, rates, Some(rings))
+}
+
+/// A vertex of [`FlatMesh::vertices`]: `px py pz nx ny nz` in f32.
+#[inline]
+fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
+    [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
 }
 
 /// `indices` into `out` (which keeps its allocation), on rayon's threads if `parallel` and

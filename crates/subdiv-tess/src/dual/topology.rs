@@ -111,6 +111,21 @@ impl Topology {
         }
     }
 
+    /// The explicit sites (every vertex outside the blocks) with their vertex numbers, in
+    /// vertex order.
+    pub(super) fn explicit_sites(&self) -> impl Iterator<Item = (u32, Site)> + '_ {
+        let mut blocks = self.blocks.iter().peekable();
+        let mut v = 0;
+        self.sites.iter().map(move |&site| {
+            // The explicit sites fill the gaps between the blocks.
+            while let Some(b) = blocks.next_if(|b| b.base <= v) {
+                v = b.base + b.len();
+            }
+            v += 1;
+            (v - 1, site)
+        })
+    }
+
     /// Every vertex's site, in vertex order.
     pub(super) fn for_each_site(&self, mut put: impl FnMut(Site)) {
         let mut explicit = self.sites.iter();
@@ -867,7 +882,8 @@ mod tests {
     }
 
     /// The implicit sites of blocks and the explicit ones of the other vertices read the same
-    /// by vertex ([`Topology::site`]) and in order ([`Topology::for_each_site`]): a block's
+    /// by vertex ([`Topology::site`]), in order ([`Topology::for_each_site`]) and, for the
+    /// explicit ones, with their numbers ([`Topology::explicit_sites`]): a block's
     /// point `(i, j)` at `((2i+1)/2n, (2j+1)/2n)` of its face, every other site where it was
     /// made, on meshes with N-gons and borders at mixed rates.
     #[test]
@@ -887,6 +903,12 @@ mod tests {
             assert_eq!(walked.len(), out.vertex_count as usize);
             for (v, s) in walked.iter().enumerate() {
                 assert_eq!(*s, out.site(v as u32), "vertex {v}");
+            }
+            let explicit: Vec<(u32, Site)> = out.explicit_sites().collect();
+            assert_eq!(explicit.len(), out.sites.len());
+            for &(v, s) in &explicit {
+                assert!(!out.blocks.iter().any(|b| (b.base..b.base + b.len()).contains(&v)), "vertex {v} in a block");
+                assert_eq!(s, out.site(v), "vertex {v}");
             }
             let in_blocks: u32 = out.blocks.iter().map(Block::len).sum();
             assert_eq!(out.sites.len() as u32 + in_blocks, out.vertex_count);
