@@ -4,7 +4,7 @@
 //!   clippy with warnings denied, and the README's test command.
 //! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named: `topology`,
 //!   `refine`, `stencil` or `eval`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
-//! - `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]…` measures dual-grid
+//! - `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]… [--mode MODE]…` measures dual-grid
 //!   tessellation into welded flat buffers (default: the peer harness's torus_big, cube and
 //!   valence56 at rates 8, 16, 32, on one thread and on all), beside OpenSubdiv's Bfr when
 //!   `SUBDIV_OSD_BENCH` names the harness's `osd_bench`.
@@ -36,7 +36,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
