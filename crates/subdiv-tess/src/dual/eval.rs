@@ -137,55 +137,65 @@ struct Place {
     grid: Option<[u8; 16]>,
 }
 
-/// A face's patch, in the order of [`Evaluator::face_type`]: the patch (level, face on that level),
-/// and its control points' ids (padded to [`LANES`], as the chunks pad) in
-/// [`Evaluator::face_ids`].
+/// A face's patch, in the order of [`Evaluator::face_type`]: the patch (level, face on that
+/// level), and the number of its first control point among the face's patches' points (all
+/// the face's patches' points in order) and its control point count.
 #[derive(Clone, Copy, Debug)]
 struct FacePatch {
     patch: (u32, u32),
-    ids: u32,
+    first: u32,
     len: u32,
 }
 
-/// A quad face's type ([`Evaluator::face_type`]): its number, and its range of
-/// [`Evaluator::face_patches`].
+/// A quad face's type ([`Evaluator::find_face_types`]): its number, its range of
+/// [`Evaluator::face_patches`], and its range of [`Evaluator::face_cage`] (the cage points its
+/// patches depend on, in the type's canonical order).
 #[derive(Clone, Copy, Debug)]
 struct FaceType {
     id: u32,
     patches: (u32, u32),
+    cage: (u32, u32),
 }
 
-/// The cell records of one face type at one rate, made by the first face of the type that
-/// descends and kept across calls: every later face of the type copies them with its own
-/// patches' control points (the patches named by their number `k` in the face's
-/// [`FacePatch`]es: a record's `ids` is `k`, a place's and a grid's `patch` is
-/// `(u32::MAX, k)`).
+/// The cell points of one face type at one rate as combinations of the face's cage points:
+/// made by the first face of the type that descends (its records and patch grids, composed
+/// down the refinement levels to the cage, with the chain-rule rows folded in), kept across
+/// calls, and read by every face of the type with its own cage points.
 #[derive(Clone, Debug, Default)]
 struct Template {
-    /// Per cell point (`rate²`, in the block's order): its record and place, or `None` for a
-    /// patch-grid point.
-    cells: Vec<Option<(Record, Place)>>,
-    /// The patch grids (bases in the kept part of `grid_basis`), their `vertices` into
-    /// `grid_vertices`, which are relative to the block's first vertex.
-    grids: Vec<PatchGrid>,
-    grid_vertices: Vec<u32>,
+    /// The face's cage points.
+    len: u32,
+    /// Per group of [`LANES`] cell points (in the block's order, the last group padded with
+    /// zeros), per row (position, `∂/∂u`, `∂/∂v`), per cage point `x` (in the type's order),
+    /// the group's weights: `weights[((g · 3 + row) · len + x) · LANES + lane]`.
+    weights: Vec<f64>,
 }
 
-/// The most template cells (about 100 bytes each) [`Evaluator`] takes into a new call; past it
-/// the templates are dropped at the start of the call and made again as needed (within one
-/// call they hold at most the records the call makes anyway).
-const MAX_TEMPLATE_CELLS: usize = 1 << 20;
+/// The most template weights (8 bytes each) one call uses, and [`Evaluator`] keeps into the
+/// next: past it, faces take their own records (decided from the call's rates alone, so a
+/// face's route, hence its bits, does not depend on earlier calls), and kept templates are
+/// dropped at the start of a call.
+const MAX_TEMPLATE_WEIGHTS: usize = 1 << 24;
 
-/// In `Evaluator::copy_of`: the block copies its type's template.
+/// The most cage points a typed face may depend on (more: its own records).
+const MAX_TYPED_POINTS: usize = 64;
+
+/// In `Evaluator::copy_of`: the block reads its type's template.
 const COPY: u8 = 1;
 /// In `Evaluator::copy_of`: the block descends, and its records become its type's template.
 const MAKE: u8 = 2;
 
+/// A template's key: the face type (or, with `Evaluator::copy_faces` off, the face, marked by
+/// the flag) and the rate.
+type TemplateKey = (bool, u32, u32);
+
+/// In `Evaluator::block_template`: the block has no template.
+const NO_TEMPLATE: u32 = u32::MAX;
+
 /// A vertex evaluated by a [`PatchGrid`].
 const IN_PATCH_GRID: u32 = u32::MAX - 2;
-/// A cell point of a face that copies an earlier face's records (see
-/// [`Evaluator::face_types`]) until [`Evaluator::patch_grids`] copies them.
-const COPIED: u32 = u32::MAX - 3;
+/// A cell point of a typed face (evaluated by its type's [`Template`]).
+const TYPED: u32 = u32::MAX - 3;
 
 /// The points of one bicubic patch on a refined level that form a grid `s × t` in its frame
 /// (the dual grid of a quad face over a regular descendant): evaluated separably, as the
@@ -329,8 +339,12 @@ pub(crate) struct Evaluator {
     /// The [`BICUBIC`] vertices in vertex order, with their face and parameter (made once per
     /// tessellation: no site lookups per frame).
     pointwise: Vec<(u32, u32, [f64; 2])>,
-    /// Per refinement level, the current cage refined to it (level 0: the cage).
+    /// Per refinement level, the current cage refined to it (level 0: the cage); the first
+    /// `refined` levels hold the current cage's points, and the last [`prepare`](Self::prepare)
+    /// reads the first `needed` (typed faces read the cage only).
     positions: Vec<Vec<DVec3>>,
+    refined: usize,
+    needed: usize,
     bases: Vec<Option<Arc<RateBasis>>>,
     kinds: Vec<u32>,
     records: Vec<Record>,
@@ -340,25 +354,29 @@ pub(crate) struct Evaluator {
     patch_grids: Vec<PatchGrid>,
     /// Per block of the topology, its range of `patch_grids`.
     block_grids: Vec<(u32, u32)>,
-    /// Per input face, its type if it has one ([`Self::face_type`]: quad faces on the general
-    /// route whose resolution tree holds only quads), fixed by the mesh; the types' patches and
-    /// their control points' ids.
+    /// Per input face, its type if it has one ([`Self::find_face_types`]), fixed by the mesh;
+    /// the types' patches, and each typed face's cage points in its type's order.
     face_types: Vec<Option<FaceType>>,
     face_patches: Vec<FacePatch>,
-    face_ids: Vec<u32>,
-    /// Per (face type, rate), the cell records every face of the type copies, kept across calls
-    /// (as `OpenSubdiv`'s `Bfr` keeps its topology cache), and how many cells they hold.
-    templates: HashMap<(u32, u32), Template>,
-    template_cells: usize,
-    /// Per block of the last [`prepare`](Self::prepare): [`COPY`], [`MAKE`] or 0.
+    face_cage: Vec<u32>,
+    /// The templates of (face type, rate), kept across calls (as `OpenSubdiv`'s `Bfr` keeps
+    /// its topology cache), by key, and how many weights they hold.
+    templates: Vec<Template>,
+    template_index: HashMap<TemplateKey, u32>,
+    template_weights: usize,
+    /// Per block of the last [`prepare`](Self::prepare): [`COPY`], [`MAKE`] or 0, and its
+    /// template (or [`NO_TEMPLATE`]).
     copy_of: Vec<u8>,
-    /// Whether faces of one type copy a template (off: each descends, for tests).
+    block_template: Vec<u32>,
+    /// Whether typed faces read templates (off: every face on its own records, for tests).
+    typed_faces: bool,
+    /// Whether faces of one type share a template (off: each typed face makes its own, for
+    /// tests).
     copy_faces: bool,
-    /// The patch grids' bases and vertices; the first `kept_basis` bases are the templates'.
+    /// The patch grids' bases and vertices.
     grid_basis: Vec<[[f64; 4]; 2]>,
     /// The parameters of `grid_basis`'s entries.
     grid_params: Vec<f64>,
-    kept_basis: usize,
     grid_vertices: Vec<u32>,
     ids: Vec<u32>,
     /// The exact stencils' weights, kept across calls (only growing): `stencil_index` gives
@@ -431,6 +449,8 @@ impl Evaluator {
             domains,
             pointwise: Vec::new(),
             positions: vec![Vec::new(); count],
+            refined: 0,
+            needed: count,
             bases: Vec::new(),
             kinds: Vec::new(),
             records: Vec::new(),
@@ -439,14 +459,16 @@ impl Evaluator {
             block_grids: Vec::new(),
             face_types: Vec::new(),
             face_patches: Vec::new(),
-            face_ids: Vec::new(),
-            templates: HashMap::new(),
-            template_cells: 0,
+            face_cage: Vec::new(),
+            templates: Vec::new(),
+            template_index: HashMap::new(),
+            template_weights: 0,
             copy_of: Vec::new(),
+            block_template: Vec::new(),
+            typed_faces: true,
             copy_faces: true,
             grid_basis: Vec::new(),
             grid_params: Vec::new(),
-            kept_basis: 0,
             grid_vertices: Vec::new(),
             ids: Vec::new(),
             weights: Vec::new(),
@@ -506,16 +528,24 @@ impl Evaluator {
     pub(crate) fn set_cage(&mut self, cage: &[DVec3]) {
         self.positions[0].clear();
         self.positions[0].extend_from_slice(cage);
+        self.refined = 1;
+        self.refine(self.needed);
+    }
+
+    /// Refines the current cage to the first `levels` levels (those not refined yet).
+    fn refine(&mut self, levels: usize) {
         if let Some(refiner) = &self.refiner {
-            for (l, stencils) in refiner.levels().iter().enumerate() {
+            for (l, stencils) in refiner.levels().iter().enumerate().take(levels - 1).skip(self.refined - 1) {
                 let (parent, child) = self.positions.split_at_mut(l + 1);
                 stencils.apply(&parent[l], &mut child[0]);
             }
         }
+        self.refined = self.refined.max(levels);
     }
 
-    /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, and a
-    /// stencil record for every vertex on the general route.
+    /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, a
+    /// stencil record for every vertex on the general route but the typed faces' cells, and
+    /// the typed faces' templates.
     pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         self.prepare_records(topo, rates, parallel)?;
         self.patch_grids(topo);
@@ -527,11 +557,21 @@ impl Evaluator {
                 (v, site.face, [u, w])
             },
         ));
+        // The levels the records and patch grids read (the templates read the cage): the next
+        // cages are refined to those only.
+        let used = |level: u32| level as usize + 1;
+        self.needed = self
+            .records
+            .iter()
+            .map(|r| used(r.level))
+            .chain(self.patch_grids.iter().map(|g| used(g.level)))
+            .fold(1, usize::max);
+        self.refine(self.needed);
         Ok(())
     }
 
     /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record,
-    /// but the cell points of faces that copy an earlier face's ([`COPIED`]).
+    /// but the typed faces' cell points that read a template ([`TYPED`]).
     fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.vertex_count as usize;
         self.kinds.clear();
@@ -620,7 +660,14 @@ impl Evaluator {
     }
 
     /// Finds every quad face's type ([`Self::face_type`]; faces on the general route under a
-    /// quad split), with its patches' control points.
+    /// quad split), with its patches and the cage points they depend on.
+    ///
+    /// A type is the resolution tree up to vertex labels, and the cage rows of the patches'
+    /// control points ([`Self::cage_rows`]) up to the order of the cage points: each cage point
+    /// is named by its column (the points it enters, with their weights' bits), and the cage
+    /// points are put in the order of their columns. Two faces of one type then have equal
+    /// cage rows point for point, column for column, and their cell points are the same
+    /// combinations of their own cage points.
     fn find_face_types(&mut self) {
         let mesh = self.levels.mesh(0);
         self.face_types = vec![None; mesh.face_count()];
@@ -629,6 +676,7 @@ impl Evaluator {
         }
         let mut types: HashMap<Vec<u64>, u32> = HashMap::new();
         let (mut signature, mut patches) = (Vec::new(), Vec::new());
+        let (mut rows, mut starts, mut columns, mut order) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for f in mesh.face_ids() {
             if !matches!(self.faces[f.index()], FacePlan::General) {
                 continue;
@@ -638,66 +686,173 @@ impl Evaluator {
             if !self.face_type(0, f, &mut signature, &mut patches) {
                 continue;
             }
+            self.cage_rows(&patches, &mut rows, &mut starts);
+            // Each cage point's column: (point, weight bits), by point.
+            columns.clear();
+            for (point, w) in starts.windows(2).enumerate() {
+                columns.extend(rows[w[0] as usize..w[1] as usize].iter().map(|&(x, r)| (x, point as u32, r.to_bits())));
+            }
+            columns.sort_unstable();
+            order.clear();
+            let mut at = 0;
+            while at < columns.len() {
+                let end = at + columns[at..].iter().take_while(|c| c.0 == columns[at].0).count();
+                order.push((at, end));
+                at = end;
+            }
+            if order.len() > MAX_TYPED_POINTS {
+                continue;
+            }
+            let column = |&(a, b): &(usize, usize)| columns[a..b].iter().map(|c| (c.1, c.2));
+            order.sort_unstable_by(|a, b| column(a).cmp(column(b)).then(columns[a.0].0.cmp(&columns[b.0].0)));
+            signature.extend([5, order.len() as u64]);
+            for range in &order {
+                signature.push((range.1 - range.0) as u64);
+                signature.extend(column(range).flat_map(|(point, bits)| [u64::from(point), bits]));
+            }
             let next = types.len() as u32;
             let id = *types.entry_ref(&signature).or_insert(next);
             let first = self.face_patches.len() as u32;
+            let mut point = 0;
             for &(level, face) in &patches {
-                let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face)) else {
-                    unreachable!("face_type lists patches")
-                };
-                let ids = self.face_ids.len();
-                self.face_ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
-                // Padded with the first id (its weights are 0), as the chunks pad.
-                self.face_ids.resize(ids + padded(patch.vertices.len()), self.face_ids[ids]);
-                self.face_patches.push(FacePatch {
-                    patch: (level, face),
-                    ids: ids as u32,
-                    len: patch.vertices.len() as u32,
-                });
+                let len = self.patch_size(level, face) as u32;
+                self.face_patches.push(FacePatch { patch: (level, face), first: point, len });
+                point += len;
             }
-            self.face_types[f.index()] = Some(FaceType { id, patches: (first, self.face_patches.len() as u32) });
+            let cage = self.face_cage.len() as u32;
+            self.face_cage.extend(order.iter().map(|&(a, _)| columns[a].0));
+            self.face_types[f.index()] = Some(FaceType {
+                id,
+                patches: (first, self.face_patches.len() as u32),
+                cage: (cage, self.face_cage.len() as u32),
+            });
         }
     }
 
-    /// Marks, per block of `topo`, whether it copies its type's template ([`COPY`]: its cell
-    /// points [`COPIED`], out of the chunks), makes it ([`MAKE`]: the first block of a type
-    /// without one at its rate) or neither.
+    /// The control point count of the patch of `face` on `level`.
+    fn patch_size(&self, level: u32, face: u32) -> usize {
+        match self.levels.resolve(level as usize, FaceId::new(face)) {
+            Some(Resolved::Patch { patch, .. }) => patch.vertices.len(),
+            _ => unreachable!("face_type lists patches"),
+        }
+    }
+
+    /// The control points of `patches` (in order, each patch's in its order) as combinations
+    /// of the cage: point `k`'s entries `(cage vertex, weight)` are
+    /// `rows[starts[k]..starts[k + 1]]`, by vertex. Each entry sums the products of the
+    /// refinement weights along the paths down to the cage (multiplied level by level) in the
+    /// order of the products' bits, so that it does not depend on how the mesh numbers its
+    /// vertices.
+    fn cage_rows(&self, patches: &[(u32, u32)], rows: &mut Vec<(u32, f64)>, starts: &mut Vec<u32>) {
+        fn expand(refiner: Option<&Refiner>, level: usize, id: usize, w: f64, terms: &mut Vec<(u32, f64)>) {
+            match refiner {
+                Some(r) if level > 0 => {
+                    for (parent, x) in r.levels()[level - 1].row(id) {
+                        expand(refiner, level - 1, parent, w * x, terms);
+                    }
+                }
+                _ => terms.push((id as u32, w)),
+            }
+        }
+        rows.clear();
+        starts.clear();
+        starts.push(0);
+        let mut terms = Vec::new();
+        for &(level, face) in patches {
+            let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face)) else {
+                unreachable!("face_type lists patches")
+            };
+            for v in &patch.vertices {
+                terms.clear();
+                expand(self.refiner.as_ref(), level as usize, v.index(), 1.0, &mut terms);
+                terms.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits())));
+                let start = rows.len();
+                for &(x, w) in &terms {
+                    match rows[start..].last_mut() {
+                        Some(last) if last.0 == x => last.1 += w,
+                        _ => rows.push((x, w)),
+                    }
+                }
+                starts.push(rows.len() as u32);
+            }
+        }
+    }
+
+    /// Decides, per block of `topo`, whether it reads its type's template ([`COPY`]: its cell
+    /// points [`TYPED`], out of the chunks), makes it ([`MAKE`]: the first block of a key
+    /// without a template) or takes its own records (0).
+    ///
+    /// Types with one block in the call take their own records, as do the types past the
+    /// [`MAX_TEMPLATE_WEIGHTS`] budget, counted in block order over the call's (type, rate)
+    /// pairs: the decision depends on this call's rates only.
     fn plan_copies(&mut self, topo: &Topology) {
+        let blocks = topo.blocks.len();
         self.copy_of.clear();
-        self.copy_of.resize(topo.blocks.len(), 0);
-        if !self.copy_faces {
+        self.copy_of.resize(blocks, 0);
+        self.block_template.clear();
+        self.block_template.resize(blocks, NO_TEMPLATE);
+        if !self.typed_faces {
             return;
         }
-        if self.template_cells > MAX_TEMPLATE_CELLS {
+        if self.template_weights > MAX_TEMPLATE_WEIGHTS {
             self.drop_templates();
+        }
+        let mut uses: HashMap<(u32, u32), (u32, bool)> = HashMap::new();
+        for block in &topo.blocks {
+            if let Some(ty) = self.face_types[block.face as usize] {
+                uses.entry((ty.id, block.rate)).or_insert((0, false)).0 += 1;
+            }
+        }
+        let mut budget = MAX_TEMPLATE_WEIGHTS;
+        for block in &topo.blocks {
+            let Some(ty) = self.face_types[block.face as usize] else { continue };
+            let size = template_size(block.rate, ty.cage.1 - ty.cage.0);
+            if let Some((count, typed)) = uses.get_mut(&(ty.id, block.rate))
+                && *count >= 2
+                && !*typed
+                && size <= budget
+            {
+                *typed = true;
+                budget -= size;
+            }
         }
         let mut made = hashbrown::HashSet::new();
         for (b, block) in topo.blocks.iter().enumerate() {
             let Some(ty) = self.face_types[block.face as usize] else { continue };
-            let key = (ty.id, block.rate);
-            if self.templates.contains_key(&key) || !made.insert(key) {
-                self.copy_of[b] = COPY;
-                self.kinds[block.base as usize..(block.base + block.rate * block.rate) as usize].fill(COPIED);
-            } else {
-                self.copy_of[b] = MAKE;
+            if !uses[&(ty.id, block.rate)].1 {
+                continue;
             }
+            let key = self.template_key(block, ty);
+            if let Some(&t) = self.template_index.get(&key) {
+                self.block_template[b] = t;
+                self.copy_of[b] = COPY;
+            } else if made.insert(key) {
+                self.copy_of[b] = MAKE;
+                continue;
+            } else {
+                self.copy_of[b] = COPY;
+            }
+            self.kinds[block.base as usize..(block.base + block.len()) as usize].fill(TYPED);
         }
     }
 
-    /// Forgets the templates (and the grid bases they use).
+    /// The key of `block`'s template (its face of type `ty`).
+    fn template_key(&self, block: &super::topology::Block, ty: FaceType) -> TemplateKey {
+        if self.copy_faces { (false, ty.id, block.rate) } else { (true, block.face, block.rate) }
+    }
+
+    /// Forgets the templates.
     fn drop_templates(&mut self) {
         self.templates.clear();
-        self.template_cells = 0;
-        self.kept_basis = 0;
-        self.grid_basis.clear();
-        self.grid_params.clear();
+        self.template_index.clear();
+        self.template_weights = 0;
     }
 
     /// Appends the resolution tree of `face` on `level` to `signature` (depth first: each
     /// node's kind; a patch's matrices, shape, size and frame), its patches to `patches`.
     /// Two quad faces with equal signatures reach every cell point through the same children
     /// to patches of the same shapes at the same points with the same derivative maps.
-    /// `false` if the tree holds a face that is not a quad under a quad split.
+    /// `false` if the tree holds a face that is not a quad under a quad split, or no patch.
     fn face_type(&self, level: usize, face: FaceId, signature: &mut Vec<u64>, patches: &mut Vec<(u32, u32)>) -> bool {
         match self.levels.resolve(level, face) {
             Some(Resolved::Children { children, domain }) => {
@@ -723,107 +878,94 @@ impl Evaluator {
                 patches.push((level as u32, face.index() as u32));
                 true
             }
-            Some(Resolved::Hole) => {
-                signature.push(3);
-                true
-            }
-            None => {
-                signature.push(4);
-                true
-            }
+            // Cell points without a patch cannot be composed.
+            Some(Resolved::Hole) | None => false,
         }
     }
 
-    /// Makes the template of `block`'s face type at its rate from its records and patch grids
-    /// (`grids`, a range of `patch_grids`), just made by its own descent.
-    fn make_template(&mut self, block: &super::topology::Block, (first, last): (u32, u32)) {
+    /// The template of `block`'s face type at its rate, from its records and patch grids
+    /// (`first..last` of `patch_grids`), just made by its own descent: each cell point's three
+    /// rows over its patch's points (the position's and, through the chain-rule rows, those of
+    /// `∂/∂u` and `∂/∂v`) composed with the cage rows of those points ([`Self::cage_rows`]),
+    /// each sum in the order of the patch's points, so a face of the same type makes the same
+    /// bits.
+    fn make_template(&self, block: &super::topology::Block, (first, last): (u32, u32)) -> Template {
         let ty = self.face_types[block.face as usize].expect("a typed face");
         let patches = &self.face_patches[ty.patches.0 as usize..ty.patches.1 as usize];
-        let index =
-            |patch: (u32, u32)| patches.iter().position(|p| p.patch == patch).expect("the face's own patch") as u32;
-        let base = block.base as usize;
-        let mut template = Template::default();
-        for g in &self.patch_grids[first as usize..last as usize] {
-            let at = template.grid_vertices.len() as u32;
-            let vertices = &self.grid_vertices[g.vertices as usize..(g.vertices + g.s * g.t) as usize];
-            template.grid_vertices.extend(vertices.iter().map(|&v| v - block.base));
-            template.grids.push(PatchGrid { patch: (u32::MAX, index(g.patch)), vertices: at, ..g.clone() });
+        let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
+        let len = cage.len();
+        let (mut rows, mut starts) = (Vec::new(), Vec::new());
+        let keys: Vec<(u32, u32)> = patches.iter().map(|p| p.patch).collect();
+        self.cage_rows(&keys, &mut rows, &mut starts);
+        for entry in &mut rows {
+            entry.0 = cage.iter().position(|&c| c == entry.0).expect("a cage point of the face") as u32;
         }
-        template.cells = self.kinds[base..base + (block.rate * block.rate) as usize]
-            .iter()
-            .map(|&kind| {
-                (kind != IN_PATCH_GRID).then(|| {
-                    let (record, place) = (self.records[kind as usize], self.places[kind as usize]);
-                    let k = index(place.patch);
-                    (Record { ids: k, ..record }, Place { patch: (u32::MAX, k), ..place })
-                })
-            })
-            .collect();
-        // The grids' bases stay until the templates are dropped.
-        self.kept_basis = self.grid_basis.len();
-        self.template_cells += template.cells.len();
-        self.templates.insert((ty.id, block.rate), template);
-    }
-
-    /// Gives `block` its type's template: the template's patch grids over its own vertices and
-    /// patches, and to its other cell points the template's records with its own patches'
-    /// control points: the same weights, tables, points and derivative maps, and the same
-    /// grids (what [`Self::patch_grid`] finds depends only on those), so the same bits as its
-    /// own descent would give.
-    fn copy_template(&mut self, block: &super::topology::Block) {
-        let ty = self.face_types[block.face as usize].expect("a typed face");
-        let key = (ty.id, block.rate);
-        let template = self.templates.remove(&key).expect("made before its copies");
-        let patches = &self.face_patches[ty.patches.0 as usize..ty.patches.1 as usize];
-        for g in &template.grids {
-            let own = patches[g.patch.1 as usize];
-            let ids = &self.face_ids[own.ids as usize..];
-            let cv = std::array::from_fn(|k| ids[usize::from(g.grid[k])]);
-            let at = self.grid_vertices.len() as u32;
-            for &v in &template.grid_vertices[g.vertices as usize..(g.vertices + g.s * g.t) as usize] {
-                let v = v + block.base;
-                self.grid_vertices.push(v);
-                self.kinds[v as usize] = IN_PATCH_GRID;
+        let index = |patch: (u32, u32)| &patches[keys.iter().position(|&p| p == patch).expect("the face's own patch")];
+        let mut weights = vec![0.0; template_size(block.rate, len as u32)];
+        // Adds cell `k`'s rows over patch `p`'s points.
+        let mut add = |k: usize, p: &FacePatch, [wp, ws, wt]: [&[f64]; 3], ju: [f64; 2], jv: [f64; 2]| {
+            let (g, lane) = (k / LANES, k % LANES);
+            for j in 0..p.len as usize {
+                let (du, dv) = (ju[0] * ws[j] + ju[1] * wt[j], jv[0] * ws[j] + jv[1] * wt[j]);
+                let point = p.first as usize + j;
+                for &(x, r) in &rows[starts[point] as usize..starts[point + 1] as usize] {
+                    let at = (g * 3 * len + x as usize) * LANES + lane;
+                    weights[at] += wp[j] * r;
+                    weights[at + len * LANES] += du * r;
+                    weights[at + 2 * len * LANES] += dv * r;
+                }
             }
-            self.patch_grids.push(PatchGrid { patch: own.patch, cv, vertices: at, ..g.clone() });
-        }
-        // Each patch's ids go to `ids` once, when a record first needs them.
-        let mut ids_of = [u32::MAX; 64];
-        let mut more = Vec::new();
-        let ids_of = if patches.len() <= ids_of.len() {
-            &mut ids_of[..patches.len()]
-        } else {
-            more.resize(patches.len(), u32::MAX);
-            &mut more[..]
         };
-        for (i, cell) in template.cells.iter().enumerate() {
-            let Some((record, place)) = cell else { continue };
-            let k = record.ids as usize;
-            if ids_of[k] == u32::MAX {
-                let own = patches[k];
-                ids_of[k] = self.ids.len() as u32;
-                let start = own.ids as usize;
-                self.ids.extend_from_slice(&self.face_ids[start..start + padded(own.len as usize)]);
+        let base = block.base as usize;
+        let mut w = [Vec::new(), Vec::new(), Vec::new()];
+        for g in &self.patch_grids[first as usize..last as usize] {
+            let p = index(g.patch);
+            let (ns, nt) = (g.s as usize, g.t as usize);
+            let (ss, ts) = self.grid_basis[g.basis as usize..g.basis as usize + ns + nt].split_at(ns);
+            for (b, [bt, dt]) in ts.iter().enumerate() {
+                for (a, [bs, ds]) in ss.iter().enumerate() {
+                    // The tensor-product weights over the patch's points, as the grid evaluates.
+                    for row in &mut w {
+                        row.clear();
+                        row.resize(p.len as usize, 0.0);
+                    }
+                    for (k, &c) in g.grid.iter().enumerate() {
+                        let (i, j, c) = (k % 4, k / 4, usize::from(c));
+                        (w[0][c], w[1][c], w[2][c]) = (bs[i] * bt[j], ds[i] * bt[j], bs[i] * dt[j]);
+                    }
+                    let v = self.grid_vertices[g.vertices as usize + b * ns + a] as usize;
+                    add(v - base, p, [&w[0], &w[1], &w[2]], g.ju, g.jv);
+                }
             }
-            self.kinds[block.base as usize + i] = self.records.len() as u32;
-            self.records.push(Record { ids: ids_of[k], ..*record });
-            self.places.push(Place { patch: patches[k].patch, ..*place });
         }
-        self.templates.insert(key, template);
+        for (k, &kind) in self.kinds[base..base + block.len() as usize].iter().enumerate() {
+            if kind == IN_PATCH_GRID {
+                continue;
+            }
+            let (r, place) = (&self.records[kind as usize], &self.places[kind as usize]);
+            let p = index(place.patch);
+            if r.table == NO_TABLE {
+                let pad = padded(r.len as usize);
+                let w = &self.weights[r.weights as usize..r.weights as usize + 3 * pad];
+                add(k, p, [&w[..pad], &w[pad..2 * pad], &w[2 * pad..]], r.ju, r.jv);
+            } else {
+                let s = self.tables.tables[r.table as usize].stencil(Grid::Dual, r.weights as usize);
+                add(k, p, [&s.position, &s.du, &s.dv], r.ju, r.jv);
+            }
+        }
+        Template { len: len as u32, weights }
     }
 
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
     /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
     /// (the patch shapes' stencils checked once against the tensor products), and marks them
-    /// [`IN_PATCH_GRID`]; faces that copy an earlier face's records take its grids and records
-    /// ([`Self::copy_template`]), and the first face of a type without a template makes it
-    /// ([`Self::make_template`]).
+    /// [`IN_PATCH_GRID`]; the first face of a key without a template makes it from its records
+    /// and grids ([`Self::make_template`]), then reads it as the others of its type do.
     fn patch_grids(&mut self, topo: &Topology) {
         self.patch_grids.clear();
         self.block_grids.clear();
-        // The templates' bases stay.
-        self.grid_basis.truncate(self.kept_basis);
-        self.grid_params.truncate(self.kept_basis);
+        self.grid_basis.clear();
+        self.grid_params.clear();
         self.grid_vertices.clear();
         let (mut s, mut t) = (Vec::new(), Vec::new());
         // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
@@ -832,9 +974,7 @@ impl Evaluator {
         for (b, block) in topo.blocks.iter().enumerate() {
             let first = self.patch_grids.len() as u32;
             let copy = self.copy_of.get(b).copied().unwrap_or(0);
-            if copy == COPY {
-                self.copy_template(block);
-            } else if let FacePlan::General = self.faces[block.face as usize] {
+            if copy != COPY && matches!(self.faces[block.face as usize], FacePlan::General) {
                 keys.clear();
                 group.clear();
                 let base = block.base as usize;
@@ -879,7 +1019,23 @@ impl Evaluator {
                 }
             }
             if copy == MAKE {
-                self.make_template(block, (first, self.patch_grids.len() as u32));
+                let template = self.make_template(block, (first, self.patch_grids.len() as u32));
+                let ty = self.face_types[block.face as usize].expect("a typed face");
+                self.template_index.insert(self.template_key(block, ty), self.templates.len() as u32);
+                self.template_weights += template.weights.len();
+                self.templates.push(template);
+                // Its records and grids served the template: it reads the template too.
+                if let Some(g) = self.patch_grids.get(first as usize) {
+                    self.grid_vertices.truncate(g.vertices as usize);
+                    self.grid_basis.truncate(g.basis as usize);
+                    self.grid_params.truncate(g.basis as usize);
+                    self.patch_grids.truncate(first as usize);
+                }
+                self.kinds[block.base as usize..(block.base + block.len()) as usize].fill(TYPED);
+            }
+            if copy != 0 {
+                let ty = self.face_types[block.face as usize].expect("a typed face");
+                self.block_template[b] = self.template_index[&self.template_key(block, ty)];
             }
             self.block_grids.push((first, self.patch_grids.len() as u32));
         }
@@ -974,7 +1130,7 @@ impl Evaluator {
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for i in range {
-            if self.kinds[i] == IN_BLOCK || self.kinds[i] == COPIED {
+            if self.kinds[i] == IN_BLOCK || self.kinds[i] == TYPED {
                 continue;
             }
             let site = topo.site(i as u32);
@@ -1123,8 +1279,19 @@ impl Evaluator {
                 *at += len;
             }
         };
-        for (block, &(first, last)) in topo.blocks.iter().zip(&self.block_grids) {
+        for ((block, &(first, last)), &template) in topo.blocks.iter().zip(&self.block_grids).zip(&self.block_template)
+        {
             let len = (block.rate * block.rate) as usize;
+            if template != NO_TEMPLATE {
+                push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+                let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
+                rest = tail;
+                at += len;
+                let ty = self.face_types[block.face as usize].expect("a typed face");
+                let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
+                pieces.push(Piece::Typed { template: &self.templates[template as usize], cage, out: piece });
+                continue;
+            }
             let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else {
                 if first < last {
                     // A general face with patch grids: one piece (its grids write anywhere in it).
@@ -1170,6 +1337,10 @@ impl Evaluator {
             Piece::Block { cv, rate, mut out } => {
                 let basis = self.bases[rate as usize].as_deref().expect("prepared");
                 grid_block(cv, cage, basis, |k, p, n| out.put(k, p, n));
+            }
+            Piece::Typed { template, cage: ids, mut out } => {
+                let len = out.len();
+                typed_block(template, ids, cage, len, |k, p, n| out.put(k, p, n));
             }
             Piece::Run { start, mut out, grids } => {
                 // By batches: first the positions and the tangents' cross products, then the
@@ -1337,6 +1508,32 @@ impl Evaluator {
             plan.vertices[v as usize] = entry(PLAN_BICUBIC, plan.bicubic.len());
             plan.bicubic.push(PlanBicubic { points: at, s, t, ju: [1.0, 0.0], jv: [0.0, 1.0] });
         }
+        // The typed faces' cell points: their templates' rows (`∂/∂u` and `∂/∂v` already) over
+        // their cage points, each template's cell once.
+        let mut cells: HashMap<(u32, u32), u32> = HashMap::new();
+        for (block, &t) in topo.blocks.iter().zip(&self.block_template) {
+            if t == NO_TEMPLATE {
+                continue;
+            }
+            let template = &self.templates[t as usize];
+            let ty = self.face_types[block.face as usize].expect("a typed face");
+            let points = plan.points.len() as u32;
+            plan.points.extend_from_slice(&self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize]);
+            let len = template.len as usize;
+            for k in 0..block.len() {
+                let weights = *cells.entry((t, k)).or_insert_with(|| {
+                    let at = plan.weights.len() as u32;
+                    let (g, lane) = (k as usize / LANES, k as usize % LANES);
+                    for row in 0..3 {
+                        plan.weights
+                            .extend((0..len).map(|x| template.weights[((g * 3 + row) * len + x) * LANES + lane]));
+                    }
+                    at
+                });
+                plan.vertices[(block.base + k) as usize] = entry(PLAN_GENERAL, plan.general.len());
+                plan.general.push(PlanGeneral { points, len: template.len, weights, ju: [1.0, 0.0], jv: [0.0, 1.0] });
+            }
+        }
         // The general records' patches and weights, each once.
         let mut patches: HashMap<(u32, u32), u32> = HashMap::new();
         let mut weights: HashMap<(u32, u32), u32> = HashMap::new();
@@ -1454,6 +1651,61 @@ fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl F
     }
 }
 
+/// The weights of a [`Template`] at `rate` over `len` cage points.
+fn template_size(rate: u32, len: u32) -> usize {
+    (rate as usize * rate as usize).div_ceil(LANES) * len as usize * 3 * LANES
+}
+
+/// A typed face's cell points (`cells` of them) from its template and its cage points `ids`:
+/// per group of [`LANES`] points, one sum per lane over the cage points in order (each cage
+/// point read once per group), then `put(k, position, normal)` for point `k`. The lanes are
+/// plain arrays (the same operations on every target); the normals are glam's
+/// `du.cross(dv).normalize_or_zero()`, operation for operation.
+#[inline(always)]
+fn typed_block(t: &Template, ids: &[u32], cage: &[DVec3], cells: usize, mut put: impl FnMut(usize, DVec3, DVec3)) {
+    type Lanes = [f64; LANES];
+    let len = ids.len();
+    // The cage points by coordinate: each coordinate is one load to broadcast.
+    let mut gathered = [[0.0f64; MAX_TYPED_POINTS]; 3];
+    for (k, &id) in ids.iter().enumerate() {
+        let p = cage[id as usize];
+        (gathered[0][k], gathered[1][k], gathered[2][k]) = (p.x, p.y, p.z);
+    }
+    let [gx, gy, gz] = &gathered;
+    let lanes = |f: &dyn Fn(usize) -> f64| -> Lanes { std::array::from_fn(f) };
+    for (g, w) in t.weights.chunks_exact(3 * LANES * len).enumerate() {
+        // Row by row (position, ∂/∂u, ∂/∂v): three sums per lane at a time stay in registers.
+        let mut acc = [[0.0f64; LANES]; 9];
+        for (row, w) in w.chunks_exact(LANES * len).enumerate() {
+            let (w, _) = w.as_chunks::<LANES>();
+            let mut sum = [[0.0f64; LANES]; 3];
+            for (k, w) in w.iter().enumerate() {
+                let (x, y, z) = (gx[k], gy[k], gz[k]);
+                for l in 0..LANES {
+                    sum[0][l] += w[l] * x;
+                    sum[1][l] += w[l] * y;
+                    sum[2][l] += w[l] * z;
+                }
+            }
+            acc[3 * row..3 * row + 3].copy_from_slice(&sum);
+        }
+        let [px, py, pz, ax, ay, az, bx, by, bz] = &acc;
+        let cx = lanes(&|l| ay[l] * bz[l] - by[l] * az[l]);
+        let cy = lanes(&|l| az[l] * bx[l] - bz[l] * ax[l]);
+        let cz = lanes(&|l| ax[l] * by[l] - bx[l] * ay[l]);
+        let rcp = lanes(&|l| 1.0 / ((cx[l] * cx[l]) + (cy[l] * cy[l]) + (cz[l] * cz[l])).sqrt());
+        let first = g * LANES;
+        for l in 0..LANES.min(cells - first) {
+            let n = if rcp[l].is_finite() && rcp[l] > 0.0 {
+                DVec3::new(cx[l] * rcp[l], cy[l] * rcp[l], cz[l] * rcp[l])
+            } else {
+                DVec3::ZERO
+            };
+            put(first + l, DVec3::new(px[l], py[l], pz[l]), n);
+        }
+    }
+}
+
 /// Vertices per piece of a run of vertices outside the blocks in [`Evaluator::evaluate_into`].
 const RUN: usize = 1024;
 
@@ -1464,6 +1716,8 @@ const BATCH: usize = 64;
 enum Piece<'a, S> {
     /// A bicubic face's dual grid.
     Block { cv: &'a [u32; 16], rate: u32, out: S },
+    /// A typed face's cell points: its template over its cage points.
+    Typed { template: &'a Template, cage: &'a [u32], out: S },
     /// Vertices `start..start + out.len()`: the patch grids' (all in the range), then each
     /// other one on its own.
     Run { start: usize, out: S, grids: &'a [PatchGrid] },
@@ -1626,8 +1880,8 @@ mod tests {
         for (soup, rate) in [(shapes::cube(), 12u32), (shapes::default_model(), 8), (shapes::ngon_prism(5), 9)] {
             let mesh = Mesh::build(soup).unwrap();
             let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
-            // Every face on its own records (copied faces have none under their grids).
-            ev.copy_faces = false;
+            // Every face on its own records (typed faces read templates instead).
+            ev.typed_faces = false;
             let moved: Vec<DVec3> =
                 mesh.positions().iter().enumerate().map(|(i, p)| *p * 1.3 + DVec3::splat((i as f64).sin())).collect();
             ev.set_cage(&moved);
@@ -1653,11 +1907,12 @@ mod tests {
         }
     }
 
-    /// Faces that copy their type's template (records and patch grids, [`Evaluator::plan_copies`])
-    /// evaluate to the same bits as their own descents, at even and odd, equal and mixed
-    /// rates, on meshes with extraordinary vertices (on the cube some faces copy others),
-    /// N-gons and borders, with templates made in the same call or kept from earlier calls at
-    /// other rates; the plans agree too.
+    /// Faces that read their type's template ([`Evaluator::plan_copies`]) evaluate to the same
+    /// bits as with templates of their own, at even and odd, equal and mixed rates, on meshes
+    /// with extraordinary vertices (on the cube faces share templates), N-gons and borders,
+    /// with templates made in the same call or kept from earlier calls at other rates; the
+    /// plans agree too, and both agree with every face on its own records (the templates are
+    /// those records composed down to the cage).
     #[test]
     fn copied_faces_equal_their_own_descent() {
         let meshes = [
@@ -1678,6 +1933,7 @@ mod tests {
             let new = |copy: bool| {
                 let mut ev = Evaluator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
                 ev.copy_faces = copy;
+                ev.typed_faces = true;
                 ev.set_cage(&moved);
                 ev
             };
@@ -1708,15 +1964,32 @@ mod tests {
                 let own = run(&mut new(false));
                 for (k, copied) in [run(&mut new(true)), run(&mut kept), run(&mut kept)].into_iter().enumerate() {
                     assert!(own.0 == copied.0 && own.1 == copied.1, "rates {rates:?}, run {k}");
-                    let worst = own.2.iter().zip(&copied.2).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max);
+                    let worst = worst_plan(&own.2, &copied.2);
                     assert!(worst < 1e-12, "plans off by {worst:e}");
                 }
+                // The templates (records composed to the cage) agree with the records.
+                let mut records = new(true);
+                records.typed_faces = false;
+                let records = run(&mut records);
+                let unbits = |v: &[u64]| v.iter().map(|&b| f64::from_bits(b)).collect::<Vec<_>>();
+                for (a, b) in [(&own.0, &records.0), (&own.1, &records.1)] {
+                    let worst = unbits(a).iter().zip(unbits(b)).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+                    assert!(worst < 1e-12, "rates {rates:?}: templates off the records by {worst:e}");
+                }
+                assert!(worst_plan(&own.2, &records.2) < 1e-12);
                 if first && rates == uniform(8) {
                     assert!(kept.copy_of.contains(&COPY), "some of the cube's faces copy others");
+                    assert!(kept.block_template.iter().all(|&t| t != NO_TEMPLATE), "the cube's faces are typed");
                 }
             }
             assert!(!first || !kept.templates.is_empty(), "the cube's faces have templates");
         }
+    }
+
+    /// The largest distance between two lists of points.
+    fn worst_plan(a: &[DVec3], b: &[DVec3]) -> f64 {
+        assert_eq!(a.len(), b.len());
+        a.iter().zip(b).map(|(x, y)| (*x - *y).length()).fold(0.0, f64::max)
     }
 
     /// The cage refined by the evaluator's own `Refiner` (what `update_cage` uses) lands on the
