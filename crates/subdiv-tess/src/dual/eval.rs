@@ -271,12 +271,30 @@ const MAX_GATHER: usize = 32;
 struct RateBasis {
     b: Vec<[f64; 4]>,
     d: Vec<[f64; 4]>,
+    /// The same by groups of [`LANES`] points: per group, each basis function's values at the
+    /// group's points (zeros past the last point), then each derivative's.
+    lanes: Vec<[[f64; LANES]; 8]>,
 }
 
 impl RateBasis {
     fn new(n: u32) -> Self {
         let t = |i: u32| f64::from(2 * i + 1) / f64::from(2 * n);
-        Self { b: (0..n).map(|i| basis(t(i))).collect(), d: (0..n).map(|i| derivative(t(i))).collect() }
+        let (b, d): (Vec<_>, Vec<_>) = (0..n).map(|i| (basis(t(i)), derivative(t(i)))).unzip();
+        let lanes = (0..b.len().div_ceil(LANES))
+            .map(|g| {
+                std::array::from_fn(|f| {
+                    std::array::from_fn(|l| {
+                        let i = g * LANES + l;
+                        match (f < 4, i < b.len()) {
+                            (true, true) => b[i][f],
+                            (false, true) => d[i][f - 4],
+                            _ => 0.0,
+                        }
+                    })
+                })
+            })
+            .collect();
+        Self { b, d, lanes }
     }
 }
 
@@ -782,9 +800,9 @@ impl Evaluator {
     /// points [`TYPED`], out of the chunks), makes it ([`MAKE`]: the first block of a key
     /// without a template) or takes its own records (0).
     ///
-    /// Types with one block in the call take their own records, as do the types past the
-    /// [`MAX_TEMPLATE_WEIGHTS`] budget, counted in block order over the call's (type, rate)
-    /// pairs: the decision depends on this call's rates only.
+    /// The (type, rate) pairs past the [`MAX_TEMPLATE_WEIGHTS`] budget, counted in block order
+    /// over the call's pairs, take their own records: the decision depends on this call's
+    /// rates only (not on the templates kept), so a face's bits do too.
     fn plan_copies(&mut self, topo: &Topology) {
         let blocks = topo.blocks.len();
         self.copy_of.clear();
@@ -797,29 +815,24 @@ impl Evaluator {
         if self.template_weights > MAX_TEMPLATE_WEIGHTS {
             self.drop_templates();
         }
-        let mut uses: HashMap<(u32, u32), (u32, bool)> = HashMap::new();
-        for block in &topo.blocks {
-            if let Some(ty) = self.face_types[block.face as usize] {
-                uses.entry((ty.id, block.rate)).or_insert((0, false)).0 += 1;
-            }
-        }
+        // Per (type, rate) of the call, in block order: whether it fits the budget.
+        let mut typed: HashMap<(u32, u32), bool> = HashMap::new();
         let mut budget = MAX_TEMPLATE_WEIGHTS;
         for block in &topo.blocks {
             let Some(ty) = self.face_types[block.face as usize] else { continue };
-            let size = template_size(block.rate, ty.cage.1 - ty.cage.0);
-            if let Some((count, typed)) = uses.get_mut(&(ty.id, block.rate))
-                && *count >= 2
-                && !*typed
-                && size <= budget
-            {
-                *typed = true;
-                budget -= size;
-            }
+            typed.entry((ty.id, block.rate)).or_insert_with(|| {
+                let size = template_size(block.rate, ty.cage.1 - ty.cage.0);
+                let fits = size <= budget;
+                if fits {
+                    budget -= size;
+                }
+                fits
+            });
         }
         let mut made = hashbrown::HashSet::new();
         for (b, block) in topo.blocks.iter().enumerate() {
             let Some(ty) = self.face_types[block.face as usize] else { continue };
-            if !uses[&(ty.id, block.rate)].1 {
+            if !typed[&(ty.id, block.rate)] {
                 continue;
             }
             let key = self.template_key(block, ty);
@@ -1621,33 +1634,71 @@ fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dy
 }
 
 /// The dual grid of a bicubic face, row by row: `put(k, position, normal)` for point
-/// `k = j · n + i`.
+/// `k = j · n + i`. Per row, the 4 column combinations of the control points (and of their
+/// `v` derivative), then [`LANES`] points of the row at a time, coordinate by coordinate in
+/// lanes: the same operations as [`bicubic_at`]'s sums, so the same bits.
 #[inline(always)]
 fn grid_block(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, mut put: impl FnMut(usize, DVec3, DVec3)) {
     let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
     let n = basis.b.len();
-    let (mut xs, mut cs) = ([DVec3::ZERO; BATCH], [DVec3::ZERO; BATCH]);
     for j in 0..n {
         let (bv, dv) = (basis.b[j], basis.d[j]);
-        // The 4 column combinations of the control points, and of their v-derivative.
         let col: [DVec3; 4] =
             std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
         let dcol: [DVec3; 4] =
             std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
-        // By batches: positions and cross products, then the normalisations.
-        for start in (0..n).step_by(BATCH) {
-            let end = (start + BATCH).min(n);
-            for i in start..end {
-                let (bu, du) = (basis.b[i], basis.d[i]);
-                let p = bu[0] * col[0] + bu[1] * col[1] + bu[2] * col[2] + bu[3] * col[3];
-                let a = du[0] * col[0] + du[1] * col[1] + du[2] * col[2] + du[3] * col[3];
-                let b = bu[0] * dcol[0] + bu[1] * dcol[1] + bu[2] * dcol[2] + bu[3] * dcol[3];
-                (xs[i - start], cs[i - start]) = (p, a.cross(b));
-            }
-            for i in start..end {
-                put(j * n + i, xs[i - start], cs[i - start].normalize_or_zero());
-            }
+        // By coordinate: [x, y, z][column].
+        let split = |v: &[DVec3; 4]| [v.map(|p| p.x), v.map(|p| p.y), v.map(|p| p.z)];
+        let (col, dcol) = (split(&col), split(&dcol));
+        for (g, lanes) in basis.lanes.iter().enumerate() {
+            let (bu, du) = lanes.split_at(4);
+            // Plain loops: `array::from_fn` is not always inlined here.
+            let sum = |w: &[[f64; LANES]], x: &[f64; 4]| {
+                let mut out = [0.0; LANES];
+                for (l, o) in out.iter_mut().enumerate() {
+                    *o = w[0][l] * x[0] + w[1][l] * x[1] + w[2][l] * x[2] + w[3][l] * x[3];
+                }
+                out
+            };
+            let acc = [
+                sum(bu, &col[0]),
+                sum(bu, &col[1]),
+                sum(bu, &col[2]),
+                sum(du, &col[0]),
+                sum(du, &col[1]),
+                sum(du, &col[2]),
+                sum(bu, &dcol[0]),
+                sum(bu, &dcol[1]),
+                sum(bu, &dcol[2]),
+            ];
+            let first = g * LANES;
+            put_lanes(&acc, LANES.min(n - first), |l, p, normal| put(j * n + first + l, p, normal));
         }
+    }
+}
+
+/// [`LANES`] points from their lanes `[px, py, pz, ax, ay, az, bx, by, bz]` (position, and the
+/// tangents `a = ∂/∂u`, `b = ∂/∂v`): `put(lane, position, normal)` for the first `count`, the
+/// normal being glam's `a.cross(b).normalize_or_zero()`, operation for operation (so the same
+/// bits), in lanes.
+#[inline(always)]
+fn put_lanes(acc: &[[f64; LANES]; 9], count: usize, mut put: impl FnMut(usize, DVec3, DVec3)) {
+    let [px, py, pz, ax, ay, az, bx, by, bz] = acc;
+    // Plain loops: `array::from_fn` is not always inlined here.
+    let (mut cx, mut cy, mut cz, mut rcp) = ([0.0; LANES], [0.0; LANES], [0.0; LANES], [0.0; LANES]);
+    for l in 0..LANES {
+        cx[l] = ay[l] * bz[l] - by[l] * az[l];
+        cy[l] = az[l] * bx[l] - bz[l] * ax[l];
+        cz[l] = ax[l] * by[l] - bx[l] * ay[l];
+        rcp[l] = 1.0 / ((cx[l] * cx[l]) + (cy[l] * cy[l]) + (cz[l] * cz[l])).sqrt();
+    }
+    for l in 0..count {
+        let n = if rcp[l].is_finite() && rcp[l] > 0.0 {
+            DVec3::new(cx[l] * rcp[l], cy[l] * rcp[l], cz[l] * rcp[l])
+        } else {
+            DVec3::ZERO
+        };
+        put(l, DVec3::new(px[l], py[l], pz[l]), n);
     }
 }
 
@@ -1663,7 +1714,6 @@ fn template_size(rate: u32, len: u32) -> usize {
 /// `du.cross(dv).normalize_or_zero()`, operation for operation.
 #[inline(always)]
 fn typed_block(t: &Template, ids: &[u32], cage: &[DVec3], cells: usize, mut put: impl FnMut(usize, DVec3, DVec3)) {
-    type Lanes = [f64; LANES];
     let len = ids.len();
     // The cage points by coordinate: each coordinate is one load to broadcast.
     let mut gathered = [[0.0f64; MAX_TYPED_POINTS]; 3];
@@ -1672,7 +1722,6 @@ fn typed_block(t: &Template, ids: &[u32], cage: &[DVec3], cells: usize, mut put:
         (gathered[0][k], gathered[1][k], gathered[2][k]) = (p.x, p.y, p.z);
     }
     let [gx, gy, gz] = &gathered;
-    let lanes = |f: &dyn Fn(usize) -> f64| -> Lanes { std::array::from_fn(f) };
     for (g, w) in t.weights.chunks_exact(3 * LANES * len).enumerate() {
         // Row by row (position, ∂/∂u, ∂/∂v): three sums per lane at a time stay in registers.
         let mut acc = [[0.0f64; LANES]; 9];
@@ -1689,20 +1738,8 @@ fn typed_block(t: &Template, ids: &[u32], cage: &[DVec3], cells: usize, mut put:
             }
             acc[3 * row..3 * row + 3].copy_from_slice(&sum);
         }
-        let [px, py, pz, ax, ay, az, bx, by, bz] = &acc;
-        let cx = lanes(&|l| ay[l] * bz[l] - by[l] * az[l]);
-        let cy = lanes(&|l| az[l] * bx[l] - bz[l] * ax[l]);
-        let cz = lanes(&|l| ax[l] * by[l] - bx[l] * ay[l]);
-        let rcp = lanes(&|l| 1.0 / ((cx[l] * cx[l]) + (cy[l] * cy[l]) + (cz[l] * cz[l])).sqrt());
         let first = g * LANES;
-        for l in 0..LANES.min(cells - first) {
-            let n = if rcp[l].is_finite() && rcp[l] > 0.0 {
-                DVec3::new(cx[l] * rcp[l], cy[l] * rcp[l], cz[l] * rcp[l])
-            } else {
-                DVec3::ZERO
-            };
-            put(first + l, DVec3::new(px[l], py[l], pz[l]), n);
-        }
+        put_lanes(&acc, LANES.min(cells - first), |l, p, n| put(first + l, p, n));
     }
 }
 
