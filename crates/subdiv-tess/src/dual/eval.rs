@@ -28,10 +28,13 @@
 //!   padded with zeros): no topology work, no allocation per vertex. The records are prepared
 //!   in parallel by chunks of vertices; the exact stencils' weights are kept across calls.
 //!   **Face types**: quad faces with the same resolution tree up to vertex labels (the same
-//!   children, patch shapes and frames) at the same rate have the same cell records but for
-//!   their patches' control points, so each (type, rate) has a template, made by the first face
-//!   of the type that descends and kept across calls; the others copy its records and patch
-//!   grids with their own control points (the same bits). **Patch grids**: the cell points of
+//!   children, patch shapes and frames) and the same cage rows of their patches' control points
+//!   (up to the order of the cage points, which the type fixes) have the same cell points as
+//!   combinations of their own cage points. Per (type, rate) the first face that descends makes
+//!   a [`Template`] from its records and patch grids, composed down to the cage, kept across
+//!   calls; every face of the type evaluates its cell points from it, 4 points at a time in
+//!   lanes over its cage points (no refinement, no per-point records). **Patch grids** (faces
+//!   without a template): the cell points of
 //!   a quad face that fall in one regular (bicubic) patch on a refined level form a grid
 //!   `s × t` in its frame;
 //!   they are then evaluated separably, as the level-0 blocks are (the shape's stencils checked
@@ -41,8 +44,8 @@
 //! vertex range (blocks, faces with patch grids, runs of other vertices) shared among threads;
 //! each vertex is computed alone, so the bits do not depend on the thread count, nor on the
 //! vector width the pieces are compiled for at run time (`pulp`: no fused products). Normals are
-//! normalised by batches (cross products first), which lets the square roots and divisions
-//! overlap.
+//! normalised by batches (cross products first; in lanes of 4 points on the blocks and typed
+//! faces), which lets the square roots and divisions overlap.
 
 use std::sync::Arc;
 

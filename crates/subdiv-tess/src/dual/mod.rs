@@ -52,7 +52,10 @@
 //! [`StencilTable`](subdiv_stencil::StencilTable); every other point through its own exact
 //! stencil at the patch that holds it (after descending through the refined levels an N-gon or
 //! a face with two extraordinary corners needs), or, where a quad face's cell points fill a grid
-//! of a regular patch on a refined level, separably too. [`DualTessellator::update_cage`] re-evaluates
+//! of a regular patch on a refined level, separably too. Quad faces with the same resolution tree
+//! and the same neighbourhood structure (a face **type**) share a template: their cell points as
+//! combinations of the face's own cage points, made once per type and rate from the first face's
+//! exact stencils and kept across calls. [`DualTessellator::update_cage`] re-evaluates
 //! positions and normals for a moved cage without any topology or stencil work.
 
 mod eval;
@@ -208,8 +211,9 @@ impl DualTessellator {
     /// checked), on the latest cage (the mesh's, or the last [`update_cage`](Self::update_cage)'s).
     /// An N-gon (N ≠ 4) under a quad split takes `⌈n/2⌉` steps per side of each of its `Bfr`
     /// sub-faces. Rebuilds the topology and the stencil records; the tables and stencils solved
-    /// by earlier calls are kept, and so are the records of each face type at each rate (faces
-    /// with the same resolution tree copy them).
+    /// by earlier calls are kept, and so are the templates of each face type at each rate (the
+    /// cell points of faces with the same resolution tree and neighbourhood, over their cage
+    /// points).
     ///
     /// # Errors
     /// [`TessError::RateCount`] unless there is one rate per face; [`TessError::Rate`] for a
