@@ -166,11 +166,9 @@ struct FaceType {
 /// calls, and read by every face of the type with its own cage points.
 #[derive(Clone, Debug, Default)]
 struct Template {
-    /// The face's cage points.
-    len: u32,
     /// Per group of [`LANES`] cell points (in the block's order, the last group padded with
-    /// zeros), per row (position, `∂/∂u`, `∂/∂v`), per cage point `x` (in the type's order),
-    /// the group's weights: `weights[((g · 3 + row) · len + x) · LANES + lane]`.
+    /// zeros), per row (position, `∂/∂u`, `∂/∂v`), per cage point `x` (in the type's order,
+    /// `len` of them), the group's weights: `weights[((g · 3 + row) · len + x) · LANES + lane]`.
     weights: Vec<f64>,
 }
 
@@ -734,12 +732,7 @@ impl Evaluator {
             let next = types.len() as u32;
             let id = *types.entry_ref(&signature).or_insert(next);
             let first = self.face_patches.len() as u32;
-            let mut point = 0;
-            for &(level, face) in &patches {
-                let len = self.patch_size(level, face) as u32;
-                self.face_patches.push(FacePatch { patch: (level, face), first: point, len });
-                point += len;
-            }
+            self.face_patches.extend_from_slice(&patches);
             let cage = self.face_cage.len() as u32;
             self.face_cage.extend(order.iter().map(|&(a, _)| columns[a].0));
             self.face_types[f.index()] = Some(FaceType {
@@ -750,21 +743,13 @@ impl Evaluator {
         }
     }
 
-    /// The control point count of the patch of `face` on `level`.
-    fn patch_size(&self, level: u32, face: u32) -> usize {
-        match self.levels.resolve(level as usize, FaceId::new(face)) {
-            Some(Resolved::Patch { patch, .. }) => patch.vertices.len(),
-            _ => unreachable!("face_type lists patches"),
-        }
-    }
-
     /// The control points of `patches` (in order, each patch's in its order) as combinations
     /// of the cage: point `k`'s entries `(cage vertex, weight)` are
     /// `rows[starts[k]..starts[k + 1]]`, by vertex. Each entry sums the products of the
     /// refinement weights along the paths down to the cage (multiplied level by level) in the
     /// order of the products' bits, so that it does not depend on how the mesh numbers its
     /// vertices.
-    fn cage_rows(&self, patches: &[(u32, u32)], rows: &mut Vec<(u32, f64)>, starts: &mut Vec<u32>) {
+    fn cage_rows(&self, patches: &[FacePatch], rows: &mut Vec<(u32, f64)>, starts: &mut Vec<u32>) {
         fn expand(refiner: Option<&Refiner>, level: usize, id: usize, w: f64, terms: &mut Vec<(u32, f64)>) {
             match refiner {
                 Some(r) if level > 0 => {
@@ -779,7 +764,7 @@ impl Evaluator {
         starts.clear();
         starts.push(0);
         let mut terms = Vec::new();
-        for &(level, face) in patches {
+        for &FacePatch { patch: (level, face), .. } in patches {
             let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face)) else {
                 unreachable!("face_type lists patches")
             };
@@ -869,7 +854,7 @@ impl Evaluator {
     /// Two quad faces with equal signatures reach every cell point through the same children
     /// to patches of the same shapes at the same points with the same derivative maps.
     /// `false` if the tree holds a face that is not a quad under a quad split, or no patch.
-    fn face_type(&self, level: usize, face: FaceId, signature: &mut Vec<u64>, patches: &mut Vec<(u32, u32)>) -> bool {
+    fn face_type(&self, level: usize, face: FaceId, signature: &mut Vec<u64>, patches: &mut Vec<FacePatch>) -> bool {
         match self.levels.resolve(level, face) {
             Some(Resolved::Children { children, domain }) => {
                 if domain != FaceDomain::Quad {
@@ -891,7 +876,9 @@ impl Evaluator {
                     patch.vertices.len() as u64,
                     code,
                 ]);
-                patches.push((level as u32, face.index() as u32));
+                let first = patches.last().map_or(0, |p: &FacePatch| p.first + p.len);
+                let len = patch.vertices.len() as u32;
+                patches.push(FacePatch { patch: (level as u32, face.index() as u32), first, len });
                 true
             }
             // Cell points without a patch cannot be composed.
@@ -911,12 +898,11 @@ impl Evaluator {
         let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
         let len = cage.len();
         let (mut rows, mut starts) = (Vec::new(), Vec::new());
-        let keys: Vec<(u32, u32)> = patches.iter().map(|p| p.patch).collect();
-        self.cage_rows(&keys, &mut rows, &mut starts);
+        self.cage_rows(patches, &mut rows, &mut starts);
         for entry in &mut rows {
             entry.0 = cage.iter().position(|&c| c == entry.0).expect("a cage point of the face") as u32;
         }
-        let index = |patch: (u32, u32)| &patches[keys.iter().position(|&p| p == patch).expect("the face's own patch")];
+        let index = |patch: (u32, u32)| patches.iter().find(|p| p.patch == patch).expect("the face's own patch");
         let mut weights = vec![0.0; template_size(block.rate, len as u32)];
         // Adds cell `k`'s rows over patch `p`'s points.
         let mut add = |k: usize, p: &FacePatch, [wp, ws, wt]: [&[f64]; 3], ju: [f64; 2], jv: [f64; 2]| {
@@ -969,7 +955,7 @@ impl Evaluator {
                 add(k, p, [&s.position, &s.du, &s.dv], r.ju, r.jv);
             }
         }
-        Template { len: len as u32, weights }
+        Template { weights }
     }
 
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
@@ -1535,7 +1521,7 @@ impl Evaluator {
             let ty = self.face_types[block.face as usize].expect("a typed face");
             let points = plan.points.len() as u32;
             plan.points.extend_from_slice(&self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize]);
-            let len = template.len as usize;
+            let len = (ty.cage.1 - ty.cage.0) as usize;
             for k in 0..block.len() {
                 let weights = *cells.entry((t, k)).or_insert_with(|| {
                     let at = plan.weights.len() as u32;
@@ -1547,7 +1533,7 @@ impl Evaluator {
                     at
                 });
                 plan.vertices[(block.base + k) as usize] = entry(PLAN_GENERAL, plan.general.len());
-                plan.general.push(PlanGeneral { points, len: template.len, weights, ju: [1.0, 0.0], jv: [0.0, 1.0] });
+                plan.general.push(PlanGeneral { points, len: len as u32, weights, ju: [1.0, 0.0], jv: [0.0, 1.0] });
             }
         }
         // The general records' patches and weights, each once.
