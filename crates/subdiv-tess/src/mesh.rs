@@ -53,6 +53,31 @@ impl TessMesh {
         &self.polygon_vertices[self.polygon_offsets[k] as usize..self.polygon_offsets[k + 1] as usize]
     }
 
+    /// Empties every list, keeping their allocations.
+    pub fn clear(&mut self) {
+        // Destructured, so that a new field cannot be forgotten here.
+        let Self {
+            positions,
+            normals,
+            parameters,
+            triangles,
+            triangle_faces,
+            triangle_parameters,
+            polygon_offsets,
+            polygon_vertices,
+            polygon_faces,
+        } = self;
+        positions.clear();
+        normals.clear();
+        parameters.clear();
+        triangles.clear();
+        triangle_faces.clear();
+        triangle_parameters.clear();
+        polygon_offsets.clear();
+        polygon_vertices.clear();
+        polygon_faces.clear();
+    }
+
     /// The triangles as a flat index list (for GPU buffers and GLB).
     pub fn triangle_indices(&self) -> Vec<u32> {
         self.triangles.iter().flatten().copied().collect()

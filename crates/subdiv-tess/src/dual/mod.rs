@@ -156,6 +156,9 @@ pub struct DualTessellator {
     topology: Topology,
     rates: Vec<u32>,
     output: TessMesh,
+    /// Whether `output` has the topology's connectivity and surface parameters (not after
+    /// [`tessellate_flat`](Self::tessellate_flat), which leaves it empty).
+    output_current: bool,
 }
 
 impl DualTessellator {
@@ -180,6 +183,7 @@ impl DualTessellator {
             topology: Topology::default(),
             rates: Vec::new(),
             output: TessMesh::default(),
+            output_current: false,
         })
     }
 
@@ -288,21 +292,28 @@ impl DualTessellator {
         let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
         builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
+        self.output_current = false;
         self.rates.clear();
         self.rates.extend_from_slice(rates);
         Ok(())
     }
 
     /// The animation path: the same topology and rates on a new cage (one finite position per
-    /// input vertex). Only positions and normals are recomputed.
+    /// input vertex). Only positions and normals are recomputed (after
+    /// [`tessellate_flat`](Self::tessellate_flat), which leaves [`mesh`](Self::mesh) empty, the
+    /// whole [`TessMesh`] is made once, as [`tessellate`](Self::tessellate) would).
     ///
     /// # Errors
     /// [`TessError::CageLength`], [`TessError::CagePosition`] for a non-finite position.
     pub fn update_cage(&mut self, positions: &[DVec3]) -> Result<&TessMesh, TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
-        let out = &mut self.output;
-        self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
+        if self.output_current {
+            let out = &mut self.output;
+            self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
+        } else {
+            self.fill_output();
+        }
         Ok(&self.output)
     }
 
@@ -310,43 +321,46 @@ impl DualTessellator {
     /// [`update_cage`](Self::update_cage) followed by [`write_flat`](Self::write_flat), without
     /// the f64 positions and normals in between, so [`mesh`](Self::mesh) keeps the previous
     /// cage's positions and normals until the next [`update_cage`](Self::update_cage) or
-    /// [`tessellate`](Self::tessellate). Reuses `out`'s allocations.
+    /// [`tessellate`](Self::tessellate). Reuses `out`'s allocations (buffers of the right
+    /// lengths are overwritten in place).
     ///
     /// # Errors
     /// As [`update_cage`](Self::update_cage).
     pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
-        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
-        out.vertices.resize(6 * self.topology.vertex_count as usize, 0.0);
-        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
-        copy_indices(self.output.triangles.as_flattened(), self.options.parallel, &mut out.indices);
+        self.write_flat_buffers(out);
         Ok(())
     }
 
     /// [`tessellate`](Self::tessellate) straight into flat f32 buffers (what a renderer
     /// uploads; the same values as [`tessellate`](Self::tessellate) then
     /// [`write_flat`](Self::write_flat)), without the f64 positions and normals and without the
-    /// vertices' and triangles' surface parameters. Afterwards [`mesh`](Self::mesh) has the new
-    /// triangles and polygons but no vertex data (empty positions, normals and parameters) until
-    /// the next [`update_cage`](Self::update_cage) (positions and normals) or
-    /// [`tessellate`](Self::tessellate); [`update_cage_flat`](Self::update_cage_flat) works as
-    /// after [`tessellate`](Self::tessellate). Reuses `out`'s allocations.
+    /// vertices' and triangles' surface parameters. Afterwards [`mesh`](Self::mesh) is empty
+    /// until the next [`update_cage`](Self::update_cage), which makes the whole [`TessMesh`] of
+    /// these rates, or [`tessellate`](Self::tessellate);
+    /// [`update_cage_flat`](Self::update_cage_flat) works as after
+    /// [`tessellate`](Self::tessellate). Reuses `out`'s allocations (buffers of the right
+    /// lengths are overwritten in place).
     ///
     /// # Errors
     /// As [`tessellate`](Self::tessellate).
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.rebuild(rates, None)?;
-        out.vertices.resize(6 * self.topology.vertex_count as usize, 0.0);
-        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, &mut out.vertices);
-        let (t, m) = (&mut self.topology, &mut self.output);
-        copy_indices(t.triangles.as_flattened(), self.options.parallel, &mut out.indices);
-        move_connectivity(t, m);
-        m.positions.clear();
-        m.normals.clear();
-        m.parameters.clear();
-        m.triangle_parameters.clear();
+        self.write_flat_buffers(out);
+        // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
+        self.output.clear();
         Ok(())
+    }
+
+    /// The flat buffers of the current topology on the latest cage.
+    fn write_flat_buffers(&self, out: &mut FlatMesh) {
+        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
+        let t = &self.topology;
+        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
+        self.evaluator.evaluate_flat(t, self.options.parallel, &mut out.vertices);
+        out.indices.resize(3 * t.triangle_count as usize, 0);
+        t.write_triangles(&mut out.indices, self.options.parallel);
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
@@ -387,23 +401,32 @@ impl DualTessellator {
         out.indices.extend_from_slice(m.triangles.as_flattened());
     }
 
-    /// Evaluates, and moves the topology's triangles and polygons into the output (their old
-    /// buffers go back to the topology, to be refilled next time: no copies).
+    /// Evaluates, writes the triangles and their faces, and moves the topology's polygons into
+    /// the output (their old buffers go back to the topology, to be refilled next time: no
+    /// copies).
     fn fill_output(&mut self) {
-        let t = &mut self.topology;
+        let (t, parallel) = (&mut self.topology, self.options.parallel);
         let out = &mut self.output;
-        self.evaluator.evaluate(t, self.options.parallel, &mut out.positions, &mut out.normals);
+        self.evaluator.evaluate(t, parallel, &mut out.positions, &mut out.normals);
+        let triangles = t.triangle_count as usize;
+        out.triangles.resize(triangles, [0; 3]);
+        t.write_triangles(out.triangles.as_flattened_mut(), parallel);
+        out.triangle_faces.resize(triangles, FaceId::new(0));
+        t.write_triangle_faces(&mut out.triangle_faces, parallel);
         out.parameters.clear();
         out.parameters.reserve(t.vertex_count as usize);
         t.for_each_site(|s| {
             let (u, v) = s.point.to_f64();
             out.parameters.push(SurfaceParameter { face: FaceId::new(s.face), u, v });
         });
-        move_connectivity(t, out);
+        std::mem::swap(&mut out.polygon_offsets, &mut t.polygon_offsets);
+        std::mem::swap(&mut out.polygon_vertices, &mut t.polygon_vertices);
+        std::mem::swap(&mut out.polygon_faces, &mut t.polygon_faces);
         out.triangle_parameters.clear();
         let params = &out.parameters;
         let corners = |tri: &[u32; 3]| tri.map(|k| [params[k as usize].u, params[k as usize].v]);
-        if self.options.parallel {
+        self.output_current = true;
+        if parallel {
             out.triangle_parameters.par_extend(out.triangles.par_iter().map(corners));
         } else {
             out.triangle_parameters.extend(out.triangles.iter().map(corners));
@@ -450,26 +473,4 @@ pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u
 #[inline]
 fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
     [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
-}
-
-/// `indices` into `out` (which keeps its allocation), on rayon's threads if `parallel` and
-/// there are enough to be worth waking them (a copy of tens of megabytes at high rates, which
-/// one core does at a fraction of the memory's speed).
-fn copy_indices(indices: &[u32], parallel: bool, out: &mut Vec<u32>) {
-    out.clear();
-    if parallel && indices.len() >= 1 << 16 {
-        out.par_extend(indices.par_iter().copied());
-    } else {
-        out.extend_from_slice(indices);
-    }
-}
-
-/// Moves the triangles and polygons the builder made into the output (no copies: the builder
-/// gets the output's old buffers back to fill next time).
-fn move_connectivity(t: &mut Topology, out: &mut TessMesh) {
-    std::mem::swap(&mut out.triangles, &mut t.triangles);
-    std::mem::swap(&mut out.triangle_faces, &mut t.triangle_faces);
-    std::mem::swap(&mut out.polygon_offsets, &mut t.polygon_offsets);
-    std::mem::swap(&mut out.polygon_vertices, &mut t.polygon_vertices);
-    std::mem::swap(&mut out.polygon_faces, &mut t.polygon_faces);
 }

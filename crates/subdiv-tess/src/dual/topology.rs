@@ -38,19 +38,43 @@ pub(crate) struct Site {
 
 /// The dual grid of a whole quad face (not a sub-face): its points are `base + j·n + i` at
 /// `((i+½)/n, (j+½)/n)`, which the regular fast path evaluates row by row. Their sites are
-/// implicit ([`Topology::site`]); `sites` is the number of explicit sites before `base`.
+/// implicit ([`Topology::site`]); `sites` is the number of explicit sites before `base`. So are
+/// the triangles of its grid of quads ([`Block::write_cells`]), most of a tessellation's: they
+/// are written straight into the output, in parallel, and never stored; `triangles` is the
+/// number of explicit triangles made before them, `first_triangle` the first one's index in the
+/// output.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Block {
     pub face: u32,
     pub rate: u32,
     pub base: u32,
     pub sites: u32,
+    pub triangles: u32,
+    pub first_triangle: u32,
 }
 
 impl Block {
     /// The number of points.
     pub(super) fn len(&self) -> u32 {
         self.rate * self.rate
+    }
+
+    /// The number of triangles of its grid: two per quad between four neighbouring points.
+    pub(super) fn cell_triangles(&self) -> u32 {
+        2 * (self.rate - 1) * (self.rate - 1)
+    }
+
+    /// Its grid's triangles (`3 ×` [`cell_triangles`](Self::cell_triangles) indices), row by
+    /// row: quad `k, k + 1, k + 1 + n, k + n` as `(k, k + 1, k + 1 + n)` and `(k, k + 1 + n, k + n)`.
+    fn write_cells(&self, out: &mut [u32]) {
+        let n = self.rate;
+        let mut quads = out.chunks_exact_mut(6);
+        for j in 0..n.saturating_sub(1) {
+            for (i, q) in (0..n - 1).zip(quads.by_ref()) {
+                let k = self.base + j * n + i;
+                q.copy_from_slice(&[k, k + 1, k + 1 + n, k, k + 1 + n, k + n]);
+            }
+        }
     }
 
     /// The site of its point `k = j · rate + i`.
@@ -81,8 +105,12 @@ pub(crate) struct Topology {
     /// which spares writing most of them: [`Self::site`]).
     pub sites: Vec<Site>,
     pub blocks: Vec<Block>,
+    /// The explicit triangles (every triangle outside the blocks' grids), in output order, and
+    /// their faces.
     pub triangles: Vec<[u32; 3]>,
     pub triangle_faces: Vec<FaceId>,
+    /// The number of triangles, the blocks' included.
+    pub triangle_count: u32,
     pub polygon_offsets: Vec<u32>,
     pub polygon_vertices: Vec<u32>,
     pub polygon_faces: Vec<FaceId>,
@@ -126,6 +154,37 @@ impl Topology {
         })
     }
 
+    /// Every triangle, in output order (three indices each), into `out`, which has
+    /// `3 ×` [`triangle_count`](Self::triangle_count) entries: the blocks' grids made here, the
+    /// explicit triangles copied between them.
+    pub(super) fn write_triangles(&self, out: &mut [u32], parallel: bool) {
+        self.write_in_order(out, 3, self.triangles.as_flattened(), parallel, &|b, out| b.write_cells(out));
+    }
+
+    /// Every triangle's face, in output order, into `out` ([`triangle_count`](Self::triangle_count) entries).
+    pub(super) fn write_triangle_faces(&self, out: &mut [FaceId], parallel: bool) {
+        self.write_in_order(out, 1, &self.triangle_faces, parallel, &|b, out| out.fill(FaceId::new(b.face)));
+    }
+
+    /// The walk of [`write_triangles`](Self::write_triangles) for `width` values per triangle:
+    /// the explicit triangles before the first block, then per block its grid (`cells`) and the
+    /// explicit triangles after it, halving the blocks between rayon's threads while a half has
+    /// enough triangles to be worth one.
+    fn write_in_order<T: Copy + Send + Sync>(
+        &self,
+        out: &mut [T],
+        width: usize,
+        explicit: &[T],
+        parallel: bool,
+        cells: &(dyn Fn(&Block, &mut [T]) + Sync),
+    ) {
+        assert_eq!(out.len(), width * self.triangle_count as usize, "one entry per triangle value");
+        let lead = self.blocks.first().map_or(self.triangles.len(), |b| b.triangles as usize) * width;
+        let (head, rest) = out.split_at_mut(lead);
+        head.copy_from_slice(&explicit[..lead]);
+        write_blocks(&self.blocks, explicit.len() / width, rest, width, explicit, parallel, cells);
+    }
+
     /// Every vertex's site, in vertex order.
     pub(super) fn for_each_site(&self, mut put: impl FnMut(Site)) {
         let mut explicit = self.sites.iter();
@@ -136,6 +195,40 @@ impl Topology {
             v = b.base + b.len();
         }
         explicit.for_each(|&s| put(s));
+    }
+}
+
+/// [`Topology::write_in_order`] from `blocks[0]` on (`out` starts at its first triangle), up to
+/// the explicit triangle `end` (that of the block after the last, or the end).
+fn write_blocks<T: Copy + Send + Sync>(
+    blocks: &[Block],
+    end: usize,
+    out: &mut [T],
+    width: usize,
+    explicit: &[T],
+    parallel: bool,
+    cells: &(dyn Fn(&Block, &mut [T]) + Sync),
+) {
+    /// Triangles below which a half is written where it is (a few microseconds of work).
+    const GRAIN: usize = 1 << 14;
+    if parallel && blocks.len() > 1 && out.len() > GRAIN * width {
+        let mid = blocks.len() / 2;
+        let (a, b) = out.split_at_mut((blocks[mid].first_triangle - blocks[0].first_triangle) as usize * width);
+        let next = blocks[mid].triangles as usize;
+        rayon::join(
+            || write_blocks(&blocks[..mid], next, a, width, explicit, parallel, cells),
+            || write_blocks(&blocks[mid..], end, b, width, explicit, parallel, cells),
+        );
+        return;
+    }
+    let mut out = out;
+    for (k, b) in blocks.iter().enumerate() {
+        let (grid, rest) = out.split_at_mut(b.cell_triangles() as usize * width);
+        cells(b, grid);
+        let after = b.triangles as usize..blocks.get(k + 1).map_or(end, |next| next.triangles as usize);
+        let (copy, rest) = rest.split_at_mut(after.len() * width);
+        copy.copy_from_slice(&explicit[after.start * width..after.end * width]);
+        out = rest;
     }
 }
 
@@ -254,6 +347,7 @@ impl<'a> Builder<'a> {
         o.blocks.clear();
         o.triangles.clear();
         o.triangle_faces.clear();
+        o.triangle_count = 0;
         o.polygon_offsets.clear();
         o.polygon_offsets.push(0);
         o.polygon_vertices.clear();
@@ -288,12 +382,18 @@ impl<'a> Builder<'a> {
     fn triangle(&mut self, t: [u32; 3], face: u32) {
         self.out.triangles.push(t);
         self.out.triangle_faces.push(FaceId::new(face));
+        self.out.triangle_count += 1;
     }
 
     /// A quad `a b c d` (counter-clockwise): two triangles, and a polygon if asked for.
     fn quad(&mut self, q: [u32; 4], face: u32) {
         self.triangle([q[0], q[1], q[2]], face);
         self.triangle([q[0], q[2], q[3]], face);
+        self.polygon(q, face);
+    }
+
+    /// A quad's polygon, if asked for (its triangles made or implicit).
+    fn polygon(&mut self, q: [u32; 4], face: u32) {
         if self.quads {
             self.out.polygon_vertices.extend_from_slice(&q);
             self.out.polygon_offsets.push(self.out.polygon_vertices.len() as u32);
@@ -332,8 +432,11 @@ impl<'a> Builder<'a> {
         let base = self.out.vertex_count;
         match domain {
             FaceDomain::Quad => {
-                let sites = self.out.sites.len() as u32;
-                self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
+                let o = &self.out;
+                let (sites, triangles) = (o.sites.len() as u32, o.triangles.len() as u32);
+                let block = Block { face: f as u32, rate: n, base, sites, triangles, first_triangle: o.triangle_count };
+                self.out.blocks.push(block);
+                self.out.triangle_count += block.cell_triangles();
                 self.quad_cell(f, domain, None, n);
                 self.faces.push(Some(FaceCells { base, m: n, domain }));
             }
@@ -432,13 +535,17 @@ impl<'a> Builder<'a> {
                 }
             }
         } else {
-            // A whole face: a block, whose sites are implicit.
+            // A whole face: a block, whose sites and triangles are implicit (counted by `face`).
             self.out.vertex_count += m * m;
+            if !self.quads {
+                return;
+            }
         }
         for j in 0..m.saturating_sub(1) {
             for i in 0..m - 1 {
                 let k = base + j * m + i;
-                self.quad([k, k + 1, k + 1 + m, k + m], f as u32);
+                let q = [k, k + 1, k + 1 + m, k + m];
+                if sub.is_some() { self.quad(q, f as u32) } else { self.polygon(q, f as u32) }
             }
         }
     }
@@ -857,6 +964,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::collections::HashMap;
     use subdiv_mesh::shapes;
     use subdiv_stencil::Grid;
 
@@ -921,6 +1029,49 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// The blocks' implicit triangles land where the builder counted them, between the
+    /// explicit ones, whether written on one thread or halved between several (at rates where
+    /// the halving starts: more than `GRAIN` triangles): every output edge of a closed mesh
+    /// then has two triangles, and each block's range holds exactly its grid, of its face.
+    #[test]
+    fn block_triangles_are_written_in_place() {
+        for soup in [shapes::default_model(), shapes::ngon_prism(5), shapes::quad_torus(6, 5)] {
+            let mesh = Mesh::build(soup).unwrap();
+            let domains: Vec<_> = mesh
+                .face_ids()
+                .map(|f| Some(FaceDomain::of(subdiv_schemes::Split::Quad, mesh.face_size(f)).unwrap()))
+                .collect();
+            let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 60 + 9 * (f % 5)).collect();
+            let mut out = Topology::default();
+            Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut out);
+            let n = out.triangle_count as usize;
+            assert!(n > 2 << 14, "{n} triangles: too few to halve");
+            let (mut serial, mut parallel) = (vec![0; 3 * n], vec![u32::MAX; 3 * n]);
+            out.write_triangles(&mut serial, false);
+            out.write_triangles(&mut parallel, true);
+            assert_eq!(serial, parallel);
+            let (mut faces, mut faces_parallel) = (vec![FaceId::new(0); n], vec![FaceId::new(7); n]);
+            out.write_triangle_faces(&mut faces, false);
+            out.write_triangle_faces(&mut faces_parallel, true);
+            assert_eq!(faces, faces_parallel);
+            let in_blocks: u32 = out.blocks.iter().map(Block::cell_triangles).sum();
+            assert_eq!(in_blocks as usize + out.triangles.len(), n);
+            for b in &out.blocks {
+                let range = b.first_triangle as usize..(b.first_triangle + b.cell_triangles()) as usize;
+                assert!(faces[range.clone()].iter().all(|f| f.index() == b.face as usize));
+                let grid = b.base..b.base + b.len();
+                assert!(serial[3 * range.start..3 * range.end].iter().all(|v| grid.contains(v)));
+            }
+            let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+            for t in serial.chunks_exact(3) {
+                for k in 0..3 {
+                    *edges.entry((t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))).or_default() += 1;
+                }
+            }
+            assert!(edges.values().all(|&c| c == 2), "an edge without two triangles");
         }
     }
 
