@@ -22,6 +22,11 @@
 //! edge (and each N-gon spoke) merging the two rows nearest it in parameter order, and **rings**
 //! around each vertex through the nearest point of each incident face. Every output edge is then
 //! shared by exactly two polygons (or one, on the border), by construction.
+//!
+//! Most triangles follow a pattern (a cell's grid of quads; the ladder of quads between two rows
+//! of equal parameters, along an edge between two whole quads of one rate or an N-gon's spoke):
+//! those are [`Run`]s of a few numbers, written straight into the output, in parallel, by
+//! [`Topology::write_triangles`]; the others are stored, in the order they are made.
 
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
 use subdiv_stencil::{Dyadic, FaceDomain};
@@ -38,19 +43,13 @@ pub(crate) struct Site {
 
 /// The dual grid of a whole quad face (not a sub-face): its points are `base + j·n + i` at
 /// `((i+½)/n, (j+½)/n)`, which the regular fast path evaluates row by row. Their sites are
-/// implicit ([`Topology::site`]); `sites` is the number of explicit sites before `base`. So are
-/// the triangles of its grid of quads ([`Block::write_cells`]), most of a tessellation's: they
-/// are written straight into the output, in parallel, and never stored; `triangles` is the
-/// number of explicit triangles made before them, `first_triangle` the first one's index in the
-/// output.
+/// implicit ([`Topology::site`]); `sites` is the number of explicit sites before `base`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Block {
     pub face: u32,
     pub rate: u32,
     pub base: u32,
     pub sites: u32,
-    pub triangles: u32,
-    pub first_triangle: u32,
 }
 
 impl Block {
@@ -59,29 +58,75 @@ impl Block {
         self.rate * self.rate
     }
 
-    /// The number of triangles of its grid: two per quad between four neighbouring points.
-    pub(super) fn cell_triangles(&self) -> u32 {
-        2 * (self.rate - 1) * (self.rate - 1)
-    }
-
-    /// Its grid's triangles (`3 ×` [`cell_triangles`](Self::cell_triangles) indices), row by
-    /// row: quad `k, k + 1, k + 1 + n, k + n` as `(k, k + 1, k + 1 + n)` and `(k, k + 1 + n, k + n)`.
-    fn write_cells(&self, out: &mut [u32]) {
-        let n = self.rate;
-        let mut quads = out.chunks_exact_mut(6);
-        for j in 0..n.saturating_sub(1) {
-            for (i, q) in (0..n - 1).zip(quads.by_ref()) {
-                let k = self.base + j * n + i;
-                q.copy_from_slice(&[k, k + 1, k + 1 + n, k, k + 1 + n, k + n]);
-            }
-        }
-    }
-
     /// The site of its point `k = j · rate + i`.
     #[inline]
     pub(super) fn site(&self, k: u32) -> Site {
         let (i, j, q) = (i64::from(k % self.rate), i64::from(k / self.rate), 2 * i64::from(self.rate));
         Site { face: self.face, point: Dyadic::new(2 * i + 1, 2 * j + 1, q) }
+    }
+}
+
+/// Triangles that follow a pattern, most of a tessellation's: they are written straight into
+/// the output ([`Topology::write_triangles`]), in parallel, and never stored. `explicit` is the
+/// number of explicit triangles made before them, `first` the first one's index in the output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Run {
+    pub face: u32,
+    pub explicit: u32,
+    pub first: u32,
+    pub shape: RunShape,
+}
+
+/// The pattern of a [`Run`]; each quad `a b c d` (counter-clockwise) as `(a, b, c)` and `(a, c, d)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum RunShape {
+    /// A block's `n × n` points' quads `k, k + 1, k + 1 + n, k + n`, row by row (`k = base + j·n + i`).
+    Grid { base: u32, n: u32 },
+    /// The quads between two rows of `len` points each, `a + k·da` on the left and `b + k·db` on
+    /// the right of their direction (steps in two's complement): `b_k, b_k+1, a_k+1, a_k`, as
+    /// [`Builder::strip`] makes them between rows of equal parameters.
+    Ladder { a: u32, da: u32, b: u32, db: u32, len: u32 },
+}
+
+impl Run {
+    /// The number of triangles.
+    pub(super) fn triangles(&self) -> u32 {
+        match self.shape {
+            RunShape::Grid { n, .. } => 2 * (n - 1) * (n - 1),
+            RunShape::Ladder { len, .. } => 2 * len.saturating_sub(1),
+        }
+    }
+
+    /// Its quads, in order.
+    #[inline]
+    fn quads(&self, mut put: impl FnMut([u32; 4])) {
+        match self.shape {
+            RunShape::Grid { base, n } => {
+                for j in 0..n.saturating_sub(1) {
+                    for i in 0..n - 1 {
+                        let k = base + j * n + i;
+                        put([k, k + 1, k + 1 + n, k + n]);
+                    }
+                }
+            }
+            RunShape::Ladder { mut a, da, mut b, db, len } => {
+                for _ in 1..len {
+                    let (a1, b1) = (a.wrapping_add(da), b.wrapping_add(db));
+                    put([b, b1, a1, a]);
+                    (a, b) = (a1, b1);
+                }
+            }
+        }
+    }
+
+    /// Its triangles' indices (`3 ×` [`triangles`](Self::triangles)).
+    fn write(&self, out: &mut [u32]) {
+        let mut triangles = out.chunks_exact_mut(6);
+        self.quads(|[a, b, c, d]| {
+            if let Some(t) = triangles.next() {
+                t.copy_from_slice(&[a, b, c, a, c, d]);
+            }
+        });
     }
 }
 
@@ -105,11 +150,13 @@ pub(crate) struct Topology {
     /// which spares writing most of them: [`Self::site`]).
     pub sites: Vec<Site>,
     pub blocks: Vec<Block>,
-    /// The explicit triangles (every triangle outside the blocks' grids), in output order, and
-    /// their faces.
+    /// The triangles made by pattern, in output order.
+    pub runs: Vec<Run>,
+    /// The explicit triangles (every triangle outside the runs), in output order, and their
+    /// faces.
     pub triangles: Vec<[u32; 3]>,
     pub triangle_faces: Vec<FaceId>,
-    /// The number of triangles, the blocks' included.
+    /// The number of triangles, the runs' included.
     pub triangle_count: u32,
     pub polygon_offsets: Vec<u32>,
     pub polygon_vertices: Vec<u32>,
@@ -155,20 +202,20 @@ impl Topology {
     }
 
     /// Every triangle, in output order (three indices each), into `out`, which has
-    /// `3 ×` [`triangle_count`](Self::triangle_count) entries: the blocks' grids made here, the
-    /// explicit triangles copied between them.
+    /// `3 ×` [`triangle_count`](Self::triangle_count) entries: the runs made here, the explicit
+    /// triangles copied between them.
     pub(super) fn write_triangles(&self, out: &mut [u32], parallel: bool) {
-        self.write_in_order(out, 3, self.triangles.as_flattened(), parallel, &|b, out| b.write_cells(out));
+        self.write_in_order(out, 3, self.triangles.as_flattened(), parallel, &|r, out| r.write(out));
     }
 
     /// Every triangle's face, in output order, into `out` ([`triangle_count`](Self::triangle_count) entries).
     pub(super) fn write_triangle_faces(&self, out: &mut [FaceId], parallel: bool) {
-        self.write_in_order(out, 1, &self.triangle_faces, parallel, &|b, out| out.fill(FaceId::new(b.face)));
+        self.write_in_order(out, 1, &self.triangle_faces, parallel, &|r, out| out.fill(FaceId::new(r.face)));
     }
 
     /// The walk of [`write_triangles`](Self::write_triangles) for `width` values per triangle:
-    /// the explicit triangles before the first block, then per block its grid (`cells`) and the
-    /// explicit triangles after it, halving the blocks between rayon's threads while a half has
+    /// the explicit triangles before the first run, then per run its triangles (`made`) and the
+    /// explicit triangles after it, halving the runs between rayon's threads while a half has
     /// enough triangles to be worth one.
     fn write_in_order<T: Copy + Send + Sync>(
         &self,
@@ -176,13 +223,13 @@ impl Topology {
         width: usize,
         explicit: &[T],
         parallel: bool,
-        cells: &(dyn Fn(&Block, &mut [T]) + Sync),
+        made: &(dyn Fn(&Run, &mut [T]) + Sync),
     ) {
         assert_eq!(out.len(), width * self.triangle_count as usize, "one entry per triangle value");
-        let lead = self.blocks.first().map_or(self.triangles.len(), |b| b.triangles as usize) * width;
+        let lead = self.runs.first().map_or(self.triangles.len(), |r| r.explicit as usize) * width;
         let (head, rest) = out.split_at_mut(lead);
         head.copy_from_slice(&explicit[..lead]);
-        write_blocks(&self.blocks, explicit.len() / width, rest, width, explicit, parallel, cells);
+        write_runs(&self.runs, explicit.len() / width, rest, width, explicit, parallel, made);
     }
 
     /// Every vertex's site, in vertex order.
@@ -198,34 +245,34 @@ impl Topology {
     }
 }
 
-/// [`Topology::write_in_order`] from `blocks[0]` on (`out` starts at its first triangle), up to
-/// the explicit triangle `end` (that of the block after the last, or the end).
-fn write_blocks<T: Copy + Send + Sync>(
-    blocks: &[Block],
+/// [`Topology::write_in_order`] from `runs[0]` on (`out` starts at its first triangle), up to
+/// the explicit triangle `end` (that of the run after the last, or the end).
+fn write_runs<T: Copy + Send + Sync>(
+    runs: &[Run],
     end: usize,
     out: &mut [T],
     width: usize,
     explicit: &[T],
     parallel: bool,
-    cells: &(dyn Fn(&Block, &mut [T]) + Sync),
+    made: &(dyn Fn(&Run, &mut [T]) + Sync),
 ) {
     /// Triangles below which a half is written where it is (a few microseconds of work).
     const GRAIN: usize = 1 << 14;
-    if parallel && blocks.len() > 1 && out.len() > GRAIN * width {
-        let mid = blocks.len() / 2;
-        let (a, b) = out.split_at_mut((blocks[mid].first_triangle - blocks[0].first_triangle) as usize * width);
-        let next = blocks[mid].triangles as usize;
+    if parallel && runs.len() > 1 && out.len() > GRAIN * width {
+        let mid = runs.len() / 2;
+        let (a, b) = out.split_at_mut((runs[mid].first - runs[0].first) as usize * width);
+        let next = runs[mid].explicit as usize;
         rayon::join(
-            || write_blocks(&blocks[..mid], next, a, width, explicit, parallel, cells),
-            || write_blocks(&blocks[mid..], end, b, width, explicit, parallel, cells),
+            || write_runs(&runs[..mid], next, a, width, explicit, parallel, made),
+            || write_runs(&runs[mid..], end, b, width, explicit, parallel, made),
         );
         return;
     }
     let mut out = out;
-    for (k, b) in blocks.iter().enumerate() {
-        let (grid, rest) = out.split_at_mut(b.cell_triangles() as usize * width);
-        cells(b, grid);
-        let after = b.triangles as usize..blocks.get(k + 1).map_or(end, |next| next.triangles as usize);
+    for (k, r) in runs.iter().enumerate() {
+        let (mine, rest) = out.split_at_mut(r.triangles() as usize * width);
+        made(r, mine);
+        let after = r.explicit as usize..runs.get(k + 1).map_or(end, |next| next.explicit as usize);
         let (copy, rest) = rest.split_at_mut(after.len() * width);
         copy.copy_from_slice(&explicit[after.start * width..after.end * width]);
         out = rest;
@@ -345,6 +392,7 @@ impl<'a> Builder<'a> {
         o.vertex_count = 0;
         o.sites.clear();
         o.blocks.clear();
+        o.runs.clear();
         o.triangles.clear();
         o.triangle_faces.clear();
         o.triangle_count = 0;
@@ -392,6 +440,17 @@ impl<'a> Builder<'a> {
         self.polygon(q, face);
     }
 
+    /// Triangles by pattern (and their quads' polygons, if asked for).
+    fn run(&mut self, face: u32, shape: RunShape) {
+        let o = &mut self.out;
+        let run = Run { face, explicit: o.triangles.len() as u32, first: o.triangle_count, shape };
+        o.runs.push(run);
+        o.triangle_count += run.triangles();
+        if self.quads {
+            run.quads(|q| self.polygon(q, face));
+        }
+    }
+
     /// A quad's polygon, if asked for (its triangles made or implicit).
     fn polygon(&mut self, q: [u32; 4], face: u32) {
         if self.quads {
@@ -432,11 +491,8 @@ impl<'a> Builder<'a> {
         let base = self.out.vertex_count;
         match domain {
             FaceDomain::Quad => {
-                let o = &self.out;
-                let (sites, triangles) = (o.sites.len() as u32, o.triangles.len() as u32);
-                let block = Block { face: f as u32, rate: n, base, sites, triangles, first_triangle: o.triangle_count };
-                self.out.blocks.push(block);
-                self.out.triangle_count += block.cell_triangles();
+                let sites = self.out.sites.len() as u32;
+                self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
                 self.quad_cell(f, domain, None, n);
                 self.faces.push(Some(FaceCells { base, m: n, domain }));
             }
@@ -451,26 +507,8 @@ impl<'a> Builder<'a> {
                 // sub-face s + 1's side 2, reversed: equal rates, so quads.
                 for s in 0..size {
                     let t = (s + 1) % size;
-                    self.row.clear();
-                    self.other.clear();
-                    for k in 0..m {
-                        let t2 = u64::from(2 * k + 1);
-                        self.row.push(RowPoint {
-                            vertex: cell(s, m - 1, k),
-                            num: t2,
-                            den: 2 * u64::from(m),
-                            near: true,
-                        });
-                        self.other.push(RowPoint {
-                            vertex: cell(t, k, m - 1),
-                            num: t2,
-                            den: 2 * u64::from(m),
-                            near: true,
-                        });
-                    }
-                    let (row, other) = (std::mem::take(&mut self.row), std::mem::take(&mut self.other));
-                    self.strip(&row, &other, f as u32);
-                    (self.row, self.other) = (row, other);
+                    let (a, b) = (cell(s, m - 1, 0), cell(t, 0, m - 1));
+                    self.run(f as u32, RunShape::Ladder { a, da: m, b, db: 1, len: m });
                 }
                 // The centre: the sub-faces' inner corners, counter-clockwise.
                 let mut ring = std::mem::take(&mut self.ring);
@@ -535,19 +573,25 @@ impl<'a> Builder<'a> {
                 }
             }
         } else {
-            // A whole face: a block, whose sites and triangles are implicit (counted by `face`).
+            // A whole face: a block, whose sites are implicit.
             self.out.vertex_count += m * m;
-            if !self.quads {
-                return;
-            }
         }
-        for j in 0..m.saturating_sub(1) {
-            for i in 0..m - 1 {
-                let k = base + j * m + i;
-                let q = [k, k + 1, k + 1 + m, k + m];
-                if sub.is_some() { self.quad(q, f as u32) } else { self.polygon(q, f as u32) }
-            }
-        }
+        self.run(f as u32, RunShape::Grid { base, n: m });
+    }
+
+    /// The first point and the step of face `f`'s row nearest its side `c` (as
+    /// [`side_row`](Self::side_row) lists it), if `f` is a whole quad (a block).
+    fn block_side(&self, f: usize, c: usize) -> Option<(u32, u32, u32)> {
+        let cells = self.faces[f]?;
+        let (base, m) = (cells.base, cells.m);
+        let FaceDomain::Quad = cells.domain else { return None };
+        let (start, step) = match c {
+            0 => (base, 1),
+            1 => (base + m - 1, m),
+            2 => (base + m * m - 1, 1u32.wrapping_neg()),
+            _ => (base + (m - 1) * m, m.wrapping_neg()),
+        };
+        Some((start, step, m))
     }
 
     /// The points of face `f`'s cells nearest its side `c` (from corner `c` to `c + 1`), in
@@ -672,21 +716,36 @@ impl<'a> Builder<'a> {
     fn edge(&mut self, h: HalfEdgeId) {
         let f = self.mesh.face(h).index();
         let c = self.corner[h.index()] as usize;
+        let border = self.is_border(h);
+        let twin = self.mesh.twin(h).filter(|_| !border);
+        // Each interior edge once, from its lower half-edge.
+        if twin.is_some_and(|t| t.index() < h.index()) {
+            return;
+        }
+        if let Some(t) = twin {
+            let g = self.mesh.face(t).index();
+            // Between two blocks of one rate, the strip is a ladder of quads (the other row
+            // reversed, as below).
+            if let (Some((a, da, m)), Some((b, db, n))) =
+                (self.block_side(f, c), self.block_side(g, self.corner[t.index()] as usize))
+                && m == n
+            {
+                let (b, db) = (b.wrapping_add((m - 1).wrapping_mul(db)), db.wrapping_neg());
+                self.run(f as u32, RunShape::Ladder { a, da, b, db, len: m });
+                return;
+            }
+        }
         let mut row = std::mem::take(&mut self.row);
         let mut other = std::mem::take(&mut self.other);
         self.side_row(f, c, &mut row);
-        if !self.is_border(h) {
-            let t = self.mesh.twin(h).expect("not a border");
-            // Each interior edge once, from its lower half-edge.
-            if h.index() < t.index() {
-                let g = self.mesh.face(t).index();
-                self.side_row(g, self.corner[t.index()] as usize, &mut other);
-                other.reverse();
-                for p in &mut other {
-                    p.num = p.den - p.num;
-                }
-                self.strip(&row, &other, f as u32);
+        if let Some(t) = twin {
+            let g = self.mesh.face(t).index();
+            self.side_row(g, self.corner[t.index()] as usize, &mut other);
+            other.reverse();
+            for p in &mut other {
+                p.num = p.den - p.num;
             }
+            self.strip(&row, &other, f as u32);
         } else {
             other.clear();
             let first = self.out.vertex_count;
@@ -1032,10 +1091,10 @@ mod tests {
         }
     }
 
-    /// The blocks' implicit triangles land where the builder counted them, between the
-    /// explicit ones, whether written on one thread or halved between several (at rates where
-    /// the halving starts: more than `GRAIN` triangles): every output edge of a closed mesh
-    /// then has two triangles, and each block's range holds exactly its grid, of its face.
+    /// The runs' triangles land where the builder counted them, between the explicit ones,
+    /// whether written on one thread or halved between several (at rates where the halving
+    /// starts: more than `GRAIN` triangles): every output edge of a closed mesh then has two
+    /// triangles, and each run's range holds its face's triangles (a grid's, of its points).
     #[test]
     fn block_triangles_are_written_in_place() {
         for soup in [shapes::default_model(), shapes::ngon_prism(5), shapes::quad_torus(6, 5)] {
@@ -1057,13 +1116,15 @@ mod tests {
             out.write_triangle_faces(&mut faces, false);
             out.write_triangle_faces(&mut faces_parallel, true);
             assert_eq!(faces, faces_parallel);
-            let in_blocks: u32 = out.blocks.iter().map(Block::cell_triangles).sum();
-            assert_eq!(in_blocks as usize + out.triangles.len(), n);
-            for b in &out.blocks {
-                let range = b.first_triangle as usize..(b.first_triangle + b.cell_triangles()) as usize;
-                assert!(faces[range.clone()].iter().all(|f| f.index() == b.face as usize));
-                let grid = b.base..b.base + b.len();
-                assert!(serial[3 * range.start..3 * range.end].iter().all(|v| grid.contains(v)));
+            let in_runs: u32 = out.runs.iter().map(Run::triangles).sum();
+            assert_eq!(in_runs as usize + out.triangles.len(), n);
+            for r in &out.runs {
+                let range = r.first as usize..(r.first + r.triangles()) as usize;
+                assert!(faces[range.clone()].iter().all(|f| f.index() == r.face as usize));
+                if let RunShape::Grid { base, n } = r.shape {
+                    let grid = base..base + n * n;
+                    assert!(serial[3 * range.start..3 * range.end].iter().all(|v| grid.contains(v)));
+                }
             }
             let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
             for t in serial.chunks_exact(3) {
