@@ -71,7 +71,7 @@ use self::eval::Evaluator;
 pub use self::plan::{
     EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
 };
-use self::topology::{Builder, Topology};
+use self::topology::{Builder, BuilderBuffers, Topology};
 use crate::rates::RingDepths;
 use crate::{SurfaceParameter, TessError, TessMesh};
 
@@ -153,6 +153,7 @@ pub struct DualTessellator {
     vertex_count: usize,
     evaluator: Evaluator,
     builder_mesh: Mesh,
+    builder_buffers: BuilderBuffers,
     topology: Topology,
     rates: Vec<u32>,
     output: TessMesh,
@@ -180,6 +181,7 @@ impl DualTessellator {
             vertex_count: mesh.vertex_count(),
             evaluator,
             builder_mesh,
+            builder_buffers: BuilderBuffers::default(),
             topology: Topology::default(),
             rates: Vec::new(),
             output: TessMesh::default(),
@@ -289,8 +291,10 @@ impl DualTessellator {
         if let Some((face, &rate)) = rates.iter().enumerate().find(|(_, r)| !(1..=MAX_DUAL_RATE).contains(*r)) {
             return Err(TessError::Rate { face, rate, rule: "rates are integers from 1 to MAX_DUAL_RATE = 128" });
         }
-        let mut builder = Builder::new(&self.builder_mesh, self.triangle, self.options.quads);
+        let buffers = std::mem::take(&mut self.builder_buffers);
+        let mut builder = Builder::with_buffers(&self.builder_mesh, self.triangle, self.options.quads, buffers);
         builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
+        self.builder_buffers = builder.into_buffers();
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.output_current = false;
         self.rates.clear();

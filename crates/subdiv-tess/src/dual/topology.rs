@@ -342,31 +342,102 @@ pub(crate) struct Builder<'a> {
     ring_centres: Vec<u32>,
 }
 
+/// A [`Builder`]'s buffers between calls (kept by the tessellator, so that a call allocates
+/// nothing): the buffers of one mesh (`corner` is computed when its length is not the mesh's).
+#[derive(Debug, Default)]
+pub(crate) struct BuilderBuffers {
+    faces: Vec<Option<FaceCells>>,
+    corner: Vec<u32>,
+    border: Vec<(u32, u32)>,
+    row: Vec<RowPoint>,
+    other: Vec<RowPoint>,
+    ring: Vec<u32>,
+    starts: Vec<HalfEdgeId>,
+    ring_corners: Vec<RingCorner>,
+    rates: Vec<u32>,
+    ring_vertices: Vec<u32>,
+    ring_centres: Vec<u32>,
+}
+
 impl<'a> Builder<'a> {
     /// `domains[f]` is `None` for a hole.
+    #[cfg(test)]
     pub(crate) fn new(mesh: &'a Mesh, triangle: bool, quads: bool) -> Self {
-        let mut corner = vec![0; mesh.half_edge_count()];
-        for f in mesh.face_ids() {
-            for (k, h) in mesh.face_half_edges(f).enumerate() {
-                corner[h.index()] = k as u32;
+        Self::with_buffers(mesh, triangle, quads, BuilderBuffers::default())
+    }
+
+    /// A builder on the buffers of an earlier one of `mesh` ([`into_buffers`](Self::into_buffers)).
+    pub(crate) fn with_buffers(mesh: &'a Mesh, triangle: bool, quads: bool, buffers: BuilderBuffers) -> Self {
+        let BuilderBuffers {
+            faces,
+            corner,
+            border,
+            row,
+            other,
+            ring,
+            starts,
+            ring_corners,
+            rates,
+            ring_vertices,
+            ring_centres,
+        } = buffers;
+        let mut corner = corner;
+        if corner.len() != mesh.half_edge_count() {
+            corner.clear();
+            corner.resize(mesh.half_edge_count(), 0);
+            for f in mesh.face_ids() {
+                for (k, h) in mesh.face_half_edges(f).enumerate() {
+                    corner[h.index()] = k as u32;
+                }
             }
         }
         Self {
             mesh,
             triangle,
             quads,
-            faces: Vec::new(),
-            corner,
-            border: Vec::new(),
             out: Topology::default(),
-            row: Vec::new(),
-            other: Vec::new(),
-            ring: Vec::new(),
-            starts: Vec::new(),
-            ring_corners: Vec::new(),
-            rates: Vec::new(),
-            ring_vertices: Vec::new(),
-            ring_centres: Vec::new(),
+            faces,
+            corner,
+            border,
+            row,
+            other,
+            ring,
+            starts,
+            ring_corners,
+            rates,
+            ring_vertices,
+            ring_centres,
+        }
+    }
+
+    /// The buffers, for the next builder of the same mesh.
+    pub(crate) fn into_buffers(self) -> BuilderBuffers {
+        let Self {
+            faces,
+            corner,
+            border,
+            row,
+            other,
+            ring,
+            starts,
+            ring_corners,
+            rates,
+            ring_vertices,
+            ring_centres,
+            ..
+        } = self;
+        BuilderBuffers {
+            faces,
+            corner,
+            border,
+            row,
+            other,
+            ring,
+            starts,
+            ring_corners,
+            rates,
+            ring_vertices,
+            ring_centres,
         }
     }
 
