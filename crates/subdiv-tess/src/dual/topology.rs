@@ -324,22 +324,8 @@ pub(crate) struct Builder<'a> {
     mesh: &'a Mesh,
     triangle: bool,
     quads: bool,
-    faces: Vec<Option<FaceCells>>,
-    /// Per half-edge: its corner number in its face.
-    corner: Vec<u32>,
-    /// Per half-edge on a border: its first border point and their number.
-    border: Vec<(u32, u32)>,
     out: Topology,
-    row: Vec<RowPoint>,
-    other: Vec<RowPoint>,
-    ring: Vec<u32>,
-    starts: Vec<HalfEdgeId>,
-    /// The ring's corners, beside `ring` (for the rings around extraordinary points).
-    ring_corners: Vec<RingCorner>,
-    /// The rates being built, and the ring depths (empty: none).
-    rates: Vec<u32>,
-    ring_vertices: Vec<u32>,
-    ring_centres: Vec<u32>,
+    buf: BuilderBuffers,
 }
 
 /// A [`Builder`]'s buffers between calls (kept by the tessellator, so that a call allocates
@@ -347,13 +333,17 @@ pub(crate) struct Builder<'a> {
 #[derive(Debug, Default)]
 pub(crate) struct BuilderBuffers {
     faces: Vec<Option<FaceCells>>,
+    /// Per half-edge: its corner number in its face.
     corner: Vec<u32>,
+    /// Per half-edge on a border: its first border point and their number.
     border: Vec<(u32, u32)>,
     row: Vec<RowPoint>,
     other: Vec<RowPoint>,
     ring: Vec<u32>,
     starts: Vec<HalfEdgeId>,
+    /// The ring's corners, beside `ring` (for the rings around extraordinary points).
     ring_corners: Vec<RingCorner>,
+    /// The rates being built, and the ring depths (empty: none).
     rates: Vec<u32>,
     ring_vertices: Vec<u32>,
     ring_centres: Vec<u32>,
@@ -367,78 +357,22 @@ impl<'a> Builder<'a> {
     }
 
     /// A builder on the buffers of an earlier one of `mesh` ([`into_buffers`](Self::into_buffers)).
-    pub(crate) fn with_buffers(mesh: &'a Mesh, triangle: bool, quads: bool, buffers: BuilderBuffers) -> Self {
-        let BuilderBuffers {
-            faces,
-            corner,
-            border,
-            row,
-            other,
-            ring,
-            starts,
-            ring_corners,
-            rates,
-            ring_vertices,
-            ring_centres,
-        } = buffers;
-        let mut corner = corner;
-        if corner.len() != mesh.half_edge_count() {
-            corner.clear();
-            corner.resize(mesh.half_edge_count(), 0);
+    pub(crate) fn with_buffers(mesh: &'a Mesh, triangle: bool, quads: bool, mut buf: BuilderBuffers) -> Self {
+        if buf.corner.len() != mesh.half_edge_count() {
+            buf.corner.clear();
+            buf.corner.resize(mesh.half_edge_count(), 0);
             for f in mesh.face_ids() {
                 for (k, h) in mesh.face_half_edges(f).enumerate() {
-                    corner[h.index()] = k as u32;
+                    buf.corner[h.index()] = k as u32;
                 }
             }
         }
-        Self {
-            mesh,
-            triangle,
-            quads,
-            out: Topology::default(),
-            faces,
-            corner,
-            border,
-            row,
-            other,
-            ring,
-            starts,
-            ring_corners,
-            rates,
-            ring_vertices,
-            ring_centres,
-        }
+        Self { mesh, triangle, quads, out: Topology::default(), buf }
     }
 
     /// The buffers, for the next builder of the same mesh.
     pub(crate) fn into_buffers(self) -> BuilderBuffers {
-        let Self {
-            faces,
-            corner,
-            border,
-            row,
-            other,
-            ring,
-            starts,
-            ring_corners,
-            rates,
-            ring_vertices,
-            ring_centres,
-            ..
-        } = self;
-        BuilderBuffers {
-            faces,
-            corner,
-            border,
-            row,
-            other,
-            ring,
-            starts,
-            ring_corners,
-            rates,
-            ring_vertices,
-            ring_centres,
-        }
+        self.buf
     }
 
     /// The topology at `rates` with `rings` around extraordinary points (both checked by the
@@ -450,13 +384,13 @@ impl<'a> Builder<'a> {
         rings: Option<&RingDepths>,
         out: &mut Topology,
     ) {
-        self.rates.clear();
-        self.rates.extend_from_slice(rates);
-        self.ring_vertices.clear();
-        self.ring_centres.clear();
+        self.buf.rates.clear();
+        self.buf.rates.extend_from_slice(rates);
+        self.buf.ring_vertices.clear();
+        self.buf.ring_centres.clear();
         if let Some(r) = rings {
-            self.ring_vertices.extend_from_slice(&r.vertices);
-            self.ring_centres.extend_from_slice(&r.centres);
+            self.buf.ring_vertices.extend_from_slice(&r.vertices);
+            self.buf.ring_centres.extend_from_slice(&r.centres);
         }
         std::mem::swap(&mut self.out, out);
         let o = &mut self.out;
@@ -471,14 +405,14 @@ impl<'a> Builder<'a> {
         o.polygon_offsets.push(0);
         o.polygon_vertices.clear();
         o.polygon_faces.clear();
-        self.faces.clear();
-        self.border.clear();
-        self.border.resize(self.mesh.half_edge_count(), (u32::MAX, 0));
+        self.buf.faces.clear();
+        self.buf.border.clear();
+        self.buf.border.resize(self.mesh.half_edge_count(), (u32::MAX, 0));
         for f in 0..domains.len() {
             self.face(f, domains[f], rates[f]);
         }
         for f in self.mesh.face_ids() {
-            if self.faces[f.index()].is_none() {
+            if self.buf.faces[f.index()].is_none() {
                 continue;
             }
             for h in self.mesh.face_half_edges(f) {
@@ -556,7 +490,7 @@ impl<'a> Builder<'a> {
     /// Cell points and interiors of face `f`.
     fn face(&mut self, f: usize, domain: Option<FaceDomain>, n: u32) {
         let Some(domain) = domain else {
-            self.faces.push(None);
+            self.buf.faces.push(None);
             return;
         };
         let base = self.out.vertex_count;
@@ -565,14 +499,14 @@ impl<'a> Builder<'a> {
                 let sites = self.out.sites.len() as u32;
                 self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
                 self.quad_cell(f, domain, None, n);
-                self.faces.push(Some(FaceCells { base, m: n, domain }));
+                self.buf.faces.push(Some(FaceCells { base, m: n, domain }));
             }
             FaceDomain::SubFaces { size, .. } => {
                 let m = n.div_ceil(2);
                 for s in 0..size {
                     self.quad_cell(f, domain, Some(s), m);
                 }
-                self.faces.push(Some(FaceCells { base, m, domain }));
+                self.buf.faces.push(Some(FaceCells { base, m, domain }));
                 let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
                 // Spoke s: sub-face s's side 1 (from the middle of side s to the centre) against
                 // sub-face s + 1's side 2, reversed: equal rates, so quads.
@@ -582,22 +516,22 @@ impl<'a> Builder<'a> {
                     self.run(f as u32, RunShape::Ladder { a, da: m, b, db: 1, len: m });
                 }
                 // The centre: the sub-faces' inner corners, counter-clockwise.
-                let mut ring = std::mem::take(&mut self.ring);
+                let mut ring = std::mem::take(&mut self.buf.ring);
                 ring.clear();
                 ring.extend((0..size).map(|s| cell(s, m - 1, m - 1)));
                 let centre_point = domain.from_sub_face(0, Dyadic::new(1, 1, 1));
-                let depth = self.ring_centres.get(f).copied().unwrap_or(0);
+                let depth = self.buf.ring_centres.get(f).copied().unwrap_or(0);
                 if depth > 0 {
-                    let mut corners = std::mem::take(&mut self.ring_corners);
+                    let mut corners = std::mem::take(&mut self.buf.ring_corners);
                     corners.clear();
                     corners.extend((0..size as u32).map(|sub| RingCorner::Centre { face: f as u32, sub }));
                     self.rings(&corners, &ring, depth, (f, centre_point));
-                    self.ring_corners = corners;
+                    self.buf.ring_corners = corners;
                 } else {
                     let centre = (size >= 5).then(|| self.push_site(f, centre_point));
                     self.close_ring(&ring, centre, f as u32);
                 }
-                self.ring = ring;
+                self.buf.ring = ring;
             }
             FaceDomain::Triangle => {
                 let q = i64::from(3 * n);
@@ -610,7 +544,7 @@ impl<'a> Builder<'a> {
                         }
                     }
                 }
-                self.faces.push(Some(FaceCells { base, m: n, domain }));
+                self.buf.faces.push(Some(FaceCells { base, m: n, domain }));
                 let up = |i: u32, j: u32| base + 2 * n * j - j * j + 2 * i;
                 for j in 1..n {
                     for i in 1..n - j {
@@ -653,7 +587,7 @@ impl<'a> Builder<'a> {
     /// The first point and the step of face `f`'s row nearest its side `c` (as
     /// [`side_row`](Self::side_row) lists it), if `f` is a whole quad (a block).
     fn block_side(&self, f: usize, c: usize) -> Option<(u32, u32, u32)> {
-        let cells = self.faces[f]?;
+        let cells = self.buf.faces[f]?;
         let (base, m) = (cells.base, cells.m);
         let FaceDomain::Quad = cells.domain else { return None };
         let (start, step) = match c {
@@ -669,7 +603,7 @@ impl<'a> Builder<'a> {
     /// that direction, with their parameters along the side, into `row`.
     fn side_row(&self, f: usize, c: usize, row: &mut Vec<RowPoint>) {
         row.clear();
-        let Some(cells) = self.faces[f] else { return };
+        let Some(cells) = self.buf.faces[f] else { return };
         let (base, m) = (cells.base, cells.m);
         let m64 = u64::from(m);
         match cells.domain {
@@ -727,7 +661,7 @@ impl<'a> Builder<'a> {
     /// The parameter of face `f` at `t = num / den` along its side `c`.
     fn on_side(&self, f: usize, c: usize, num: u64, den: u64) -> Dyadic {
         let (t, d) = (num as i64, den as i64);
-        let cells = self.faces[f].expect("a face with a surface");
+        let cells = self.buf.faces[f].expect("a face with a surface");
         match cells.domain {
             FaceDomain::Quad => match c {
                 0 => Dyadic::new(t, 0, d),
@@ -753,7 +687,7 @@ impl<'a> Builder<'a> {
 
     /// The parameter of face `f`'s corner `c`.
     fn corner_point(&self, f: usize, c: usize) -> Dyadic {
-        let cells = self.faces[f].expect("a face with a surface");
+        let cells = self.buf.faces[f].expect("a face with a surface");
         match cells.domain {
             FaceDomain::Quad => {
                 [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(1, 1, 1), Dyadic::new(0, 1, 1)][c]
@@ -765,7 +699,7 @@ impl<'a> Builder<'a> {
 
     /// Face `f`'s point nearest its corner `c`.
     fn corner_vertex(&self, f: usize, c: usize) -> u32 {
-        let cells = self.faces[f].expect("a face with a surface");
+        let cells = self.buf.faces[f].expect("a face with a surface");
         let (base, m) = (cells.base, cells.m);
         match cells.domain {
             FaceDomain::Quad => base + [0, m - 1, m * m - 1, m * (m - 1)][c],
@@ -779,14 +713,14 @@ impl<'a> Builder<'a> {
 
     /// Whether half-edge `h` (of a face with a surface) has no surface across it.
     fn is_border(&self, h: HalfEdgeId) -> bool {
-        self.mesh.twin(h).is_none_or(|t| self.faces[self.mesh.face(t).index()].is_none())
+        self.mesh.twin(h).is_none_or(|t| self.buf.faces[self.mesh.face(t).index()].is_none())
     }
 
     /// The strip along the edge of half-edge `h` (its face has a surface): against the other
     /// face's row, or against new border points.
     fn edge(&mut self, h: HalfEdgeId) {
         let f = self.mesh.face(h).index();
-        let c = self.corner[h.index()] as usize;
+        let c = self.buf.corner[h.index()] as usize;
         let border = self.is_border(h);
         let twin = self.mesh.twin(h).filter(|_| !border);
         // Each interior edge once, from its lower half-edge.
@@ -798,7 +732,7 @@ impl<'a> Builder<'a> {
             // Between two blocks of one rate, the strip is a ladder of quads (the other row
             // reversed, as below).
             if let (Some((a, da, m)), Some((b, db, n))) =
-                (self.block_side(f, c), self.block_side(g, self.corner[t.index()] as usize))
+                (self.block_side(f, c), self.block_side(g, self.buf.corner[t.index()] as usize))
                 && m == n
             {
                 let (b, db) = (b.wrapping_add((m - 1).wrapping_mul(db)), db.wrapping_neg());
@@ -806,12 +740,12 @@ impl<'a> Builder<'a> {
                 return;
             }
         }
-        let mut row = std::mem::take(&mut self.row);
-        let mut other = std::mem::take(&mut self.other);
+        let mut row = std::mem::take(&mut self.buf.row);
+        let mut other = std::mem::take(&mut self.buf.other);
         self.side_row(f, c, &mut row);
         if let Some(t) = twin {
             let g = self.mesh.face(t).index();
-            self.side_row(g, self.corner[t.index()] as usize, &mut other);
+            self.side_row(g, self.buf.corner[t.index()] as usize, &mut other);
             other.reverse();
             for p in &mut other {
                 p.num = p.den - p.num;
@@ -825,10 +759,10 @@ impl<'a> Builder<'a> {
                 let vertex = self.push_site(f, point);
                 other.push(RowPoint { vertex, num: p.num, den: p.den, near: true });
             }
-            self.border[h.index()] = (first, other.len() as u32);
+            self.buf.border[h.index()] = (first, other.len() as u32);
             self.strip(&row, &other, f as u32);
         }
-        (self.row, self.other) = (row, other);
+        (self.buf.row, self.buf.other) = (row, other);
     }
 
     /// Triangulates the ribbon between row `a` (on the left of the direction) and row `b` (on
@@ -870,8 +804,8 @@ impl<'a> Builder<'a> {
     /// borders (each run from a border to a border, around the vertex's limit point).
     fn vertex(&mut self, v: VertexId) {
         let mesh = self.mesh;
-        let has_surface = |h: HalfEdgeId| self.faces[mesh.face(h).index()].is_some();
-        let mut starts = std::mem::take(&mut self.starts);
+        let has_surface = |h: HalfEdgeId| self.buf.faces[mesh.face(h).index()].is_some();
+        let mut starts = std::mem::take(&mut self.buf.starts);
         starts.clear();
         starts.extend(mesh.outgoing(v).filter(|&h| has_surface(h) && self.is_border(h)));
         let closed = starts.is_empty();
@@ -879,31 +813,31 @@ impl<'a> Builder<'a> {
             match mesh.outgoing(v).find(|&h| has_surface(h)) {
                 Some(h) => starts.push(h),
                 None => {
-                    self.starts = starts;
+                    self.buf.starts = starts;
                     return;
                 }
             }
         }
         let mut centre = None;
-        let mut ring = std::mem::take(&mut self.ring);
-        let mut corners = std::mem::take(&mut self.ring_corners);
+        let mut ring = std::mem::take(&mut self.buf.ring);
+        let mut corners = std::mem::take(&mut self.buf.ring_corners);
         for &start in &starts {
             ring.clear();
             corners.clear();
             let f0 = mesh.face(start).index();
             if !closed {
-                let (first, _) = self.border[start.index()];
+                let (first, _) = self.buf.border[start.index()];
                 ring.push(first);
             }
             let mut h = start;
             loop {
                 let f = mesh.face(h).index();
-                ring.push(self.corner_vertex(f, self.corner[h.index()] as usize));
-                corners.push(RingCorner::Vertex { face: f as u32, corner: self.corner[h.index()] });
+                ring.push(self.corner_vertex(f, self.buf.corner[h.index()] as usize));
+                corners.push(RingCorner::Vertex { face: f as u32, corner: self.buf.corner[h.index()] });
                 let p = mesh.prev(h);
                 if self.is_border(p) {
                     if !closed {
-                        let (first, count) = self.border[p.index()];
+                        let (first, count) = self.buf.border[p.index()];
                         ring.push(first + count - 1);
                     }
                     break;
@@ -915,10 +849,10 @@ impl<'a> Builder<'a> {
             }
             // An extraordinary interior vertex (quad split) with a ring depth: rings down to it,
             // fanned around its limit point, in place of the polygon.
-            let depth = self.ring_vertices.get(v.index()).copied().unwrap_or(0);
+            let depth = self.buf.ring_vertices.get(v.index()).copied().unwrap_or(0);
             let regular = if self.triangle { 6 } else { 4 };
             if closed && depth > 0 && ring.len() >= 3 && ring.len() != regular {
-                let point = self.corner_point(f0, self.corner[start.index()] as usize);
+                let point = self.corner_point(f0, self.buf.corner[start.index()] as usize);
                 self.rings(&corners, &ring, depth, (f0, point));
                 continue;
             }
@@ -926,7 +860,7 @@ impl<'a> Builder<'a> {
             // fewer than 3 close nothing.
             let fan = !closed || (ring.len() >= 3 && (self.triangle || ring.len() >= 5));
             if fan && centre.is_none() {
-                let point = self.corner_point(f0, self.corner[start.index()] as usize);
+                let point = self.corner_point(f0, self.buf.corner[start.index()] as usize);
                 centre = Some(self.push_site(f0, point));
             }
             if closed {
@@ -938,9 +872,9 @@ impl<'a> Builder<'a> {
                 }
             }
         }
-        self.ring = ring;
-        self.ring_corners = corners;
-        self.starts = starts;
+        self.buf.ring = ring;
+        self.buf.ring_corners = corners;
+        self.buf.starts = starts;
     }
 
     /// The point `(a, b) · 2^−e` (face units, `a, b ≤ 2`, `e ≥ 2`) of `corner`'s frame, as its
@@ -948,7 +882,7 @@ impl<'a> Builder<'a> {
     /// coordinates, which are twice the face units (a sub-face is a quarter of the face); a
     /// triangle's turned to the corner (`s` along side `c`, `t` along side `c − 1` reversed).
     fn ring_point(&self, corner: RingCorner, a: i64, b: i64, e: u32) -> Dyadic {
-        let domain = self.faces[corner.face()].expect("a face with a surface").domain;
+        let domain = self.buf.faces[corner.face()].expect("a face with a surface").domain;
         match corner {
             RingCorner::Vertex { corner: c, .. } => match domain {
                 FaceDomain::SubFaces { .. } => domain.from_sub_face(c as usize, Dyadic::new(a, b, 1 << (e - 1))),
@@ -1000,7 +934,7 @@ impl<'a> Builder<'a> {
         let n = corners.len() as u32;
         let finest = corners
             .iter()
-            .map(|c| face_reach(self.mesh, self.triangle, FaceId::new(c.face() as u32), self.rates[c.face()]))
+            .map(|c| face_reach(self.mesh, self.triangle, FaceId::new(c.face() as u32), self.buf.rates[c.face()]))
             .max()
             .unwrap_or(1);
         let first = first_depth(self.triangle, finest);
