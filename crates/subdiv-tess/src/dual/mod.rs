@@ -160,6 +160,9 @@ pub struct DualTessellator {
     /// Whether `output` has the topology's connectivity and surface parameters (not after
     /// [`tessellate_flat`](Self::tessellate_flat), which leaves it empty).
     output_current: bool,
+    /// The triangles' indices, for [`update_cage_flat`](Self::update_cage_flat) when `output`
+    /// has none (made by its first call after [`tessellate_flat`](Self::tessellate_flat)).
+    flat_indices: Vec<u32>,
 }
 
 impl DualTessellator {
@@ -186,6 +189,7 @@ impl DualTessellator {
             rates: Vec::new(),
             output: TessMesh::default(),
             output_current: false,
+            flat_indices: Vec::new(),
         })
     }
 
@@ -297,6 +301,7 @@ impl DualTessellator {
         self.builder_buffers = builder.into_buffers();
         self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.output_current = false;
+        self.flat_indices.clear();
         self.rates.clear();
         self.rates.extend_from_slice(rates);
         Ok(())
@@ -333,7 +338,23 @@ impl DualTessellator {
     pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
-        self.write_flat_buffers(out);
+        let (t, parallel) = (&self.topology, self.options.parallel);
+        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
+        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
+        self.evaluator.evaluate_flat(t, parallel, &mut out.vertices);
+        // The same indices every frame: copied from the output's triangles, or from a copy
+        // made once (a copy runs at the memory's speed, which writing them anew does not reach
+        // on large meshes).
+        let indices = if self.output_current {
+            self.output.triangles.as_flattened()
+        } else {
+            if self.flat_indices.is_empty() && t.triangle_count > 0 {
+                self.flat_indices.resize(3 * t.triangle_count as usize, 0);
+                t.write_triangles(&mut self.flat_indices, parallel);
+            }
+            &self.flat_indices
+        };
+        copy_indices(indices, parallel, &mut out.indices);
         Ok(())
     }
 
@@ -351,20 +372,16 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate).
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.rebuild(rates, None)?;
-        self.write_flat_buffers(out);
+        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
+        let (t, parallel) = (&self.topology, self.options.parallel);
+        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
+        self.evaluator.evaluate_flat(t, parallel, &mut out.vertices);
+        // Written straight from the topology's runs: no stored copy of most of them.
+        out.indices.resize(3 * t.triangle_count as usize, 0);
+        t.write_triangles(&mut out.indices, parallel);
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
         self.output.clear();
         Ok(())
-    }
-
-    /// The flat buffers of the current topology on the latest cage.
-    fn write_flat_buffers(&self, out: &mut FlatMesh) {
-        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
-        let t = &self.topology;
-        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
-        self.evaluator.evaluate_flat(t, self.options.parallel, &mut out.vertices);
-        out.indices.resize(3 * t.triangle_count as usize, 0);
-        t.write_triangles(&mut out.indices, self.options.parallel);
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
@@ -477,4 +494,16 @@ pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u
 #[inline]
 fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
     [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
+}
+
+/// `indices` into `out` (which keeps its allocation), on rayon's threads if `parallel` and
+/// there are enough to be worth waking them (a copy of tens of megabytes at high rates, which
+/// one core does at a fraction of the memory's speed).
+fn copy_indices(indices: &[u32], parallel: bool, out: &mut Vec<u32>) {
+    out.clear();
+    if parallel && indices.len() >= 1 << 16 {
+        out.par_extend(indices.par_iter().copied());
+    } else {
+        out.extend_from_slice(indices);
+    }
 }
