@@ -480,6 +480,13 @@ fn update_cage_equals_a_fresh_tessellation() {
         // The first `update_cage` after it makes the whole mesh, as `tessellate` does.
         assert_eq!(flat_tess.update_cage(&moved).unwrap(), fresh_tess.mesh(), "{builtin:?}: update_cage after it");
         assert_eq!(flat_tess.update_cage(&moved).unwrap(), fresh_tess.mesh(), "{builtin:?}: and the next one");
+        // New rates: the animation copies the new indices, not those of the last rates.
+        let other = rates_for(&mesh, 5, 9);
+        flat_tess.tessellate_flat(&other, &mut stale).unwrap();
+        flat_tess.update_cage_flat(&moved, &mut stale).unwrap();
+        fresh_tess.tessellate(&other).unwrap();
+        fresh_tess.write_flat(&mut written);
+        assert_eq!(stale, written, "{builtin:?}: update_cage_flat after tessellate_flat at new rates");
     }
 }
 
