@@ -338,18 +338,16 @@ impl DualTessellator {
     pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
+        self.evaluate_flat(&mut out.vertices);
         let (t, parallel) = (&self.topology, self.options.parallel);
-        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
-        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
-        self.evaluator.evaluate_flat(t, parallel, &mut out.vertices);
         // The same indices every frame: copied from the output's triangles, or from a copy
         // made once (a copy runs at the memory's speed, which writing them anew does not reach
         // on large meshes).
         let indices = if self.output_current {
             self.output.triangles.as_flattened()
         } else {
-            if self.flat_indices.is_empty() && t.triangle_count > 0 {
-                self.flat_indices.resize(3 * t.triangle_count as usize, 0);
+            if self.flat_indices.is_empty() && t.triangle_count() > 0 {
+                self.flat_indices.resize(3 * t.triangle_count() as usize, 0);
                 t.write_triangles(&mut self.flat_indices, parallel);
             }
             &self.flat_indices
@@ -372,16 +370,21 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate).
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.rebuild(rates, None)?;
-        // Every value is overwritten: no clearing (a buffer of the right length is kept as is).
+        self.evaluate_flat(&mut out.vertices);
         let (t, parallel) = (&self.topology, self.options.parallel);
-        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
-        self.evaluator.evaluate_flat(t, parallel, &mut out.vertices);
         // Written straight from the topology's runs: no stored copy of most of them.
-        out.indices.resize(3 * t.triangle_count as usize, 0);
+        out.indices.resize(3 * t.triangle_count() as usize, 0);
         t.write_triangles(&mut out.indices, parallel);
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
         self.output.clear();
         Ok(())
+    }
+
+    /// Every vertex as `px py pz nx ny nz` in f32 into `vertices`, on the latest cage. Every
+    /// value is overwritten: no clearing (a buffer of the right length is kept as is).
+    fn evaluate_flat(&self, vertices: &mut Vec<f32>) {
+        vertices.resize(6 * self.topology.vertex_count as usize, 0.0);
+        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, vertices);
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
@@ -429,7 +432,7 @@ impl DualTessellator {
         let (t, parallel) = (&mut self.topology, self.options.parallel);
         let out = &mut self.output;
         self.evaluator.evaluate(t, parallel, &mut out.positions, &mut out.normals);
-        let triangles = t.triangle_count as usize;
+        let triangles = t.triangle_count() as usize;
         out.triangles.resize(triangles, [0; 3]);
         t.write_triangles(out.triangles.as_flattened_mut(), parallel);
         out.triangle_faces.resize(triangles, FaceId::new(0));

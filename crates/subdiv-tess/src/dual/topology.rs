@@ -156,8 +156,6 @@ pub(crate) struct Topology {
     /// faces.
     pub triangles: Vec<[u32; 3]>,
     pub triangle_faces: Vec<FaceId>,
-    /// The number of triangles, the runs' included.
-    pub triangle_count: u32,
     pub polygon_offsets: Vec<u32>,
     pub polygon_vertices: Vec<u32>,
     pub polygon_faces: Vec<FaceId>,
@@ -201,6 +199,13 @@ impl Topology {
         })
     }
 
+    /// The number of triangles, the runs' included: up to the last run's end, then the explicit
+    /// triangles made after it.
+    pub(super) fn triangle_count(&self) -> u32 {
+        let explicit = self.triangles.len() as u32;
+        self.runs.last().map_or(explicit, |r| r.first + r.triangles() + explicit - r.explicit)
+    }
+
     /// Every triangle, in output order (three indices each), into `out`, which has
     /// `3 ×` [`triangle_count`](Self::triangle_count) entries: the runs made here, the explicit
     /// triangles copied between them.
@@ -225,7 +230,7 @@ impl Topology {
         parallel: bool,
         made: &(dyn Fn(&Run, &mut [T]) + Sync),
     ) {
-        assert_eq!(out.len(), width * self.triangle_count as usize, "one entry per triangle value");
+        assert_eq!(out.len(), width * self.triangle_count() as usize, "one entry per triangle value");
         let lead = self.runs.first().map_or(self.triangles.len(), |r| r.explicit as usize) * width;
         let (head, rest) = out.split_at_mut(lead);
         head.copy_from_slice(&explicit[..lead]);
@@ -306,6 +311,18 @@ fn first_depth(triangle: bool, finest: u32) -> u32 {
 /// from `2^−first` down to `2^−max(depth, first)`, one ring per halving (at least one).
 fn ring_count(first: u32, depth: u32) -> u32 {
     depth.saturating_sub(first) + 1
+}
+
+/// The row of a quad cell's `m × m` points (from `base`, row by row) nearest its side `c`, in
+/// the side's direction: its first point (the one nearest corner `c`) and the step between
+/// points (in two's complement).
+fn quad_side(base: u32, m: u32, c: usize) -> (u32, u32) {
+    match c {
+        0 => (base, 1),
+        1 => (base + m - 1, m),
+        2 => (base + m * m - 1, 1u32.wrapping_neg()),
+        _ => (base + (m - 1) * m, m.wrapping_neg()),
+    }
 }
 
 /// One input face's cells.
@@ -400,7 +417,6 @@ impl<'a> Builder<'a> {
         o.runs.clear();
         o.triangles.clear();
         o.triangle_faces.clear();
-        o.triangle_count = 0;
         o.polygon_offsets.clear();
         o.polygon_offsets.push(0);
         o.polygon_vertices.clear();
@@ -435,7 +451,6 @@ impl<'a> Builder<'a> {
     fn triangle(&mut self, t: [u32; 3], face: u32) {
         self.out.triangles.push(t);
         self.out.triangle_faces.push(FaceId::new(face));
-        self.out.triangle_count += 1;
     }
 
     /// A quad `a b c d` (counter-clockwise): two triangles, and a polygon if asked for.
@@ -448,9 +463,8 @@ impl<'a> Builder<'a> {
     /// Triangles by pattern (and their quads' polygons, if asked for).
     fn run(&mut self, face: u32, shape: RunShape) {
         let o = &mut self.out;
-        let run = Run { face, explicit: o.triangles.len() as u32, first: o.triangle_count, shape };
+        let run = Run { face, explicit: o.triangles.len() as u32, first: o.triangle_count(), shape };
         o.runs.push(run);
-        o.triangle_count += run.triangles();
         if self.quads {
             run.quads(|q| self.polygon(q, face));
         }
@@ -588,15 +602,9 @@ impl<'a> Builder<'a> {
     /// [`side_row`](Self::side_row) lists it), if `f` is a whole quad (a block).
     fn block_side(&self, f: usize, c: usize) -> Option<(u32, u32, u32)> {
         let cells = self.buf.faces[f]?;
-        let (base, m) = (cells.base, cells.m);
         let FaceDomain::Quad = cells.domain else { return None };
-        let (start, step) = match c {
-            0 => (base, 1),
-            1 => (base + m - 1, m),
-            2 => (base + m * m - 1, 1u32.wrapping_neg()),
-            _ => (base + (m - 1) * m, m.wrapping_neg()),
-        };
-        Some((start, step, m))
+        let (start, step) = quad_side(cells.base, cells.m, c);
+        Some((start, step, cells.m))
     }
 
     /// The points of face `f`'s cells nearest its side `c` (from corner `c` to `c + 1`), in
@@ -608,15 +616,10 @@ impl<'a> Builder<'a> {
         let m64 = u64::from(m);
         match cells.domain {
             FaceDomain::Quad => {
+                let (start, step) = quad_side(base, m, c);
                 for k in 0..m {
-                    let (i, j) = match c {
-                        0 => (k, 0),
-                        1 => (m - 1, k),
-                        2 => (m - 1 - k, m - 1),
-                        _ => (0, m - 1 - k),
-                    };
                     row.push(RowPoint {
-                        vertex: base + j * m + i,
+                        vertex: start.wrapping_add(k.wrapping_mul(step)),
                         num: u64::from(2 * k + 1),
                         den: 2 * m64,
                         near: true,
@@ -702,7 +705,7 @@ impl<'a> Builder<'a> {
         let cells = self.buf.faces[f].expect("a face with a surface");
         let (base, m) = (cells.base, cells.m);
         match cells.domain {
-            FaceDomain::Quad => base + [0, m - 1, m * m - 1, m * (m - 1)][c],
+            FaceDomain::Quad => quad_side(base, m, c).0,
             FaceDomain::SubFaces { .. } => base + (c as u32) * m * m,
             FaceDomain::Triangle => {
                 let up = |i: u32, j: u32| base + 2 * m * j - j * j + 2 * i;
@@ -1101,7 +1104,7 @@ mod tests {
     /// starts: more than `GRAIN` triangles): every output edge of a closed mesh then has two
     /// triangles, and each run's range holds its face's triangles (a grid's, of its points).
     #[test]
-    fn block_triangles_are_written_in_place() {
+    fn runs_are_written_in_place() {
         for soup in [shapes::default_model(), shapes::ngon_prism(5), shapes::quad_torus(6, 5)] {
             let mesh = Mesh::build(soup).unwrap();
             let domains: Vec<_> = mesh
@@ -1111,7 +1114,7 @@ mod tests {
             let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 60 + 9 * (f % 5)).collect();
             let mut out = Topology::default();
             Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut out);
-            let n = out.triangle_count as usize;
+            let n = out.triangle_count() as usize;
             assert!(n > 2 << 14, "{n} triangles: too few to halve");
             let (mut serial, mut parallel) = (vec![0; 3 * n], vec![u32::MAX; 3 * n]);
             out.write_triangles(&mut serial, false);
