@@ -43,7 +43,8 @@
 //! One pass writes every vertex (f64 arrays or interleaved f32), over disjoint pieces of the
 //! vertex range (blocks, faces with patch grids, runs of other vertices) shared among threads;
 //! each vertex is computed alone, so the bits do not depend on the thread count, nor on the
-//! vector width the pieces are compiled for at run time (`pulp`: no fused products). Normals are
+//! vector width the pieces are compiled for at run time (`pulp`: no product and sum is fused but
+//! the typed faces' explicit `mul_add`, exact on every target). Normals are
 //! normalised by batches (cross products first; in lanes of 4 points on the blocks and typed
 //! faces), which lets the square roots and divisions overlap.
 
@@ -1314,7 +1315,8 @@ impl Evaluator {
         }
         push_run(&mut rest, &mut at, topo.vertex_count as usize, &mut pieces);
         // The widest vector instructions the CPU has (AVX2 on x86-64), chosen at run time: the
-        // same operations in the same order (Rust never fuses a product and a sum), so the same
+        // same operations in the same order (Rust never fuses a product and a sum on its own;
+        // the typed faces' `mul_add` is one rounding on every target), so the same
         // bits as the baseline build. The piece's work is inlined into the dispatched function,
         // which compiles it for the CPU's features.
         let arch = pulp::Arch::new();
@@ -1697,9 +1699,11 @@ fn template_size(rate: u32, len: u32) -> usize {
 }
 
 /// A typed face's cell points (`cells` of them) from its template and its cage points `ids`:
-/// per group of [`LANES`] points, one sum per lane over the cage points in order (each cage
-/// point read once per group), then `put(k, position, normal)` for point `k`. The lanes are
-/// plain arrays (the same operations on every target); the normals are glam's
+/// per group of [`LANES`] points, nine sums per lane (position, `∂/∂u`, `∂/∂v`, by coordinate)
+/// over the cage points in order, each cage point read once per group, then
+/// `put(k, position, normal)` for point `k`. The sums are fused multiply-adds (`mul_add`,
+/// exact on every target: the same bits, one rounding per term, half the operations of a
+/// multiply and an add); the lanes are plain arrays; the normals are glam's
 /// `du.cross(dv).normalize_or_zero()`, operation for operation.
 #[inline(always)]
 fn typed_block(t: &Template, ids: &[u32], cage: &[DVec3], cells: usize, mut put: impl FnMut(usize, DVec3, DVec3)) {
@@ -1712,21 +1716,36 @@ fn typed_block(t: &Template, ids: &[u32], cage: &[DVec3], cells: usize, mut put:
     }
     let [gx, gy, gz] = &gathered;
     for (g, w) in t.weights.chunks_exact(3 * LANES * len).enumerate() {
-        // Row by row (position, ∂/∂u, ∂/∂v): three sums per lane at a time stay in registers.
-        let mut acc = [[0.0f64; LANES]; 9];
-        for (row, w) in w.chunks_exact(LANES * len).enumerate() {
-            let (w, _) = w.as_chunks::<LANES>();
-            let mut sum = [[0.0f64; LANES]; 3];
-            for (k, w) in w.iter().enumerate() {
-                let (x, y, z) = (gx[k], gy[k], gz[k]);
-                for l in 0..LANES {
-                    sum[0][l] += w[l] * x;
-                    sum[1][l] += w[l] * y;
-                    sum[2][l] += w[l] * z;
-                }
+        let (wp, w) = w.split_at(LANES * len);
+        let (wu, wv) = w.split_at(LANES * len);
+        let (wp, wu, wv) = (wp.as_chunks::<LANES>().0, wu.as_chunks::<LANES>().0, wv.as_chunks::<LANES>().0);
+        // The position and `∂/∂u` rows together, then the `∂/∂v` row: six accumulators, three
+        // broadcasts and the weights fit the 16 vector registers of AVX2 (all nine do not, and
+        // then the compiler splits the lanes).
+        let zero = [0.0f64; LANES];
+        let (mut px, mut py, mut pz, mut ux, mut uy, mut uz, mut vx, mut vy, mut vz) =
+            (zero, zero, zero, zero, zero, zero, zero, zero, zero);
+        for k in 0..len {
+            let (x, y, z) = (gx[k], gy[k], gz[k]);
+            let (p, u) = (&wp[k], &wu[k]);
+            for l in 0..LANES {
+                px[l] = p[l].mul_add(x, px[l]);
+                py[l] = p[l].mul_add(y, py[l]);
+                pz[l] = p[l].mul_add(z, pz[l]);
+                ux[l] = u[l].mul_add(x, ux[l]);
+                uy[l] = u[l].mul_add(y, uy[l]);
+                uz[l] = u[l].mul_add(z, uz[l]);
             }
-            acc[3 * row..3 * row + 3].copy_from_slice(&sum);
         }
+        for k in 0..len {
+            let (x, y, z, v) = (gx[k], gy[k], gz[k], &wv[k]);
+            for l in 0..LANES {
+                vx[l] = v[l].mul_add(x, vx[l]);
+                vy[l] = v[l].mul_add(y, vy[l]);
+                vz[l] = v[l].mul_add(z, vz[l]);
+            }
+        }
+        let acc = [px, py, pz, ux, uy, uz, vx, vy, vz];
         let first = g * LANES;
         put_lanes(&acc, LANES.min(cells - first), |l, p, n| put(first + l, p, n));
     }

@@ -338,7 +338,6 @@ impl DualTessellator {
     pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
-        self.evaluate_flat(&mut out.vertices);
         let (t, parallel) = (&self.topology, self.options.parallel);
         // The same indices every frame: copied from the output's triangles, or from a copy
         // made once (a copy runs at the memory's speed, which writing them anew does not reach
@@ -352,7 +351,13 @@ impl DualTessellator {
             }
             &self.flat_indices
         };
-        copy_indices(indices, parallel, &mut out.indices);
+        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
+        let (evaluator, FlatMesh { vertices, indices: out_indices }) = (&self.evaluator, out);
+        both(
+            parallel && t.triangle_count() > BESIDE,
+            || evaluator.evaluate_flat(t, parallel, vertices),
+            || copy_indices(indices, parallel, out_indices),
+        );
         Ok(())
     }
 
@@ -370,21 +375,20 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate).
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.rebuild(rates, None)?;
-        self.evaluate_flat(&mut out.vertices);
         let (t, parallel) = (&self.topology, self.options.parallel);
-        // Written straight from the topology's runs: no stored copy of most of them.
+        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
+        // Written straight from the topology's runs (no stored copy of most of them), beside
+        // the evaluation.
         out.indices.resize(3 * t.triangle_count() as usize, 0);
-        t.write_triangles(&mut out.indices, parallel);
+        let (evaluator, FlatMesh { vertices, indices }) = (&self.evaluator, out);
+        both(
+            parallel && t.triangle_count() > BESIDE,
+            || evaluator.evaluate_flat(t, parallel, vertices),
+            || t.write_triangles(indices, parallel),
+        );
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
         self.output.clear();
         Ok(())
-    }
-
-    /// Every vertex as `px py pz nx ny nz` in f32 into `vertices`, on the latest cage. Every
-    /// value is overwritten: no clearing (a buffer of the right length is kept as is).
-    fn evaluate_flat(&self, vertices: &mut Vec<f32>) {
-        vertices.resize(6 * self.topology.vertex_count as usize, 0.0);
-        self.evaluator.evaluate_flat(&self.topology, self.options.parallel, vertices);
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
@@ -502,6 +506,18 @@ fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
 /// `indices` into `out` (which keeps its allocation), on rayon's threads if `parallel` and
 /// there are enough to be worth waking them (a copy of tens of megabytes at high rates, which
 /// one core does at a fraction of the memory's speed).
+const BESIDE: u32 = 1 << 12;
+
+/// `a` and `b`, on two of rayon's threads when `parallel` (the output is the same).
+fn both(parallel: bool, a: impl FnOnce() + Send, b: impl FnOnce() + Send) {
+    if parallel {
+        rayon::join(a, b);
+    } else {
+        a();
+        b();
+    }
+}
+
 fn copy_indices(indices: &[u32], parallel: bool, out: &mut Vec<u32>) {
     out.clear();
     if parallel && indices.len() >= 1 << 16 {
