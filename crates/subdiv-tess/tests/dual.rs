@@ -561,6 +561,9 @@ fn thread_count_does_not_change_the_bits() {
             .unwrap();
     let sequential = tess.tessellate(&rates).unwrap().clone();
     assert_eq!(parallel, sequential);
+    // Large enough for every parallel step: the evaluation's pieces among threads (from 1024
+    // vertices) and the flat paths' indices beside it (from 4097 triangles).
+    assert!(sequential.positions.len() > 4096 && sequential.triangles.len() > 4096);
     let mut flat = FlatMesh::default();
     tess.write_flat(&mut flat);
     assert_eq!(flat.vertices.len(), 6 * sequential.positions.len());
@@ -569,6 +572,16 @@ fn thread_count_does_not_change_the_bits() {
     let rings = random_rings(&mesh, 8, 10);
     let parallel = tessellate_rings(&mesh, &rates, &rings);
     assert_eq!(parallel, tess.tessellate_with_rings(&rates, &rings).unwrap().clone());
+    // The flat paths too (after the rings: the last step moves the cage).
+    let mut threads = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
+    let (mut a, mut b) = (FlatMesh::default(), FlatMesh::default());
+    threads.tessellate_flat(&rates, &mut a).unwrap();
+    tess.tessellate_flat(&rates, &mut b).unwrap();
+    assert_eq!((&a, &a), (&flat, &b));
+    let moved: Vec<DVec3> = mesh.positions().iter().map(|p| *p * 0.5 + DVec3::X).collect();
+    threads.update_cage_flat(&moved, &mut a).unwrap();
+    tess.update_cage_flat(&moved, &mut b).unwrap();
+    assert_eq!(a, b);
 }
 
 #[test]
