@@ -351,13 +351,7 @@ impl DualTessellator {
             }
             &self.flat_indices
         };
-        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
-        let (evaluator, FlatMesh { vertices, indices: out_indices }) = (&self.evaluator, out);
-        both(
-            parallel && t.triangle_count() > BESIDE,
-            || evaluator.evaluate_flat(t, parallel, vertices),
-            || copy_indices(indices, parallel, out_indices),
-        );
+        self.evaluate_flat_beside(out, |out| copy_indices(indices, parallel, out));
         Ok(())
     }
 
@@ -376,19 +370,30 @@ impl DualTessellator {
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.rebuild(rates, None)?;
         let (t, parallel) = (&self.topology, self.options.parallel);
-        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
-        // Written straight from the topology's runs (no stored copy of most of them), beside
-        // the evaluation.
-        out.indices.resize(3 * t.triangle_count() as usize, 0);
-        let (evaluator, FlatMesh { vertices, indices }) = (&self.evaluator, out);
-        both(
-            parallel && t.triangle_count() > BESIDE,
-            || evaluator.evaluate_flat(t, parallel, vertices),
-            || t.write_triangles(indices, parallel),
-        );
+        // Written straight from the topology's runs: no stored copy of most of them.
+        self.evaluate_flat_beside(out, |out| {
+            out.resize(3 * t.triangle_count() as usize, 0);
+            t.write_triangles(out, parallel);
+        });
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
         self.output.clear();
         Ok(())
+    }
+
+    /// Every vertex as `px py pz nx ny nz` in f32 into `out.vertices` (every value
+    /// overwritten: a buffer of the right length is kept as is), and `indices` on
+    /// `out.indices` beside it, on a second thread when the options are parallel and there are
+    /// more than [`BESIDE`] triangles (the output is the same).
+    fn evaluate_flat_beside(&self, out: &mut FlatMesh, indices: impl FnOnce(&mut Vec<u32>) + Send) {
+        let (t, parallel) = (&self.topology, self.options.parallel);
+        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
+        let FlatMesh { vertices, indices: out_indices } = out;
+        if parallel && t.triangle_count() > BESIDE {
+            rayon::join(|| self.evaluator.evaluate_flat(t, parallel, vertices), || indices(out_indices));
+        } else {
+            self.evaluator.evaluate_flat(t, parallel, vertices);
+            indices(out_indices);
+        }
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
@@ -503,21 +508,13 @@ fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
     [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
 }
 
+/// The most triangles for which the flat paths write their indices after the evaluation, on
+/// the same thread: below, waking a second thread for them costs more than it saves.
+const BESIDE: u32 = 1 << 12;
+
 /// `indices` into `out` (which keeps its allocation), on rayon's threads if `parallel` and
 /// there are enough to be worth waking them (a copy of tens of megabytes at high rates, which
 /// one core does at a fraction of the memory's speed).
-const BESIDE: u32 = 1 << 12;
-
-/// `a` and `b`, on two of rayon's threads when `parallel` (the output is the same).
-fn both(parallel: bool, a: impl FnOnce() + Send, b: impl FnOnce() + Send) {
-    if parallel {
-        rayon::join(a, b);
-    } else {
-        a();
-        b();
-    }
-}
-
 fn copy_indices(indices: &[u32], parallel: bool, out: &mut Vec<u32>) {
     out.clear();
     if parallel && indices.len() >= 1 << 16 {
