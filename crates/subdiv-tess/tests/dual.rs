@@ -577,11 +577,12 @@ fn thread_count_does_not_change_the_bits() {
     let (mut a, mut b) = (FlatMesh::default(), FlatMesh::default());
     threads.tessellate_flat(&rates, &mut a).unwrap();
     tess.tessellate_flat(&rates, &mut b).unwrap();
-    assert_eq!((&a, &a), (&flat, &b));
+    assert_eq!(a, flat, "tessellate_flat on all threads against write_flat");
+    assert_eq!(a, b, "tessellate_flat on all threads against one");
     let moved: Vec<DVec3> = mesh.positions().iter().map(|p| *p * 0.5 + DVec3::X).collect();
     threads.update_cage_flat(&moved, &mut a).unwrap();
     tess.update_cage_flat(&moved, &mut b).unwrap();
-    assert_eq!(a, b);
+    assert_eq!(a, b, "update_cage_flat on all threads against one");
 }
 
 #[test]

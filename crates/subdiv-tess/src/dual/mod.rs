@@ -458,12 +458,12 @@ impl DualTessellator {
         out.triangle_parameters.clear();
         let params = &out.parameters;
         let corners = |tri: &[u32; 3]| tri.map(|k| [params[k as usize].u, params[k as usize].v]);
-        self.output_current = true;
         if parallel {
             out.triangle_parameters.par_extend(out.triangles.par_iter().map(corners));
         } else {
             out.triangle_parameters.extend(out.triangles.iter().map(corners));
         }
+        self.output_current = true;
     }
 }
 
