@@ -106,11 +106,6 @@ struct Evaluators {
     grids: HashMap<(usize, usize), Option<[u8; 16]>>,
 }
 
-/// The fewest vertices [`Evaluator::evaluate_into`] shares among threads: below, waking a
-/// second thread costs more than it saves (the cube at rate 8, 386 vertices: 94 M triangles/s
-/// on two threads, 125 on one, in the full path).
-const PARALLEL_VERTICES: usize = 1024;
-
 /// Vertices per chunk of [`Evaluator::prepare`].
 const CHUNK: usize = 4096;
 
@@ -1331,7 +1326,7 @@ impl Evaluator {
                 || self.evaluate_piece(piece),
             );
         };
-        if parallel && topo.vertex_count as usize >= PARALLEL_VERTICES {
+        if parallel {
             pieces.into_par_iter().for_each(run);
         } else {
             pieces.into_iter().for_each(run);
