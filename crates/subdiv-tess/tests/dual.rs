@@ -561,8 +561,8 @@ fn thread_count_does_not_change_the_bits() {
             .unwrap();
     let sequential = tess.tessellate(&rates).unwrap().clone();
     assert_eq!(parallel, sequential);
-    // Large enough for every parallel step: the flat paths' indices beside the evaluation
-    // (from 4097 triangles) too.
+    // Large enough for every parallel step: the evaluation's pieces among threads (from 1024
+    // vertices) and the flat paths' indices beside it (from 4097 triangles).
     assert!(sequential.positions.len() > 4096 && sequential.triangles.len() > 4096);
     let mut flat = FlatMesh::default();
     tess.write_flat(&mut flat);

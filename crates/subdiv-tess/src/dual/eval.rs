@@ -109,6 +109,12 @@ struct Evaluators {
 /// Vertices per chunk of [`Evaluator::prepare`].
 const CHUNK: usize = 4096;
 
+/// The fewest vertices [`Evaluator::evaluate_into`] shares among threads: waking a sleeping
+/// thread costs about what a thousand vertices take (tens of microseconds in a virtual
+/// machine), and past that the pieces stay small, so that the calling thread can do them all
+/// when the others wake late.
+const PARALLEL_VERTICES: usize = 1024;
+
 /// One chunk's stencil records, with offsets into its own `ids` and `weights`.
 #[derive(Debug, Default)]
 struct Chunk {
@@ -1326,7 +1332,7 @@ impl Evaluator {
                 || self.evaluate_piece(piece),
             );
         };
-        if parallel {
+        if parallel && topo.vertex_count as usize >= PARALLEL_VERTICES {
             pieces.into_par_iter().for_each(run);
         } else {
             pieces.into_iter().for_each(run);
