@@ -614,6 +614,12 @@ fn bad_input_is_a_typed_error() {
     assert!(matches!(tess.tessellate(&[1, 1, 0, 1, 1, 1]), Err(TessError::Rate { face: 2, rate: 0, .. })));
     let too_big = subdiv_tess::MAX_DUAL_RATE + 1;
     assert!(matches!(tess.tessellate(&[1, 1, 1, 1, too_big, 1]), Err(TessError::Rate { face: 4, .. })));
+    // The flat path: the same errors, and the caller's buffers untouched.
+    let mut flat = FlatMesh { vertices: vec![7.0; 5], indices: vec![3; 2] };
+    let kept = flat.clone();
+    assert!(matches!(tess.tessellate_flat(&[1; 7], &mut flat), Err(TessError::RateCount { expected: 6, got: 7 })));
+    assert!(matches!(tess.tessellate_flat(&[0; 6], &mut flat), Err(TessError::Rate { face: 0, rate: 0, .. })));
+    assert_eq!(flat, kept);
     tess.tessellate(&[2; 6]).unwrap();
     let mut cage = cube.positions().to_vec();
     assert!(matches!(tess.update_cage(&cage[1..]), Err(TessError::CageLength { expected: 8, got: 7 })));

@@ -289,6 +289,16 @@ impl DualTessellator {
 
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
+        self.build_topology(rates, rings)?;
+        self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
+        self.rates.clear();
+        self.rates.extend_from_slice(rates);
+        Ok(())
+    }
+
+    /// Checks `rates` and rebuilds the topology (with `rings`, if any), which the output and
+    /// the kept indices no longer match; the evaluation is prepared next.
+    fn build_topology(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
@@ -299,11 +309,8 @@ impl DualTessellator {
         let mut builder = Builder::with_buffers(&self.builder_mesh, self.triangle, self.options.quads, buffers);
         builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
         self.builder_buffers = builder.into_buffers();
-        self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
         self.output_current = false;
         self.flat_indices.clear();
-        self.rates.clear();
-        self.rates.extend_from_slice(rates);
         Ok(())
     }
 
@@ -351,8 +358,17 @@ impl DualTessellator {
             }
             &self.flat_indices
         };
-        self.evaluate_flat_beside(out, |out| copy_indices(indices, parallel, out));
-        Ok(())
+        let evaluator = &self.evaluator;
+        beside(
+            t,
+            parallel,
+            out,
+            |vertices| {
+                evaluator.evaluate_flat(t, parallel, vertices);
+                Ok(())
+            },
+            |out| copy_indices(indices, parallel, out),
+        )
     }
 
     /// [`tessellate`](Self::tessellate) straight into flat f32 buffers (what a renderer
@@ -366,34 +382,40 @@ impl DualTessellator {
     /// lengths are overwritten in place).
     ///
     /// # Errors
-    /// As [`tessellate`](Self::tessellate).
+    /// As [`tessellate`](Self::tessellate); `out` is then left empty if the rates were
+    /// accepted (the failure came from a stencil), untouched if not.
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
-        self.rebuild(rates, None)?;
-        let (t, parallel) = (&self.topology, self.options.parallel);
-        // Written straight from the topology's runs: no stored copy of most of them.
-        self.evaluate_flat_beside(out, |out| {
-            out.resize(3 * t.triangle_count() as usize, 0);
-            t.write_triangles(out, parallel);
-        });
+        self.build_topology(rates, None)?;
+        let (t, parallel, evaluator) = (&self.topology, self.options.parallel, &mut self.evaluator);
+        // The indices go beside the preparation too (they need the topology alone): the second
+        // thread is then awake when the evaluation shares its pieces, where after the
+        // preparation alone it would have gone to sleep (and waking one costs tens of
+        // microseconds in a virtual machine).
+        let done = beside(
+            t,
+            parallel,
+            out,
+            |vertices| {
+                evaluator.prepare(t, rates, parallel)?;
+                evaluator.evaluate_flat(t, parallel, vertices);
+                Ok(())
+            },
+            // Written straight from the topology's runs: no stored copy of most of them.
+            |indices| {
+                indices.resize(3 * t.triangle_count() as usize, 0);
+                t.write_triangles(indices, parallel);
+            },
+        );
+        if let Err(e) = done {
+            out.vertices.clear();
+            out.indices.clear();
+            return Err(e);
+        }
+        self.rates.clear();
+        self.rates.extend_from_slice(rates);
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
         self.output.clear();
         Ok(())
-    }
-
-    /// Every vertex as `px py pz nx ny nz` in f32 into `out.vertices` (every value
-    /// overwritten: a buffer of the right length is kept as is), and `indices` on
-    /// `out.indices` beside it, on a second thread when the options are parallel and there are
-    /// more than [`BESIDE`] triangles (the output is the same).
-    fn evaluate_flat_beside(&self, out: &mut FlatMesh, indices: impl FnOnce(&mut Vec<u32>) + Send) {
-        let (t, parallel) = (&self.topology, self.options.parallel);
-        out.vertices.resize(6 * t.vertex_count as usize, 0.0);
-        let FlatMesh { vertices, indices: out_indices } = out;
-        if parallel && t.triangle_count() > BESIDE {
-            rayon::join(|| self.evaluator.evaluate_flat(t, parallel, vertices), || indices(out_indices));
-        } else {
-            self.evaluator.evaluate_flat(t, parallel, vertices);
-            indices(out_indices);
-        }
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
@@ -511,6 +533,29 @@ fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
 /// The most triangles for which the flat paths write their indices after the evaluation, on
 /// the same thread: below, waking a second thread for them costs more than it saves.
 const BESIDE: u32 = 1 << 12;
+
+/// The flat paths' two halves for the vertices and triangles of `t`: `evaluate` fills
+/// `out.vertices` (resized first, every value to be overwritten: a buffer of the right length
+/// is kept as is) and `indices` fills `out.indices`, on two of rayon's threads when `parallel`
+/// and there are more than [`BESIDE`] triangles (the output is the same), else one after the
+/// other (the indices only if the evaluation succeeds).
+fn beside<E: Send>(
+    t: &Topology,
+    parallel: bool,
+    out: &mut FlatMesh,
+    evaluate: impl FnOnce(&mut [f32]) -> Result<(), E> + Send,
+    indices: impl FnOnce(&mut Vec<u32>) + Send,
+) -> Result<(), E> {
+    let FlatMesh { vertices, indices: out_indices } = out;
+    vertices.resize(6 * t.vertex_count as usize, 0.0);
+    if parallel && t.triangle_count() > BESIDE {
+        rayon::join(|| evaluate(vertices), || indices(out_indices)).0
+    } else {
+        evaluate(vertices)?;
+        indices(out_indices);
+        Ok(())
+    }
+}
 
 /// `indices` into `out` (which keeps its allocation), on rayon's threads if `parallel` and
 /// there are enough to be worth waking them (a copy of tens of megabytes at high rates, which
