@@ -1326,30 +1326,31 @@ impl Evaluator {
         // bits as the baseline build. The piece's work is inlined into the dispatched function,
         // which compiles it for the CPU's features.
         let arch = pulp::Arch::new();
-        let run = |piece: Piece<'_, S>| {
+        let run = |scratch: &mut Scratch, piece: Piece<'_, S>| {
             arch.dispatch(
                 #[inline(always)]
-                || self.evaluate_piece(piece),
+                || self.evaluate_piece(piece, scratch),
             );
         };
         if parallel && topo.vertex_count as usize >= PARALLEL_VERTICES {
-            pieces.into_par_iter().for_each(run);
+            pieces.into_par_iter().for_each_init(Scratch::new, run);
         } else {
-            pieces.into_iter().for_each(run);
+            let mut scratch = Scratch::new();
+            pieces.into_iter().for_each(|piece| run(&mut scratch, piece));
         }
     }
 
     /// One piece of [`evaluate_into`](Self::evaluate_into)'s work.
     #[inline(always)]
-    fn evaluate_piece<S: Sink>(&self, piece: Piece<'_, S>) {
+    fn evaluate_piece<S: Sink>(&self, piece: Piece<'_, S>, scratch: &mut Scratch) {
         let cage = &self.positions[0];
         match piece {
             Piece::Block { cv, rate, mut out } => {
                 let basis = self.bases[rate as usize].as_deref().expect("prepared");
-                grid_block(cv, cage, basis, &mut out);
+                grid_block(cv, cage, basis, &mut out, &mut scratch.pending);
             }
             Piece::Typed { template, cage: ids, mut out } => {
-                typed_block(template, ids, cage, &mut out);
+                typed_block(template, ids, cage, &mut out, scratch);
             }
             Piece::Run { start, mut out, grids } => {
                 // By batches: first the positions and the tangents' cross products, then the
@@ -1634,10 +1635,9 @@ fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dy
 /// then [`LANES`] points of the row at a time, coordinate by coordinate in lanes: the same
 /// operations as [`bicubic_at`]'s sums, so the same bits.
 #[inline(always)]
-fn grid_block<S: Sink>(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, out: &mut S) {
+fn grid_block<S: Sink>(cv: &[u32; 16], cage: &[DVec3], basis: &RateBasis, out: &mut S, pending: &mut Pending) {
     let c: [DVec3; 16] = std::array::from_fn(|k| cage[cv[k] as usize]);
     let n = basis.b.len();
-    let mut pending = Pending::new();
     for j in 0..n {
         let (bv, dv) = (basis.b[j], basis.d[j]);
         let col: [DVec3; 4] =
@@ -1720,23 +1720,34 @@ impl Pending {
     /// `a.cross(b).normalize_or_zero()`, operation for operation (so the same bits), in lanes.
     #[inline(always)]
     fn flush<S: Sink>(&mut self, out: &mut S) {
-        let mut n = [[[0.0; LANES]; 3]; GROUPS];
-        for (n, c) in n.iter_mut().zip(&self.c).take(self.len) {
-            for l in 0..LANES {
-                let (cx, cy, cz) = (c[0][l], c[1][l], c[2][l]);
-                let rcp = 1.0 / ((cx * cx) + (cy * cy) + (cz * cz)).sqrt();
+        // In place: the cross products become the normals.
+        for [x, y, z] in self.c.iter_mut().take(self.len) {
+            for ((x, y), z) in x.iter_mut().zip(y.iter_mut()).zip(z.iter_mut()) {
+                let rcp = 1.0 / ((*x * *x) + (*y * *y) + (*z * *z)).sqrt();
                 let unit = rcp.is_finite() && rcp > 0.0;
-                n[0][l] = if unit { cx * rcp } else { 0.0 };
-                n[1][l] = if unit { cy * rcp } else { 0.0 };
-                n[2][l] = if unit { cz * rcp } else { 0.0 };
+                (*x, *y, *z) = if unit { (*x * rcp, *y * rcp, *z * rcp) } else { (0.0, 0.0, 0.0) };
             }
         }
-        for ((p, n), &(first, count)) in self.p.iter().zip(&n).zip(&self.at).take(self.len) {
+        for ((p, n), &(first, count)) in self.p.iter().zip(&self.c).zip(&self.at).take(self.len) {
             for l in 0..count {
                 out.put(first + l, lane(p, l), lane(n, l));
             }
         }
         self.len = 0;
+    }
+}
+
+/// What the blocks and typed faces of one thread reuse from piece to piece (made anew for
+/// each, their zeroing showed in profiles as a `memset` of 4 % of the full path's time).
+struct Scratch {
+    pending: Pending,
+    /// A typed face's cage points by coordinate.
+    gathered: [[f64; MAX_TYPED_POINTS]; 3],
+}
+
+impl Scratch {
+    fn new() -> Self {
+        Self { pending: Pending::new(), gathered: [[0.0; MAX_TYPED_POINTS]; 3] }
     }
 }
 
@@ -1759,16 +1770,15 @@ fn template_size(rate: u32, len: u32) -> usize {
 /// add); the lanes are plain arrays; the normals are glam's
 /// `du.cross(dv).normalize_or_zero()`, operation for operation.
 #[inline(always)]
-fn typed_block<S: Sink>(t: &Template, ids: &[u32], cage: &[DVec3], out: &mut S) {
+fn typed_block<S: Sink>(t: &Template, ids: &[u32], cage: &[DVec3], out: &mut S, scratch: &mut Scratch) {
     let (len, cells) = (ids.len(), out.len());
     // The cage points by coordinate: each coordinate is one load to broadcast.
-    let mut gathered = [[0.0f64; MAX_TYPED_POINTS]; 3];
+    let Scratch { gathered, pending } = scratch;
     for (k, &id) in ids.iter().enumerate() {
         let p = cage[id as usize];
         (gathered[0][k], gathered[1][k], gathered[2][k]) = (p.x, p.y, p.z);
     }
-    let [gx, gy, gz] = &gathered;
-    let mut pending = Pending::new();
+    let [gx, gy, gz] = &*gathered;
     for (g, w) in t.weights.chunks_exact(3 * LANES * len).enumerate() {
         let (wp, w) = w.split_at(LANES * len);
         let (wu, wv) = w.split_at(LANES * len);
@@ -1926,7 +1936,7 @@ mod tests {
                     .unwrap()
                     .remove(0);
                 let points: Vec<DVec3> = patch.vertices.iter().map(|v| cage[v.index()]).collect();
-                grid_block(&cv, cage, &basis, &mut WideSink(&mut ps, &mut ns));
+                grid_block(&cv, cage, &basis, &mut WideSink(&mut ps, &mut ns), &mut Pending::new());
                 let index: HashMap<Dyadic, usize> =
                     (0..table.len(Grid::Dual)).map(|k| (table.point(Grid::Dual, k), k)).collect();
                 let (ju, jv) = frame.chain([[1.0, 0.0], [0.0, 1.0]]);
