@@ -290,10 +290,21 @@ impl DualTessellator {
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
         self.build_topology(rates, rings)?;
-        self.evaluator.prepare(&self.topology, rates, self.options.parallel)?;
+        if let Err(e) = self.evaluator.prepare(&self.topology, rates, self.options.parallel) {
+            self.forget_topology();
+            return Err(e);
+        }
         self.rates.clear();
         self.rates.extend_from_slice(rates);
         Ok(())
+    }
+
+    /// After a failed preparation: back to no topology, as before the first tessellation (the
+    /// animation paths then evaluate nothing, instead of a topology the evaluation was not
+    /// prepared for).
+    fn forget_topology(&mut self) {
+        self.topology = Topology::default();
+        self.rates.clear();
     }
 
     /// Checks `rates` and rebuilds the topology (with `rings`, if any), which the output and
@@ -409,6 +420,7 @@ impl DualTessellator {
         if let Err(e) = done {
             out.vertices.clear();
             out.indices.clear();
+            self.forget_topology();
             return Err(e);
         }
         self.rates.clear();
@@ -439,7 +451,8 @@ impl DualTessellator {
         &self.output
     }
 
-    /// The rates of the last [`tessellate`](Self::tessellate).
+    /// The rates of the last [`tessellate`](Self::tessellate) (or of its variants; empty
+    /// before the first and after one that failed past the checks of its rates).
     pub fn rates(&self) -> &[u32] {
         &self.rates
     }
