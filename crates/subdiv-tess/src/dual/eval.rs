@@ -416,6 +416,17 @@ pub(crate) struct Evaluator {
     pool: Vec<Evaluators>,
     /// Chunk buffers of the last [`prepare`](Self::prepare), to be reused.
     spare: Vec<Chunk>,
+    /// [`record_spans`](Self::record_spans)'s buffer.
+    spans: Vec<std::ops::Range<usize>>,
+    /// The faces whose cell points may read a dual-grid table (on the general route, resolved
+    /// on level 0 by a patch of shape 0 with at most [`MAX_GATHER`] points), fixed by the mesh.
+    table_faces: Vec<FaceId>,
+    /// Per input face, whether its block reads its type's template in this call (its cell
+    /// points then need no table).
+    copied: Vec<bool>,
+    /// [`plan_copies`](Self::plan_copies)'s maps, kept for their allocations.
+    budget: HashMap<(u32, u32), bool>,
+    made: hashbrown::HashSet<TemplateKey>,
 }
 
 impl Evaluator {
@@ -502,7 +513,20 @@ impl Evaluator {
             tables: DualTables::default(),
             pool: Vec::new(),
             spare: Vec::new(),
+            spans: Vec::new(),
+            table_faces: Vec::new(),
+            copied: Vec::new(),
+            budget: HashMap::new(),
+            made: hashbrown::HashSet::new(),
         };
+        evaluator.table_faces = mesh
+            .face_ids()
+            .filter(|&f| {
+                matches!(evaluator.faces[f.index()], FacePlan::General)
+                    && matches!(evaluator.levels.resolve(0, f),
+                        Some(Resolved::Patch { patch, .. }) if patch.shape == 0 && patch.vertices.len() <= MAX_GATHER)
+            })
+            .collect();
         evaluator.set_cage(mesh.positions());
         evaluator.find_face_types();
         Ok(evaluator)
@@ -617,40 +641,53 @@ impl Evaluator {
                 self.kinds[block.base as usize..end].fill(IN_BLOCK);
             }
         }
-        // The dual-grid tables the level-0 patches need, first: the chunks below only read them.
-        for f in self.levels.mesh(0).face_ids() {
-            if let FacePlan::General = self.faces[f.index()]
-                && let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(0, f)
-                && patch.shape == 0
-                && patch.vertices.len() <= MAX_GATHER
-            {
-                ensure_table(&mut self.tables, patch, rates[f.index()])?;
-            }
-        }
         // Faces of one type (the same resolution tree up to vertex labels) at one rate have the
         // same cell records but for their patches' control points: they copy their type's
         // template in `patch_grids`, which the first face of the type without one makes from its
         // own descent through the chunks.
         self.plan_copies(topo);
+        // The dual-grid tables the level-0 patches' cell points read (but those of faces that
+        // copy a template), first: the chunks below only read them.
+        for &f in &self.table_faces {
+            if self.copied[f.index()] {
+                continue;
+            }
+            if let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(0, f) {
+                ensure_table(&mut self.tables, patch, rates[f.index()])?;
+            }
+        }
         // Stencil records by chunks of vertices, in parallel; each chunk borrows a set of
         // stencil evaluators from the pool (their results do not depend on what they solved
         // before, so neither does the output on the thread count).
-        let chunks: Vec<std::ops::Range<usize>> =
-            (0..n).step_by(CHUNK).map(|start| start..(start + CHUNK).min(n)).collect();
+        let spans = self.record_spans(topo);
+        // Runs of consecutive spans of at most `CHUNK` vertices in all (no span is longer).
+        let mut chunks: Vec<&[std::ops::Range<usize>]> = Vec::new();
+        let (mut first, mut len) = (0, 0);
+        for (k, span) in spans.iter().enumerate() {
+            if len + span.len() > CHUNK {
+                chunks.push(&spans[first..k]);
+                (first, len) = (k, 0);
+            }
+            len += span.len();
+        }
+        if first < spans.len() {
+            chunks.push(&spans[first..]);
+        }
         let pool = std::sync::Mutex::new(std::mem::take(&mut self.pool));
         // The chunks' buffers are kept across calls too (no fresh pages per call).
         let spare = std::sync::Mutex::new(std::mem::take(&mut self.spare));
         let this = &*self;
-        let work = |range: std::ops::Range<usize>| -> Result<Chunk, TessError> {
+        let work = |spans: &[std::ops::Range<usize>]| -> Result<Chunk, TessError> {
             let mut evaluators =
                 pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
             let out = spare.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
-            let chunk = this.chunk(topo, range, &mut evaluators, out);
+            let chunk = this.chunk(topo, spans, &mut evaluators, out);
             pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(evaluators);
             chunk
         };
         let results: Vec<Result<Chunk, TessError>> =
             if parallel { chunks.into_par_iter().map(work).collect() } else { chunks.into_iter().map(work).collect() };
+        self.spans = spans;
         self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.spare = spare.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.places.clear();
@@ -800,6 +837,8 @@ impl Evaluator {
     /// rates only (not on the templates kept), so a face's bits do too.
     fn plan_copies(&mut self, topo: &Topology) {
         let blocks = topo.blocks.len();
+        self.copied.clear();
+        self.copied.resize(self.faces.len(), false);
         self.copy_of.clear();
         self.copy_of.resize(blocks, 0);
         self.block_template.clear();
@@ -811,7 +850,9 @@ impl Evaluator {
             self.drop_templates();
         }
         // Per (type, rate) of the call, in block order: whether it fits the budget.
-        let mut typed: HashMap<(u32, u32), bool> = HashMap::new();
+        let (mut typed, mut made) = (std::mem::take(&mut self.budget), std::mem::take(&mut self.made));
+        typed.clear();
+        made.clear();
         let mut budget = MAX_TEMPLATE_WEIGHTS;
         for block in &topo.blocks {
             let Some(ty) = self.face_types[block.face as usize] else { continue };
@@ -824,7 +865,6 @@ impl Evaluator {
                 fits
             });
         }
-        let mut made = hashbrown::HashSet::new();
         for (b, block) in topo.blocks.iter().enumerate() {
             let Some(ty) = self.face_types[block.face as usize] else { continue };
             if !typed[&(ty.id, block.rate)] {
@@ -840,8 +880,10 @@ impl Evaluator {
             } else {
                 self.copy_of[b] = COPY;
             }
+            self.copied[block.face as usize] = true;
             self.kinds[block.base as usize..(block.base + block.len()) as usize].fill(TYPED);
         }
+        (self.budget, self.made) = (typed, made);
     }
 
     /// The key of `block`'s template (its face of type `ty`).
@@ -1121,11 +1163,34 @@ impl Evaluator {
         })
     }
 
-    /// The stencil records of the general-route vertices of `range`, with chunk-local offsets.
+    /// The vertices that may take records, as ranges of at most [`CHUNK`] vertices, in order:
+    /// all but the blocks whose points are evaluated without (bicubic faces' grids and typed
+    /// faces' cells), which a scan vertex by vertex would only skip (most of a tessellation's
+    /// vertices, often all). In a buffer kept across calls.
+    fn record_spans(&mut self, topo: &Topology) -> Vec<std::ops::Range<usize>> {
+        let mut spans = std::mem::take(&mut self.spans);
+        spans.clear();
+        let mut push = |start: usize, end: usize| {
+            spans.extend((start..end).step_by(CHUNK).map(|s| s..(s + CHUNK).min(end)));
+        };
+        let mut at = 0;
+        for block in &topo.blocks {
+            let (base, end) = (block.base as usize, (block.base + block.len()) as usize);
+            // A block's points are all of one kind (`prepare_records` marks them together).
+            if base < end && matches!(self.kinds[base], IN_BLOCK | TYPED) {
+                push(at, base);
+                at = end;
+            }
+        }
+        push(at, topo.vertex_count as usize);
+        spans
+    }
+
+    /// The stencil records of the general-route vertices of `spans`, with chunk-local offsets.
     fn chunk(
         &self,
         topo: &Topology,
-        range: std::ops::Range<usize>,
+        spans: &[std::ops::Range<usize>],
         evaluators: &mut Evaluators,
         mut out: Chunk,
     ) -> Result<Chunk, TessError> {
@@ -1138,7 +1203,7 @@ impl Evaluator {
         let mut patches: HashMap<(usize, u32), (u32, u32)> = HashMap::new();
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
-        for i in range {
+        for i in spans.iter().flat_map(Clone::clone) {
             if self.kinds[i] == IN_BLOCK || self.kinds[i] == TYPED {
                 continue;
             }
