@@ -419,13 +419,13 @@ pub(crate) struct Evaluator {
     /// [`record_spans`](Self::record_spans)'s buffer.
     spans: Vec<std::ops::Range<usize>>,
     /// The faces whose cell points may read a dual-grid table (on the general route, resolved
-    /// on level 0 by a patch of shape 0 with at most [`MAX_GATHER`] points), fixed by the mesh.
+    /// on level 0 by a patch that [`reads_table`]), fixed by the mesh.
     table_faces: Vec<FaceId>,
     /// Per input face, whether its block reads its type's template in this call (its cell
     /// points then need no table).
     copied: Vec<bool>,
     /// [`plan_copies`](Self::plan_copies)'s maps, kept for their allocations.
-    budget: HashMap<(u32, u32), bool>,
+    fits: HashMap<(u32, u32), bool>,
     made: hashbrown::HashSet<TemplateKey>,
 }
 
@@ -516,15 +516,14 @@ impl Evaluator {
             spans: Vec::new(),
             table_faces: Vec::new(),
             copied: Vec::new(),
-            budget: HashMap::new(),
+            fits: HashMap::new(),
             made: hashbrown::HashSet::new(),
         };
         evaluator.table_faces = mesh
             .face_ids()
             .filter(|&f| {
                 matches!(evaluator.faces[f.index()], FacePlan::General)
-                    && matches!(evaluator.levels.resolve(0, f),
-                        Some(Resolved::Patch { patch, .. }) if patch.shape == 0 && patch.vertices.len() <= MAX_GATHER)
+                    && matches!(evaluator.levels.resolve(0, f), Some(Resolved::Patch { patch, .. }) if reads_table(patch))
             })
             .collect();
         evaluator.set_cage(mesh.positions());
@@ -850,24 +849,24 @@ impl Evaluator {
             self.drop_templates();
         }
         // Per (type, rate) of the call, in block order: whether it fits the budget.
-        let (mut typed, mut made) = (std::mem::take(&mut self.budget), std::mem::take(&mut self.made));
-        typed.clear();
+        let (mut fits, mut made) = (std::mem::take(&mut self.fits), std::mem::take(&mut self.made));
+        fits.clear();
         made.clear();
         let mut budget = MAX_TEMPLATE_WEIGHTS;
         for block in &topo.blocks {
             let Some(ty) = self.face_types[block.face as usize] else { continue };
-            typed.entry((ty.id, block.rate)).or_insert_with(|| {
+            fits.entry((ty.id, block.rate)).or_insert_with(|| {
                 let size = template_size(block.rate, ty.cage.1 - ty.cage.0);
-                let fits = size <= budget;
-                if fits {
+                let fit = size <= budget;
+                if fit {
                     budget -= size;
                 }
-                fits
+                fit
             });
         }
         for (b, block) in topo.blocks.iter().enumerate() {
             let Some(ty) = self.face_types[block.face as usize] else { continue };
-            if !typed[&(ty.id, block.rate)] {
+            if !fits[&(ty.id, block.rate)] {
                 continue;
             }
             let key = self.template_key(block, ty);
@@ -883,7 +882,7 @@ impl Evaluator {
             self.copied[block.face as usize] = true;
             self.kinds[block.base as usize..(block.base + block.len()) as usize].fill(TYPED);
         }
-        (self.budget, self.made) = (typed, made);
+        (self.fits, self.made) = (fits, made);
     }
 
     /// The key of `block`'s template (its face of type `ty`).
@@ -1245,7 +1244,7 @@ impl Evaluator {
                         let (ju, jv) = frame.chain(j);
                         out.assigned.push((i as u32, out.records.len() as u32));
                         // A point of a level-0 patch's own dual grid reads the shared table.
-                        let table = if level == 0 && patch.shape == 0 && patch.vertices.len() <= MAX_GATHER {
+                        let table = if level == 0 && reads_table(patch) {
                             dual_table(&self.tables, patch, frame.to_patch(site.point))
                         } else {
                             None
@@ -1653,6 +1652,12 @@ impl Evaluator {
 struct DualTables {
     tables: Vec<Arc<StencilTable>>,
     index: HashMap<(usize, u32), u32>,
+}
+
+/// Whether the points of level-0 `patch`'s own dual grid read a dual-grid table (shape 0, at
+/// most [`MAX_GATHER`] control points), rather than stencils of their own.
+fn reads_table(patch: &subdiv_schemes::FoundPatch) -> bool {
+    patch.shape == 0 && patch.vertices.len() <= MAX_GATHER
 }
 
 /// Computes the dual-grid table of `patch`'s shape at `rate` unless it is held.

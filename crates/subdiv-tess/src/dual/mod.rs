@@ -290,21 +290,26 @@ impl DualTessellator {
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
         self.build_topology(rates, rings)?;
-        if let Err(e) = self.evaluator.prepare(&self.topology, rates, self.options.parallel) {
-            self.forget_topology();
-            return Err(e);
-        }
-        self.rates.clear();
-        self.rates.extend_from_slice(rates);
-        Ok(())
+        let prepared = self.evaluator.prepare(&self.topology, rates, self.options.parallel);
+        self.settle(rates, prepared)
     }
 
-    /// After a failed preparation: back to no topology, as before the first tessellation (the
-    /// animation paths then evaluate nothing, instead of a topology the evaluation was not
-    /// prepared for).
-    fn forget_topology(&mut self) {
-        self.topology = Topology::default();
+    /// After the preparation of the topology just built for `rates`: on success the rates are
+    /// kept; on failure the tessellator goes back to no topology and no rates, as before the
+    /// first tessellation (the animation paths then evaluate nothing, instead of a topology
+    /// the evaluation was not prepared for).
+    fn settle(&mut self, rates: &[u32], prepared: Result<(), TessError>) -> Result<(), TessError> {
         self.rates.clear();
+        match prepared {
+            Ok(()) => {
+                self.rates.extend_from_slice(rates);
+                Ok(())
+            }
+            Err(e) => {
+                self.topology = Topology::default();
+                Err(e)
+            }
+        }
     }
 
     /// Checks `rates` and rebuilds the topology (with `rings`, if any), which the output and
@@ -417,14 +422,11 @@ impl DualTessellator {
                 t.write_triangles(indices, parallel);
             },
         );
-        if let Err(e) = done {
+        if done.is_err() {
             out.vertices.clear();
             out.indices.clear();
-            self.forget_topology();
-            return Err(e);
         }
-        self.rates.clear();
-        self.rates.extend_from_slice(rates);
+        self.settle(rates, done)?;
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
         self.output.clear();
         Ok(())

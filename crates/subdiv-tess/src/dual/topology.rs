@@ -120,7 +120,7 @@ impl Run {
 
     /// Its triangles' indices (`3 ×` [`triangles`](Self::triangles)): its quads in the order of
     /// [`quads`](Self::quads), each quad's six indices at once (no bounds check or iterator
-    /// state per quad, which cost the small meshes' full path about 4 %).
+    /// state per quad).
     fn write(&self, out: &mut [u32]) {
         match self.shape {
             RunShape::Grid { base, n } => {
