@@ -1203,9 +1203,8 @@ impl Evaluator {
         let mut last: Vec<Option<(FaceId, Option<Resolved<'_>>)>> = vec![None; self.levels.level_count()];
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for i in spans.iter().flat_map(Clone::clone) {
-            if self.kinds[i] == IN_BLOCK || self.kinds[i] == TYPED {
-                continue;
-            }
+            // `record_spans` left out the blocks of those kinds, and only blocks have them.
+            debug_assert!(!matches!(self.kinds[i], IN_BLOCK | TYPED), "vertex {i} outside the record spans");
             let site = topo.site(i as u32);
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
