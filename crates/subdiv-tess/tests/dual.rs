@@ -585,6 +585,46 @@ fn thread_count_does_not_change_the_bits() {
     assert_eq!(a, b, "update_cage_flat on all threads against one");
 }
 
+/// Small calls of the flat path on two threads go through a team (the second thread evaluates
+/// the leading faces that read kept templates, or are bicubic, while the first builds the
+/// topology): the same bits as one thread, on the calls after the first (which makes the
+/// templates), at equal and mixed rates, with N-gons (whose vertices come after the early
+/// blocks), borders, and after a moved cage.
+#[test]
+fn small_flat_calls_on_two_threads_equal_one() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
+    let cc = Builtin::CatmullClark.scheme();
+    for (name, soup) in [
+        ("cube", shapes::cube()),
+        ("prism", shapes::ngon_prism(5)),
+        ("grid", shapes::quad_grid(3, 2)),
+        ("torus", shapes::quad_torus(5, 4)),
+    ] {
+        let mesh = Mesh::build(soup).unwrap();
+        let faces = mesh.face_count();
+        let mut one = DualTessellator::new(cc, &mesh, &DualOptions { quads: false, parallel: false }).unwrap();
+        let mut two = DualTessellator::new(cc, &mesh, &DualOptions { quads: false, parallel: true }).unwrap();
+        let moved: Vec<DVec3> = mesh.positions().iter().map(|p| *p * 1.25 + DVec3::new(0.5, -1.0, 2.0)).collect();
+        let (mut expected, mut got) = (FlatMesh::default(), FlatMesh::default());
+        for rates in [vec![8; faces], rates_for(&mesh, 3, 12), vec![16; faces]] {
+            one.tessellate_flat(&rates, &mut expected).unwrap();
+            pool.install(|| {
+                for call in 0..3 {
+                    two.tessellate_flat(&rates, &mut got).unwrap();
+                    assert_eq!(got, expected, "{name} at {rates:?}, call {call}");
+                }
+            });
+        }
+        one.update_cage_flat(&moved, &mut expected).unwrap();
+        one.tessellate_flat(&vec![8; faces], &mut expected).unwrap();
+        pool.install(|| {
+            two.update_cage_flat(&moved, &mut got).unwrap();
+            two.tessellate_flat(&vec![8; faces], &mut got).unwrap();
+        });
+        assert_eq!(got, expected, "{name} on a moved cage");
+    }
+}
+
 #[test]
 fn extreme_rates_side_by_side_are_watertight() {
     let max = subdiv_tess::MAX_DUAL_RATE;

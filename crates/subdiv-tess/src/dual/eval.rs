@@ -427,6 +427,11 @@ pub(crate) struct Evaluator {
     /// [`plan_copies`](Self::plan_copies)'s maps, kept for their allocations.
     fits: HashMap<(u32, u32), bool>,
     made: hashbrown::HashSet<TemplateKey>,
+    /// The blocks of the last [`plan_blocks`](Self::plan_blocks) (the topology's blocks at its
+    /// rates): face and rate.
+    planned: Vec<(u32, u32)>,
+    /// The early blocks of the last [`plan_blocks`](Self::plan_blocks): index and first vertex.
+    early: Vec<(u32, u32)>,
 }
 
 impl Evaluator {
@@ -518,6 +523,8 @@ impl Evaluator {
             copied: Vec::new(),
             fits: HashMap::new(),
             made: hashbrown::HashSet::new(),
+            planned: Vec::new(),
+            early: Vec::new(),
         };
         evaluator.table_faces = mesh
             .face_ids()
@@ -592,9 +599,59 @@ impl Evaluator {
         self.refined = self.refined.max(levels);
     }
 
-    /// Prepares the evaluation of `topo`'s vertices: basis tables for the blocks' rates, a
-    /// stencil record for every vertex on the general route but the typed faces' cells, and
-    /// the typed faces' templates.
+    /// Plans the blocks (the whole quad faces' dual grids) of a tessellation at `rates`, before
+    /// its topology is built (the blocks are the faces whose domain is a quad, in face order):
+    /// the basis tables of the bicubic faces' rates, which typed faces read their type's
+    /// template ([`plan_copies`](Self::plan_copies)), and the **early** blocks, which
+    /// [`evaluate_early_flat`](Self::evaluate_early_flat) evaluates without the topology: in the
+    /// leading faces that are whole quads or holes (whose blocks come first in the vertex order,
+    /// each at the sum of the squares of the rates before it), the bicubic faces and the faces
+    /// whose type's template at their rate is kept. Returns the number of vertices to the end of
+    /// the last early block. [`prepare`](Self::prepare) then takes the topology of these rates.
+    pub(crate) fn plan_blocks(&mut self, rates: &[u32]) -> usize {
+        self.planned.clear();
+        self.planned.extend(
+            self.domains
+                .iter()
+                .zip(rates)
+                .enumerate()
+                .filter(|(_, (d, _))| matches!(d, Some(FaceDomain::Quad)))
+                .map(|(f, (_, &rate))| (f as u32, rate)),
+        );
+        for &(f, rate) in &self.planned {
+            if let FacePlan::Bicubic { .. } = self.faces[f as usize] {
+                let r = rate as usize;
+                if self.bases.len() <= r {
+                    self.bases.resize(r + 1, None);
+                }
+                if self.bases[r].is_none() {
+                    self.bases[r] = Some(Arc::new(RateBasis::new(rate)));
+                }
+            }
+        }
+        self.plan_copies();
+        self.early.clear();
+        let (mut base, mut end, mut b) = (0u32, 0, 0);
+        for (f, domain) in self.domains.iter().enumerate() {
+            match domain {
+                None => continue,
+                Some(FaceDomain::Quad) => {}
+                Some(_) => break,
+            }
+            let rate = rates[f];
+            if matches!(self.faces[f], FacePlan::Bicubic { .. }) || self.block_template[b] != NO_TEMPLATE {
+                self.early.push((b as u32, base));
+                end = (base + rate * rate) as usize;
+            }
+            base += rate * rate;
+            b += 1;
+        }
+        end
+    }
+
+    /// Prepares the evaluation of `topo`'s vertices (after [`plan_blocks`](Self::plan_blocks)
+    /// at `rates`): a stencil record for every vertex on the general route but the typed
+    /// faces' cells, and the typed faces' templates.
     pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         self.prepare_records(topo, rates, parallel)?;
         self.patch_grids(topo);
@@ -627,24 +684,18 @@ impl Evaluator {
         self.kinds.resize(n, BICUBIC);
         self.records.clear();
         self.ids.clear();
-        for block in &topo.blocks {
+        debug_assert!(
+            topo.blocks.iter().map(|b| (b.face, b.rate)).eq(self.planned.iter().copied()),
+            "blocks as planned"
+        );
+        for (b, block) in topo.blocks.iter().enumerate() {
+            let cells = block.base as usize..(block.base + block.len()) as usize;
             if let FacePlan::Bicubic { .. } = self.faces[block.face as usize] {
-                let r = block.rate as usize;
-                if self.bases.len() <= r {
-                    self.bases.resize(r + 1, None);
-                }
-                if self.bases[r].is_none() {
-                    self.bases[r] = Some(Arc::new(RateBasis::new(block.rate)));
-                }
-                let end = block.base as usize + r * r;
-                self.kinds[block.base as usize..end].fill(IN_BLOCK);
+                self.kinds[cells].fill(IN_BLOCK);
+            } else if self.copy_of[b] == COPY {
+                self.kinds[cells].fill(TYPED);
             }
         }
-        // Faces of one type (the same resolution tree up to vertex labels) at one rate have the
-        // same cell records but for their patches' control points: they copy their type's
-        // template in `patch_grids`, which the first face of the type without one makes from its
-        // own descent through the chunks.
-        self.plan_copies(topo);
         // The dual-grid tables the level-0 patches' cell points read (but those of faces that
         // copy a template), first: the chunks below only read them.
         for &f in &self.table_faces {
@@ -827,15 +878,15 @@ impl Evaluator {
         }
     }
 
-    /// Decides, per block of `topo`, whether it reads its type's template ([`COPY`]: its cell
+    /// Decides, per planned block, whether it reads its type's template ([`COPY`]: its cell
     /// points [`TYPED`], out of the chunks), makes it ([`MAKE`]: the first block of a key
     /// without a template) or takes its own records (0).
     ///
     /// The (type, rate) pairs past the [`MAX_TEMPLATE_WEIGHTS`] budget, counted in block order
     /// over the call's pairs, take their own records: the decision depends on this call's
     /// rates only (not on the templates kept), so a face's bits do too.
-    fn plan_copies(&mut self, topo: &Topology) {
-        let blocks = topo.blocks.len();
+    fn plan_copies(&mut self) {
+        let blocks = self.planned.len();
         self.copied.clear();
         self.copied.resize(self.faces.len(), false);
         self.copy_of.clear();
@@ -853,10 +904,10 @@ impl Evaluator {
         fits.clear();
         made.clear();
         let mut budget = MAX_TEMPLATE_WEIGHTS;
-        for block in &topo.blocks {
-            let Some(ty) = self.face_types[block.face as usize] else { continue };
-            fits.entry((ty.id, block.rate)).or_insert_with(|| {
-                let size = template_size(block.rate, ty.cage.1 - ty.cage.0);
+        for &(face, rate) in &self.planned {
+            let Some(ty) = self.face_types[face as usize] else { continue };
+            fits.entry((ty.id, rate)).or_insert_with(|| {
+                let size = template_size(rate, ty.cage.1 - ty.cage.0);
                 let fit = size <= budget;
                 if fit {
                     budget -= size;
@@ -864,12 +915,12 @@ impl Evaluator {
                 fit
             });
         }
-        for (b, block) in topo.blocks.iter().enumerate() {
-            let Some(ty) = self.face_types[block.face as usize] else { continue };
-            if !fits[&(ty.id, block.rate)] {
+        for (b, &(face, rate)) in self.planned.iter().enumerate() {
+            let Some(ty) = self.face_types[face as usize] else { continue };
+            if !fits[&(ty.id, rate)] {
                 continue;
             }
-            let key = self.template_key(block, ty);
+            let key = self.template_key(face, rate, ty);
             if let Some(&t) = self.template_index.get(&key) {
                 self.block_template[b] = t;
                 self.copy_of[b] = COPY;
@@ -879,15 +930,14 @@ impl Evaluator {
             } else {
                 self.copy_of[b] = COPY;
             }
-            self.copied[block.face as usize] = true;
-            self.kinds[block.base as usize..(block.base + block.len()) as usize].fill(TYPED);
+            self.copied[face as usize] = true;
         }
         (self.fits, self.made) = (fits, made);
     }
 
-    /// The key of `block`'s template (its face of type `ty`).
-    fn template_key(&self, block: &super::topology::Block, ty: FaceType) -> TemplateKey {
-        if self.copy_faces { (false, ty.id, block.rate) } else { (true, block.face, block.rate) }
+    /// The key of the template of `face` (of type `ty`) at `rate`.
+    fn template_key(&self, face: u32, rate: u32, ty: FaceType) -> TemplateKey {
+        if self.copy_faces { (false, ty.id, rate) } else { (true, face, rate) }
     }
 
     /// Forgets the templates.
@@ -1071,7 +1121,7 @@ impl Evaluator {
             if copy == MAKE {
                 let template = self.make_template(block, (first, self.patch_grids.len() as u32));
                 let ty = self.face_types[block.face as usize].expect("a typed face");
-                self.template_index.insert(self.template_key(block, ty), self.templates.len() as u32);
+                self.template_index.insert(self.template_key(block.face, block.rate, ty), self.templates.len() as u32);
                 self.template_weights += template.weights.len();
                 self.templates.push(template);
                 // Its records and grids served the template: it reads the template too.
@@ -1085,7 +1135,7 @@ impl Evaluator {
             }
             if copy != 0 {
                 let ty = self.face_types[block.face as usize].expect("a typed face");
-                self.block_template[b] = self.template_index[&self.template_key(block, ty)];
+                self.block_template[b] = self.template_index[&self.template_key(block.face, block.rate, ty)];
             }
             self.block_grids.push((first, self.patch_grids.len() as u32));
         }
@@ -1315,9 +1365,37 @@ impl Evaluator {
     }
 
     /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
-    /// positions and normals, without the f64 arrays.
-    pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
-        self.evaluate_into(topo, parallel, FlatSink(out));
+    /// positions and normals, without the f64 arrays; with `skip_early`, but the early blocks
+    /// of the last [`plan_blocks`](Self::plan_blocks) (left as they are in `out`).
+    pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32], skip_early: bool) {
+        self.evaluate_into(topo, parallel, FlatSink(out), skip_early);
+    }
+
+    /// The early blocks of the last [`plan_blocks`](Self::plan_blocks) (no topology needed) as
+    /// pieces over `out`, interleaved f32 as [`evaluate_flat`](Self::evaluate_flat) writes them,
+    /// to the number of vertices `plan_blocks` returned (the vertices between early blocks are
+    /// not written), for the caller to share among threads
+    /// ([`evaluate_flat_piece`](Self::evaluate_flat_piece) each, in any order and on any
+    /// thread: the output is the same).
+    pub(crate) fn early_pieces<'a>(&'a self, out: &'a mut [f32]) -> Vec<FlatPiece<'a>> {
+        let mut pieces = Vec::with_capacity(self.early.len());
+        let (mut rest, mut at) = (FlatSink(out), 0);
+        for &(b, base) in &self.early {
+            let (face, rate) = self.planned[b as usize];
+            let len = (rate * rate) as usize;
+            let (piece, tail) = rest.split(base as usize - at).1.split(len);
+            (rest, at) = (tail, base as usize + len);
+            let Ok(piece) = self.block_piece(b as usize, face, rate, piece) else {
+                unreachable!("an early block is bicubic or reads a template")
+            };
+            pieces.push(FlatPiece(piece));
+        }
+        pieces
+    }
+
+    /// One of [`early_pieces`](Self::early_pieces)' pieces, with a thread's `scratch`.
+    pub(crate) fn evaluate_flat_piece(&self, piece: FlatPiece<'_>, scratch: &mut Scratch) {
+        self.run_piece(piece.0, scratch);
     }
 
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
@@ -1331,17 +1409,18 @@ impl Evaluator {
         let n = topo.vertex_count as usize;
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
-        self.evaluate_into(topo, parallel, WideSink(positions, normals));
+        self.evaluate_into(topo, parallel, WideSink(positions, normals), false);
     }
 
-    /// Every vertex into `out`, in one pass over disjoint pieces of the vertex range: the
-    /// bicubic blocks, and the runs between them (general-route and pointwise bicubic vertices)
+    /// Every vertex into `out` (with `skip_early`, but the early blocks), in one pass over
+    /// disjoint pieces of the vertex range: the bicubic blocks, the typed faces, the faces with
+    /// patch grids, and the runs between them (general-route and pointwise bicubic vertices)
     /// cut to at most [`RUN`] vertices. Each vertex is computed alone, so the output does not
     /// depend on how the pieces are shared among threads.
-    fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S) {
+    fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S, skip_early: bool) {
         let mut pieces: Vec<Piece<'_, S>> = Vec::with_capacity(2 * topo.blocks.len() + 1);
         let mut rest = out;
-        let mut at = 0;
+        let (mut at, mut skipped) = (0, 0);
         let push_run = |rest: &mut S, at: &mut usize, end: usize, pieces: &mut Vec<Piece<'_, S>>| {
             while *at < end {
                 let len = (end - *at).min(RUN);
@@ -1351,56 +1430,75 @@ impl Evaluator {
                 *at += len;
             }
         };
-        for ((block, &(first, last)), &template) in topo.blocks.iter().zip(&self.block_grids).zip(&self.block_template)
-        {
-            let len = (block.rate * block.rate) as usize;
-            if template != NO_TEMPLATE {
-                push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
-                let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
-                rest = tail;
-                at += len;
-                let ty = self.face_types[block.face as usize].expect("a typed face");
-                let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
-                pieces.push(Piece::Typed { template: &self.templates[template as usize], cage, out: piece });
+        let mut early = self.early.iter().peekable();
+        for (b, (block, &(first, last))) in topo.blocks.iter().zip(&self.block_grids).enumerate() {
+            let skip = skip_early && early.next_if(|e| e.0 as usize == b).is_some();
+            let whole = skip
+                || self.block_template[b] != NO_TEMPLATE
+                || matches!(self.faces[block.face as usize], FacePlan::Bicubic { .. })
+                || first < last;
+            if !whole {
                 continue;
             }
-            let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else {
-                if first < last {
-                    // A general face with patch grids: one piece (its grids write anywhere in it).
-                    push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
-                    let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
-                    rest = tail;
-                    let grids = &self.patch_grids[first as usize..last as usize];
-                    pieces.push(Piece::Run { start: at, out: piece, grids });
-                    at += len;
-                }
-                continue;
-            };
             push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+            let len = block.len() as usize;
             let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
-            rest = tail;
-            at += len;
-            pieces.push(Piece::Block { cv, rate: block.rate, out: piece });
+            let start = at;
+            (rest, at) = (tail, at + len);
+            if skip {
+                skipped += len;
+                continue;
+            }
+            // A general face with patch grids: one piece (its grids write anywhere in it).
+            let grids = &self.patch_grids[first as usize..last as usize];
+            pieces.push(self.block_piece(b, block.face, block.rate, piece).unwrap_or_else(|out| Piece::Run {
+                start,
+                out,
+                grids,
+            }));
         }
         push_run(&mut rest, &mut at, topo.vertex_count as usize, &mut pieces);
-        // The widest vector instructions the CPU has (AVX2 on x86-64), chosen at run time: the
-        // same operations in the same order (Rust never fuses a product and a sum on its own;
-        // the typed faces' `mul_add` is one rounding on every target), so the same
-        // bits as the baseline build. The piece's work is inlined into the dispatched function,
-        // which compiles it for the CPU's features.
-        let arch = pulp::Arch::new();
-        let run = |scratch: &mut Scratch, piece: Piece<'_, S>| {
-            arch.dispatch(
-                #[inline(always)]
-                || self.evaluate_piece(piece, scratch),
-            );
-        };
-        if parallel && topo.vertex_count as usize >= PARALLEL_VERTICES {
-            pieces.into_par_iter().for_each_init(Scratch::new, run);
+        self.run_pieces(pieces, parallel && topo.vertex_count as usize - skipped >= PARALLEL_VERTICES);
+    }
+
+    /// Block `b` (of `face` at `rate`) as one piece if it is one (a typed face reading its
+    /// template, or a bicubic face), else its output back.
+    fn block_piece<'a, S: Sink>(&'a self, b: usize, face: u32, rate: u32, out: S) -> Result<Piece<'a, S>, S> {
+        let template = self.block_template[b];
+        if template != NO_TEMPLATE {
+            let ty = self.face_types[face as usize].expect("a typed face");
+            let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
+            return Ok(Piece::Typed { weights: &self.templates[template as usize].weights, cage, out });
+        }
+        match &self.faces[face as usize] {
+            FacePlan::Bicubic { cv } => Ok(Piece::Block { cv, rate, out }),
+            _ => Err(out),
+        }
+    }
+
+    /// Evaluates `pieces`, on rayon's threads if `parallel`.
+    fn run_pieces<S: Sink>(&self, pieces: Vec<Piece<'_, S>>, parallel: bool) {
+        if pieces.is_empty() {
+            // No scratch to make (after the early blocks, a call may have nothing left).
+        } else if parallel {
+            pieces.into_par_iter().for_each_init(Scratch::new, |scratch, piece| self.run_piece(piece, scratch));
         } else {
             let mut scratch = Scratch::new();
-            pieces.into_iter().for_each(|piece| run(&mut scratch, piece));
+            pieces.into_iter().for_each(|piece| self.run_piece(piece, &mut scratch));
         }
+    }
+
+    /// One piece, with the widest vector instructions the CPU has (AVX2 on x86-64), chosen at
+    /// run time: the same operations in the same order (Rust never fuses a product and a sum
+    /// on its own; the typed faces' `mul_add` is one rounding on every target), so the same
+    /// bits as the baseline build. The piece's work is inlined into the dispatched function,
+    /// which compiles it for the CPU's features.
+    fn run_piece<S: Sink>(&self, piece: Piece<'_, S>, scratch: &mut Scratch) {
+        let arch = scratch.arch;
+        arch.dispatch(
+            #[inline(always)]
+            || self.evaluate_piece(piece, scratch),
+        );
     }
 
     /// One piece of [`evaluate_into`](Self::evaluate_into)'s work.
@@ -1412,8 +1510,8 @@ impl Evaluator {
                 let basis = self.bases[rate as usize].as_deref().expect("prepared");
                 grid_block(cv, cage, basis, &mut out, &mut scratch.pending);
             }
-            Piece::Typed { template, cage: ids, mut out } => {
-                typed_block(template, ids, cage, &mut out, scratch);
+            Piece::Typed { weights, cage: ids, mut out } => {
+                typed_block(weights, ids, cage, &mut out, scratch);
             }
             Piece::Run { start, mut out, grids } => {
                 // By batches: first the positions and the tangents' cross products, then the
@@ -1808,15 +1906,17 @@ impl Pending {
 
 /// What the blocks and typed faces of one thread reuse from piece to piece (made anew for
 /// each, their zeroing showed in profiles as a `memset` of 4 % of the full path's time).
-struct Scratch {
+pub(crate) struct Scratch {
     pending: Pending,
     /// A typed face's cage points by coordinate.
     gathered: [[f64; MAX_TYPED_POINTS]; 3],
+    /// The CPU's features, looked up once per thread and call rather than per piece.
+    arch: pulp::Arch,
 }
 
 impl Scratch {
-    fn new() -> Self {
-        Self { pending: Pending::new(), gathered: [[0.0; MAX_TYPED_POINTS]; 3] }
+    pub(crate) fn new() -> Self {
+        Self { pending: Pending::new(), gathered: [[0.0; MAX_TYPED_POINTS]; 3], arch: pulp::Arch::new() }
     }
 }
 
@@ -1839,16 +1939,16 @@ fn template_size(rate: u32, len: u32) -> usize {
 /// add); the lanes are plain arrays; the normals are glam's
 /// `du.cross(dv).normalize_or_zero()`, operation for operation.
 #[inline(always)]
-fn typed_block<S: Sink>(t: &Template, ids: &[u32], cage: &[DVec3], out: &mut S, scratch: &mut Scratch) {
+fn typed_block<S: Sink>(weights: &[f64], ids: &[u32], cage: &[DVec3], out: &mut S, scratch: &mut Scratch) {
     let (len, cells) = (ids.len(), out.len());
     // The cage points by coordinate: each coordinate is one load to broadcast.
-    let Scratch { gathered, pending } = scratch;
+    let Scratch { gathered, pending, .. } = scratch;
     for (k, &id) in ids.iter().enumerate() {
         let p = cage[id as usize];
         (gathered[0][k], gathered[1][k], gathered[2][k]) = (p.x, p.y, p.z);
     }
     let [gx, gy, gz] = &*gathered;
-    for (g, w) in t.weights.chunks_exact(3 * LANES * len).enumerate() {
+    for (g, w) in weights.chunks_exact(3 * LANES * len).enumerate() {
         let (wp, w) = w.split_at(LANES * len);
         let (wu, wv) = w.split_at(LANES * len);
         let (wp, wu, wv) = (wp.as_chunks::<LANES>().0, wu.as_chunks::<LANES>().0, wv.as_chunks::<LANES>().0);
@@ -1891,12 +1991,15 @@ const RUN: usize = 1024;
 /// Vertices per batch of a run's normalisations.
 const BATCH: usize = 64;
 
+/// A piece of [`Evaluator::early_pieces`]' work (its vertices' part of the flat buffer).
+pub(crate) struct FlatPiece<'a>(Piece<'a, FlatSink<'a>>);
+
 /// A piece of [`Evaluator::evaluate_into`]'s work.
 enum Piece<'a, S> {
     /// A bicubic face's dual grid.
     Block { cv: &'a [u32; 16], rate: u32, out: S },
     /// A typed face's cell points: its template over its cage points.
-    Typed { template: &'a Template, cage: &'a [u32], out: S },
+    Typed { weights: &'a [f64], cage: &'a [u32], out: S },
     /// Vertices `start..start + out.len()`: the patch grids' (all in the range), then each
     /// other one on its own.
     Run { start: usize, out: S, grids: &'a [PatchGrid] },
@@ -2040,6 +2143,7 @@ mod tests {
         let mut topo = Topology::default();
         let faces = mesh.face_count();
         super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], None, &mut topo);
+        ev.plan_blocks(&vec![4; faces]);
         ev.prepare(&topo, &vec![4; faces], true).unwrap();
         let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
         assert_eq!(tabled, faces * 16);
@@ -2065,6 +2169,7 @@ mod tests {
             let mut topo = Topology::default();
             let rates = vec![rate; mesh.face_count()];
             super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
+            ev.plan_blocks(&rates);
             ev.prepare_records(&topo, &rates, true).unwrap();
             let kinds = ev.kinds.clone();
             ev.patch_grids(&topo);
@@ -2129,6 +2234,7 @@ mod tests {
                 let mut topo = Topology::default();
                 super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
                 let run = |ev: &mut Evaluator| {
+                    ev.plan_blocks(&rates);
                     ev.prepare(&topo, &rates, true).unwrap();
                     let (mut ps, mut ns) = (Vec::new(), Vec::new());
                     ev.evaluate(&topo, true, &mut ps, &mut ns);

@@ -60,12 +60,14 @@
 
 mod eval;
 mod plan;
+mod team;
 mod topology;
 
 use glam::DVec3;
 use rayon::prelude::*;
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{Scheme, Split};
+use subdiv_stencil::FaceDomain;
 
 use self::eval::Evaluator;
 pub use self::plan::{
@@ -149,11 +151,9 @@ pub struct FlatMesh {
 pub struct DualTessellator {
     options: DualOptions,
     scheme: String,
-    triangle: bool,
     vertex_count: usize,
     evaluator: Evaluator,
-    builder_mesh: Mesh,
-    builder_buffers: BuilderBuffers,
+    builder: TopologyBuilder,
     topology: Topology,
     rates: Vec<u32>,
     output: TessMesh,
@@ -176,15 +176,18 @@ impl DualTessellator {
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &DualOptions) -> Result<Self, TessError> {
         let evaluator = Evaluator::new(scheme, mesh)?;
         let triangle = evaluator.levels().split() == Split::Triangle;
-        let builder_mesh = evaluator.levels().mesh(0).clone();
+        let level0 = evaluator.levels().mesh(0).clone();
         Ok(Self {
             options: *options,
             scheme: scheme.name().to_string(),
-            triangle,
             vertex_count: mesh.vertex_count(),
             evaluator,
-            builder_mesh,
-            builder_buffers: BuilderBuffers::default(),
+            builder: TopologyBuilder {
+                mesh: level0,
+                triangle,
+                quads: options.quads,
+                buffers: BuilderBuffers::default(),
+            },
             topology: Topology::default(),
             rates: Vec::new(),
             output: TessMesh::default(),
@@ -214,7 +217,7 @@ impl DualTessellator {
 
     /// The number of input faces (the length [`tessellate`](Self::tessellate)'s rates must have).
     pub fn face_count(&self) -> usize {
-        self.builder_mesh.face_count()
+        self.builder.mesh.face_count()
     }
 
     /// Tessellates with `rates[f]` steps per side of input face `f` (holes: ignored, but still
@@ -289,7 +292,10 @@ impl DualTessellator {
 
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
-        self.build_topology(rates, rings)?;
+        self.check_rates(rates)?;
+        self.evaluator.plan_blocks(rates);
+        self.topology_changes();
+        self.builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
         let prepared = self.evaluator.prepare(&self.topology, rates, self.options.parallel);
         self.settle(rates, prepared)
     }
@@ -312,22 +318,21 @@ impl DualTessellator {
         }
     }
 
-    /// Checks `rates` and rebuilds the topology (with `rings`, if any), which the output and
-    /// the kept indices no longer match; the evaluation is prepared next.
-    fn build_topology(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
+    /// Checks `rates`: one per face, each in `1..=`[`MAX_DUAL_RATE`].
+    fn check_rates(&self, rates: &[u32]) -> Result<(), TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
         if let Some((face, &rate)) = rates.iter().enumerate().find(|(_, r)| !(1..=MAX_DUAL_RATE).contains(*r)) {
             return Err(TessError::Rate { face, rate, rule: "rates are integers from 1 to MAX_DUAL_RATE = 128" });
         }
-        let buffers = std::mem::take(&mut self.builder_buffers);
-        let mut builder = Builder::with_buffers(&self.builder_mesh, self.triangle, self.options.quads, buffers);
-        builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
-        self.builder_buffers = builder.into_buffers();
+        Ok(())
+    }
+
+    /// Before the topology is rebuilt: the output and the kept indices no longer match it.
+    fn topology_changes(&mut self) {
         self.output_current = false;
         self.flat_indices.clear();
-        Ok(())
     }
 
     /// The animation path: the same topology and rates on a new cage (one finite position per
@@ -380,7 +385,7 @@ impl DualTessellator {
             parallel,
             out,
             |vertices| {
-                evaluator.evaluate_flat(t, parallel, vertices);
+                evaluator.evaluate_flat(t, parallel, vertices, false);
                 Ok(())
             },
             |out| copy_indices(indices, parallel, out),
@@ -401,27 +406,12 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate); `out` is then left empty if the rates were
     /// accepted (the failure came from a stencil), untouched if not.
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
-        self.build_topology(rates, None)?;
-        let (t, parallel, evaluator) = (&self.topology, self.options.parallel, &mut self.evaluator);
-        // The indices go beside the preparation too (they need the topology alone): the second
-        // thread is then awake when the evaluation shares its pieces, where after the
-        // preparation alone it would have gone to sleep (and waking one costs tens of
-        // microseconds in a virtual machine).
-        let done = beside(
-            t,
-            parallel,
-            out,
-            |vertices| {
-                evaluator.prepare(t, rates, parallel)?;
-                evaluator.evaluate_flat(t, parallel, vertices);
-                Ok(())
-            },
-            // Written straight from the topology's runs: no stored copy of most of them.
-            |indices| {
-                indices.resize(3 * t.triangle_count() as usize, 0);
-                t.write_triangles(indices, parallel);
-            },
-        );
+        self.check_rates(rates)?;
+        let early = self.evaluator.plan_blocks(rates);
+        self.topology_changes();
+        let team =
+            self.options.parallel && early >= TEAM_EARLY && rayon::current_num_threads() > 1 && small_call(rates);
+        let done = if team { self.flat_team(rates, early, out) } else { self.flat_forked(rates, out) };
         if done.is_err() {
             out.vertices.clear();
             out.indices.clear();
@@ -429,6 +419,63 @@ impl DualTessellator {
         self.settle(rates, done)?;
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
         self.output.clear();
+        Ok(())
+    }
+
+    /// [`tessellate_flat`](Self::tessellate_flat) after the blocks' planning: the topology,
+    /// then its indices on a second thread beside the evaluation.
+    fn flat_forked(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
+        let Self { evaluator, builder, topology, options, .. } = self;
+        builder.build(evaluator.domains(), rates, None, topology);
+        let (t, parallel) = (&*topology, options.parallel);
+        // The indices go beside the preparation too (they need the topology alone): the second
+        // thread is then awake when the evaluation shares its pieces, where after the
+        // preparation alone it would have gone to sleep (and waking one costs tens of
+        // microseconds in a virtual machine).
+        beside(
+            t,
+            parallel,
+            out,
+            |vertices| {
+                evaluator.prepare(t, rates, parallel)?;
+                evaluator.evaluate_flat(t, parallel, vertices, false);
+                Ok(())
+            },
+            // Written straight from the topology's runs: no stored copy of most of them.
+            |indices| {
+                indices.resize(3 * t.triangle_count() as usize, 0);
+                t.write_triangles(indices, parallel);
+            },
+        )
+    }
+
+    /// [`tessellate_flat`](Self::tessellate_flat) of a small call with `early` vertices to the
+    /// end of the early blocks, on two threads (see [`team`]): the second thread evaluates the
+    /// early blocks (which need no topology) from the last, while this one builds the topology
+    /// and writes the indices, then takes the early blocks left from the first; the
+    /// preparation and the other vertices follow.
+    fn flat_team(&mut self, rates: &[u32], early: usize, out: &mut FlatMesh) -> Result<(), TessError> {
+        let FlatMesh { vertices, indices } = out;
+        if vertices.len() < 6 * early {
+            vertices.resize(6 * early, 0.0);
+        }
+        let Self { evaluator, builder, topology, options, .. } = self;
+        let shared: &Evaluator = evaluator;
+        team::serial_beside_jobs(
+            shared.early_pieces(&mut vertices[..6 * early]),
+            || {
+                builder.build(shared.domains(), rates, None, topology);
+                // Written straight from the topology's runs: no stored copy of most of them.
+                indices.resize(3 * topology.triangle_count() as usize, 0);
+                topology.write_triangles(indices, false);
+            },
+            eval::Scratch::new,
+            |piece, scratch| shared.evaluate_flat_piece(piece, scratch),
+        );
+        let (t, parallel) = (&*topology, options.parallel);
+        vertices.resize(6 * t.vertex_count as usize, 0.0);
+        evaluator.prepare(t, rates, parallel)?;
+        evaluator.evaluate_flat(t, parallel, vertices, true);
         Ok(())
     }
 
@@ -543,6 +590,41 @@ pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u
 #[inline]
 fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
     [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
+}
+
+/// The fewest early blocks' vertices for which [`DualTessellator::tessellate_flat`] takes a
+/// [`team`].
+const TEAM_EARLY: usize = 256;
+
+/// The most vertices (as `Σ rate²`, about a quad mesh's count) of a
+/// [`tessellate_flat`](DualTessellator::tessellate_flat) call on a [`team`] of two threads:
+/// larger calls fork as the evaluation goes (where more threads than two may help, and the
+/// helper would wait long beside the topology build).
+const TEAM_VERTICES: u64 = 1 << 15;
+
+/// Whether `rates` make a call small enough for a [`team`].
+fn small_call(rates: &[u32]) -> bool {
+    rates.iter().map(|&r| u64::from(r).pow(2)).sum::<u64>() <= TEAM_VERTICES
+}
+
+/// The topology's builder, kept across calls: the mesh (level 0), the split, whether quads are
+/// listed, and the builder's buffers.
+#[derive(Debug)]
+struct TopologyBuilder {
+    mesh: Mesh,
+    triangle: bool,
+    quads: bool,
+    buffers: BuilderBuffers,
+}
+
+impl TopologyBuilder {
+    /// The topology at `rates` (checked) with `rings` into `out` (its allocations reused).
+    fn build(&mut self, domains: &[Option<FaceDomain>], rates: &[u32], rings: Option<&RingDepths>, out: &mut Topology) {
+        let buffers = std::mem::take(&mut self.buffers);
+        let mut builder = Builder::with_buffers(&self.mesh, self.triangle, self.quads, buffers);
+        builder.build(domains, rates, rings, out);
+        self.buffers = builder.into_buffers();
+    }
 }
 
 /// The most triangles for which the flat paths write their indices after the evaluation, on
