@@ -1395,7 +1395,7 @@ impl Evaluator {
 
     /// One of [`early_pieces`](Self::early_pieces)' pieces, with a thread's `scratch`.
     pub(crate) fn evaluate_flat_piece(&self, piece: FlatPiece<'_>, scratch: &mut Scratch) {
-        self.run_piece(piece.0, scratch);
+        self.run_piece(pulp::Arch::new(), piece.0, scratch);
     }
 
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
@@ -1468,7 +1468,7 @@ impl Evaluator {
         if template != NO_TEMPLATE {
             let ty = self.face_types[face as usize].expect("a typed face");
             let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
-            return Ok(Piece::Typed { weights: &self.templates[template as usize].weights, cage, out });
+            return Ok(Piece::Typed { template: &self.templates[template as usize], cage, out });
         }
         match &self.faces[face as usize] {
             FacePlan::Bicubic { cv } => Ok(Piece::Block { cv, rate, out }),
@@ -1478,13 +1478,15 @@ impl Evaluator {
 
     /// Evaluates `pieces`, on rayon's threads if `parallel`.
     fn run_pieces<S: Sink>(&self, pieces: Vec<Piece<'_, S>>, parallel: bool) {
+        // The CPU's features, looked up once per call.
+        let arch = pulp::Arch::new();
         if pieces.is_empty() {
             // No scratch to make (after the early blocks, a call may have nothing left).
         } else if parallel {
-            pieces.into_par_iter().for_each_init(Scratch::new, |scratch, piece| self.run_piece(piece, scratch));
+            pieces.into_par_iter().for_each_init(Scratch::new, |scratch, piece| self.run_piece(arch, piece, scratch));
         } else {
             let mut scratch = Scratch::new();
-            pieces.into_iter().for_each(|piece| self.run_piece(piece, &mut scratch));
+            pieces.into_iter().for_each(|piece| self.run_piece(arch, piece, &mut scratch));
         }
     }
 
@@ -1493,8 +1495,8 @@ impl Evaluator {
     /// on its own; the typed faces' `mul_add` is one rounding on every target), so the same
     /// bits as the baseline build. The piece's work is inlined into the dispatched function,
     /// which compiles it for the CPU's features.
-    fn run_piece<S: Sink>(&self, piece: Piece<'_, S>, scratch: &mut Scratch) {
-        let arch = scratch.arch;
+    #[inline(always)]
+    fn run_piece<S: Sink>(&self, arch: pulp::Arch, piece: Piece<'_, S>, scratch: &mut Scratch) {
         arch.dispatch(
             #[inline(always)]
             || self.evaluate_piece(piece, scratch),
@@ -1510,8 +1512,8 @@ impl Evaluator {
                 let basis = self.bases[rate as usize].as_deref().expect("prepared");
                 grid_block(cv, cage, basis, &mut out, &mut scratch.pending);
             }
-            Piece::Typed { weights, cage: ids, mut out } => {
-                typed_block(weights, ids, cage, &mut out, scratch);
+            Piece::Typed { template, cage: ids, mut out } => {
+                typed_block(template, ids, cage, &mut out, scratch);
             }
             Piece::Run { start, mut out, grids } => {
                 // By batches: first the positions and the tangents' cross products, then the
@@ -1910,13 +1912,11 @@ pub(crate) struct Scratch {
     pending: Pending,
     /// A typed face's cage points by coordinate.
     gathered: [[f64; MAX_TYPED_POINTS]; 3],
-    /// The CPU's features, looked up once per thread and call rather than per piece.
-    arch: pulp::Arch,
 }
 
 impl Scratch {
     pub(crate) fn new() -> Self {
-        Self { pending: Pending::new(), gathered: [[0.0; MAX_TYPED_POINTS]; 3], arch: pulp::Arch::new() }
+        Self { pending: Pending::new(), gathered: [[0.0; MAX_TYPED_POINTS]; 3] }
     }
 }
 
@@ -1939,16 +1939,16 @@ fn template_size(rate: u32, len: u32) -> usize {
 /// add); the lanes are plain arrays; the normals are glam's
 /// `du.cross(dv).normalize_or_zero()`, operation for operation.
 #[inline(always)]
-fn typed_block<S: Sink>(weights: &[f64], ids: &[u32], cage: &[DVec3], out: &mut S, scratch: &mut Scratch) {
+fn typed_block<S: Sink>(t: &Template, ids: &[u32], cage: &[DVec3], out: &mut S, scratch: &mut Scratch) {
     let (len, cells) = (ids.len(), out.len());
     // The cage points by coordinate: each coordinate is one load to broadcast.
-    let Scratch { gathered, pending, .. } = scratch;
+    let Scratch { gathered, pending } = scratch;
     for (k, &id) in ids.iter().enumerate() {
         let p = cage[id as usize];
         (gathered[0][k], gathered[1][k], gathered[2][k]) = (p.x, p.y, p.z);
     }
     let [gx, gy, gz] = &*gathered;
-    for (g, w) in weights.chunks_exact(3 * LANES * len).enumerate() {
+    for (g, w) in t.weights.chunks_exact(3 * LANES * len).enumerate() {
         let (wp, w) = w.split_at(LANES * len);
         let (wu, wv) = w.split_at(LANES * len);
         let (wp, wu, wv) = (wp.as_chunks::<LANES>().0, wu.as_chunks::<LANES>().0, wv.as_chunks::<LANES>().0);
@@ -1999,7 +1999,7 @@ enum Piece<'a, S> {
     /// A bicubic face's dual grid.
     Block { cv: &'a [u32; 16], rate: u32, out: S },
     /// A typed face's cell points: its template over its cage points.
-    Typed { weights: &'a [f64], cage: &'a [u32], out: S },
+    Typed { template: &'a Template, cage: &'a [u32], out: S },
     /// Vertices `start..start + out.len()`: the patch grids' (all in the range), then each
     /// other one on its own.
     Run { start: usize, out: S, grids: &'a [PatchGrid] },
