@@ -603,7 +603,7 @@ impl Evaluator {
     /// its topology is built (the blocks are the faces whose domain is a quad, in face order):
     /// the basis tables of the bicubic faces' rates, which typed faces read their type's
     /// template ([`plan_copies`](Self::plan_copies)), and the **early** blocks, which
-    /// [`evaluate_early_flat`](Self::evaluate_early_flat) evaluates without the topology: in the
+    /// [`early_pieces`](Self::early_pieces) evaluate without the topology: in the
     /// leading faces that are whole quads or holes (whose blocks come first in the vertex order,
     /// each at the sum of the squares of the rates before it), the bicubic faces and the faces
     /// whose type's template at their rate is kept. Returns the number of vertices to the end of
@@ -1377,20 +1377,18 @@ impl Evaluator {
     /// not written), for the caller to share among threads
     /// ([`evaluate_flat_piece`](Self::evaluate_flat_piece) each, in any order and on any
     /// thread: the output is the same).
-    pub(crate) fn early_pieces<'a>(&'a self, out: &'a mut [f32]) -> Vec<FlatPiece<'a>> {
-        let mut pieces = Vec::with_capacity(self.early.len());
+    pub(crate) fn early_pieces<'a>(&'a self, out: &'a mut [f32]) -> impl Iterator<Item = FlatPiece<'a>> {
         let (mut rest, mut at) = (FlatSink(out), 0);
-        for &(b, base) in &self.early {
+        self.early.iter().map(move |&(b, base)| {
             let (face, rate) = self.planned[b as usize];
             let len = (rate * rate) as usize;
-            let (piece, tail) = rest.split(base as usize - at).1.split(len);
+            let (piece, tail) = std::mem::replace(&mut rest, FlatSink::empty()).split(base as usize - at).1.split(len);
             (rest, at) = (tail, base as usize + len);
             let Ok(piece) = self.block_piece(b as usize, face, rate, piece) else {
                 unreachable!("an early block is bicubic or reads a template")
             };
-            pieces.push(FlatPiece(piece));
-        }
-        pieces
+            FlatPiece(piece)
+        })
     }
 
     /// One of [`early_pieces`](Self::early_pieces)' pieces, with a thread's `scratch`.
@@ -1478,11 +1476,13 @@ impl Evaluator {
 
     /// Evaluates `pieces`, on rayon's threads if `parallel`.
     fn run_pieces<S: Sink>(&self, pieces: Vec<Piece<'_, S>>, parallel: bool) {
-        // The CPU's features, looked up once per call.
-        let arch = pulp::Arch::new();
         if pieces.is_empty() {
             // No scratch to make (after the early blocks, a call may have nothing left).
-        } else if parallel {
+            return;
+        }
+        // The CPU's features, looked up once per call.
+        let arch = pulp::Arch::new();
+        if parallel {
             pieces.into_par_iter().for_each_init(Scratch::new, |scratch, piece| self.run_piece(arch, piece, scratch));
         } else {
             let mut scratch = Scratch::new();

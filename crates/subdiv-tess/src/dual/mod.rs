@@ -292,9 +292,7 @@ impl DualTessellator {
 
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
-        self.check_rates(rates)?;
-        self.evaluator.plan_blocks(rates);
-        self.topology_changes();
+        self.plan(rates)?;
         self.builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
         let prepared = self.evaluator.prepare(&self.topology, rates, self.options.parallel);
         self.settle(rates, prepared)
@@ -318,21 +316,20 @@ impl DualTessellator {
         }
     }
 
-    /// Checks `rates`: one per face, each in `1..=`[`MAX_DUAL_RATE`].
-    fn check_rates(&self, rates: &[u32]) -> Result<(), TessError> {
+    /// Checks `rates` (one per face, each in `1..=`[`MAX_DUAL_RATE`]) and plans the blocks of
+    /// the topology about to be built at them, which the output and the kept indices no longer
+    /// match. Returns the number of vertices to the end of the early blocks
+    /// ([`Evaluator::plan_blocks`]).
+    fn plan(&mut self, rates: &[u32]) -> Result<usize, TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
         if let Some((face, &rate)) = rates.iter().enumerate().find(|(_, r)| !(1..=MAX_DUAL_RATE).contains(*r)) {
             return Err(TessError::Rate { face, rate, rule: "rates are integers from 1 to MAX_DUAL_RATE = 128" });
         }
-        Ok(())
-    }
-
-    /// Before the topology is rebuilt: the output and the kept indices no longer match it.
-    fn topology_changes(&mut self) {
         self.output_current = false;
         self.flat_indices.clear();
+        Ok(self.evaluator.plan_blocks(rates))
     }
 
     /// The animation path: the same topology and rates on a new cage (one finite position per
@@ -406,9 +403,7 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate); `out` is then left empty if the rates were
     /// accepted (the failure came from a stencil), untouched if not.
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
-        self.check_rates(rates)?;
-        let early = self.evaluator.plan_blocks(rates);
-        self.topology_changes();
+        let early = self.plan(rates)?;
         let team =
             self.options.parallel && early >= TEAM_EARLY && rayon::current_num_threads() > 1 && small_call(rates);
         let done = if team { self.flat_team(rates, early, out) } else { self.flat_forked(rates, out) };
@@ -441,11 +436,7 @@ impl DualTessellator {
                 evaluator.evaluate_flat(t, parallel, vertices, false);
                 Ok(())
             },
-            // Written straight from the topology's runs: no stored copy of most of them.
-            |indices| {
-                indices.resize(3 * t.triangle_count() as usize, 0);
-                t.write_triangles(indices, parallel);
-            },
+            |indices| write_indices(t, parallel, indices),
         )
     }
 
@@ -465,9 +456,7 @@ impl DualTessellator {
             shared.early_pieces(&mut vertices[..6 * early]),
             || {
                 builder.build(shared.domains(), rates, None, topology);
-                // Written straight from the topology's runs: no stored copy of most of them.
-                indices.resize(3 * topology.triangle_count() as usize, 0);
-                topology.write_triangles(indices, false);
+                write_indices(topology, false, indices);
             },
             eval::Scratch::new,
             |piece, scratch| shared.evaluate_flat_piece(piece, scratch),
@@ -609,7 +598,17 @@ const TEAM_RATE: u32 = 16;
 
 /// Whether `rates` make a call small enough for a [`team`].
 fn small_call(rates: &[u32]) -> bool {
-    rates.iter().all(|&r| r <= TEAM_RATE) && rates.iter().map(|&r| u64::from(r).pow(2)).sum::<u64>() <= TEAM_VERTICES
+    rates
+        .iter()
+        .try_fold(0, |sum, &r| (r <= TEAM_RATE).then(|| sum + u64::from(r).pow(2)))
+        .is_some_and(|sum| sum <= TEAM_VERTICES)
+}
+
+/// `t`'s triangles into `indices` (resized), written straight from the topology's runs: no
+/// stored copy of most of them.
+fn write_indices(t: &Topology, parallel: bool, indices: &mut Vec<u32>) {
+    indices.resize(3 * t.triangle_count() as usize, 0);
+    t.write_triangles(indices, parallel);
 }
 
 /// The topology's builder, kept across calls: the mesh (level 0), the split, whether quads are

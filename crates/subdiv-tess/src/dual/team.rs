@@ -31,7 +31,7 @@ impl Drop for SetOnDrop<'_> {
 /// last. Each job runs once, with a scratch that `scratch` makes once per thread. Returns
 /// `serial`'s result when every job has run.
 pub(super) fn serial_beside_jobs<J: Send, W, R: Send>(
-    jobs: Vec<J>,
+    jobs: impl IntoIterator<Item = J>,
     serial: impl FnOnce() -> R + Send,
     scratch: impl Fn() -> W + Sync,
     run: impl Fn(J, &mut W) + Sync,
@@ -88,7 +88,7 @@ mod tests {
                 let ran = Mutex::new(Vec::new());
                 let serial = pool.install(|| {
                     serial_beside_jobs(
-                        (0..jobs).collect(),
+                        0..jobs,
                         || std::hint::black_box((0..1000u64).sum::<u64>()),
                         || 0usize,
                         |job: u32, count: &mut usize| {
