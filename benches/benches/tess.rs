@@ -1,4 +1,4 @@
-//! Dual-grid stitching (subdiv-tess `DualTessellator`), one thread (`parallel: false`):
+//! Dual-grid stitching (subdiv-tess `DualTessellator`), one thread (`Parallelism::Serial`):
 //! triangles per second (Throughput::Elements = output triangles) at uniform rates 8, 16, 32 on
 //! a regular 128 × 64 quad torus (every face on the separable bicubic route), the cube (every
 //! face through its children: exact stencils) and the default model. Four measurements per
@@ -11,12 +11,12 @@
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use subdiv::mesh::{Mesh, shapes};
 use subdiv::schemes::Builtin;
-use subdiv::tess::{DualOptions, DualTessellator, FlatMesh};
+use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, Parallelism};
 
 fn dual(c: &mut Criterion) {
     let mut group = c.benchmark_group("dual");
     group.sample_size(10);
-    let options = DualOptions { parallel: false, ..DualOptions::default() };
+    let options = DualOptions::DEFAULT.with_parallelism(Parallelism::Serial);
     for (name, soup) in [
         ("torus128x64", shapes::quad_torus(128, 64)),
         ("cube", shapes::cube()),

@@ -11,7 +11,7 @@ use subdiv::io::load_mesh;
 use subdiv::mesh::{DVec3, Mesh};
 use subdiv::schemes::{Builtin, RefineOptions};
 use subdiv::tess::check::LimitSamples;
-use subdiv::tess::{TessOptions, Tessellator, Tolerance};
+use subdiv::tess::{QuadtreeOptions, QuadtreeTessellator, Tolerance};
 
 /// Closed Catmull-Clark cages of the shared corpus without tags (`testdata/meshes/SOURCES.md`).
 pub(crate) const MODELS: [&str; 6] = [
@@ -54,7 +54,7 @@ pub(crate) fn run(samples: u32, all: bool) -> Result<(), String> {
     for (model, path) in &models {
         let taken = load_mesh(path, &Default::default())
             .map_err(|e| e.to_string())
-            .and_then(|mesh| Tessellator::new(scheme, &mesh).map(|t| (mesh, t)).map_err(|e| e.to_string()));
+            .and_then(|mesh| QuadtreeTessellator::new(scheme, &mesh).map(|t| (mesh, t)).map_err(|e| e.to_string()));
         let (mesh, tess) = match taken {
             Ok(taken) => taken,
             Err(reason) if all => {
@@ -67,7 +67,7 @@ pub(crate) fn run(samples: u32, all: bool) -> Result<(), String> {
         for r in TOLERANCES {
             let start = Instant::now();
             let (out, stats) = tess
-                .tessellate_with_stats(&TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(r)))
+                .tessellate_with_stats(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(r)))
                 .map_err(|e| format!("{model}: {e}"))?;
             let seconds = start.elapsed().as_secs_f64();
             let uniform = tess.uniform_polygon_count(stats.max_depth);

@@ -66,9 +66,8 @@ fn median(mut samples: Vec<f64>) -> f64 {
 
 fn measure(gpu: &Gpu, adapter: &str, name: &str, mesh: &Mesh, rate: u32, frames: usize) -> Result<(), String> {
     let err = |e: &dyn std::fmt::Display| format!("{name} at rate {rate}: {e}");
-    let mut tess =
-        DualTessellator::new(Builtin::CatmullClark.scheme(), mesh, &DualOptions { quads: false, parallel: true })
-            .map_err(|e| err(&e))?;
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), mesh, &DualOptions::DEFAULT.with_quads(false))
+        .map_err(|e| err(&e))?;
     let mut flat = FlatMesh::default();
     tess.tessellate_flat(&vec![rate; mesh.face_count()], &mut flat).map_err(|e| err(&e))?;
     let start = Instant::now();

@@ -20,7 +20,7 @@ use std::time::Instant;
 use subdiv::io::load_mesh;
 use subdiv::mesh::Mesh;
 use subdiv::schemes::Builtin;
-use subdiv::tess::{DualOptions, DualTessellator, FlatMesh};
+use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, Parallelism};
 
 /// The peer harness's benchmark meshes (`../shared/peers/osd/meshes`).
 const PEER_MESHES: [&str; 3] = ["torus_big.obj", "cube.obj", "valence56.obj"];
@@ -99,7 +99,11 @@ const MODES: [&str; 4] = ["full", "animate", "full_mesh", "animate_mesh"];
 /// Our lines for one mesh, rate and thread count.
 fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
-    let options = DualOptions { quads: false, parallel: threads > 1 };
+    let options = DualOptions::DEFAULT.with_quads(false).with_parallelism(if threads > 1 {
+        Parallelism::Rayon
+    } else {
+        Parallelism::Serial
+    });
     let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), mesh, &options).map_err(|e| e.to_string())?;
     let rates = vec![rate; tess.face_count()];
     let cage = mesh.positions().to_vec();

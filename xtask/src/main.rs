@@ -14,6 +14,9 @@
 //!   adapter's name.
 //! - `cargo xtask osd-refine PATH/TO/osd_refine` compares our uniform refinement with
 //!   OpenSubdiv's on the shared corpus (levels 1 to 3), through the peer harness.
+//! - `cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv]` runs the README's
+//!   commands with both builds on the cube, valence56, spot_control_mesh and the built-in model
+//!   and checks that every file they write is byte-identical.
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
 //! - `cargo xtask adaptive [--samples N] [--all]` prints paper 002's Table 1 for the quadtree
 //!   tessellator (adaptive against uniform polygons, with the measured worst distance / ε on an
@@ -32,11 +35,12 @@ mod bench_tess;
 mod osd;
 mod paper;
 mod rates_table;
+mod same_output;
 mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -46,6 +50,7 @@ fn main() -> ExitCode {
         Some("bench") if args.get(1).is_some_and(|a| a == "tess") => bench_tess::run(&args[2..]),
         Some("bench") if args.get(1).is_some_and(|a| a == "gpu") => bench_gpu::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
+        Some("same-output") => same_output::run(&args[1..]),
         Some("paper") => paper::run(),
         Some("rates") => rates_table::run(),
         Some("adaptive") => {

@@ -13,7 +13,7 @@ use subdiv::mesh::DVec3;
 use subdiv::schemes::Builtin;
 use subdiv::tess::check::MeshDistance;
 use subdiv::tess::rates::{ErrorRates, RingDepths};
-use subdiv::tess::{DualOptions, DualTessellator, Tessellator, Tolerance};
+use subdiv::tess::{DualOptions, DualTessellator, QuadtreeTessellator, Tolerance};
 
 /// Relative tolerances (× the bounding-box diagonal).
 const TOLERANCES: [f64; 3] = [3e-2, 1e-2, 3e-3];
@@ -32,7 +32,7 @@ pub(crate) fn run() -> Result<(), String> {
         let path: PathBuf =
             subdiv_testkit::shared_mesh(model).ok_or("the shared corpus is missing (set SUBDIV_SHARED)")?;
         let mesh = load_mesh(&path, &Default::default()).map_err(|e| format!("{model}: {e}"))?;
-        let bounds = Tessellator::new(cc, &mesh).map_err(|e| format!("{model}: {e}"))?;
+        let bounds = QuadtreeTessellator::new(cc, &mesh).map_err(|e| format!("{model}: {e}"))?;
         let mut dual = DualTessellator::new(cc, &mesh, &DualOptions { quads: false, ..DualOptions::default() })
             .map_err(|e| format!("{model}: {e}"))?;
         let samples: Vec<DVec3> =

@@ -10,7 +10,7 @@ use subdiv::io::{GlbMesh, write_glb};
 use subdiv::mesh::{DVec3, Mesh};
 use subdiv::schemes::Scheme;
 use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE, DualRates, ErrorRates, RingDepths, ScreenSpace};
-use subdiv::tess::{DualOptions, DualTessellator, TessMesh, TessOptions, Tessellator, Tolerance};
+use subdiv::tess::{DualOptions, DualTessellator, QuadtreeOptions, QuadtreeTessellator, TessMesh, Tolerance};
 
 use crate::UserError;
 use crate::args::{parse_list, parse_size};
@@ -122,11 +122,12 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     let (result, detail) = match args.method {
         Method::Quadtree => {
             let tolerance = tolerance.ok_or_else(|| UserError("--method quadtree needs --tolerance".to_string()))?;
-            let tess = Tessellator::new(&scheme, &mesh).map_err(|e| located(&e))?;
+            let tess = QuadtreeTessellator::new(&scheme, &mesh).map_err(|e| located(&e))?;
             let epsilon = tolerance.absolute(tess.diagonal()).map_err(|e| located(&e))?;
             bar.say("quadtree");
-            let (result, stats) =
-                tess.tessellate_with_stats(&TessOptions::DEFAULT.with_tolerance(tolerance)).map_err(|e| located(&e))?;
+            let (result, stats) = tess
+                .tessellate_with_stats(&QuadtreeOptions::DEFAULT.with_tolerance(tolerance))
+                .map_err(|e| located(&e))?;
             (result, format!("ε = {epsilon:.3e}, depth ≤ {}", stats.max_depth))
         }
         Method::Dual => {
@@ -221,7 +222,8 @@ fn dual_rates(
 ) -> Result<(Vec<u32>, Option<RingDepths>, String), UserError> {
     let located = |error: subdiv::tess::TessError| UserError(format!("{name}: {error}"));
     if let Some(tolerance) = tolerance {
-        let bounds = Tessellator::new(scheme, mesh).map_err(|e| UserError(format!("{name}: --tolerance: {e}")))?;
+        let bounds =
+            QuadtreeTessellator::new(scheme, mesh).map_err(|e| UserError(format!("{name}: --tolerance: {e}")))?;
         let policy = ErrorRates { tolerance, max_rate: args.max_rate };
         let DualRates { faces, rings } = policy.rates(&bounds, mesh).map_err(located)?;
         let epsilon = tolerance.absolute(bounds.diagonal())?;

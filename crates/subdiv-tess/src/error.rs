@@ -31,7 +31,7 @@ pub enum TessError {
     /// Preparing the surface (patches, stencils) failed.
     #[error(transparent)]
     Surface(#[from] StencilError),
-    /// A face needed more levels than allowed ([`TessOptions::max_depth`](crate::TessOptions)).
+    /// A face needed more levels than allowed ([`QuadtreeOptions::max_depth`](crate::QuadtreeOptions)).
     #[error("face {face}: not flat to ε = {epsilon:e} at depth {depth} (the limit); raise the tolerance")]
     DepthLimit {
         /// The input face.
@@ -41,7 +41,7 @@ pub enum TessError {
         /// The absolute tolerance.
         epsilon: f64,
     },
-    /// The output would exceed [`TessOptions::max_polygons`](crate::TessOptions).
+    /// The output would exceed [`QuadtreeOptions::max_polygons`](crate::QuadtreeOptions).
     #[error("more than {limit} polygons needed for ε = {epsilon:e}; raise the tolerance")]
     TooManyPolygons {
         /// The limit.

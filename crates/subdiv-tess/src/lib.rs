@@ -11,7 +11,7 @@
 //!   every primal scheme with sub-patch matrices (Catmull-Clark, Kobbelt, bilinear, Loop,
 //!   butterfly), closed and open meshes and holes, and re-evaluates a moved cage without any
 //!   topology work ([`DualTessellator::update_cage`]): the animation path.
-//! - The [`quadtree`] tessellator ([`Tessellator`], paper 002, Lai and Cheng) refines each
+//! - The [`quadtree`] tessellator ([`QuadtreeTessellator`], paper 002, Lai and Cheng) refines each
 //!   closed Catmull-Clark face's parameter domain by midpoint splits until every piece is flat,
 //!   with **global vertex ids** (one vertex per parameter point, shared across faces) and
 //!   **polyline replacement** (a polygon lists the vertices its finer neighbours put on its
@@ -23,12 +23,12 @@
 //! ```
 //! use subdiv_mesh::{shapes, Mesh};
 //! use subdiv_schemes::Builtin;
-//! use subdiv_tess::{Tessellator, TessOptions, Tolerance};
+//! use subdiv_tess::{QuadtreeTessellator, QuadtreeOptions, Tolerance};
 //!
 //! let mesh = Mesh::build(shapes::ngon_prism(5))?;
-//! let tess = Tessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
-//! let coarse = tess.tessellate(&TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2)))?;
-//! let fine = tess.tessellate(&TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-3)))?;
+//! let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
+//! let coarse = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2)))?;
+//! let fine = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-3)))?;
 //! assert!(fine.triangles.len() > coarse.triangles.len());
 //! assert_eq!(fine.normals.len(), fine.positions.len());
 //! # Ok::<(), Box<dyn std::error::Error>>(())
@@ -56,6 +56,7 @@ pub mod dual;
 mod error;
 pub mod flatness;
 mod mesh;
+mod par;
 pub mod quadtree;
 pub mod rates;
 
@@ -63,4 +64,5 @@ pub use dual::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, MAX_DUAL_
 pub use error::TessError;
 pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessMesh};
-pub use quadtree::{FaceCurvature, TessOptions, TessStats, Tessellator};
+pub use par::Parallelism;
+pub use quadtree::{FaceCurvature, QuadtreeOptions, QuadtreeStats, QuadtreeTessellator};

@@ -23,11 +23,11 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
 use hashbrown::HashMap;
-use rayon::prelude::*;
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh};
 use subdiv_schemes::{PatchMatrices, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, surface_stencil};
 
+use crate::Parallelism;
 use crate::bezier::Bicubic;
 use crate::flatness::{self, Tolerance};
 use crate::{SurfaceParameter, TessError, TessMesh};
@@ -37,12 +37,12 @@ use crate::{SurfaceParameter, TessError, TessMesh};
 const FULL_BITS: u32 = 40;
 /// `2^FULL_BITS`: the root's side.
 const FULL: i64 = 1 << FULL_BITS;
-/// The largest [`TessOptions::max_depth`] accepted (sub-face coordinates halve once more).
+/// The largest [`QuadtreeOptions::max_depth`] accepted (sub-face coordinates halve once more).
 pub const DEPTH_LIMIT: u32 = 30;
 
-/// Options of [`Tessellator::tessellate`].
+/// Options of [`QuadtreeTessellator::tessellate`].
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TessOptions {
+pub struct QuadtreeOptions {
     /// The flatness every output triangle meets. Default: `Relative(1e-3)`.
     pub tolerance: Tolerance,
     /// The deepest level a node may reach, counted from the input face (an N-gon's sub-faces
@@ -51,19 +51,46 @@ pub struct TessOptions {
     pub max_depth: u32,
     /// The most polygons the output may have. Default: 20 million.
     pub max_polygons: usize,
+    /// Whether the roots' leaves and the vertices are found on rayon's threads (the output is
+    /// the same either way). Default: [`Parallelism::Rayon`].
+    pub parallelism: Parallelism,
 }
 
-impl TessOptions {
+impl QuadtreeOptions {
     /// The defaults.
-    pub const DEFAULT: Self = Self { tolerance: Tolerance::Relative(1e-3), max_depth: 24, max_polygons: 20_000_000 };
+    pub const DEFAULT: Self = Self {
+        tolerance: Tolerance::Relative(1e-3),
+        max_depth: 24,
+        max_polygons: 20_000_000,
+        parallelism: Parallelism::DEFAULT,
+    };
 
-    /// These options with `tolerance`.
-    pub fn with_tolerance(self, tolerance: Tolerance) -> Self {
+    /// These options with [`tolerance`](Self::tolerance).
+    #[must_use]
+    pub const fn with_tolerance(self, tolerance: Tolerance) -> Self {
         Self { tolerance, ..self }
+    }
+
+    /// These options with [`max_depth`](Self::max_depth).
+    #[must_use]
+    pub const fn with_max_depth(self, max_depth: u32) -> Self {
+        Self { max_depth, ..self }
+    }
+
+    /// These options with [`max_polygons`](Self::max_polygons).
+    #[must_use]
+    pub const fn with_max_polygons(self, max_polygons: usize) -> Self {
+        Self { max_polygons, ..self }
+    }
+
+    /// These options with [`parallelism`](Self::parallelism).
+    #[must_use]
+    pub const fn with_parallelism(self, parallelism: Parallelism) -> Self {
+        Self { parallelism, ..self }
     }
 }
 
-impl Default for TessOptions {
+impl Default for QuadtreeOptions {
     fn default() -> Self {
         Self::DEFAULT
     }
@@ -137,17 +164,17 @@ enum VertexKey {
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
 /// use subdiv_schemes::Builtin;
-/// use subdiv_tess::{Tessellator, TessOptions, Tolerance};
+/// use subdiv_tess::{QuadtreeTessellator, QuadtreeOptions, Tolerance};
 ///
 /// let cube = Mesh::build(shapes::cube())?;
-/// let tess = Tessellator::new(Builtin::CatmullClark.scheme(), &cube)?;
-/// let out = tess.tessellate(&TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2)))?;
+/// let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &cube)?;
+/// let out = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2)))?;
 /// // Closed and watertight: V − E + F of the triangles is the cube's Euler characteristic.
 /// let edges = out.triangles.len() * 3 / 2;
 /// assert_eq!(out.positions.len() as i64 - edges as i64 + out.triangles.len() as i64, 2);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
-pub struct Tessellator {
+pub struct QuadtreeTessellator {
     levels: PatchLevels,
     shapes: HashMap<ShapeKey, ShapeKind>,
     roots: Vec<Root>,
@@ -156,13 +183,16 @@ pub struct Tessellator {
     diagonal: f64,
 }
 
-impl std::fmt::Debug for Tessellator {
+impl std::fmt::Debug for QuadtreeTessellator {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Tessellator").field("roots", &self.roots.len()).field("shapes", &self.shapes.len()).finish()
+        f.debug_struct("QuadtreeTessellator")
+            .field("roots", &self.roots.len())
+            .field("shapes", &self.shapes.len())
+            .finish()
     }
 }
 
-/// What [`Tessellator::face_curvature`] bounds: a face's second derivatives away from its
+/// What [`QuadtreeTessellator::face_curvature`] bounds: a face's second derivatives away from its
 /// extraordinary corners, and the size of the surface next to them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FaceCurvature {
@@ -179,7 +209,7 @@ pub struct FaceCurvature {
 
 /// Statistics of one tessellation.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct TessStats {
+pub struct QuadtreeStats {
     /// The deepest leaf, counted from its input face.
     pub max_depth: u32,
     /// The deepest leaf away from extraordinary corners, counted from its input face: the
@@ -189,7 +219,7 @@ pub struct TessStats {
     pub extraordinary_leaves: usize,
 }
 
-impl Tessellator {
+impl QuadtreeTessellator {
     /// Prepares `mesh` under `scheme`, which must be Catmull-Clark (checked on its matrices:
     /// regular patches are bicubic B-splines, every sub-patch matrix is a convex combination).
     ///
@@ -324,7 +354,7 @@ impl Tessellator {
     ///
     /// # Errors
     /// [`TessError::Tolerance`], [`TessError::DepthLimit`], [`TessError::TooManyPolygons`].
-    pub fn tessellate(&self, options: &TessOptions) -> Result<TessMesh, TessError> {
+    pub fn tessellate(&self, options: &QuadtreeOptions) -> Result<TessMesh, TessError> {
         self.tessellate_with_stats(options).map(|(mesh, _)| mesh)
     }
 
@@ -332,23 +362,19 @@ impl Tessellator {
     ///
     /// # Errors
     /// As [`tessellate`](Self::tessellate).
-    pub fn tessellate_with_stats(&self, options: &TessOptions) -> Result<(TessMesh, TessStats), TessError> {
+    pub fn tessellate_with_stats(&self, options: &QuadtreeOptions) -> Result<(TessMesh, QuadtreeStats), TessError> {
         let epsilon = options.tolerance.absolute(self.diagonal)?;
         let max_depth = options.max_depth.min(DEPTH_LIMIT);
         let count = AtomicUsize::new(0);
-        let forest: Vec<Vec<Leaf>> = self
-            .roots
-            .par_iter()
-            .map(|&root| {
-                let mut leaves = Vec::new();
-                let piece = self.root_piece(root)?;
-                let budget =
-                    Budget { epsilon, max_depth: max_depth.saturating_sub(root.depth()), count: &count, options };
-                self.build(root, piece, Leaf { depth: 0, x: 0, y: 0 }, &budget, &mut leaves)?;
-                Ok(leaves)
-            })
-            .collect::<Result<_, TessError>>()?;
-        let mut stats = TessStats::default();
+        let parallel = options.parallelism.forks();
+        let forest: Vec<Vec<Leaf>> = crate::par::try_map(parallel, &self.roots, |&root| {
+            let mut leaves = Vec::new();
+            let piece = self.root_piece(root)?;
+            let budget = Budget { epsilon, max_depth: max_depth.saturating_sub(root.depth()), count: &count, options };
+            self.build(root, piece, Leaf { depth: 0, x: 0, y: 0 }, &budget, &mut leaves)?;
+            Ok::<_, TessError>(leaves)
+        })?;
+        let mut stats = QuadtreeStats::default();
         for (root, leaves) in self.roots.iter().zip(&forest) {
             for leaf in leaves {
                 stats.max_depth = stats.max_depth.max(leaf.depth + root.depth());
@@ -380,15 +406,13 @@ impl Tessellator {
         }
 
         // Every vertex evaluated once, exactly.
-        let evaluated: Vec<(DVec3, DVec3, SurfaceParameter)> = creators
-            .par_iter()
-            .map(|&(r, x, y)| {
+        let evaluated: Vec<(DVec3, DVec3, SurfaceParameter)> =
+            crate::par::try_map(parallel, &creators, |&(r, x, y)| {
                 let root = self.roots[r];
                 let (position, normal) = self.eval(root, x, y)?;
                 let (u, v) = bfr(root, x, y);
-                Ok((position, normal, SurfaceParameter { face: root.face, u, v }))
-            })
-            .collect::<Result<_, TessError>>()?;
+                Ok::<_, TessError>((position, normal, SurfaceParameter { face: root.face, u, v }))
+            })?;
         let mut out = TessMesh::default();
         for (p, n, s) in evaluated {
             out.positions.push(p);
@@ -397,12 +421,10 @@ impl Tessellator {
         }
 
         // Polygons with their hanging vertices, and their fans.
-        let rings: Vec<Vec<Ring>> = self
-            .roots
-            .par_iter()
-            .zip(&forest)
-            .map(|(&root, leaves)| leaves.iter().map(|leaf| self.ring(root, leaf, &ids)).collect())
-            .collect();
+        let roots: Vec<(Root, &Vec<Leaf>)> = self.roots.iter().copied().zip(&forest).collect();
+        let rings: Vec<Vec<Ring>> = crate::par::map(parallel, roots, |(root, leaves)| {
+            leaves.iter().map(|leaf| self.ring(root, leaf, &ids)).collect()
+        });
         out.polygon_offsets.push(0);
         for (r, root) in self.roots.iter().enumerate() {
             for ((ring, params), (&centre, leaf)) in rings[r].iter().zip(centres[r].iter().zip(&forest[r])) {
@@ -683,7 +705,7 @@ struct Budget<'a> {
     epsilon: f64,
     max_depth: u32,
     count: &'a AtomicUsize,
-    options: &'a TessOptions,
+    options: &'a QuadtreeOptions,
 }
 
 /// The `Bfr` parameters of root point `(x, y)`, laid out by [`FaceDomain`] (exact in f64: the

@@ -9,7 +9,7 @@ use glam::DVec3;
 use subdiv_mesh::{FaceId, Mesh};
 
 use crate::flatness::{Tolerance, rounding_slack};
-use crate::{TessError, Tessellator};
+use crate::{QuadtreeTessellator, TessError};
 
 /// A pinhole camera: where it is, what it looks at, which way is up, and its vertical field of
 /// view.
@@ -170,7 +170,7 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 ///
 /// so a face with rate `n ≥ √(M/ε)` keeps its own triangles, and those it shares with coarser
 /// neighbours' rates, within `ε` — provided `M` bounds every face that a triangle touches:
-/// each face takes the largest `M` ([`Tessellator::face_curvature`]) of the faces sharing a
+/// each face takes the largest `M` ([`QuadtreeTessellator::face_curvature`]) of the faces sharing a
 /// vertex with it. Near an extraordinary point `M` is taken over the face less the corner
 /// square inside the first ring around it (below), which no cell or strip triangle enters;
 /// since that square shrinks as the rates around grow, and `M` grows like `(4λ)^d` there,
@@ -187,11 +187,11 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
 /// use subdiv_schemes::Builtin;
-/// use subdiv_tess::{Tessellator, Tolerance};
+/// use subdiv_tess::{QuadtreeTessellator, Tolerance};
 /// use subdiv_tess::rates::ErrorRates;
 ///
 /// let mesh = Mesh::build(shapes::quad_torus(16, 8))?;
-/// let bounds = Tessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
+/// let bounds = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
 /// let coarse = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&bounds, &mesh)?.faces;
 /// let fine = ErrorRates::new(Tolerance::Relative(1e-3)).rates(&bounds, &mesh)?.faces;
 /// assert!(coarse.iter().zip(&fine).all(|(c, f)| c <= f) && fine.iter().max() > coarse.iter().max());
@@ -278,8 +278,8 @@ impl ErrorRates {
     /// [`TessError::Tolerance`] for a tolerance that is not a positive finite number,
     /// [`TessError::RateLimit`] when a face needs more than `max_rate` or an extraordinary
     /// point's hull stays above `ε` down to depth 40, and the errors of
-    /// [`Tessellator::face_curvature`].
-    pub fn rates(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<DualRates, TessError> {
+    /// [`QuadtreeTessellator::face_curvature`].
+    pub fn rates(&self, bounds: &QuadtreeTessellator, mesh: &Mesh) -> Result<DualRates, TessError> {
         self.rates_rounded(bounds, mesh, |n| n)
     }
 
@@ -291,7 +291,7 @@ impl ErrorRates {
     /// As [`rates`](Self::rates).
     pub fn rates_rounded(
         &self,
-        bounds: &Tessellator,
+        bounds: &QuadtreeTessellator,
         mesh: &Mesh,
         round: impl Fn(u32) -> u32,
     ) -> Result<DualRates, TessError> {
@@ -396,7 +396,7 @@ impl ErrorRates {
     }
 
     /// `ε` less the rounding slack.
-    fn budget(&self, bounds: &Tessellator, mesh: &Mesh) -> Result<f64, TessError> {
+    fn budget(&self, bounds: &QuadtreeTessellator, mesh: &Mesh) -> Result<f64, TessError> {
         let epsilon = self.tolerance.absolute(bounds.diagonal())?;
         let magnitude = mesh.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
         Ok(epsilon - rounding_slack(magnitude))
@@ -439,13 +439,13 @@ mod tests {
     fn error_rates_follow_the_bounds() {
         let cc = subdiv_schemes::Builtin::CatmullClark.scheme();
         let torus = Mesh::build(shapes::quad_torus(16, 8)).expect("torus");
-        let bounds = Tessellator::new(cc, &torus).expect("closed");
+        let bounds = QuadtreeTessellator::new(cc, &torus).expect("closed");
         let rate = |r: f64| ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &torus).expect("reachable").faces;
         let (coarse, fine) = (rate(1e-2), rate(1e-4));
         let ratio = f64::from(*fine.iter().max().expect("faces")) / f64::from(*coarse.iter().max().expect("faces"));
         assert!((8.0..=12.0).contains(&ratio), "rates {coarse:?} → {fine:?}");
         let cube = Mesh::build(shapes::cube()).expect("cube");
-        let bounds = Tessellator::new(cc, &cube).expect("closed");
+        let bounds = QuadtreeTessellator::new(cc, &cube).expect("closed");
         assert!(ErrorRates::new(Tolerance::Relative(3e-2)).rates(&bounds, &cube).is_ok());
         let err = ErrorRates { max_rate: 8, ..ErrorRates::new(Tolerance::Relative(1e-3)) }.rates(&bounds, &cube);
         assert!(matches!(err, Err(TessError::RateLimit { max_rate: 8, .. })), "{err:?}");
@@ -459,7 +459,7 @@ mod tests {
     fn ring_depths_follow_the_hulls() {
         let cc = subdiv_schemes::Builtin::CatmullClark.scheme();
         let cube = Mesh::build(shapes::cube()).expect("cube");
-        let bounds = Tessellator::new(cc, &cube).expect("closed");
+        let bounds = QuadtreeTessellator::new(cc, &cube).expect("closed");
         let rates = |r: f64| ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &cube).expect("reachable");
         let (coarse, fine) = (rates(3e-2), rates(1e-2));
         assert!(coarse.faces.iter().zip(&fine.faces).all(|(c, f)| c < f), "{coarse:?} {fine:?}");
@@ -467,7 +467,7 @@ mod tests {
         assert!(coarse.rings.vertices.iter().zip(&fine.rings.vertices).all(|(c, f)| c <= f), "{coarse:?} {fine:?}");
         // A regular torus has no extraordinary points: no rings.
         let torus = Mesh::build(shapes::quad_torus(16, 8)).expect("torus");
-        let bounds = Tessellator::new(cc, &torus).expect("closed");
+        let bounds = QuadtreeTessellator::new(cc, &torus).expect("closed");
         let r = ErrorRates::new(Tolerance::Relative(1e-3)).rates(&bounds, &torus).expect("reachable");
         assert!(r.rings.vertices.iter().all(|&d| d == 0));
         // And the rates are ⌈√(M/ε)⌉ of the faces' own bound (no corner to exclude).

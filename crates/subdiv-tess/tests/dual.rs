@@ -14,7 +14,9 @@ use subdiv_stencil::LimitEvaluator;
 use subdiv_tess::check::MeshDistance;
 use subdiv_tess::dual::{MAX_DUAL_RING_DEPTH, predicted_vertex_count, predicted_vertex_count_with_rings};
 use subdiv_tess::rates::{ErrorRates, RingDepths};
-use subdiv_tess::{DualOptions, DualTessellator, FlatMesh, TessError, TessMesh, Tessellator, Tolerance};
+use subdiv_tess::{
+    DualOptions, DualTessellator, FlatMesh, Parallelism, QuadtreeTessellator, TessError, TessMesh, Tolerance,
+};
 
 fn tessellate(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> TessMesh {
     let mut tess = DualTessellator::new(builtin.scheme(), mesh, &DualOptions::default()).unwrap();
@@ -556,9 +558,12 @@ fn thread_count_does_not_change_the_bits() {
     let mesh = Mesh::build(shapes::default_model()).unwrap();
     let rates = rates_for(&mesh, 8, 16);
     let parallel = tessellate(Builtin::CatmullClark, &mesh, &rates);
-    let mut tess =
-        DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions { parallel: false, quads: true })
-            .unwrap();
+    let mut tess = DualTessellator::new(
+        Builtin::CatmullClark.scheme(),
+        &mesh,
+        &DualOptions::DEFAULT.with_parallelism(Parallelism::Serial),
+    )
+    .unwrap();
     let sequential = tess.tessellate(&rates).unwrap().clone();
     assert_eq!(parallel, sequential);
     // Large enough for every parallel step: the evaluation's pieces among threads (from 1024
@@ -585,11 +590,9 @@ fn thread_count_does_not_change_the_bits() {
     assert_eq!(a, b, "update_cage_flat on all threads against one");
 }
 
-/// Small calls of the flat path on two threads go through a team (the second thread evaluates
-/// the leading faces that read kept templates, or are bicubic, while the first builds the
-/// topology): the same bits as one thread, on the calls after the first (which makes the
-/// templates), at equal and mixed rates, with N-gons (whose vertices come after the early
-/// blocks), borders, and after a moved cage.
+/// The flat path with [`Parallelism::Rayon`] on two threads gives the bits of
+/// [`Parallelism::Serial`], on the calls after the first (which makes the templates) too, at
+/// equal and mixed rates, with N-gons, borders, and after a moved cage.
 #[test]
 fn small_flat_calls_on_two_threads_equal_one() {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().unwrap();
@@ -602,8 +605,13 @@ fn small_flat_calls_on_two_threads_equal_one() {
     ] {
         let mesh = Mesh::build(soup).unwrap();
         let faces = mesh.face_count();
-        let mut one = DualTessellator::new(cc, &mesh, &DualOptions { quads: false, parallel: false }).unwrap();
-        let mut two = DualTessellator::new(cc, &mesh, &DualOptions { quads: false, parallel: true }).unwrap();
+        let mut one = DualTessellator::new(
+            cc,
+            &mesh,
+            &DualOptions::DEFAULT.with_quads(false).with_parallelism(Parallelism::Serial),
+        )
+        .unwrap();
+        let mut two = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT.with_quads(false)).unwrap();
         let moved: Vec<DVec3> = mesh.positions().iter().map(|p| *p * 1.25 + DVec3::new(0.5, -1.0, 2.0)).collect();
         let (mut expected, mut got) = (FlatMesh::default(), FlatMesh::default());
         for rates in [vec![8; faces], rates_for(&mesh, 3, 12), vec![16; faces]] {
@@ -1244,7 +1252,7 @@ fn rings_keep_the_surface_within_tolerance() {
         ("pentagonal prism", shapes::ngon_prism(5)),
     ] {
         let mesh = Mesh::build(soup).unwrap();
-        let bounds = Tessellator::new(cc, &mesh).unwrap();
+        let bounds = QuadtreeTessellator::new(cc, &mesh).unwrap();
         let evaluator = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap();
         // The samples do not depend on the tolerance: evaluated once.
         let mut samples: Vec<DVec3> = Vec::new();

@@ -10,11 +10,11 @@ use subdiv_mesh::{Mesh, PolygonSoup, shapes};
 use subdiv_schemes::{Builtin, RefineOptions};
 use subdiv_stencil::LimitEvaluator;
 use subdiv_tess::check::LimitSamples;
-use subdiv_tess::{TessError, TessMesh, TessOptions, Tessellator, Tolerance};
+use subdiv_tess::{QuadtreeOptions, QuadtreeTessellator, TessError, TessMesh, Tolerance};
 
 fn tessellate(mesh: &Mesh, relative: f64) -> TessMesh {
-    let tess = Tessellator::new(Builtin::CatmullClark.scheme(), mesh).unwrap();
-    tess.tessellate(&TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(relative))).unwrap()
+    let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), mesh).unwrap();
+    tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(relative))).unwrap()
 }
 
 /// Every triangle edge has exactly one opposite; no two vertices share a position.
@@ -59,12 +59,12 @@ fn euler(out: &TessMesh) -> i64 {
 /// `n × n` grid per face against `LimitEvaluator`; returns the worst distance / ε.
 fn guarantee(mesh: &Mesh, n: u32, tolerances: &[f64]) -> f64 {
     let scheme = Builtin::CatmullClark.scheme();
-    let tess = Tessellator::new(scheme, mesh).unwrap();
+    let tess = QuadtreeTessellator::new(scheme, mesh).unwrap();
     let evaluator = LimitEvaluator::new(scheme, mesh, &RefineOptions::DEFAULT).unwrap();
     let samples = LimitSamples::new(&evaluator, mesh, n).unwrap();
     let mut worst_ratio: f64 = 0.0;
     for &r in tolerances {
-        let out = tess.tessellate(&TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(r))).unwrap();
+        let out = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(r))).unwrap();
         let epsilon = r * tess.diagonal();
         let m = samples.measure(&out);
         assert_eq!(m.uncovered, 0, "samples outside every triangle");
@@ -134,8 +134,8 @@ fn output_is_deterministic() {
 #[test]
 fn finer_tolerance_gives_more_polygons_and_adapts() {
     let mesh = Mesh::build(shapes::default_model()).unwrap();
-    let tess = Tessellator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
-    let options = TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-3));
+    let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+    let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-3));
     let (out, stats) = tess.tessellate_with_stats(&options).unwrap();
     assert!(stats.extraordinary_leaves > 0);
     // Adaptive: fewer polygons than the uniform tessellation as deep as the deepest leaf.
@@ -163,25 +163,27 @@ fn vertex_parameters_map_to_their_positions() {
 #[test]
 fn bad_input_gives_typed_errors() {
     let cube = Mesh::build(shapes::cube()).unwrap();
-    let tess = Tessellator::new(Builtin::CatmullClark.scheme(), &cube).unwrap();
+    let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &cube).unwrap();
     for t in [Tolerance::Absolute(0.0), Tolerance::Absolute(-1.0), Tolerance::Relative(f64::NAN)] {
-        let e = tess.tessellate(&TessOptions::DEFAULT.with_tolerance(t));
+        let e = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(t));
         assert!(matches!(e, Err(TessError::Tolerance { .. })), "{e:?}");
     }
-    let tiny = TessOptions { max_polygons: 100, ..TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)) };
+    let tiny =
+        QuadtreeOptions { max_polygons: 100, ..QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)) };
     assert!(matches!(tess.tessellate(&tiny), Err(TessError::TooManyPolygons { .. })));
-    let shallow = TessOptions { max_depth: 3, ..TessOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)) };
+    let shallow =
+        QuadtreeOptions { max_depth: 3, ..QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)) };
     assert!(matches!(tess.tessellate(&shallow), Err(TessError::DepthLimit { .. })));
-    let loop_scheme = Tessellator::new(Builtin::Loop.scheme(), &Mesh::build(shapes::icosahedron()).unwrap());
+    let loop_scheme = QuadtreeTessellator::new(Builtin::Loop.scheme(), &Mesh::build(shapes::icosahedron()).unwrap());
     assert!(matches!(loop_scheme, Err(TessError::Scheme { .. })));
-    let bilinear = Tessellator::new(Builtin::Bilinear.scheme(), &cube);
+    let bilinear = QuadtreeTessellator::new(Builtin::Bilinear.scheme(), &cube);
     assert!(matches!(bilinear, Err(TessError::Scheme { .. })), "{bilinear:?}");
-    let grid = Tessellator::new(Builtin::CatmullClark.scheme(), &Mesh::build(shapes::quad_grid(2, 2)).unwrap());
+    let grid = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &Mesh::build(shapes::quad_grid(2, 2)).unwrap());
     assert!(matches!(grid, Err(TessError::Unsupported { .. })));
     let mut creased = Mesh::build(shapes::cube()).unwrap();
     let edge = creased.edges().next().unwrap();
     creased.set_edge_sharpness(edge, 2.0);
-    let creased = Tessellator::new(Builtin::CatmullClark.scheme(), &creased);
+    let creased = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &creased);
     assert!(matches!(creased, Err(TessError::Surface(_))), "{creased:?}");
 }
 

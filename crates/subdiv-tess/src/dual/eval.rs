@@ -52,7 +52,6 @@ use std::sync::Arc;
 
 use glam::DVec3;
 use hashbrown::HashMap;
-use rayon::prelude::*;
 use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
@@ -64,11 +63,53 @@ use super::topology::Topology;
 use crate::TessError;
 use crate::quadtree::{check_bicubic, regular_grid};
 
-/// A vertex evaluated by its face's block (the separable route).
-const IN_BLOCK: u32 = u32::MAX;
-/// A vertex of a regular face outside its block: the bicubic polynomial at its parameter
-/// (listed in [`Evaluator::pointwise`]).
-const BICUBIC: u32 = u32::MAX - 1;
+/// How one output vertex is evaluated.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Route {
+    /// A cell of a bicubic face's block: the separable grid of its rate.
+    BlockCell,
+    /// A point of a bicubic face outside its block: the bicubic polynomial at its parameter
+    /// (listed in [`Evaluator::pointwise`]).
+    BicubicPoint,
+    /// A cell point of a typed face: its type's [`Template`] over the face's cage points.
+    Template,
+    /// A point of a [`PatchGrid`] (a bicubic patch on a refined level), evaluated separably.
+    PatchGrid,
+    /// Its own exact stencil: the [`Record`] of this number.
+    Record(u32),
+}
+
+/// Whether a block reads a face type's [`Template`] ([`Evaluator::plan_copies`] decides it,
+/// [`Evaluator::patch_grids`] settles it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum TemplateUse {
+    /// The block's cells take their own records.
+    Own,
+    /// The first block of its (type, rate) without a template: it descends, and its records
+    /// become the template.
+    Make,
+    /// It will read the template a [`Make`](Self::Make) block of this call makes.
+    Copy,
+    /// Settled: it made this template.
+    Made(u32),
+    /// Settled: it reads this template (made by another block, in this call or before).
+    Copied(u32),
+}
+
+impl TemplateUse {
+    /// The template it reads, once settled.
+    fn template(self) -> Option<u32> {
+        match self {
+            Self::Made(t) | Self::Copied(t) => Some(t),
+            Self::Own | Self::Make | Self::Copy => None,
+        }
+    }
+
+    /// Whether its cells read a template made by another block (not its own records).
+    fn copies(self) -> bool {
+        matches!(self, Self::Copy | Self::Copied(_))
+    }
+}
 
 /// How an input face is evaluated.
 #[derive(Clone, Copy, Debug)]
@@ -188,22 +229,9 @@ const MAX_TEMPLATE_WEIGHTS: usize = 1 << 24;
 /// The most cage points a typed face may depend on (more: its own records).
 const MAX_TYPED_POINTS: usize = 64;
 
-/// In `Evaluator::copy_of`: the block reads its type's template.
-const COPY: u8 = 1;
-/// In `Evaluator::copy_of`: the block descends, and its records become its type's template.
-const MAKE: u8 = 2;
-
 /// A template's key: the face type (or, with `Evaluator::copy_faces` off, the face, marked by
 /// the flag) and the rate.
 type TemplateKey = (bool, u32, u32);
-
-/// In `Evaluator::block_template`: the block has no template.
-const NO_TEMPLATE: u32 = u32::MAX;
-
-/// A vertex evaluated by a [`PatchGrid`].
-const IN_PATCH_GRID: u32 = u32::MAX - 2;
-/// A cell point of a typed face (evaluated by its type's [`Template`]).
-const TYPED: u32 = u32::MAX - 3;
 
 /// The points of one bicubic patch on a refined level that form a grid `s × t` in its frame
 /// (the dual grid of a quad face over a regular descendant): evaluated separably, as the
@@ -362,7 +390,7 @@ pub(crate) struct Evaluator {
     faces: Vec<FacePlan>,
     /// Per input face, its domain (`None`: a hole).
     domains: Vec<Option<FaceDomain>>,
-    /// The [`BICUBIC`] vertices in vertex order, with their face and parameter (made once per
+    /// The [`Route::BicubicPoint`] vertices in vertex order, with their face and parameter (made once per
     /// tessellation: no site lookups per frame).
     pointwise: Vec<(u32, u32, [f64; 2])>,
     /// Per refinement level, the current cage refined to it (level 0: the cage); the first
@@ -372,7 +400,8 @@ pub(crate) struct Evaluator {
     refined: usize,
     needed: usize,
     bases: Vec<Option<Arc<RateBasis>>>,
-    kinds: Vec<u32>,
+    /// Per output vertex of the last [`prepare`](Self::prepare), how it is evaluated.
+    routes: Vec<Route>,
     records: Vec<Record>,
     /// Per record, its patch and parameter (for [`Self::patch_grids`]).
     places: Vec<Place>,
@@ -390,10 +419,8 @@ pub(crate) struct Evaluator {
     templates: Vec<Template>,
     template_index: HashMap<TemplateKey, u32>,
     template_weights: usize,
-    /// Per block of the last [`prepare`](Self::prepare): [`COPY`], [`MAKE`] or 0, and its
-    /// template (or [`NO_TEMPLATE`]).
-    copy_of: Vec<u8>,
-    block_template: Vec<u32>,
+    /// Per block of the last [`prepare`](Self::prepare): whether it reads a template.
+    block_templates: Vec<TemplateUse>,
     /// Whether typed faces read templates (off: every face on its own records, for tests).
     typed_faces: bool,
     /// Whether faces of one type share a template (off: each typed face makes its own, for
@@ -427,11 +454,8 @@ pub(crate) struct Evaluator {
     /// [`plan_copies`](Self::plan_copies)'s maps, kept for their allocations.
     fits: HashMap<(u32, u32), bool>,
     made: hashbrown::HashSet<TemplateKey>,
-    /// The blocks of the last [`plan_blocks`](Self::plan_blocks) (the topology's blocks at its
-    /// rates): face and rate.
+    /// The blocks of the last [`prepare`](Self::prepare)'s topology: face and rate.
     planned: Vec<(u32, u32)>,
-    /// The early blocks of the last [`plan_blocks`](Self::plan_blocks): index and first vertex.
-    early: Vec<(u32, u32)>,
 }
 
 impl Evaluator {
@@ -494,7 +518,7 @@ impl Evaluator {
             refined: 0,
             needed: count,
             bases: Vec::new(),
-            kinds: Vec::new(),
+            routes: Vec::new(),
             records: Vec::new(),
             places: Vec::new(),
             patch_grids: Vec::new(),
@@ -505,8 +529,7 @@ impl Evaluator {
             templates: Vec::new(),
             template_index: HashMap::new(),
             template_weights: 0,
-            copy_of: Vec::new(),
-            block_template: Vec::new(),
+            block_templates: Vec::new(),
             typed_faces: true,
             copy_faces: true,
             grid_basis: Vec::new(),
@@ -524,7 +547,6 @@ impl Evaluator {
             fits: HashMap::new(),
             made: hashbrown::HashSet::new(),
             planned: Vec::new(),
-            early: Vec::new(),
         };
         evaluator.table_faces = mesh
             .face_ids()
@@ -599,25 +621,12 @@ impl Evaluator {
         self.refined = self.refined.max(levels);
     }
 
-    /// Plans the blocks (the whole quad faces' dual grids) of a tessellation at `rates`, before
-    /// its topology is built (the blocks are the faces whose domain is a quad, in face order):
-    /// the basis tables of the bicubic faces' rates, which typed faces read their type's
-    /// template ([`plan_copies`](Self::plan_copies)), and the **early** blocks, which
-    /// [`early_pieces`](Self::early_pieces) evaluate without the topology: in the
-    /// leading faces that are whole quads or holes (whose blocks come first in the vertex order,
-    /// each at the sum of the squares of the rates before it), the bicubic faces and the faces
-    /// whose type's template at their rate is kept. Returns the number of vertices to the end of
-    /// the last early block. [`prepare`](Self::prepare) then takes the topology of these rates.
-    pub(crate) fn plan_blocks(&mut self, rates: &[u32]) -> usize {
+    /// Plans the blocks (the whole quad faces' dual grids) of `topo`: the basis tables of the
+    /// bicubic faces' rates, and which typed faces read their type's template
+    /// ([`plan_copies`](Self::plan_copies)).
+    fn plan_blocks(&mut self, topo: &Topology) {
         self.planned.clear();
-        self.planned.extend(
-            self.domains
-                .iter()
-                .zip(rates)
-                .enumerate()
-                .filter(|(_, (d, _))| matches!(d, Some(FaceDomain::Quad)))
-                .map(|(f, (_, &rate))| (f as u32, rate)),
-        );
+        self.planned.extend(topo.blocks.iter().map(|b| (b.face, b.rate)));
         for &(f, rate) in &self.planned {
             if let FacePlan::Bicubic { .. } = self.faces[f as usize] {
                 let r = rate as usize;
@@ -630,39 +639,23 @@ impl Evaluator {
             }
         }
         self.plan_copies();
-        self.early.clear();
-        let (mut base, mut end, mut b) = (0u32, 0, 0);
-        for (f, domain) in self.domains.iter().enumerate() {
-            match domain {
-                None => continue,
-                Some(FaceDomain::Quad) => {}
-                Some(_) => break,
-            }
-            let rate = rates[f];
-            if matches!(self.faces[f], FacePlan::Bicubic { .. }) || self.block_template[b] != NO_TEMPLATE {
-                self.early.push((b as u32, base));
-                end = (base + rate * rate) as usize;
-            }
-            base += rate * rate;
-            b += 1;
-        }
-        end
     }
 
-    /// Prepares the evaluation of `topo`'s vertices (after [`plan_blocks`](Self::plan_blocks)
-    /// at `rates`): a stencil record for every vertex on the general route but the typed
-    /// faces' cells, and the typed faces' templates.
+    /// Prepares the evaluation of `topo`'s vertices (built at `rates`): its blocks' plan, a
+    /// stencil record for every vertex on the general route but the typed faces' cells, and the
+    /// typed faces' templates.
     pub(crate) fn prepare(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
+        self.plan_blocks(topo);
         self.prepare_records(topo, rates, parallel)?;
         self.patch_grids(topo);
         // Only vertices outside the blocks can be pointwise: their sites are the explicit ones.
         self.pointwise.clear();
-        self.pointwise.extend(topo.explicit_sites().filter(|&(v, _)| self.kinds[v as usize] == BICUBIC).map(
-            |(v, site)| {
+        self.pointwise.extend(
+            topo.explicit_sites().filter(|&(v, _)| self.routes[v as usize] == Route::BicubicPoint).map(|(v, site)| {
                 let (u, w) = site.point.to_f64();
                 (v, site.face, [u, w])
-            },
-        ));
+            }),
+        );
         // The levels the records and patch grids read (the templates read the cage): the next
         // cages are refined to those only.
         let used = |level: u32| level as usize + 1;
@@ -677,23 +670,19 @@ impl Evaluator {
     }
 
     /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record,
-    /// but the typed faces' cell points that read a template ([`TYPED`]).
+    /// but the typed faces' cell points that read a template ([`Route::Template`]).
     fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.vertex_count as usize;
-        self.kinds.clear();
-        self.kinds.resize(n, BICUBIC);
+        self.routes.clear();
+        self.routes.resize(n, Route::BicubicPoint);
         self.records.clear();
         self.ids.clear();
-        debug_assert!(
-            topo.blocks.iter().map(|b| (b.face, b.rate)).eq(self.planned.iter().copied()),
-            "blocks as planned"
-        );
         for (b, block) in topo.blocks.iter().enumerate() {
             let cells = block.base as usize..(block.base + block.len()) as usize;
             if let FacePlan::Bicubic { .. } = self.faces[block.face as usize] {
-                self.kinds[cells].fill(IN_BLOCK);
-            } else if self.copy_of[b] == COPY {
-                self.kinds[cells].fill(TYPED);
+                self.routes[cells].fill(Route::BlockCell);
+            } else if self.block_templates[b].copies() {
+                self.routes[cells].fill(Route::Template);
             }
         }
         // The dual-grid tables the level-0 patches' cell points read (but those of faces that
@@ -735,8 +724,7 @@ impl Evaluator {
             pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(evaluators);
             chunk
         };
-        let results: Vec<Result<Chunk, TessError>> =
-            if parallel { chunks.into_par_iter().map(work).collect() } else { chunks.into_iter().map(work).collect() };
+        let results: Vec<Result<Chunk, TessError>> = crate::par::map(parallel, chunks, work);
         self.spans = spans;
         self.pool = pool.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
         self.spare = spare.into_inner().unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -747,7 +735,7 @@ impl Evaluator {
             self.places.extend_from_slice(&chunk.places);
             let (records, ids) = (self.records.len() as u32, self.ids.len() as u32);
             for &(vertex, record) in &chunk.assigned {
-                self.kinds[vertex as usize] = records + record;
+                self.routes[vertex as usize] = Route::Record(records + record);
             }
             // The chunk's fresh stencils join the kept ones (a key an earlier chunk added
             // takes that copy: the same weights).
@@ -878,8 +866,9 @@ impl Evaluator {
         }
     }
 
-    /// Decides, per planned block, whether it reads its type's template ([`COPY`]: its cell
-    /// points [`TYPED`], out of the chunks), makes it ([`MAKE`]: the first block of a key
+    /// Decides, per planned block, whether it reads its type's template
+    /// ([`TemplateUse::Copy`], or [`Copied`](TemplateUse::Copied) if kept: its cell points
+    /// [`Route::Template`], out of the chunks), makes it ([`Make`](TemplateUse::Make): the first block of a key
     /// without a template) or takes its own records (0).
     ///
     /// The (type, rate) pairs past the [`MAX_TEMPLATE_WEIGHTS`] budget, counted in block order
@@ -889,10 +878,8 @@ impl Evaluator {
         let blocks = self.planned.len();
         self.copied.clear();
         self.copied.resize(self.faces.len(), false);
-        self.copy_of.clear();
-        self.copy_of.resize(blocks, 0);
-        self.block_template.clear();
-        self.block_template.resize(blocks, NO_TEMPLATE);
+        self.block_templates.clear();
+        self.block_templates.resize(blocks, TemplateUse::Own);
         if !self.typed_faces {
             return;
         }
@@ -922,13 +909,12 @@ impl Evaluator {
             }
             let key = self.template_key(face, rate, ty);
             if let Some(&t) = self.template_index.get(&key) {
-                self.block_template[b] = t;
-                self.copy_of[b] = COPY;
+                self.block_templates[b] = TemplateUse::Copied(t);
             } else if made.insert(key) {
-                self.copy_of[b] = MAKE;
+                self.block_templates[b] = TemplateUse::Make;
                 continue;
             } else {
-                self.copy_of[b] = COPY;
+                self.block_templates[b] = TemplateUse::Copy;
             }
             self.copied[face as usize] = true;
         }
@@ -1038,11 +1024,10 @@ impl Evaluator {
                 }
             }
         }
-        for (k, &kind) in self.kinds[base..base + block.len() as usize].iter().enumerate() {
-            if kind == IN_PATCH_GRID {
-                continue;
-            }
-            let (r, place) = (&self.records[kind as usize], &self.places[kind as usize]);
+        for (k, &route) in self.routes[base..base + block.len() as usize].iter().enumerate() {
+            // The other cells are in patch grids.
+            let Route::Record(record) = route else { continue };
+            let (r, place) = (&self.records[record as usize], &self.places[record as usize]);
             let p = index(place.patch);
             if r.table == NO_TABLE {
                 let pad = padded(r.len as usize);
@@ -1059,7 +1044,7 @@ impl Evaluator {
     /// Gathers, per quad face on the general route, the points of each bicubic patch on a
     /// refined level that form a full grid `s × t` in the patch's frame into a [`PatchGrid`]
     /// (the patch shapes' stencils checked once against the tensor products), and marks them
-    /// [`IN_PATCH_GRID`]; the first face of a key without a template makes it from its records
+    /// [`Route::PatchGrid`]; the first face of a key without a template makes it from its records
     /// and grids ([`Self::make_template`]), then reads it as the others of its type do.
     fn patch_grids(&mut self, topo: &Topology) {
         self.patch_grids.clear();
@@ -1073,18 +1058,18 @@ impl Evaluator {
         let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (b, block) in topo.blocks.iter().enumerate() {
             let first = self.patch_grids.len() as u32;
-            let copy = self.copy_of.get(b).copied().unwrap_or(0);
-            if copy != COPY && matches!(self.faces[block.face as usize], FacePlan::General) {
+            let template = self.block_templates.get(b).copied().unwrap_or(TemplateUse::Own);
+            if !template.copies() && matches!(self.faces[block.face as usize], FacePlan::General) {
                 keys.clear();
                 group.clear();
                 let base = block.base as usize;
                 let mut last = usize::MAX;
                 for v in base..base + (block.rate * block.rate) as usize {
-                    let kind = self.kinds[v];
-                    if kind >= IN_PATCH_GRID || self.places[kind as usize].grid.is_none() {
+                    let Route::Record(record) = self.routes[v] else { continue };
+                    if self.places[record as usize].grid.is_none() {
                         continue;
                     }
-                    let key = self.places[kind as usize].patch;
+                    let key = self.places[record as usize].patch;
                     if last == usize::MAX || keys[last] != key {
                         last = keys.iter().position(|&k| k == key).unwrap_or_else(|| {
                             keys.push(key);
@@ -1112,13 +1097,13 @@ impl Evaluator {
                     let vertices = &sorted[starts[g] as usize..starts[g + 1] as usize];
                     if let Some(grid) = self.patch_grid(vertices, &mut s, &mut t) {
                         for &v in vertices {
-                            self.kinds[v as usize] = IN_PATCH_GRID;
+                            self.routes[v as usize] = Route::PatchGrid;
                         }
                         self.patch_grids.push(grid);
                     }
                 }
             }
-            if copy == MAKE {
+            if template == TemplateUse::Make {
                 let template = self.make_template(block, (first, self.patch_grids.len() as u32));
                 let ty = self.face_types[block.face as usize].expect("a typed face");
                 self.template_index.insert(self.template_key(block.face, block.rate, ty), self.templates.len() as u32);
@@ -1131,11 +1116,13 @@ impl Evaluator {
                     self.grid_params.truncate(g.basis as usize);
                     self.patch_grids.truncate(first as usize);
                 }
-                self.kinds[block.base as usize..(block.base + block.len()) as usize].fill(TYPED);
+                self.routes[block.base as usize..(block.base + block.len()) as usize].fill(Route::Template);
             }
-            if copy != 0 {
+            if template != TemplateUse::Own {
                 let ty = self.face_types[block.face as usize].expect("a typed face");
-                self.block_template[b] = self.template_index[&self.template_key(block.face, block.rate, ty)];
+                let t = self.template_index[&self.template_key(block.face, block.rate, ty)];
+                self.block_templates[b] =
+                    if template == TemplateUse::Make { TemplateUse::Made(t) } else { TemplateUse::Copied(t) };
             }
             self.block_grids.push((first, self.patch_grids.len() as u32));
         }
@@ -1147,9 +1134,13 @@ impl Evaluator {
     /// its bases and vertices are appended to `grid_basis` and `grid_vertices` (`s` and `t`:
     /// scratch).
     fn patch_grid(&mut self, vertices: &[u32], s: &mut Vec<f64>, t: &mut Vec<f64>) -> Option<PatchGrid> {
-        let (records, places, kinds) = (&self.records, &self.places, &self.kinds);
-        let record = |v: u32| &records[kinds[v as usize] as usize];
-        let place = |v: u32| &places[kinds[v as usize] as usize];
+        let (records, places, routes) = (&self.records, &self.places, &self.routes);
+        let index = |v: u32| match routes[v as usize] {
+            Route::Record(r) => r as usize,
+            _ => unreachable!("patch grids gather records"),
+        };
+        let record = |v: u32| &records[index(v)];
+        let place = |v: u32| &places[index(v)];
         let r0 = *record(vertices[0]);
         let grid = place(vertices[0]).grid?;
         s.clear();
@@ -1226,7 +1217,7 @@ impl Evaluator {
         for block in &topo.blocks {
             let (base, end) = (block.base as usize, (block.base + block.len()) as usize);
             // A block's points are all of one kind (`prepare_records` marks them together).
-            if base < end && matches!(self.kinds[base], IN_BLOCK | TYPED) {
+            if base < end && matches!(self.routes[base], Route::BlockCell | Route::Template) {
                 push(at, base);
                 at = end;
             }
@@ -1254,7 +1245,10 @@ impl Evaluator {
         let mut shared: HashMap<(usize, usize, Dyadic), u32> = HashMap::new();
         for i in spans.iter().flat_map(Clone::clone) {
             // `record_spans` left out the blocks of those kinds, and only blocks have them.
-            debug_assert!(!matches!(self.kinds[i], IN_BLOCK | TYPED), "vertex {i} outside the record spans");
+            debug_assert!(
+                !matches!(self.routes[i], Route::BlockCell | Route::Template),
+                "vertex {i} outside the record spans"
+            );
             let site = topo.site(i as u32);
             if !matches!(self.faces[site.face as usize], FacePlan::General) {
                 continue;
@@ -1365,35 +1359,9 @@ impl Evaluator {
     }
 
     /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
-    /// positions and normals, without the f64 arrays; with `skip_early`, but the early blocks
-    /// of the last [`plan_blocks`](Self::plan_blocks) (left as they are in `out`).
-    pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32], skip_early: bool) {
-        self.evaluate_into(topo, parallel, FlatSink(out), skip_early);
-    }
-
-    /// The early blocks of the last [`plan_blocks`](Self::plan_blocks) (no topology needed) as
-    /// pieces over `out`, interleaved f32 as [`evaluate_flat`](Self::evaluate_flat) writes them,
-    /// to the number of vertices `plan_blocks` returned (the vertices between early blocks are
-    /// not written), for the caller to share among threads
-    /// ([`evaluate_flat_piece`](Self::evaluate_flat_piece) each, in any order and on any
-    /// thread: the output is the same).
-    pub(crate) fn early_pieces<'a>(&'a self, out: &'a mut [f32]) -> impl Iterator<Item = FlatPiece<'a>> {
-        let (mut rest, mut at) = (FlatSink(out), 0);
-        self.early.iter().map(move |&(b, base)| {
-            let (face, rate) = self.planned[b as usize];
-            let len = (rate * rate) as usize;
-            let (piece, tail) = std::mem::replace(&mut rest, FlatSink::empty()).split(base as usize - at).1.split(len);
-            (rest, at) = (tail, base as usize + len);
-            let Ok(piece) = self.block_piece(b as usize, face, rate, piece) else {
-                unreachable!("an early block is bicubic or reads a template")
-            };
-            FlatPiece(piece)
-        })
-    }
-
-    /// One of [`early_pieces`](Self::early_pieces)' pieces, with a thread's `scratch`.
-    pub(crate) fn evaluate_flat_piece(&self, piece: FlatPiece<'_>, scratch: &mut Scratch) {
-        self.run_piece(pulp::Arch::new(), piece.0, scratch);
+    /// positions and normals, without the f64 arrays.
+    pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
+        self.evaluate_into(topo, parallel, FlatSink(out));
     }
 
     /// Evaluates every vertex of `topo` (prepared) on the current cage.
@@ -1407,18 +1375,18 @@ impl Evaluator {
         let n = topo.vertex_count as usize;
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
-        self.evaluate_into(topo, parallel, WideSink(positions, normals), false);
+        self.evaluate_into(topo, parallel, WideSink(positions, normals));
     }
 
-    /// Every vertex into `out` (with `skip_early`, but the early blocks), in one pass over
+    /// Every vertex into `out`, in one pass over
     /// disjoint pieces of the vertex range: the bicubic blocks, the typed faces, the faces with
     /// patch grids, and the runs between them (general-route and pointwise bicubic vertices)
     /// cut to at most [`RUN`] vertices. Each vertex is computed alone, so the output does not
     /// depend on how the pieces are shared among threads.
-    fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S, skip_early: bool) {
+    fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S) {
         let mut pieces: Vec<Piece<'_, S>> = Vec::with_capacity(2 * topo.blocks.len() + 1);
         let mut rest = out;
-        let (mut at, mut skipped) = (0, 0);
+        let mut at = 0;
         let push_run = |rest: &mut S, at: &mut usize, end: usize, pieces: &mut Vec<Piece<'_, S>>| {
             while *at < end {
                 let len = (end - *at).min(RUN);
@@ -1428,11 +1396,8 @@ impl Evaluator {
                 *at += len;
             }
         };
-        let mut early = self.early.iter().peekable();
         for (b, (block, &(first, last))) in topo.blocks.iter().zip(&self.block_grids).enumerate() {
-            let skip = skip_early && early.next_if(|e| e.0 as usize == b).is_some();
-            let whole = skip
-                || self.block_template[b] != NO_TEMPLATE
+            let whole = self.block_templates[b].template().is_some()
                 || matches!(self.faces[block.face as usize], FacePlan::Bicubic { .. })
                 || first < last;
             if !whole {
@@ -1443,10 +1408,6 @@ impl Evaluator {
             let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
             let start = at;
             (rest, at) = (tail, at + len);
-            if skip {
-                skipped += len;
-                continue;
-            }
             // A general face with patch grids: one piece (its grids write anywhere in it).
             let grids = &self.patch_grids[first as usize..last as usize];
             pieces.push(self.block_piece(b, block.face, block.rate, piece).unwrap_or_else(|out| Piece::Run {
@@ -1456,14 +1417,13 @@ impl Evaluator {
             }));
         }
         push_run(&mut rest, &mut at, topo.vertex_count as usize, &mut pieces);
-        self.run_pieces(pieces, parallel && topo.vertex_count as usize - skipped >= PARALLEL_VERTICES);
+        self.run_pieces(pieces, parallel && topo.vertex_count as usize >= PARALLEL_VERTICES);
     }
 
     /// Block `b` (of `face` at `rate`) as one piece if it is one (a typed face reading its
     /// template, or a bicubic face), else its output back.
     fn block_piece<'a, S: Sink>(&'a self, b: usize, face: u32, rate: u32, out: S) -> Result<Piece<'a, S>, S> {
-        let template = self.block_template[b];
-        if template != NO_TEMPLATE {
+        if let Some(template) = self.block_templates[b].template() {
             let ty = self.face_types[face as usize].expect("a typed face");
             let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
             return Ok(Piece::Typed { template: &self.templates[template as usize], cage, out });
@@ -1477,17 +1437,13 @@ impl Evaluator {
     /// Evaluates `pieces`, on rayon's threads if `parallel`.
     fn run_pieces<S: Sink>(&self, pieces: Vec<Piece<'_, S>>, parallel: bool) {
         if pieces.is_empty() {
-            // No scratch to make (after the early blocks, a call may have nothing left).
             return;
         }
         // The CPU's features, looked up once per call.
         let arch = pulp::Arch::new();
-        if parallel {
-            pieces.into_par_iter().for_each_init(Scratch::new, |scratch, piece| self.run_piece(arch, piece, scratch));
-        } else {
-            let mut scratch = Scratch::new();
-            pieces.into_iter().for_each(|piece| self.run_piece(arch, piece, &mut scratch));
-        }
+        crate::par::for_each_init(parallel, pieces, Scratch::new, |scratch, piece| {
+            self.run_piece(arch, piece, scratch)
+        });
     }
 
     /// One piece, with the widest vector instructions the CPU has (AVX2 on x86-64), chosen at
@@ -1527,23 +1483,24 @@ impl Evaluator {
                 let mut ks = [0usize; BATCH];
                 // The piece's first pointwise vertex; the others follow in order.
                 let mut next = self.pointwise.partition_point(|&(v, ..)| (v as usize) < start);
-                let kinds = &self.kinds[start..start + out.len()];
-                for (b, batch) in kinds.chunks(BATCH).enumerate() {
+                let routes = &self.routes[start..start + out.len()];
+                for (b, batch) in routes.chunks(BATCH).enumerate() {
                     let mut m = 0;
-                    for (k, &kind) in batch.iter().enumerate() {
-                        if kind == IN_PATCH_GRID {
-                            continue;
-                        }
-                        let (x, du, dv) = if kind == BICUBIC {
-                            let (vertex, face, [u, v]) = self.pointwise[next];
-                            debug_assert_eq!(vertex as usize, start + b * BATCH + k);
-                            next += 1;
-                            let FacePlan::Bicubic { cv } = &self.faces[face as usize] else {
-                                unreachable!("bicubic face")
-                            };
-                            bicubic(cv, cage, u, v)
-                        } else {
-                            self.general(&self.records[kind as usize])
+                    for (k, &route) in batch.iter().enumerate() {
+                        let (x, du, dv) = match route {
+                            // Written by their grids above.
+                            Route::PatchGrid => continue,
+                            Route::BicubicPoint => {
+                                let (vertex, face, [u, v]) = self.pointwise[next];
+                                debug_assert_eq!(vertex as usize, start + b * BATCH + k);
+                                next += 1;
+                                let FacePlan::Bicubic { cv } = &self.faces[face as usize] else {
+                                    unreachable!("bicubic face")
+                                };
+                                bicubic(cv, cage, u, v)
+                            }
+                            Route::Record(r) => self.general(&self.records[r as usize]),
+                            Route::BlockCell | Route::Template => unreachable!("blocks are pieces of their own"),
                         };
                         (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
                         m += 1;
@@ -1684,10 +1641,8 @@ impl Evaluator {
         // The typed faces' cell points: their templates' rows (`∂/∂u` and `∂/∂v` already) over
         // their cage points, each template's cell once.
         let mut cells: HashMap<(u32, u32), u32> = HashMap::new();
-        for (block, &t) in topo.blocks.iter().zip(&self.block_template) {
-            if t == NO_TEMPLATE {
-                continue;
-            }
+        for (block, &t) in topo.blocks.iter().zip(&self.block_templates) {
+            let Some(t) = t.template() else { continue };
             let template = &self.templates[t as usize];
             let ty = self.face_types[block.face as usize].expect("a typed face");
             let points = plan.points.len() as u32;
@@ -1714,9 +1669,8 @@ impl Evaluator {
             if plan.vertices[v] != UNSET {
                 continue;
             }
-            let kind = self.kinds[v];
-            debug_assert!(kind < IN_PATCH_GRID, "vertex {v} has no plan");
-            let r = &self.records[kind as usize];
+            let Route::Record(record) = self.routes[v] else { unreachable!("vertex {v} has no plan") };
+            let r = &self.records[record as usize];
             let len = r.len as usize;
             let points = *patches.entry((r.level, r.ids)).or_insert_with(|| {
                 let ids = &self.ids[r.ids as usize..r.ids as usize + len];
@@ -1991,9 +1945,6 @@ const RUN: usize = 1024;
 /// Vertices per batch of a run's normalisations.
 const BATCH: usize = 64;
 
-/// A piece of [`Evaluator::early_pieces`]' work (its vertices' part of the flat buffer).
-pub(crate) struct FlatPiece<'a>(Piece<'a, FlatSink<'a>>);
-
 /// A piece of [`Evaluator::evaluate_into`]'s work.
 enum Piece<'a, S> {
     /// A bicubic face's dual grid.
@@ -2143,7 +2094,6 @@ mod tests {
         let mut topo = Topology::default();
         let faces = mesh.face_count();
         super::super::topology::Builder::new(&mesh, true, false).build(&domains, &vec![4; faces], None, &mut topo);
-        ev.plan_blocks(&vec![4; faces]);
         ev.prepare(&topo, &vec![4; faces], true).unwrap();
         let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
         assert_eq!(tabled, faces * 16);
@@ -2169,18 +2119,18 @@ mod tests {
             let mut topo = Topology::default();
             let rates = vec![rate; mesh.face_count()];
             super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
-            ev.plan_blocks(&rates);
+            ev.plan_blocks(&topo);
             ev.prepare_records(&topo, &rates, true).unwrap();
-            let kinds = ev.kinds.clone();
+            let routes = ev.routes.clone();
             ev.patch_grids(&topo);
-            let gridded = ev.kinds.iter().filter(|&&k| k == IN_PATCH_GRID).count();
+            let gridded = ev.routes.iter().filter(|&&k| k == Route::PatchGrid).count();
             assert!(4 * gridded > ev.records.len(), "{gridded} of {} in patch grids", ev.records.len());
             let (mut ps, mut ns) = (Vec::new(), Vec::new());
             ev.evaluate(&topo, true, &mut ps, &mut ns);
             let mut worst: f64 = 0.0;
-            for (v, &kind) in ev.kinds.iter().enumerate() {
-                if kind == IN_PATCH_GRID {
-                    let (p, du, dv) = ev.general(&ev.records[kinds[v] as usize]);
+            for (v, &route) in ev.routes.iter().enumerate() {
+                if let (Route::PatchGrid, Route::Record(r)) = (route, routes[v]) {
+                    let (p, du, dv) = ev.general(&ev.records[r as usize]);
                     worst = worst.max((p - ps[v]).length()).max((normal(du, dv) - ns[v]).length());
                 }
             }
@@ -2234,7 +2184,6 @@ mod tests {
                 let mut topo = Topology::default();
                 super::super::topology::Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut topo);
                 let run = |ev: &mut Evaluator| {
-                    ev.plan_blocks(&rates);
                     ev.prepare(&topo, &rates, true).unwrap();
                     let (mut ps, mut ns) = (Vec::new(), Vec::new());
                     ev.evaluate(&topo, true, &mut ps, &mut ns);
@@ -2260,8 +2209,12 @@ mod tests {
                 }
                 assert!(worst_plan(&own.2, &records.2) < 1e-12);
                 if first && rates == uniform(8) {
-                    assert!(kept.copy_of.contains(&COPY), "some of the cube's faces copy others");
-                    assert!(kept.block_template.iter().all(|&t| t != NO_TEMPLATE), "the cube's faces are typed");
+                    let uses = &kept.block_templates;
+                    assert!(
+                        uses.iter().any(|t| matches!(t, TemplateUse::Copied(_))),
+                        "some of the cube's faces copy others"
+                    );
+                    assert!(uses.iter().all(|t| t.template().is_some()), "the cube's faces are typed");
                 }
             }
             assert!(!first || !kept.templates.is_empty(), "the cube's faces have templates");

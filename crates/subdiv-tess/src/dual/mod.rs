@@ -60,11 +60,9 @@
 
 mod eval;
 mod plan;
-mod team;
 mod topology;
 
 use glam::DVec3;
-use rayon::prelude::*;
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{Scheme, Split};
 use subdiv_stencil::FaceDomain;
@@ -74,6 +72,7 @@ pub use self::plan::{
     EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
 };
 use self::topology::{Builder, BuilderBuffers, Topology};
+use crate::par::{self, Parallelism};
 use crate::rates::RingDepths;
 use crate::{SurfaceParameter, TessError, TessMesh};
 
@@ -86,19 +85,44 @@ pub const MAX_DUAL_RATE: u32 = 128;
 pub const MAX_DUAL_RING_DEPTH: u32 = 60;
 
 /// Options of [`DualTessellator`].
+///
+/// ```
+/// use subdiv_tess::{DualOptions, Parallelism};
+///
+/// let options = DualOptions::DEFAULT.with_quads(false).with_parallelism(Parallelism::Serial);
+/// assert_eq!(DualOptions::default(), DualOptions::DEFAULT);
+/// assert!(!options.quads);
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct DualOptions {
     /// Also list the output's quads (face grids, equal-rate strips, valence-4 vertices) as
     /// [`TessMesh`] polygons. Triangles are always output. Default: `true`.
     pub quads: bool,
-    /// Evaluate on rayon's thread pool (the output is the same, bit for bit, either way).
-    /// Default: `true`.
-    pub parallel: bool,
+    /// Whether the evaluation and the index writing may use rayon's threads (the output is the
+    /// same, bit for bit, either way). Default: [`Parallelism::Rayon`].
+    pub parallelism: Parallelism,
+}
+
+impl DualOptions {
+    /// The defaults: quads listed, [`Parallelism::Rayon`].
+    pub const DEFAULT: Self = Self { quads: true, parallelism: Parallelism::DEFAULT };
+
+    /// These options with [`quads`](Self::quads) set.
+    #[must_use]
+    pub const fn with_quads(self, quads: bool) -> Self {
+        Self { quads, ..self }
+    }
+
+    /// These options with [`parallelism`](Self::parallelism) set.
+    #[must_use]
+    pub const fn with_parallelism(self, parallelism: Parallelism) -> Self {
+        Self { parallelism, ..self }
+    }
 }
 
 impl Default for DualOptions {
     fn default() -> Self {
-        Self { quads: true, parallel: true }
+        Self::DEFAULT
     }
 }
 
@@ -255,12 +279,12 @@ impl DualTessellator {
     /// use subdiv_mesh::{shapes, Mesh};
     /// use subdiv_schemes::Builtin;
     /// use subdiv_tess::rates::ErrorRates;
-    /// use subdiv_tess::{DualOptions, DualTessellator, Tessellator, Tolerance};
+    /// use subdiv_tess::{DualOptions, DualTessellator, QuadtreeTessellator, Tolerance};
     ///
     /// let mesh = Mesh::build(shapes::cube())?;
     /// let cc = Builtin::CatmullClark.scheme();
     /// // Rates and ring depths to 1% of the bounding box (the bounds come from the quadtree's pieces).
-    /// let rates = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&Tessellator::new(cc, &mesh)?, &mesh)?;
+    /// let rates = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&QuadtreeTessellator::new(cc, &mesh)?, &mesh)?;
     /// assert!(rates.rings.vertices.iter().all(|&d| d > 0)); // the cube's valence-3 corners
     /// let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::default())?;
     /// let plain = tess.tessellate(&rates.faces)?.positions.len();
@@ -292,9 +316,9 @@ impl DualTessellator {
 
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
-        self.plan(rates)?;
+        self.check_rates(rates)?;
         self.builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
-        let prepared = self.evaluator.prepare(&self.topology, rates, self.options.parallel);
+        let prepared = self.evaluator.prepare(&self.topology, rates, self.options.parallelism.forks());
         self.settle(rates, prepared)
     }
 
@@ -316,11 +340,9 @@ impl DualTessellator {
         }
     }
 
-    /// Checks `rates` (one per face, each in `1..=`[`MAX_DUAL_RATE`]) and plans the blocks of
-    /// the topology about to be built at them, which the output and the kept indices no longer
-    /// match. Returns the number of vertices to the end of the early blocks
-    /// ([`Evaluator::plan_blocks`]).
-    fn plan(&mut self, rates: &[u32]) -> Result<usize, TessError> {
+    /// Checks `rates` (one per face, each in `1..=`[`MAX_DUAL_RATE`]) for the topology about
+    /// to be built at them, which the output and the kept indices then no longer match.
+    fn check_rates(&mut self, rates: &[u32]) -> Result<(), TessError> {
         if rates.len() != self.face_count() {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
@@ -329,7 +351,7 @@ impl DualTessellator {
         }
         self.output_current = false;
         self.flat_indices.clear();
-        Ok(self.evaluator.plan_blocks(rates))
+        Ok(())
     }
 
     /// The animation path: the same topology and rates on a new cage (one finite position per
@@ -344,7 +366,12 @@ impl DualTessellator {
         self.evaluator.set_cage(positions);
         if self.output_current {
             let out = &mut self.output;
-            self.evaluator.evaluate(&self.topology, self.options.parallel, &mut out.positions, &mut out.normals);
+            self.evaluator.evaluate(
+                &self.topology,
+                self.options.parallelism.forks(),
+                &mut out.positions,
+                &mut out.normals,
+            );
         } else {
             self.fill_output();
         }
@@ -363,7 +390,7 @@ impl DualTessellator {
     pub fn update_cage_flat(&mut self, positions: &[DVec3], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_cage(positions)?;
         self.evaluator.set_cage(positions);
-        let (t, parallel) = (&self.topology, self.options.parallel);
+        let (t, parallel) = (&self.topology, self.options.parallelism.forks());
         // The same indices every frame: copied from the output's triangles, or from a copy
         // made once (a copy runs at the memory's speed, which writing them anew does not reach
         // on large meshes).
@@ -382,7 +409,7 @@ impl DualTessellator {
             parallel,
             out,
             |vertices| {
-                evaluator.evaluate_flat(t, parallel, vertices, false);
+                evaluator.evaluate_flat(t, parallel, vertices);
                 Ok(())
             },
             |out| copy_indices(indices, parallel, out),
@@ -403,10 +430,8 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate); `out` is then left empty if the rates were
     /// accepted (the failure came from a stencil), untouched if not.
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
-        let early = self.plan(rates)?;
-        let team =
-            self.options.parallel && early >= TEAM_EARLY && rayon::current_num_threads() > 1 && small_call(rates);
-        let done = if team { self.flat_team(rates, early, out) } else { self.flat_forked(rates, out) };
+        self.check_rates(rates)?;
+        let done = self.flat_forked(rates, out);
         if done.is_err() {
             out.vertices.clear();
             out.indices.clear();
@@ -422,7 +447,7 @@ impl DualTessellator {
     fn flat_forked(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         let Self { evaluator, builder, topology, options, .. } = self;
         builder.build(evaluator.domains(), rates, None, topology);
-        let (t, parallel) = (&*topology, options.parallel);
+        let (t, parallel) = (&*topology, options.parallelism.forks());
         // The indices go beside the preparation too (they need the topology alone): the second
         // thread is then awake when the evaluation shares its pieces, where after the
         // preparation alone it would have gone to sleep (and waking one costs tens of
@@ -433,39 +458,11 @@ impl DualTessellator {
             out,
             |vertices| {
                 evaluator.prepare(t, rates, parallel)?;
-                evaluator.evaluate_flat(t, parallel, vertices, false);
+                evaluator.evaluate_flat(t, parallel, vertices);
                 Ok(())
             },
             |indices| write_indices(t, parallel, indices),
         )
-    }
-
-    /// [`tessellate_flat`](Self::tessellate_flat) of a small call with `early` vertices to the
-    /// end of the early blocks, on two threads (see [`team`]): the second thread evaluates the
-    /// early blocks (which need no topology) from the last, while this one builds the topology
-    /// and writes the indices, then takes the early blocks left from the first; the
-    /// preparation and the other vertices follow.
-    fn flat_team(&mut self, rates: &[u32], early: usize, out: &mut FlatMesh) -> Result<(), TessError> {
-        let FlatMesh { vertices, indices } = out;
-        if vertices.len() < 6 * early {
-            vertices.resize(6 * early, 0.0);
-        }
-        let Self { evaluator, builder, topology, options, .. } = self;
-        let shared: &Evaluator = evaluator;
-        team::serial_beside_jobs(
-            shared.early_pieces(&mut vertices[..6 * early]),
-            || {
-                builder.build(shared.domains(), rates, None, topology);
-                write_indices(topology, false, indices);
-            },
-            eval::Scratch::new,
-            |piece, scratch| shared.evaluate_flat_piece(piece, scratch),
-        );
-        let (t, parallel) = (&*topology, options.parallel);
-        vertices.resize(6 * t.vertex_count as usize, 0.0);
-        evaluator.prepare(t, rates, parallel)?;
-        evaluator.evaluate_flat(t, parallel, vertices, true);
-        Ok(())
     }
 
     fn check_cage(&self, positions: &[DVec3]) -> Result<(), TessError> {
@@ -511,7 +508,7 @@ impl DualTessellator {
     /// the output (their old buffers go back to the topology, to be refilled next time: no
     /// copies).
     fn fill_output(&mut self) {
-        let (t, parallel) = (&mut self.topology, self.options.parallel);
+        let (t, parallel) = (&mut self.topology, self.options.parallelism.forks());
         let out = &mut self.output;
         self.evaluator.evaluate(t, parallel, &mut out.positions, &mut out.normals);
         let triangles = t.triangle_count() as usize;
@@ -531,11 +528,7 @@ impl DualTessellator {
         out.triangle_parameters.clear();
         let params = &out.parameters;
         let corners = |tri: &[u32; 3]| tri.map(|k| [params[k as usize].u, params[k as usize].v]);
-        if parallel {
-            out.triangle_parameters.par_extend(out.triangles.par_iter().map(corners));
-        } else {
-            out.triangle_parameters.extend(out.triangles.iter().map(corners));
-        }
+        par::extend_map(parallel, &mut out.triangle_parameters, &out.triangles, corners);
         self.output_current = true;
     }
 }
@@ -579,29 +572,6 @@ pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u
 #[inline]
 fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
     [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
-}
-
-/// The fewest early blocks' vertices for which [`DualTessellator::tessellate_flat`] takes a
-/// [`team`].
-const TEAM_EARLY: usize = 256;
-
-/// The most vertices (as `Σ rate²`, about a quad mesh's count) of a
-/// [`tessellate_flat`](DualTessellator::tessellate_flat) call on a [`team`] of two threads:
-/// larger calls fork as the evaluation goes (where more threads than two may help, and the
-/// helper would wait long beside the topology build).
-const TEAM_VERTICES: u64 = 1 << 15;
-
-/// The largest rate of a [`team`]'s call: its jobs are whole blocks, and past `16² = 256` cells
-/// a block is too long a job for the two threads to end together (the cube at rate 32, six
-/// blocks of 1024 cells, went from 313 to 287 M triangles/s on two threads).
-const TEAM_RATE: u32 = 16;
-
-/// Whether `rates` make a call small enough for a [`team`].
-fn small_call(rates: &[u32]) -> bool {
-    rates
-        .iter()
-        .try_fold(0, |sum, &r| (r <= TEAM_RATE).then(|| sum + u64::from(r).pow(2)))
-        .is_some_and(|sum| sum <= TEAM_VERTICES)
 }
 
 /// `t`'s triangles into `indices` (resized), written straight from the topology's runs: no
@@ -650,7 +620,7 @@ fn beside<E: Send>(
     let FlatMesh { vertices, indices: out_indices } = out;
     vertices.resize(6 * t.vertex_count as usize, 0.0);
     if parallel && t.triangle_count() > BESIDE {
-        rayon::join(|| evaluate(vertices), || indices(out_indices)).0
+        par::join(true, || evaluate(vertices), || indices(out_indices)).0
     } else {
         evaluate(vertices)?;
         indices(out_indices);
@@ -664,7 +634,7 @@ fn beside<E: Send>(
 fn copy_indices(indices: &[u32], parallel: bool, out: &mut Vec<u32>) {
     out.clear();
     if parallel && indices.len() >= 1 << 16 {
-        out.par_extend(indices.par_iter().copied());
+        par::extend_map(true, out, indices, |&k| k);
     } else {
         out.extend_from_slice(indices);
     }

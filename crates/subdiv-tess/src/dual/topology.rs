@@ -292,7 +292,8 @@ fn write_runs<T: Copy + Send + Sync>(
         let mid = runs.len() / 2;
         let (a, b) = out.split_at_mut((runs[mid].first - runs[0].first) as usize * width);
         let next = runs[mid].explicit as usize;
-        rayon::join(
+        crate::par::join(
+            true,
             || write_runs(&runs[..mid], next, a, width, explicit, parallel, made),
             || write_runs(&runs[mid..], end, b, width, explicit, parallel, made),
         );
