@@ -1,0 +1,257 @@
+//! The evaluation pass: disjoint pieces of the vertex range (blocks, typed faces, runs), shared among threads, written through a [`Sink`].
+
+use super::*;
+
+/// The fewest vertices [`Evaluator::evaluate_into`] shares among threads: waking a sleeping
+/// thread costs about what a thousand vertices take (tens of microseconds in a virtual
+/// machine), and past that the pieces stay small, so that the calling thread can do them all
+/// when the others wake late.
+pub(super) const PARALLEL_VERTICES: usize = 1024;
+
+/// What the blocks and typed faces of one thread reuse from piece to piece (made anew for
+/// each, their zeroing showed in profiles as a `memset` of 4 % of the full path's time).
+pub(super) struct Scratch {
+    pub(super) pending: Pending,
+    /// A typed face's cage points by coordinate.
+    pub(super) gathered: [[f64; MAX_TYPED_POINTS]; 3],
+}
+
+impl Scratch {
+    pub(super) fn new() -> Self {
+        Self { pending: Pending::new(), gathered: [[0.0; MAX_TYPED_POINTS]; 3] }
+    }
+}
+
+/// Vertices per piece of a run of vertices outside the blocks in [`Evaluator::evaluate_into`].
+pub(super) const RUN: usize = 1024;
+
+/// Vertices per batch of a run's normalisations.
+pub(super) const BATCH: usize = 64;
+
+/// A piece of [`Evaluator::evaluate_into`]'s work.
+pub(super) enum Piece<'a, S> {
+    /// A bicubic face's dual grid.
+    Block { cv: &'a [u32; 16], rate: u32, out: S },
+    /// A typed face's cell points: its template over its cage points.
+    Typed { template: &'a Template, cage: &'a [u32], out: S },
+    /// Vertices `start..start + out.len()`: the patch grids' (all in the range), then each
+    /// other one on its own.
+    Run { start: usize, out: S, grids: &'a [PatchGrid] },
+}
+
+/// Where [`Evaluator::evaluate_into`] writes a range of vertices.
+pub(super) trait Sink: Send + Sized {
+    /// An empty range.
+    fn empty() -> Self;
+    /// The number of vertices.
+    fn len(&self) -> usize;
+    /// The first `k` vertices and the rest.
+    fn split(self, k: usize) -> (Self, Self);
+    /// Writes vertex `k`'s position and unit normal.
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3);
+}
+
+/// Interleaved f32: per vertex `px py pz nx ny nz`.
+pub(super) struct FlatSink<'a>(pub(super) &'a mut [f32]);
+
+impl Sink for FlatSink<'_> {
+    fn empty() -> Self {
+        Self(&mut [])
+    }
+    fn len(&self) -> usize {
+        self.0.len() / 6
+    }
+    fn split(self, k: usize) -> (Self, Self) {
+        let (a, b) = self.0.split_at_mut(6 * k);
+        (Self(a), Self(b))
+    }
+    #[inline]
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3) {
+        self.0[6 * k..6 * k + 6].copy_from_slice(&crate::dual::flat_vertex(p, n));
+    }
+}
+
+/// f64 positions and normals.
+pub(super) struct WideSink<'a>(pub(super) &'a mut [DVec3], pub(super) &'a mut [DVec3]);
+
+impl Sink for WideSink<'_> {
+    fn empty() -> Self {
+        Self(&mut [], &mut [])
+    }
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+    fn split(self, k: usize) -> (Self, Self) {
+        let (a, b) = self.0.split_at_mut(k);
+        let (c, d) = self.1.split_at_mut(k);
+        (Self(a, c), Self(b, d))
+    }
+    #[inline]
+    fn put(&mut self, k: usize, p: DVec3, n: DVec3) {
+        self.0[k] = p;
+        self.1[k] = n;
+    }
+}
+
+impl Evaluator {
+    /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
+    /// positions and normals, without the f64 arrays.
+    pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
+        self.evaluate_into(topo, parallel, FlatSink(out));
+    }
+
+    /// Evaluates every vertex of `topo` (prepared) on the current cage.
+    pub(crate) fn evaluate(
+        &self,
+        topo: &Topology,
+        parallel: bool,
+        positions: &mut Vec<DVec3>,
+        normals: &mut Vec<DVec3>,
+    ) {
+        let n = topo.vertex_count as usize;
+        positions.resize(n, DVec3::ZERO);
+        normals.resize(n, DVec3::ZERO);
+        self.evaluate_into(topo, parallel, WideSink(positions, normals));
+    }
+
+    /// Every vertex into `out`, in one pass over
+    /// disjoint pieces of the vertex range: the bicubic blocks, the typed faces, the faces with
+    /// patch grids, and the runs between them (general-route and pointwise bicubic vertices)
+    /// cut to at most [`RUN`] vertices. Each vertex is computed alone, so the output does not
+    /// depend on how the pieces are shared among threads.
+    pub(super) fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S) {
+        let mut pieces: Vec<Piece<'_, S>> = Vec::with_capacity(2 * topo.blocks.len() + 1);
+        let mut rest = out;
+        let mut at = 0;
+        let push_run = |rest: &mut S, at: &mut usize, end: usize, pieces: &mut Vec<Piece<'_, S>>| {
+            while *at < end {
+                let len = (end - *at).min(RUN);
+                let (piece, tail) = std::mem::replace(rest, S::empty()).split(len);
+                *rest = tail;
+                pieces.push(Piece::Run { start: *at, out: piece, grids: &[] });
+                *at += len;
+            }
+        };
+        for (b, (block, &(first, last))) in topo.blocks.iter().zip(&self.block_grids).enumerate() {
+            let whole = self.block_templates[b].template().is_some()
+                || matches!(self.faces[block.face as usize], FacePlan::Bicubic { .. })
+                || first < last;
+            if !whole {
+                continue;
+            }
+            push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+            let len = block.len() as usize;
+            let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
+            let start = at;
+            (rest, at) = (tail, at + len);
+            // A general face with patch grids: one piece (its grids write anywhere in it).
+            let grids = &self.patch_grids[first as usize..last as usize];
+            pieces.push(self.block_piece(b, block.face, block.rate, piece).unwrap_or_else(|out| Piece::Run {
+                start,
+                out,
+                grids,
+            }));
+        }
+        push_run(&mut rest, &mut at, topo.vertex_count as usize, &mut pieces);
+        self.run_pieces(pieces, parallel && topo.vertex_count as usize >= PARALLEL_VERTICES);
+    }
+
+    /// Block `b` (of `face` at `rate`) as one piece if it is one (a typed face reading its
+    /// template, or a bicubic face), else its output back.
+    pub(super) fn block_piece<'a, S: Sink>(
+        &'a self,
+        b: usize,
+        face: u32,
+        rate: u32,
+        out: S,
+    ) -> Result<Piece<'a, S>, S> {
+        if let Some(template) = self.block_templates[b].template() {
+            let ty = self.face_types[face as usize].expect("a typed face");
+            let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
+            return Ok(Piece::Typed { template: &self.templates[template as usize], cage, out });
+        }
+        match &self.faces[face as usize] {
+            FacePlan::Bicubic { cv } => Ok(Piece::Block { cv, rate, out }),
+            _ => Err(out),
+        }
+    }
+
+    /// Evaluates `pieces`, on rayon's threads if `parallel`.
+    pub(super) fn run_pieces<S: Sink>(&self, pieces: Vec<Piece<'_, S>>, parallel: bool) {
+        if pieces.is_empty() {
+            return;
+        }
+        // The CPU's features, looked up once per call.
+        let arch = pulp::Arch::new();
+        crate::par::for_each_init(parallel, pieces, Scratch::new, |scratch, piece| {
+            self.run_piece(arch, piece, scratch)
+        });
+    }
+
+    /// One piece, with the widest vector instructions the CPU has (AVX2 on x86-64), chosen at
+    /// run time: the same operations in the same order (Rust never fuses a product and a sum
+    /// on its own; the typed faces' `mul_add` is one rounding on every target), so the same
+    /// bits as the baseline build. The piece's work is inlined into the dispatched function,
+    /// which compiles it for the CPU's features.
+    #[inline(always)]
+    pub(super) fn run_piece<S: Sink>(&self, arch: pulp::Arch, piece: Piece<'_, S>, scratch: &mut Scratch) {
+        arch.dispatch(
+            #[inline(always)]
+            || self.evaluate_piece(piece, scratch),
+        );
+    }
+
+    /// One piece of [`evaluate_into`](Self::evaluate_into)'s work.
+    #[inline(always)]
+    pub(super) fn evaluate_piece<S: Sink>(&self, piece: Piece<'_, S>, scratch: &mut Scratch) {
+        let cage = &self.positions[0];
+        match piece {
+            Piece::Block { cv, rate, mut out } => {
+                let basis = self.bases[rate as usize].as_deref().expect("prepared");
+                grid_block(cv, cage, basis, &mut out, &mut scratch.pending);
+            }
+            Piece::Typed { template, cage: ids, mut out } => {
+                typed_block(template, ids, cage, &mut out, scratch);
+            }
+            Piece::Run { start, mut out, grids } => {
+                // By batches: first the positions and the tangents' cross products, then the
+                // normalisations (their square roots and divisions overlap).
+                let mut xs = [DVec3::ZERO; BATCH];
+                let mut cs = [DVec3::ZERO; BATCH];
+                for grid in grids {
+                    let points = &self.positions[grid.level as usize];
+                    self.patch_grid_eval(grid, points, (&mut xs, &mut cs), |v, p, n| out.put(v as usize - start, p, n));
+                }
+                let mut ks = [0usize; BATCH];
+                // The piece's first pointwise vertex; the others follow in order.
+                let mut next = self.pointwise.partition_point(|&(v, ..)| (v as usize) < start);
+                let routes = &self.routes[start..start + out.len()];
+                for (b, batch) in routes.chunks(BATCH).enumerate() {
+                    let mut m = 0;
+                    for (k, &route) in batch.iter().enumerate() {
+                        let (x, du, dv) = match route {
+                            // Written by their grids above.
+                            Route::PatchGrid => continue,
+                            Route::BicubicPoint => {
+                                let (vertex, face, [u, v]) = self.pointwise[next];
+                                debug_assert_eq!(vertex as usize, start + b * BATCH + k);
+                                next += 1;
+                                let FacePlan::Bicubic { cv } = &self.faces[face as usize] else {
+                                    unreachable!("bicubic face")
+                                };
+                                bicubic(cv, cage, u, v)
+                            }
+                            Route::Record(r) => self.general(&self.records[r as usize]),
+                            Route::BlockCell | Route::Template => unreachable!("blocks are pieces of their own"),
+                        };
+                        (xs[m], cs[m], ks[m]) = (x, du.cross(dv), b * BATCH + k);
+                        m += 1;
+                    }
+                    for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
+                        out.put(k, *x, c.normalize_or_zero());
+                    }
+                }
+            }
+        }
+    }
+}
