@@ -161,45 +161,8 @@ impl Evaluator {
     pub(crate) fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
         let levels = PatchLevels::new(scheme, mesh, &RefineOptions::DEFAULT)?;
         let count = levels.level_count();
-        let refiner = if count > 1 {
-            let refiner = Refiner::new(levels.mesh(0), scheme, count - 1, &RefineOptions::DEFAULT)
-                .map_err(subdiv_stencil::StencilError::from)?;
-            for (l, s) in refiner.levels().iter().enumerate() {
-                if s.child_count() != levels.mesh(l + 1).vertex_count() {
-                    return Err(TessError::Internal(format!(
-                        "refinement level {} does not match the patch levels",
-                        l + 1
-                    )));
-                }
-            }
-            Some(refiner)
-        } else {
-            None
-        };
-        let mut shapes: HashMap<(usize, usize), Option<[usize; 16]>> = HashMap::new();
-        let mut faces = Vec::with_capacity(mesh.face_count());
-        for f in mesh.face_ids() {
-            let plan = match levels.resolve(0, f) {
-                Some(Resolved::Hole) => FacePlan::Hole,
-                Some(Resolved::Patch { patch, frame, .. }) if levels.split() == Split::Quad => {
-                    let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
-                    let grid = *shapes.entry(key).or_insert_with(|| bicubic_grid(&patch.matrices, patch.shape));
-                    match grid {
-                        Some(grid) => FacePlan::Bicubic {
-                            cv: std::array::from_fn(|k| {
-                                let (i, j) = ((k % 4) as i64, (k / 4) as i64);
-                                let p = frame.to_patch(Dyadic::new(i - 1, j - 1, 1));
-                                patch.vertices[grid[(p.v + 1) as usize * 4 + (p.u + 1) as usize]].index() as u32
-                            }),
-                        },
-                        None => FacePlan::General,
-                    }
-                }
-                Some(_) => FacePlan::General,
-                None => return Err(TessError::Internal(format!("{f} was not prepared"))),
-            };
-            faces.push(plan);
-        }
+        let refiner = level_refiner(scheme, &levels)?;
+        let faces = face_plans(mesh, &levels)?;
         let domains = mesh
             .face_ids()
             .map(|f| match faces[f.index()] {
@@ -367,4 +330,52 @@ impl Evaluator {
         self.refine(self.needed);
         Ok(())
     }
+}
+
+/// The refiner of the cage to the patch levels' refined levels (none when there are none),
+/// checked against them.
+fn level_refiner(scheme: &Scheme, levels: &PatchLevels) -> Result<Option<Refiner>, TessError> {
+    let count = levels.level_count();
+    if count > 1 {
+        let refiner = Refiner::new(levels.mesh(0), scheme, count - 1, &RefineOptions::DEFAULT)
+            .map_err(subdiv_stencil::StencilError::from)?;
+        for (l, s) in refiner.levels().iter().enumerate() {
+            if s.child_count() != levels.mesh(l + 1).vertex_count() {
+                return Err(TessError::Internal(format!("refinement level {} does not match the patch levels", l + 1)));
+            }
+        }
+        Ok(Some(refiner))
+    } else {
+        Ok(None)
+    }
+}
+
+/// How each input face is evaluated: holes, bicubic faces (a level-0 patch whose matrices are
+/// a bicubic B-spline's, with its control points in the face's frame) and the others.
+fn face_plans(mesh: &Mesh, levels: &PatchLevels) -> Result<Vec<FacePlan>, TessError> {
+    let mut shapes: HashMap<(usize, usize), Option<[usize; 16]>> = HashMap::new();
+    let mut faces = Vec::with_capacity(mesh.face_count());
+    for f in mesh.face_ids() {
+        let plan = match levels.resolve(0, f) {
+            Some(Resolved::Hole) => FacePlan::Hole,
+            Some(Resolved::Patch { patch, frame, .. }) if levels.split() == Split::Quad => {
+                let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
+                let grid = *shapes.entry(key).or_insert_with(|| bicubic_grid(&patch.matrices, patch.shape));
+                match grid {
+                    Some(grid) => FacePlan::Bicubic {
+                        cv: std::array::from_fn(|k| {
+                            let (i, j) = ((k % 4) as i64, (k / 4) as i64);
+                            let p = frame.to_patch(Dyadic::new(i - 1, j - 1, 1));
+                            patch.vertices[grid[(p.v + 1) as usize * 4 + (p.u + 1) as usize]].index() as u32
+                        }),
+                    },
+                    None => FacePlan::General,
+                }
+            }
+            Some(_) => FacePlan::General,
+            None => return Err(TessError::Internal(format!("{f} was not prepared"))),
+        };
+        faces.push(plan);
+    }
+    Ok(faces)
 }

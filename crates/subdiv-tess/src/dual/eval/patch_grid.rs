@@ -67,56 +67,12 @@ impl Evaluator {
         self.grid_basis.clear();
         self.grid_params.clear();
         self.grid_vertices.clear();
-        let (mut s, mut t) = (Vec::new(), Vec::new());
-        // Per face: the distinct patches (few), each vertex's group, then the groups' vertices
-        // by a counting sort (in vertex order within each).
-        let (mut keys, mut group, mut starts, mut sorted) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut scratch = GridScratch::default();
         for (b, block) in topo.blocks.iter().enumerate() {
             let first = self.patch_grids.len() as u32;
             let template = self.block_templates.get(b).copied().unwrap_or(TemplateUse::Own);
             if !template.copies() && matches!(self.faces[block.face as usize], FacePlan::General) {
-                keys.clear();
-                group.clear();
-                let base = block.base as usize;
-                let mut last = usize::MAX;
-                for v in base..base + (block.rate * block.rate) as usize {
-                    let Route::Record(record) = self.routes[v] else { continue };
-                    if self.places[record as usize].grid.is_none() {
-                        continue;
-                    }
-                    let key = self.places[record as usize].patch;
-                    if last == usize::MAX || keys[last] != key {
-                        last = keys.iter().position(|&k| k == key).unwrap_or_else(|| {
-                            keys.push(key);
-                            keys.len() - 1
-                        });
-                    }
-                    group.push((last as u32, v as u32));
-                }
-                starts.clear();
-                starts.resize(keys.len() + 1, 0u32);
-                for &(g, _) in &group {
-                    starts[g as usize + 1] += 1;
-                }
-                for g in 0..keys.len() {
-                    starts[g + 1] += starts[g];
-                }
-                sorted.clear();
-                sorted.resize(group.len(), 0u32);
-                let mut next = starts.clone();
-                for &(g, v) in &group {
-                    sorted[next[g as usize] as usize] = v;
-                    next[g as usize] += 1;
-                }
-                for g in 0..keys.len() {
-                    let vertices = &sorted[starts[g] as usize..starts[g + 1] as usize];
-                    if let Some(grid) = self.patch_grid(vertices, &mut s, &mut t) {
-                        for &v in vertices {
-                            self.routes[v as usize] = Route::PatchGrid;
-                        }
-                        self.patch_grids.push(grid);
-                    }
-                }
+                self.block_patch_grids(block, &mut scratch);
             }
             if template == TemplateUse::Make {
                 let template = self.make_template(block, (first, self.patch_grids.len() as u32));
@@ -140,6 +96,55 @@ impl Evaluator {
                     if template == TemplateUse::Make { TemplateUse::Made(t) } else { TemplateUse::Copied(t) };
             }
             self.block_grids.push((first, self.patch_grids.len() as u32));
+        }
+    }
+
+    /// The [`PatchGrid`]s of the cells of `block` (a face on the general route): per distinct
+    /// patch (few) its cells, by a counting sort (in vertex order within each), gathered into
+    /// a grid where they form one.
+    pub(super) fn block_patch_grids(&mut self, block: &crate::dual::topology::Block, scratch: &mut GridScratch) {
+        let GridScratch { s, t, keys, group, starts, sorted } = scratch;
+        keys.clear();
+        group.clear();
+        let base = block.base as usize;
+        let mut last = usize::MAX;
+        for v in base..base + (block.rate * block.rate) as usize {
+            let Route::Record(record) = self.routes[v] else { continue };
+            if self.places[record as usize].grid.is_none() {
+                continue;
+            }
+            let key = self.places[record as usize].patch;
+            if last == usize::MAX || keys[last] != key {
+                last = keys.iter().position(|&k| k == key).unwrap_or_else(|| {
+                    keys.push(key);
+                    keys.len() - 1
+                });
+            }
+            group.push((last as u32, v as u32));
+        }
+        starts.clear();
+        starts.resize(keys.len() + 1, 0u32);
+        for &(g, _) in group.iter() {
+            starts[g as usize + 1] += 1;
+        }
+        for g in 0..keys.len() {
+            starts[g + 1] += starts[g];
+        }
+        sorted.clear();
+        sorted.resize(group.len(), 0u32);
+        let mut next = starts.clone();
+        for &(g, v) in group.iter() {
+            sorted[next[g as usize] as usize] = v;
+            next[g as usize] += 1;
+        }
+        for g in 0..keys.len() {
+            let vertices = &sorted[starts[g] as usize..starts[g + 1] as usize];
+            if let Some(grid) = self.patch_grid(vertices, s, t) {
+                for &v in vertices {
+                    self.routes[v as usize] = Route::PatchGrid;
+                }
+                self.patch_grids.push(grid);
+            }
         }
     }
 
@@ -258,4 +263,15 @@ impl Evaluator {
             put(k, *x, c.normalize_or_zero());
         }
     }
+}
+
+/// [`Evaluator::block_patch_grids`]' buffers, kept across blocks.
+#[derive(Debug, Default)]
+pub(super) struct GridScratch {
+    s: Vec<f64>,
+    t: Vec<f64>,
+    keys: Vec<(u32, u32)>,
+    group: Vec<(u32, u32)>,
+    starts: Vec<u32>,
+    sorted: Vec<u32>,
 }

@@ -155,19 +155,7 @@ impl Evaluator {
         // stencil evaluators from the pool (their results do not depend on what they solved
         // before, so neither does the output on the thread count).
         let spans = self.record_spans(topo);
-        // Runs of consecutive spans of at most `CHUNK` vertices in all (no span is longer).
-        let mut chunks: Vec<&[std::ops::Range<usize>]> = Vec::new();
-        let (mut first, mut len) = (0, 0);
-        for (k, span) in spans.iter().enumerate() {
-            if len + span.len() > CHUNK {
-                chunks.push(&spans[first..k]);
-                (first, len) = (k, 0);
-            }
-            len += span.len();
-        }
-        if first < spans.len() {
-            chunks.push(&spans[first..]);
-        }
+        let chunks = chunks_of(&spans);
         let pool = std::sync::Mutex::new(std::mem::take(&mut self.pool));
         // The chunks' buffers are kept across calls too (no fresh pages per call).
         let spare = std::sync::Mutex::new(std::mem::take(&mut self.spare));
@@ -188,32 +176,37 @@ impl Evaluator {
         let mut fresh = Vec::new();
         for chunk in results {
             let chunk = chunk?;
-            self.places.extend_from_slice(&chunk.places);
-            let (records, ids) = (self.records.len() as u32, self.ids.len() as u32);
-            for &(vertex, record) in &chunk.assigned {
-                self.routes[vertex as usize] = Route::Record(records + record);
-            }
-            // The chunk's fresh stencils join the kept ones (a key an earlier chunk added
-            // takes that copy: the same weights).
-            fresh.clear();
-            for (k, &(key, at)) in chunk.fresh.iter().enumerate() {
-                let end = chunk.fresh.get(k + 1).map_or(chunk.weights.len(), |&(_, next)| next as usize);
-                let weights = &mut self.weights;
-                fresh.push(*self.stencil_index.entry(key).or_insert_with(|| {
-                    weights.extend_from_slice(&chunk.weights[at as usize..end]);
-                    (weights.len() - (end - at as usize)) as u32
-                }));
-            }
-            self.records.extend(chunk.records.iter().map(|r| Record {
-                ids: r.ids + ids,
-                weights: if r.table == FRESH { fresh[r.weights as usize] } else { r.weights },
-                table: if r.table == FRESH { NO_TABLE } else { r.table },
-                ..*r
-            }));
-            self.ids.extend_from_slice(&chunk.ids);
+            self.absorb(&chunk, &mut fresh);
             self.spare.push(chunk);
         }
         Ok(())
+    }
+
+    /// One chunk's records joined to the evaluator's (`fresh`: scratch).
+    pub(super) fn absorb(&mut self, chunk: &Chunk, fresh: &mut Vec<u32>) {
+        self.places.extend_from_slice(&chunk.places);
+        let (records, ids) = (self.records.len() as u32, self.ids.len() as u32);
+        for &(vertex, record) in &chunk.assigned {
+            self.routes[vertex as usize] = Route::Record(records + record);
+        }
+        // The chunk's fresh stencils join the kept ones (a key an earlier chunk added takes
+        // that copy: the same weights).
+        fresh.clear();
+        for (k, &(key, at)) in chunk.fresh.iter().enumerate() {
+            let end = chunk.fresh.get(k + 1).map_or(chunk.weights.len(), |&(_, next)| next as usize);
+            let weights = &mut self.weights;
+            fresh.push(*self.stencil_index.entry(key).or_insert_with(|| {
+                weights.extend_from_slice(&chunk.weights[at as usize..end]);
+                (weights.len() - (end - at as usize)) as u32
+            }));
+        }
+        self.records.extend(chunk.records.iter().map(|r| Record {
+            ids: r.ids + ids,
+            weights: if r.table == FRESH { fresh[r.weights as usize] } else { r.weights },
+            table: if r.table == FRESH { NO_TABLE } else { r.table },
+            ..*r
+        }));
+        self.ids.extend_from_slice(&chunk.ids);
     }
 
     /// The vertices that may take records, as ranges of at most [`CHUNK`] vertices, in order:
@@ -316,47 +309,9 @@ impl Evaluator {
                         let matrices = Arc::as_ptr(&patch.matrices) as usize;
                         let at = frame.to_patch(p);
                         let key = (matrices, patch.shape, at);
-                        let (weights, table) = match (self.stencil_index.get(&key), shared.get(&key)) {
-                            (Some(&w), _) => (w, NO_TABLE),
-                            (None, Some(&k)) => (k, FRESH),
-                            (None, None) => {
-                                let evaluator = evaluators
-                                    .stencils
-                                    .entry(matrices)
-                                    .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
-                                let stencil = evaluator.stencil(patch.shape, at)?;
-                                let k = out.fresh.len() as u32;
-                                out.fresh.push((key, out.weights.len() as u32));
-                                let pad = padded(stencil.position.len());
-                                for row in [&stencil.position, &stencil.du, &stencil.dv] {
-                                    out.weights.extend_from_slice(row);
-                                    out.weights.resize(out.weights.len() + pad - row.len(), 0.0);
-                                }
-                                shared.insert(key, k);
-                                (k, FRESH)
-                            }
-                        };
+                        let (weights, table) = self.stencil_weights(key, patch, evaluators, &mut shared, &mut out)?;
                         out.records.push(Record { level: level as u32, ids, len, weights, table, ju, jv });
-                        let grid = if level > 0 && len == 16 {
-                            match evaluators.grids.get(&(matrices, patch.shape)) {
-                                Some(&grid) => grid,
-                                None => {
-                                    let grid = bicubic_grid(&patch.matrices, patch.shape)
-                                        .map(|g| g.map(|k| k as u8))
-                                        .filter(|g| {
-                                            let evaluator = evaluators
-                                                .stencils
-                                                .entry(matrices)
-                                                .or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
-                                            tensor_weights_match(evaluator, patch.shape, g)
-                                        });
-                                    evaluators.grids.insert((matrices, patch.shape), grid);
-                                    grid
-                                }
-                            }
-                        } else {
-                            None
-                        };
+                        let grid = if level > 0 && len == 16 { bicubic_grid_of(patch, evaluators) } else { None };
                         out.places.push(Place { patch: (level as u32, f.index() as u32), at, grid });
                         done = true;
                         break;
@@ -369,6 +324,37 @@ impl Evaluator {
             }
         }
         Ok(out)
+    }
+
+    /// The weights of the stencil at `key` (matrices, shape, point in the patch's frame) of
+    /// `patch`: a kept stencil's (`NO_TABLE`), or one of the chunk's fresh ones (`FRESH`,
+    /// solved now unless `shared` has it already).
+    pub(super) fn stencil_weights(
+        &self,
+        key: (usize, usize, Dyadic),
+        patch: &subdiv_schemes::FoundPatch,
+        evaluators: &mut Evaluators,
+        shared: &mut HashMap<(usize, usize, Dyadic), u32>,
+        out: &mut Chunk,
+    ) -> Result<(u32, u32), TessError> {
+        if let Some(&w) = self.stencil_index.get(&key) {
+            return Ok((w, NO_TABLE));
+        }
+        if let Some(&k) = shared.get(&key) {
+            return Ok((k, FRESH));
+        }
+        let evaluator =
+            evaluators.stencils.entry(key.0).or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+        let stencil = evaluator.stencil(patch.shape, key.2)?;
+        let k = out.fresh.len() as u32;
+        out.fresh.push((key, out.weights.len() as u32));
+        let pad = padded(stencil.position.len());
+        for row in [&stencil.position, &stencil.du, &stencil.dv] {
+            out.weights.extend_from_slice(row);
+            out.weights.resize(out.weights.len() + pad - row.len(), 0.0);
+        }
+        shared.insert(key, k);
+        Ok((k, FRESH))
     }
 
     /// A general-route vertex on the current cage.
@@ -392,4 +378,37 @@ impl Evaluator {
         let [p, s, t] = dot3(points, ids, w);
         (p, r.ju[0] * s + r.ju[1] * t, r.jv[0] * s + r.jv[1] * t)
     }
+}
+
+/// The 4 × 4 grid of `patch` if its shape's sub-patch matrices are bicubic and its stencils
+/// are the tensor products over that grid (checked once per matrices and shape).
+fn bicubic_grid_of(patch: &subdiv_schemes::FoundPatch, evaluators: &mut Evaluators) -> Option<[u8; 16]> {
+    let matrices = Arc::as_ptr(&patch.matrices) as usize;
+    if let Some(&grid) = evaluators.grids.get(&(matrices, patch.shape)) {
+        return grid;
+    }
+    let grid = bicubic_grid(&patch.matrices, patch.shape).map(|g| g.map(|k| k as u8)).filter(|g| {
+        let evaluator =
+            evaluators.stencils.entry(matrices).or_insert_with(|| StencilEvaluator::new(patch.matrices.clone()));
+        tensor_weights_match(evaluator, patch.shape, g)
+    });
+    evaluators.grids.insert((matrices, patch.shape), grid);
+    grid
+}
+
+/// Runs of consecutive `spans` of at most [`CHUNK`] vertices in all (no span is longer).
+fn chunks_of(spans: &[std::ops::Range<usize>]) -> Vec<&[std::ops::Range<usize>]> {
+    let mut chunks = Vec::new();
+    let (mut first, mut len) = (0, 0);
+    for (k, span) in spans.iter().enumerate() {
+        if len + span.len() > CHUNK {
+            chunks.push(&spans[first..k]);
+            (first, len) = (k, 0);
+        }
+        len += span.len();
+    }
+    if first < spans.len() {
+        chunks.push(&spans[first..]);
+    }
+    chunks
 }

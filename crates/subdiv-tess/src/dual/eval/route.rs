@@ -1,6 +1,5 @@
 //! How each output vertex and each block is evaluated: the routes.
 
-
 /// How one output vertex is evaluated.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Route {
