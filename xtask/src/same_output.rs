@@ -22,7 +22,7 @@ const COMMANDS: [(&[&str], &str); 6] = [
     (&["tessellate"], "default.glb"),
     (&["tessellate", "--rate", "16"], "rate16.obj"),
     (&["tessellate", "--pixels", "4", "--camera", "0,-5,2,0,0,0,0,0,1,45", "--viewport", "1920,1080"], "pixels.glb"),
-    (&["tessellate", "--tolerance", "1e-2", "--relative"], "tolerance.glb"),
+    (&["tessellate", "--tolerance", "2e-2", "--relative"], "tolerance.glb"),
     (&["tessellate", "--method", "quadtree", "--tolerance", "1e-2", "--relative"], "quadtree.obj"),
     (&["eval", "--grid", "8"], "eval.csv"),
 ];
