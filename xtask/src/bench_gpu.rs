@@ -72,7 +72,7 @@ fn measure(gpu: &Gpu, adapter: &str, name: &str, mesh: &Mesh, rate: u32, frames:
     tess.tessellate_flat(&vec![rate; mesh.face_count()], &mut flat).map_err(|e| err(&e))?;
     let start = Instant::now();
     let plan = tess.evaluation_plan();
-    let mut on_gpu = GpuTessellation::new(gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default())
+    let on_gpu = GpuTessellation::new(gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default())
         .map_err(|e| err(&e))?;
     on_gpu.wait(gpu).map_err(|e| err(&e))?;
     let setup = start.elapsed().as_secs_f64();

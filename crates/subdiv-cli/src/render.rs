@@ -120,8 +120,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
     let gpu = Gpu::new(&GpuOptions::default())?;
     let renderer = Renderer::new(&gpu, &options)?;
     let eval_options = GpuEvalOptions { edges: args.wireframe, ..GpuEvalOptions::default() };
-    let mut surface =
-        GpuTessellation::new(&gpu, &tess.evaluation_plan(), &flat.indices, mesh.positions(), &eval_options)?;
+    let surface = GpuTessellation::new(&gpu, &tess.evaluation_plan(), &flat.indices, mesh.positions(), &eval_options)?;
     let cage = if args.cage { Some(GpuCage::upload(&gpu, &mesh)?) } else { None };
 
     let drawing = Instant::now();
@@ -170,10 +169,11 @@ fn numbered(output: &Path, frame: u32) -> PathBuf {
     output.with_file_name(format!("{stem}_{frame:04}.{extension}"))
 }
 
-/// The image as an RGB PNG, written atomically.
-fn write_png(path: &Path, image: &image::RgbaImage) -> Result<(), UserError> {
-    let rgb = image::DynamicImage::ImageRgba8(image.clone()).into_rgb8();
-    crate::plot::write_png(path, &rgb)
+/// The image as an RGB PNG, written atomically ([`subdiv::io::write_atomic`]).
+fn write_png(path: &Path, image: &subdiv_gpu::Image) -> Result<(), UserError> {
+    let png = image.encode_png().map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+    subdiv::io::write_atomic(path, |writer| writer.write_all(&png))?;
+    Ok(())
 }
 
 #[cfg(test)]

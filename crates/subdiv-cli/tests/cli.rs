@@ -395,7 +395,7 @@ fn render_writes_numbered_frames_and_rejects_bad_arguments() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written on bad input");
 
     // The rest draws: skipped (saying so) without an adapter, unless SUBDIV_REQUIRE_GPU=1.
-    if subdiv_gpu::Gpu::for_tests().is_none() {
+    if subdiv_testkit::gpu().is_none() {
         return;
     }
     let size = ["--size", "64,48"];

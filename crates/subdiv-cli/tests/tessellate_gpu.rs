@@ -16,7 +16,7 @@ fn vertices(obj: &str) -> Vec<[f64; 3]> {
 #[test]
 fn gpu_evaluation_writes_the_cpu_output() {
     // The adapter helper decides: skip without one, fail under SUBDIV_REQUIRE_GPU=1.
-    let Some(_gpu) = subdiv_gpu::Gpu::for_tests() else { return };
+    let Some(_gpu) = subdiv_testkit::gpu() else { return };
     let dir = tempfile::tempdir().unwrap();
     let run = |gpu: bool, name: &str| {
         let path = dir.path().join(name);

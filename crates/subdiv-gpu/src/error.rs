@@ -2,8 +2,8 @@
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum GpuError {
-    /// No adapter (Vulkan driver) was found.
-    #[error("no GPU adapter found (is a Vulkan driver installed? on Debian: mesa-vulkan-drivers): {0}")]
+    /// No adapter was found.
+    #[error("no GPU adapter found (is a driver installed? on Debian, Vulkan's: mesa-vulkan-drivers): {0}")]
     NoAdapter(String),
     /// The adapter refused to create a device.
     #[error("the adapter {adapter} refused a device: {reason}")]
@@ -12,6 +12,21 @@ pub enum GpuError {
         adapter: String,
         /// wgpu's message.
         reason: String,
+    },
+    /// A device whose limits are below [`Gpu::required_limits`](crate::Gpu::required_limits).
+    #[error(
+        "the device on {adapter} has {limit} = {available}, subdiv-gpu needs {required} \
+         (request subdiv_gpu::Gpu::required_limits() or better)"
+    )]
+    Limit {
+        /// The adapter's name.
+        adapter: String,
+        /// The limit's name, as in [`wgpu::Limits`].
+        limit: &'static str,
+        /// What subdiv-gpu needs.
+        required: u64,
+        /// What the device has.
+        available: u64,
     },
     /// An index past the tessellation's vertices.
     #[error("index {index} names no vertex (there are {vertices})")]

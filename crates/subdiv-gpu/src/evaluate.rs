@@ -26,10 +26,18 @@
 
 use glam::{DVec3, Vec3};
 use hashbrown::HashMap;
-use subdiv_tess::dual::{EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_KIND_SHIFT, check_cage};
+use subdiv_tess::TessError;
+use subdiv_tess::dual::{EvaluationPlan, PlanEntry, check_cage};
 use wgpu::util::DeviceExt;
 
 use crate::{Gpu, GpuError};
+
+// The entries' encoding in `evaluate.wgsl`: `kind << KIND_SHIFT | record`, the record numbered
+// within its range.
+const KIND_SHIFT: u32 = 30;
+const KIND_BLOCK: u32 = 0;
+const KIND_BICUBIC: u32 = 1;
+const KIND_GENERAL: u32 = 2;
 
 /// Invocations per workgroup of both shaders.
 const WORKGROUP: u32 = 64;
@@ -190,11 +198,13 @@ impl GpuTessellation {
         cage: &[DVec3],
         options: &GpuEvalOptions,
     ) -> Result<Self, GpuError> {
-        check_cage(plan.cage_len as usize, cage)?;
+        // A plan from elsewhere may break its rules: checked before anything indexes it.
+        plan.validate().map_err(TessError::from)?;
+        check_cage(plan.cage_len(), cage)?;
         // Every combination over the cage itself (composed in f64): f32 refined points would
         // carry errors of the model's size that small patches' tangents magnify.
         let plan = &*plan.over_cage();
-        let vertex_count = plan.vertices.len();
+        let vertex_count = plan.vertex_count();
         if let Some(&bad) = indices.iter().find(|&&i| i as usize >= vertex_count) {
             return Err(GpuError::Indices { index: bad, vertices: vertex_count });
         }
@@ -305,7 +315,7 @@ impl GpuTessellation {
         });
         let this = Self {
             edges,
-            cage_len: plan.cage_len as usize,
+            cage_len: plan.cage_len(),
             origin,
             points,
             vertices,
@@ -315,58 +325,108 @@ impl GpuTessellation {
             pipeline: evaluate_pipeline,
             dispatches: evaluate,
         };
-        this.write_cage(gpu, cage);
-        this.dispatch(gpu);
+        this.write_cage(&gpu.queue, cage);
+        this.submit(gpu);
         scopes.pop()?;
         Ok(this)
     }
 
     /// The animation path: a new cage (one finite position per control point), evaluated on
-    /// the GPU; the vertex buffer holds the new surface when the queue gets to it. Indices and
-    /// stencil data stay.
+    /// the GPU and submitted; the vertex buffer holds the new surface when the queue gets to
+    /// it. Indices and stencil data stay. [`write_control_points`](Self::write_control_points)
+    /// and [`record`](Self::record) do the same in the caller's submission.
     ///
     /// # Errors
     /// [`GpuError::Tessellation`] with [`TessError::CageLength`](subdiv_tess::TessError::CageLength)
     /// or [`TessError::CagePosition`](subdiv_tess::TessError::CagePosition).
-    pub fn update_control_points(&mut self, gpu: &Gpu, cage: &[Vec3]) -> Result<(), GpuError> {
-        let wide: Vec<DVec3> = cage.iter().map(|p| p.as_dvec3()).collect();
-        self.update_control_points_f64(gpu, &wide)
+    pub fn update_control_points(&self, gpu: &Gpu, cage: &[Vec3]) -> Result<(), GpuError> {
+        self.write_control_points(&gpu.queue, cage)?;
+        self.submit(gpu);
+        Ok(())
     }
 
     /// As [`update_control_points`](Self::update_control_points), from f64 positions.
     ///
     /// # Errors
     /// As [`update_control_points`](Self::update_control_points).
-    pub fn update_control_points_f64(&mut self, gpu: &Gpu, cage: &[DVec3]) -> Result<(), GpuError> {
-        check_cage(self.cage_len, cage)?;
-        self.write_cage(gpu, cage);
-        self.dispatch(gpu);
+    pub fn update_control_points_f64(&self, gpu: &Gpu, cage: &[DVec3]) -> Result<(), GpuError> {
+        self.write_control_points_f64(&gpu.queue, cage)?;
+        self.submit(gpu);
         Ok(())
     }
 
-    /// Writes the cage, relative to the centre, into the control-point buffer.
-    fn write_cage(&self, gpu: &Gpu, cage: &[DVec3]) {
-        let data: Vec<[f32; 4]> = cage.iter().map(|p| (*p - self.origin).as_vec3().extend(1.0).to_array()).collect();
-        if !data.is_empty() {
-            gpu.queue.write_buffer(&self.points, 0, bytemuck::cast_slice(&data));
+    /// Checks a new cage and writes it into the control-point buffer with
+    /// [`Queue::write_buffer`](wgpu::Queue::write_buffer): nothing is evaluated until
+    /// [`record`](Self::record)ed commands run. wgpu applies the write at the queue's next
+    /// submission, before that submission's command buffers, so the order is: write, record
+    /// into an encoder, submit. Two writes before one submission: the last one wins.
+    ///
+    /// # Errors
+    /// As [`update_control_points`](Self::update_control_points); nothing is written then.
+    pub fn write_control_points(&self, queue: &wgpu::Queue, cage: &[Vec3]) -> Result<(), GpuError> {
+        let wide: Vec<DVec3> = cage.iter().map(|p| p.as_dvec3()).collect();
+        self.write_control_points_f64(queue, &wide)
+    }
+
+    /// As [`write_control_points`](Self::write_control_points), from f64 positions.
+    ///
+    /// # Errors
+    /// As [`update_control_points`](Self::update_control_points); nothing is written then.
+    pub fn write_control_points_f64(&self, queue: &wgpu::Queue, cage: &[DVec3]) -> Result<(), GpuError> {
+        check_cage(self.cage_len, cage)?;
+        self.write_cage(queue, cage);
+        Ok(())
+    }
+
+    /// Records the evaluation into the caller's `encoder`: one compute pass with one dispatch
+    /// per vertex range ([`dispatch_count`](Self::dispatch_count)), which refills the vertex
+    /// buffer from the control-point buffer. Commands recorded after it in the same encoder
+    /// (a render pass drawing [`vertex_buffer`](Self::vertex_buffer), a copy) see the new
+    /// vertices: wgpu orders the passes' buffer uses.
+    ///
+    /// ```no_run
+    /// # fn frame(gpu: &subdiv_gpu::Gpu, surface: &subdiv_gpu::GpuTessellation, cage: &[glam::Vec3])
+    /// #     -> Result<(), subdiv_gpu::GpuError> {
+    /// surface.write_control_points(&gpu.queue, cage)?;
+    /// let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    /// surface.record(&mut encoder);
+    /// // … the application's render pass, drawing surface.vertex_buffer() …
+    /// gpu.queue.submit([encoder.finish()]);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn record(&self, encoder: &mut wgpu::CommandEncoder) {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("subdiv evaluate"),
+            timestamp_writes: None,
+        });
+        self.record_in_pass(&mut pass);
+    }
+
+    /// Records the evaluation's dispatches into the caller's compute `pass` (as
+    /// [`record`](Self::record), without a pass of its own). It sets the pass's pipeline and
+    /// bind group 0: dispatches of the caller's that follow set their own.
+    pub fn record_in_pass(&self, pass: &mut wgpu::ComputePass<'_>) {
+        pass.set_pipeline(&self.pipeline);
+        for d in &self.dispatches {
+            pass.set_bind_group(0, &d.bind_group, &[]);
+            pass.dispatch_workgroups(d.groups[0], d.groups[1], 1);
         }
     }
 
-    /// Records and submits the refinement and evaluation dispatches.
-    fn dispatch(&self, gpu: &Gpu) {
+    /// Writes the cage, relative to the centre, into the control-point buffer.
+    fn write_cage(&self, queue: &wgpu::Queue, cage: &[DVec3]) {
+        let data: Vec<[f32; 4]> = cage.iter().map(|p| (*p - self.origin).as_vec3().extend(1.0).to_array()).collect();
+        if !data.is_empty() {
+            queue.write_buffer(&self.points, 0, bytemuck::cast_slice(&data));
+        }
+    }
+
+    /// Records the evaluation into an encoder of its own and submits it.
+    fn submit(&self, gpu: &Gpu) {
         let mut encoder =
             gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("subdiv evaluate") });
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("subdiv evaluate"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(&self.pipeline);
-            for d in &self.dispatches {
-                pass.set_bind_group(0, &d.bind_group, &[]);
-                pass.dispatch_workgroups(d.groups[0], d.groups[1], 1);
-            }
-        }
+        self.record(&mut encoder);
         gpu.queue.submit([encoder.finish()]);
     }
 
@@ -489,18 +549,19 @@ fn lcm(a: u64, b: u64) -> u64 {
 /// each with its own records, patches and weights (shared ones copied once per range).
 fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
     // The most one vertex can add to any buffer: a record, a patch, its weights.
-    let widest = plan.general.iter().map(|g| u64::from(g.len)).max().unwrap_or(16).max(16);
+    let widest = plan.general().iter().map(|g| u64::from(g.len)).max().unwrap_or(16).max(16);
     let per_vertex = (12 * widest).max(32);
     let reserve = per_vertex * step as u64;
     let output = |r: &Range| VERTEX_BYTES * u64::from(r.count);
     let mut ranges = Vec::new();
     let mut range = Range::default();
     let (mut patches, mut weights) = (HashMap::new(), HashMap::new());
-    // A block's vertices are consecutive: the last block taken is the only one to look for.
-    let mut last_block: Option<usize> = None;
-    let n = plan.vertices.len();
+    // A block's vertices are consecutive: the last block taken (by its base) is the only one
+    // to look for.
+    let mut last_block: Option<u32> = None;
+    let mut entries = plan.entries().peekable();
     let mut v = 0;
-    while v < n {
+    while entries.peek().is_some() {
         if range.count > 0
             && (range.largest() + reserve > budget || output(&range) + VERTEX_BYTES * step as u64 > budget)
         {
@@ -510,29 +571,24 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
             patches.clear();
             weights.clear();
         }
-        for v in v..(v + step).min(n) {
-            let entry = plan.vertices[v];
-            let index = (entry & ((1 << PLAN_KIND_SHIFT) - 1)) as usize;
-            let kind = entry >> PLAN_KIND_SHIFT;
+        for entry in entries.by_ref().take(step) {
             let mut patch = |at: u32, len: u32, range: &mut Range| {
                 *patches.entry(at).or_insert_with(|| {
                     let local = range.patches.len() as u32;
-                    range.patches.extend_from_slice(&plan.points[at as usize..(at + len) as usize]);
+                    range.patches.extend_from_slice(&plan.points()[at as usize..(at + len) as usize]);
                     local
                 })
             };
-            let local = match kind {
-                PLAN_BLOCK => {
-                    if last_block != Some(index) {
-                        let b = plan.blocks[index];
+            let (kind, local) = match entry {
+                PlanEntry::Block(b) => {
+                    if last_block != Some(b.base) {
                         let points = patch(b.points, 16, &mut range);
                         range.blocks.push(GpuBlock { base: b.base, rate: b.rate, points, pad: 0 });
-                        last_block = Some(index);
+                        last_block = Some(b.base);
                     }
-                    range.blocks.len() as u32 - 1
+                    (KIND_BLOCK, range.blocks.len() as u32 - 1)
                 }
-                PLAN_BICUBIC => {
-                    let b = plan.bicubic[index];
+                PlanEntry::Bicubic(b) => {
                     let points = patch(b.points, 16, &mut range);
                     range.bicubic.push(GpuBicubic {
                         points,
@@ -542,14 +598,13 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
                         ju: b.ju.map(|x| x as f32),
                         jv: b.jv.map(|x| x as f32),
                     });
-                    range.bicubic.len() as u32 - 1
+                    (KIND_BICUBIC, range.bicubic.len() as u32 - 1)
                 }
-                _ => {
-                    let g = plan.general[index];
+                PlanEntry::General(g) => {
                     let points = patch(g.points, g.len, &mut range);
                     let w = *weights.entry(g.weights).or_insert_with(|| {
                         let local = range.weights.len() as u32;
-                        let rows = &plan.weights[g.weights as usize..(g.weights + 3 * g.len) as usize];
+                        let rows = &plan.weights()[g.weights as usize..(g.weights + 3 * g.len) as usize];
                         range.weights.extend(rows.iter().map(|&x| x as f32));
                         local
                     });
@@ -561,13 +616,13 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
                         ju: g.ju.map(|x| x as f32),
                         jv: g.jv.map(|x| x as f32),
                     });
-                    range.general.len() as u32 - 1
+                    (KIND_GENERAL, range.general.len() as u32 - 1)
                 }
             };
-            range.entries.push(kind << PLAN_KIND_SHIFT | local);
+            range.entries.push(kind << KIND_SHIFT | local);
             range.count += 1;
+            v += 1;
         }
-        v += step;
     }
     if range.count > 0 {
         ranges.push(range);

@@ -571,7 +571,7 @@ impl Renderer {
     /// multiple of 3 (triangles) or 2 (lines), the wireframe is asked for without lines, or the
     /// view is degenerate; [`GpuError::Wgpu`] for an error wgpu reports (e.g. a buffer without
     /// the `VERTEX` or `INDEX` usage); [`GpuError::Readback`] if mapping the image fails.
-    pub fn render(&self, gpu: &Gpu, scene: &Scene<'_>) -> Result<image::RgbaImage, GpuError> {
+    pub fn render(&self, gpu: &Gpu, scene: &Scene<'_>) -> Result<Image, GpuError> {
         let options = &self.options;
         scene.check(options)?;
         let frame = scene.view.frame()?;
@@ -665,8 +665,93 @@ impl Renderer {
         scopes.pop()?;
         polled?;
         let pixels = pixels?;
-        image::RgbaImage::from_raw(options.width, options.height, pixels)
-            .ok_or_else(|| GpuError::Readback("the image has the wrong length; please report".to_string()))
+        if pixels.len() != 4 * options.width as usize * options.height as usize {
+            return Err(GpuError::Readback("the image has the wrong length; please report".to_string()));
+        }
+        Ok(Image { width: options.width, height: options.height, pixels })
+    }
+}
+
+/// An image read back by [`Renderer::render`]: `width × height` pixels of 4 bytes (RGBA, 8 bits
+/// each, sRGB-encoded), rows from the top, no padding. The renderer draws over an opaque
+/// background, so the colour channels are final; alpha is what blending left there.
+///
+/// With the `png` feature, [`encode_png`](Self::encode_png) and
+/// [`into_rgba_image`](Self::into_rgba_image) hand it to the `image` crate.
+#[derive(Clone, PartialEq, Eq)]
+pub struct Image {
+    width: u32,
+    height: u32,
+    pixels: Vec<u8>,
+}
+
+impl Image {
+    /// The width in pixels.
+    pub fn width(&self) -> u32 {
+        self.width
+    }
+
+    /// The height in pixels.
+    pub fn height(&self) -> u32 {
+        self.height
+    }
+
+    /// `(width, height)`.
+    pub fn dimensions(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The pixels: `4 · width · height` bytes, RGBA per pixel, rows from the top.
+    pub fn pixels(&self) -> &[u8] {
+        &self.pixels
+    }
+
+    /// The pixels (as [`pixels`](Self::pixels)), without a copy.
+    pub fn into_pixels(self) -> Vec<u8> {
+        self.pixels
+    }
+
+    /// The pixel at column `x` and row `y` (from the top) as RGBA, `None` outside the image.
+    pub fn pixel(&self, x: u32, y: u32) -> Option<[u8; 4]> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        let at = 4 * (y as usize * self.width as usize + x as usize);
+        let p = &self.pixels[at..at + 4];
+        Some([p[0], p[1], p[2], p[3]])
+    }
+
+    /// The image as the `image` crate's RGBA image, without a copy.
+    #[cfg(feature = "png")]
+    pub fn into_rgba_image(self) -> image::RgbaImage {
+        image::RgbaImage::from_raw(self.width, self.height, self.pixels)
+            .expect("an Image holds 4 bytes per pixel (made only by the renderer)")
+    }
+
+    /// The image encoded as an 8-bit RGB PNG, in memory (alpha is dropped: the colours are
+    /// already composed over the opaque background). Writing it to a file is the caller's.
+    ///
+    /// # Errors
+    /// The encoder's error (none is expected for an image in memory).
+    #[cfg(feature = "png")]
+    pub fn encode_png(&self) -> image::ImageResult<Vec<u8>> {
+        let rgb: Vec<u8> = self.pixels.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        let mut png = Vec::new();
+        image::ImageEncoder::write_image(
+            image::codecs::png::PngEncoder::new(&mut png),
+            &rgb,
+            self.width,
+            self.height,
+            image::ExtendedColorType::Rgb8,
+        )?;
+        Ok(png)
+    }
+}
+
+impl std::fmt::Debug for Image {
+    /// The size only (the pixels would fill a screen).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Image").field("width", &self.width).field("height", &self.height).finish_non_exhaustive()
     }
 }
 

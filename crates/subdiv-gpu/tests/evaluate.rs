@@ -8,6 +8,7 @@ use glam::{DVec3, Vec3};
 use subdiv_gpu::{Gpu, GpuError, GpuEvalOptions, GpuTessellation, RateCache};
 use subdiv_mesh::{Mesh, shapes};
 use subdiv_schemes::Builtin;
+use subdiv_tess::dual::{PlanError, PlanItem};
 use subdiv_tess::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, TessError, TessMesh};
 
 fn diagonal(mesh: &Mesh) -> f64 {
@@ -52,8 +53,7 @@ fn case(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> Case {
 fn check(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     let Case { mut tess, plan, flat } = case(builtin, mesh, rates);
     let diag = diagonal(mesh);
-    let mut on_gpu =
-        GpuTessellation::new(gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
+    let on_gpu = GpuTessellation::new(gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
     assert_eq!(on_gpu.vertex_count() as usize, flat.vertices.len() / 6);
     assert_eq!(on_gpu.index_count() as usize, flat.indices.len());
     let (dp, dn) = compare(&on_gpu.read_vertices(gpu).unwrap(), tess.mesh(), diag);
@@ -63,7 +63,15 @@ fn check(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
         let cage = twisted(mesh.positions(), frame);
         let cpu = tess.update_cage(&cage).unwrap();
         let cage32: Vec<Vec3> = cage.iter().map(|p| p.as_vec3()).collect();
-        on_gpu.update_control_points(gpu, &cage32).unwrap();
+        if frame == 2 {
+            // An application's frame: the write and the evaluation in its own submission.
+            on_gpu.write_control_points(&gpu.queue, &cage32).unwrap();
+            let mut encoder = gpu.device.create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+            on_gpu.record(&mut encoder);
+            gpu.queue.submit([encoder.finish()]);
+        } else {
+            on_gpu.update_control_points(gpu, &cage32).unwrap();
+        }
         let (dp, dn) = compare(&on_gpu.read_vertices(gpu).unwrap(), cpu, diag);
         assert!(dp <= 1e-5 && dn <= 1e-5, "{name}, frame {frame}: position {dp:e}, normal {dn:e}");
     }
@@ -71,7 +79,7 @@ fn check(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
 
 #[test]
 fn procedural_meshes_match_the_cpu() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     eprintln!("adapter: {}", gpu.adapter_name());
     for (builtin, name, soup) in [
         (Builtin::CatmullClark, "cube", shapes::cube()),
@@ -93,7 +101,7 @@ fn procedural_meshes_match_the_cpu() {
 
 #[test]
 fn shared_meshes_match_the_cpu() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     for (file, builtin, rates) in [
         ("opensubdiv/catmark_cube.obj", Builtin::CatmullClark, [4, 8, 32]),
         ("keenan/spot_control_mesh.obj", Builtin::CatmullClark, [2, 8, 16]),
@@ -113,7 +121,7 @@ fn shared_meshes_match_the_cpu() {
 /// bit (each vertex is computed alone, from the same data).
 #[test]
 fn split_buffers_give_the_same_bits() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let mesh = Mesh::build(shapes::default_model()).unwrap();
     let Case { plan, flat, .. } = case(Builtin::CatmullClark, &mesh, &vec![6; mesh.face_count()]);
     let whole = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
@@ -125,7 +133,7 @@ fn split_buffers_give_the_same_bits() {
 
 #[test]
 fn the_rate_cache_switches_configurations() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let mesh = Mesh::build(shapes::ngon_prism(5)).unwrap();
     let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
     let mut cache = RateCache::new(2);
@@ -155,7 +163,7 @@ fn the_rate_cache_switches_configurations() {
 
 #[test]
 fn bad_input_is_a_typed_error() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let mesh = Mesh::build(shapes::cube()).unwrap();
     let Case { plan, flat, .. } = case(Builtin::CatmullClark, &mesh, &vec![2; mesh.face_count()]);
     let options = GpuEvalOptions::default();
@@ -164,11 +172,15 @@ fn bad_input_is_a_typed_error() {
         GpuTessellation::new(&gpu, &plan, &flat.indices, short, &options),
         Err(GpuError::Tessellation(TessError::CageLength { expected: 8, got: 3 }))
     ));
-    let mut t = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &options).unwrap();
+    let t = GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &options).unwrap();
     let mut cage: Vec<Vec3> = mesh.positions().iter().map(|p| p.as_vec3()).collect();
     cage[5].y = f32::NAN;
     assert!(matches!(
         t.update_control_points(&gpu, &cage),
+        Err(GpuError::Tessellation(TessError::CagePosition { vertex: 5, .. }))
+    ));
+    assert!(matches!(
+        t.write_control_points(&gpu.queue, &cage),
         Err(GpuError::Tessellation(TessError::CagePosition { vertex: 5, .. }))
     ));
     let bad = [0, 1, u32::MAX];
@@ -176,4 +188,35 @@ fn bad_input_is_a_typed_error() {
         GpuTessellation::new(&gpu, &plan, &bad, mesh.positions(), &options),
         Err(GpuError::Indices { index: u32::MAX, .. })
     ));
+}
+
+/// A plan from elsewhere that breaks its rules is refused before anything indexes it (the
+/// upload composes and splits the plan, and the shader would read past its buffers).
+#[test]
+fn malformed_plans_are_refused_by_the_upload() {
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
+    let mesh = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    let Case { plan, flat, .. } = case(Builtin::CatmullClark, &mesh, &vec![3; mesh.face_count()]);
+    let options = GpuEvalOptions::default();
+    let upload = |change: &dyn Fn(&mut subdiv_tess::dual::PlanParts)| {
+        let mut parts = plan.clone().into_parts();
+        change(&mut parts);
+        let broken = EvaluationPlan::from_parts_unchecked(parts).expect("entries that name records");
+        GpuTessellation::new(&gpu, &broken, &flat.indices, mesh.positions(), &options)
+    };
+    let past = plan.point_count() as u32;
+    match upload(&|p| p.points[4] = past) {
+        Err(GpuError::Tessellation(TessError::Plan(PlanError::OutOfRange { at: PlanItem::PatchPoint(4), .. }))) => {}
+        other => panic!("a point index past the points: {other:?}"),
+    }
+    match upload(&|p| p.weights[0] = f64::INFINITY) {
+        Err(GpuError::Tessellation(TessError::Plan(PlanError::NonFinite { at: PlanItem::Weight(0), .. }))) => {}
+        other => panic!("an infinite weight: {other:?}"),
+    }
+    match upload(&|p| p.general[2].len = 1 << 20) {
+        Err(GpuError::Tessellation(TessError::Plan(PlanError::PastEnd { at: PlanItem::General(2), .. }))) => {}
+        other => panic!("a stencil past its patch: {other:?}"),
+    }
+    // The plan itself uploads.
+    assert!(GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &options).is_ok());
 }

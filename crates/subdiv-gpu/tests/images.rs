@@ -45,13 +45,19 @@ fn tessellate(relative: &str) -> Option<Tessellated> {
     Some(Tessellated { cage: mesh.positions().to_vec(), plan: tess.evaluation_plan(), flat })
 }
 
+/// A render as the `image` crate's image (for its pixel access and PNG files).
+fn rgba(image: subdiv_gpu::Image) -> RgbaImage {
+    let (width, height) = image.dimensions();
+    RgbaImage::from_raw(width, height, image.into_pixels()).expect("4 bytes per pixel")
+}
+
 /// The surface evaluated on the GPU, drawn.
 fn render(gpu: &Gpu, t: &Tessellated, view: View, wireframe: bool) -> RgbaImage {
     let options = RenderOptions::default().with_size(WIDTH, HEIGHT).with_wireframe(wireframe);
     let renderer = Renderer::new(gpu, &options).expect("a renderer");
     let eval = GpuEvalOptions { edges: wireframe, ..GpuEvalOptions::default() };
     let surface = GpuTessellation::new(gpu, &t.plan, &t.flat.indices, &t.cage, &eval).expect("the plan uploads");
-    renderer.render(gpu, &surface.scene(view)).expect("the scene renders")
+    rgba(renderer.render(gpu, &surface.scene(view)).expect("the scene renders"))
 }
 
 /// The CPU's values uploaded and drawn: the GPU evaluation must look the same.
@@ -59,7 +65,7 @@ fn render_cpu(gpu: &Gpu, t: &Tessellated, view: View) -> RgbaImage {
     let options = RenderOptions::default().with_size(WIDTH, HEIGHT);
     let renderer = Renderer::new(gpu, &options).expect("a renderer");
     let mesh = GpuMesh::upload(gpu, &t.flat).expect("the mesh uploads");
-    renderer.render(gpu, &mesh.scene(view)).expect("the scene renders")
+    rgba(renderer.render(gpu, &mesh.scene(view)).expect("the scene renders"))
 }
 
 /// The mean absolute difference over RGB as a fraction of 255.
@@ -153,7 +159,7 @@ fn compare(name: &str, image: &RgbaImage) {
 #[test]
 fn catmark_cube_shaded_and_wireframe() {
     let Some(t) = tessellate("opensubdiv/catmark_cube.obj") else { return };
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let view = camera([3.3, 2.7, 4.7], 2.0, 10.0);
     let shaded = render(&gpu, &t, view, false);
     check_structure("catmark_cube", &shaded);
@@ -178,7 +184,7 @@ fn catmark_cube_shaded_and_wireframe() {
 #[test]
 fn spot_shaded() {
     let Some(t) = tessellate("keenan/spot_control_mesh.obj") else { return };
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let view = View { target: Vec3::new(0.0, 0.1, 0.15), ..camera([3.2, 1.9, -2.6], 2.0, 7.5) };
     let image = render(&gpu, &t, view, false);
     check_structure("spot_control_mesh", &image);

@@ -3,7 +3,7 @@
 //! and bad scenes are typed errors after which the renderer still works.
 
 use glam::Vec3;
-use subdiv_gpu::{Gpu, GpuError, GpuMesh, Lines, RenderOptions, Renderer, Scene, View};
+use subdiv_gpu::{GpuError, GpuMesh, Lines, RenderOptions, Renderer, Scene, View};
 use subdiv_mesh::{Mesh, shapes};
 use subdiv_schemes::Builtin;
 use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
@@ -28,7 +28,7 @@ fn framing(flat: &FlatMesh) -> View {
 
 #[test]
 fn raw_buffers_draw_like_an_uploaded_mesh_and_frames_move() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let (mut tess, mesh, flat) = cube(6);
     let renderer = Renderer::new(&gpu, &options().with_wireframe(true)).unwrap();
     let uploaded = GpuMesh::upload_with_edges(&gpu, &flat).unwrap();
@@ -70,7 +70,7 @@ fn raw_buffers_draw_like_an_uploaded_mesh_and_frames_move() {
 
 #[test]
 fn bad_scenes_are_errors_and_the_renderer_survives_them() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let (_, _, flat) = cube(3);
     let renderer = Renderer::new(&gpu, &options()).unwrap();
     let mesh = GpuMesh::upload(&gpu, &flat).unwrap();
@@ -120,7 +120,7 @@ fn bad_scenes_are_errors_and_the_renderer_survives_them() {
 
 #[test]
 fn the_cage_is_drawn_in_orange() {
-    let Some(gpu) = Gpu::for_tests() else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
     let (_, mesh, flat) = cube(4);
     let renderer = Renderer::new(&gpu, &options()).unwrap();
     let surface = GpuMesh::upload(&gpu, &flat).unwrap();
@@ -130,7 +130,39 @@ fn the_cage_is_drawn_in_orange() {
     let view = View::framing(lo, hi, options().aspect());
     let plain = renderer.render(&gpu, &surface.scene(view)).unwrap();
     let caged = renderer.render(&gpu, &Scene { cage: Some(cage.lines()), ..surface.scene(view) }).unwrap();
-    let orange = |image: &image::RgbaImage| image.pixels().filter(|p| p[0] > 200 && p[1] < 170 && p[2] < 80).count();
+    let orange = |image: &subdiv_gpu::Image| {
+        image.pixels().chunks_exact(4).filter(|p| p[0] > 200 && p[1] < 170 && p[2] < 80).count()
+    };
     assert_eq!(orange(&plain), 0);
     assert!(orange(&caged) > 40, "{} orange pixels", orange(&caged));
+}
+
+#[test]
+fn images_are_rows_of_rgba_bytes() {
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
+    let (_, _, flat) = cube(4);
+    let renderer = Renderer::new(&gpu, &options()).unwrap();
+    let mesh = GpuMesh::upload(&gpu, &flat).unwrap();
+    let image = renderer.render(&gpu, &mesh.scene(framing(&flat))).unwrap();
+    assert_eq!((image.width(), image.height()), (96, 72));
+    assert_eq!(image.pixels().len(), 4 * 96 * 72);
+    // Pixel (x, y) is bytes 4 (y w + x) ..; none outside.
+    let (x, y) = (48, 36);
+    let at = 4 * (y * 96 + x) as usize;
+    assert_eq!(image.pixel(x, y).unwrap().as_slice(), &image.pixels()[at..at + 4]);
+    assert_ne!(image.pixel(x, y), image.pixel(0, 0), "the centre shows the cube, the corner the background");
+    assert_eq!(image.pixel(96, 0), None);
+    assert_eq!(image.pixel(0, 72), None);
+    assert_eq!(format!("{image:?}"), "Image { width: 96, height: 72, .. }");
+
+    #[cfg(feature = "png")]
+    {
+        // The PNG holds the colours (alpha dropped); the image crate's image holds the bytes.
+        let png = image.encode_png().unwrap();
+        let decoded = image::load_from_memory_with_format(&png, image::ImageFormat::Png).unwrap();
+        assert_eq!(decoded.color(), image::ColorType::Rgb8);
+        let rgb: Vec<u8> = image.pixels().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+        assert_eq!(decoded.into_rgb8().into_raw(), rgb);
+        assert_eq!(image.clone().into_rgba_image().into_raw(), image.into_pixels());
+    }
 }

@@ -122,6 +122,10 @@ pub enum TessError {
         /// The position as given.
         value: String,
     },
+    /// An [`EvaluationPlan`](crate::EvaluationPlan) that breaks a rule of
+    /// [`validate`](crate::EvaluationPlan::validate).
+    #[error(transparent)]
+    Plan(#[from] crate::dual::PlanError),
     /// An internal invariant failed: please report.
     #[error("internal error (please report): {0}")]
     Internal(String),

@@ -12,7 +12,7 @@ use subdiv_mesh::{FaceId, Mesh, PolygonSoup, VertexId, shapes};
 use subdiv_schemes::{Builtin, RefineOptions};
 use subdiv_stencil::LimitEvaluator;
 use subdiv_tess::check::MeshDistance;
-use subdiv_tess::dual::{MAX_DUAL_RING_DEPTH, predicted_vertex_count, predicted_vertex_count_with_rings};
+use subdiv_tess::dual::{MAX_DUAL_RING_DEPTH, PlanEntry, predicted_vertex_count, predicted_vertex_count_with_rings};
 use subdiv_tess::rates::{ErrorRates, RingDepths};
 use subdiv_tess::{
     DualOptions, DualTessellator, FlatMesh, Parallelism, QuadtreeTessellator, TessError, TessMesh, Tolerance,
@@ -495,12 +495,15 @@ fn update_cage_equals_a_fresh_tessellation() {
 /// The plan's f64 evaluation against the tessellator's own, on a moved cage.
 fn check_plan(name: &str, tess: &DualTessellator, cage: &[DVec3], out: &TessMesh) {
     let plan = tess.evaluation_plan();
-    assert_eq!(plan.vertices.len(), out.positions.len(), "{name}: one entry per vertex");
+    assert_eq!(plan.vertex_count(), out.positions.len(), "{name}: one entry per vertex");
+    assert_eq!(plan.entries().len(), out.positions.len(), "{name}: one entry per vertex");
+    plan.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
     let (mut positions, mut normals) = (Vec::new(), Vec::new());
     plan.evaluate(cage, &mut positions, &mut normals);
     // Over the cage's own points: the same values.
     let flat = plan.over_cage();
-    assert!(flat.levels.is_empty() && flat.point_count() == cage.len(), "{name}: refined points left");
+    assert!(flat.levels().is_empty() && flat.point_count() == cage.len(), "{name}: refined points left");
+    flat.validate().unwrap_or_else(|e| panic!("{name}: over the cage: {e}"));
     let (mut flat_positions, mut flat_normals) = (Vec::new(), Vec::new());
     flat.evaluate(cage, &mut flat_positions, &mut flat_normals);
     positions.iter().zip(&flat_positions).chain(normals.iter().zip(&flat_normals)).for_each(|(a, b)| {
@@ -529,13 +532,20 @@ fn evaluation_plans_reproduce_the_tessellator() {
         let out = tess.tessellate(&rates).unwrap().clone();
         check_plan(name, &tess, mesh.positions(), &out);
         let plan = tess.evaluation_plan();
-        let kinds = |kind| plan.vertices.iter().filter(|&&e| e >> subdiv_tess::dual::PLAN_KIND_SHIFT == kind).count();
+        let mut kinds = [0; 3];
+        for entry in plan.entries() {
+            kinds[match entry {
+                PlanEntry::Block(_) => 0,
+                PlanEntry::Bicubic(_) => 1,
+                PlanEntry::General(_) => 2,
+            }] += 1;
+        }
         eprintln!(
             "{name}: {} vertices: {} block, {} bicubic, {} general; {} refined points",
-            plan.vertices.len(),
-            kinds(subdiv_tess::dual::PLAN_BLOCK),
-            kinds(subdiv_tess::dual::PLAN_BICUBIC),
-            kinds(subdiv_tess::dual::PLAN_GENERAL),
+            plan.vertex_count(),
+            kinds[0],
+            kinds[1],
+            kinds[2],
             plan.point_count() - mesh.vertex_count()
         );
         // The plan is linear in the cage: it follows a moved one, rings included.

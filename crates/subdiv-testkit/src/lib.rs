@@ -4,6 +4,9 @@
 //! variable `SUBDIV_SHARED`, which `.ci/run` sets. When it is set, the data must be there: a
 //! missing folder or file fails the test instead of skipping it. When it is unset, `../shared`
 //! beside the workspace is used if it exists, and otherwise the caller skips, saying so.
+//!
+//! With the `gpu` feature, [`gpu`] is the device of every GPU test: it skips the same way
+//! without an adapter, unless `SUBDIV_REQUIRE_GPU=1` (which `.ci/run` sets) makes that a failure.
 
 #![allow(clippy::print_stderr)]
 
@@ -31,6 +34,31 @@ pub fn shared_dir() -> Option<PathBuf> {
                 eprintln!("SUBDIV_SHARED is unset and ../shared is missing: shared-corpus checks not run");
                 None
             }
+        }
+    }
+}
+
+/// The device for a GPU test ([`subdiv_gpu::Gpu::new`] with the default options): `None`
+/// (after saying so on stderr) when there is none, unless `SUBDIV_REQUIRE_GPU=1`, where it
+/// panics instead, so that CI cannot pass by skipping.
+///
+/// ```no_run
+/// let Some(gpu) = subdiv_testkit::gpu() else { return };
+/// assert!(!gpu.adapter_name().is_empty());
+/// ```
+///
+/// # Panics
+/// When no device can be had and `SUBDIV_REQUIRE_GPU=1`.
+#[cfg(feature = "gpu")]
+pub fn gpu() -> Option<subdiv_gpu::Gpu> {
+    match subdiv_gpu::Gpu::new(&subdiv_gpu::GpuOptions::default()) {
+        Ok(gpu) => Some(gpu),
+        Err(e) if std::env::var("SUBDIV_REQUIRE_GPU").is_ok_and(|v| v == "1") => {
+            panic!("SUBDIV_REQUIRE_GPU=1 but {e}")
+        }
+        Err(e) => {
+            eprintln!("skipping a GPU test: {e}");
+            None
         }
     }
 }

@@ -69,7 +69,7 @@ use subdiv_stencil::FaceDomain;
 
 use self::eval::Evaluator;
 pub use self::plan::{
-    EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
+    EvaluationPlan, PlanBicubic, PlanBlock, PlanEntry, PlanError, PlanGeneral, PlanItem, PlanParts, PlanRecord,
 };
 use self::topology::{Builder, BuilderBuffers, Topology};
 use crate::par::{self, Parallelism};

@@ -6,31 +6,36 @@
 //! refined levels that some patches live on, each level a sparse combination of the one
 //! before), the **patches** (point indices, flattened: [`EvaluationPlan::points`]) and, per
 //! output vertex, which patch and which **combination** of its points (weights of the position
-//! and both derivatives) give it. Three kinds of vertices:
-//! - [`PLAN_BLOCK`]: a cell point `((i+½)/n, (j+½)/n)` of a regular bicubic face, found from the
-//!   vertex's offset in its face's block: the uniform bicubic B-spline there (no weights
-//!   stored).
-//! - [`PLAN_BICUBIC`]: any other point of a bicubic patch (on the cage or on a refined level),
-//!   at a stored `(s, t)` with the chain-rule rows that turn the patch's derivatives into the
-//!   face's.
-//! - [`PLAN_GENERAL`]: an exact stencil over its patch's points (extraordinary patches,
+//! and both derivatives) give it. Three kinds of vertices ([`PlanEntry`]):
+//! - [`PlanEntry::Block`]: a cell point `((i+½)/n, (j+½)/n)` of a regular bicubic face, found
+//!   from the vertex's offset in its face's block: the uniform bicubic B-spline there (no
+//!   weights stored).
+//! - [`PlanEntry::Bicubic`]: any other point of a bicubic patch (on the cage or on a refined
+//!   level), at a stored `(s, t)` with the chain-rule rows that turn the patch's derivatives
+//!   into the face's.
+//! - [`PlanEntry::General`]: an exact stencil over its patch's points (extraordinary patches,
 //!   boundaries, vertex limit points); points at the same place of the same patch shape share
 //!   their weights.
+//!
+//! A plan from [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan)
+//! meets every rule of [`EvaluationPlan::validate`]; one put together elsewhere
+//! ([`EvaluationPlan::from_parts`]) is checked against them, so that its evaluators index only
+//! what exists.
 
 use std::borrow::Cow;
+use std::fmt;
 use std::ops::Range;
 
 use glam::DVec3;
 use hashbrown::HashMap;
 
-/// Kind of an [`EvaluationPlan::vertices`] entry: a [`PlanBlock`] number below the kind bits.
-pub const PLAN_BLOCK: u32 = 0;
-/// Kind of an [`EvaluationPlan::vertices`] entry: a [`PlanBicubic`] number below the kind bits.
-pub const PLAN_BICUBIC: u32 = 1;
-/// Kind of an [`EvaluationPlan::vertices`] entry: a [`PlanGeneral`] number below the kind bits.
-pub const PLAN_GENERAL: u32 = 2;
-/// Where the kind sits in an [`EvaluationPlan::vertices`] entry: `kind << PLAN_KIND_SHIFT | index`.
-pub const PLAN_KIND_SHIFT: u32 = 30;
+// How `EvaluationPlan::vertices` encodes an entry: `kind << PLAN_KIND_SHIFT | index`.
+pub(crate) const PLAN_BLOCK: u32 = 0;
+pub(crate) const PLAN_BICUBIC: u32 = 1;
+pub(crate) const PLAN_GENERAL: u32 = 2;
+pub(crate) const PLAN_KIND_SHIFT: u32 = 30;
+/// The most records of one kind an entry can name.
+const MAX_RECORDS: usize = 1 << PLAN_KIND_SHIFT;
 
 /// The cell points of a regular bicubic face at rate `n`: output vertex `base + j · n + i` is
 /// the patch at `((i+½)/n, (j+½)/n)`.
@@ -77,8 +82,166 @@ pub struct PlanGeneral {
     pub jv: [f64; 2],
 }
 
+/// How one output vertex is evaluated: its record ([`EvaluationPlan::entries`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PlanEntry<'a> {
+    /// A cell point of a regular bicubic face; the vertex's offset from
+    /// [`PlanBlock::base`] gives its cell.
+    Block(&'a PlanBlock),
+    /// A point of a bicubic patch at a stored parameter.
+    Bicubic(&'a PlanBicubic),
+    /// A point on an exact stencil.
+    General(&'a PlanGeneral),
+}
+
+/// Which record gives an output vertex, by its number in [`PlanParts::blocks`],
+/// [`PlanParts::bicubic`] or [`PlanParts::general`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PlanRecord {
+    /// A number in [`PlanParts::blocks`].
+    Block(u32),
+    /// A number in [`PlanParts::bicubic`].
+    Bicubic(u32),
+    /// A number in [`PlanParts::general`].
+    General(u32),
+}
+
+/// An [`EvaluationPlan`]'s arrays, taken apart ([`EvaluationPlan::into_parts`]) to be stored
+/// or sent elsewhere, and put together again by [`EvaluationPlan::from_parts`], which checks
+/// them. Each field is what the accessor of the same name returns.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PlanParts {
+    /// [`EvaluationPlan::cage_len`].
+    pub cage_len: u32,
+    /// [`EvaluationPlan::levels`].
+    pub levels: Vec<Range<u32>>,
+    /// [`EvaluationPlan::refine_rows`].
+    pub refine_rows: Vec<u32>,
+    /// [`EvaluationPlan::refine_ids`].
+    pub refine_ids: Vec<u32>,
+    /// [`EvaluationPlan::refine_weights`].
+    pub refine_weights: Vec<f64>,
+    /// Per output vertex, its record ([`EvaluationPlan::entries`]).
+    pub vertices: Vec<PlanRecord>,
+    /// [`EvaluationPlan::blocks`].
+    pub blocks: Vec<PlanBlock>,
+    /// [`EvaluationPlan::bicubic`].
+    pub bicubic: Vec<PlanBicubic>,
+    /// [`EvaluationPlan::general`].
+    pub general: Vec<PlanGeneral>,
+    /// [`EvaluationPlan::points`].
+    pub points: Vec<u32>,
+    /// [`EvaluationPlan::weights`].
+    pub weights: Vec<f64>,
+}
+
+/// What part of an [`EvaluationPlan`] a [`PlanError`] is about.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[non_exhaustive]
+pub enum PlanItem {
+    /// The plan as a whole (how its arrays' lengths agree).
+    Plan,
+    /// A refined level: its number in [`EvaluationPlan::levels`].
+    Level(usize),
+    /// A refined point's row ([`EvaluationPlan::refine_rows`]), by its number among all
+    /// points (at least [`EvaluationPlan::cage_len`]).
+    RefinedPoint(usize),
+    /// An output vertex's entry.
+    Vertex(usize),
+    /// A block: its number in [`EvaluationPlan::blocks`].
+    Block(usize),
+    /// A bicubic point: its number in [`EvaluationPlan::bicubic`].
+    Bicubic(usize),
+    /// A stencil point: its number in [`EvaluationPlan::general`].
+    General(usize),
+    /// A patch's point index: its place in [`EvaluationPlan::points`].
+    PatchPoint(usize),
+    /// A stencil weight: its place in [`EvaluationPlan::weights`].
+    Weight(usize),
+}
+
+impl fmt::Display for PlanItem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Self::Plan => write!(f, "evaluation plan"),
+            Self::Level(k) => write!(f, "evaluation plan, level {k}"),
+            Self::RefinedPoint(p) => write!(f, "evaluation plan, refined point {p}"),
+            Self::Vertex(v) => write!(f, "evaluation plan, vertex {v}"),
+            Self::Block(k) => write!(f, "evaluation plan, block {k}"),
+            Self::Bicubic(k) => write!(f, "evaluation plan, bicubic point {k}"),
+            Self::General(k) => write!(f, "evaluation plan, stencil point {k}"),
+            Self::PatchPoint(k) => write!(f, "evaluation plan, patch point index {k}"),
+            Self::Weight(k) => write!(f, "evaluation plan, weight {k}"),
+        }
+    }
+}
+
+/// A rule of [`EvaluationPlan::validate`] that a plan breaks, with the item that breaks it.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum PlanError {
+    /// An index that names nothing: a record, a point, or a point outside the level a
+    /// refinement row may read.
+    #[error("{at}: {what} {index} is not in {}..{}", valid.start, valid.end)]
+    OutOfRange {
+        /// Where.
+        at: PlanItem,
+        /// What the index names (`"block"`, `"point"`, …).
+        what: &'static str,
+        /// The index.
+        index: u64,
+        /// The indices allowed.
+        valid: Range<u64>,
+    },
+    /// A record's run in one of the flat arrays ends past the array's end.
+    #[error("{at}: its {array} {start}..{end} run past the end ({len})")]
+    PastEnd {
+        /// Where.
+        at: PlanItem,
+        /// Which array (`"patch point indices"`, `"weights"`, `"cell vertices"`).
+        array: &'static str,
+        /// The run's start.
+        start: u64,
+        /// The run's end.
+        end: u64,
+        /// The array's length.
+        len: u64,
+    },
+    /// A length or an offset that disagrees with the rest of the plan.
+    #[error("{at}: {what} is {got}, expected {expected}")]
+    Length {
+        /// Where.
+        at: PlanItem,
+        /// What was counted or where something starts.
+        what: &'static str,
+        /// Its value.
+        got: u64,
+        /// What the plan's other arrays make it.
+        expected: u64,
+    },
+    /// A weight, parameter or chain-rule entry that is NaN or infinite.
+    #[error("{at}: {what} {value} is not finite")]
+    NonFinite {
+        /// Where.
+        at: PlanItem,
+        /// Which value (`"weight"`, `"s"`, `"ju"`, …).
+        what: &'static str,
+        /// The value.
+        value: f64,
+    },
+    /// A rule about the plan's shape (the text says which).
+    #[error("{at}: {rule}")]
+    Structure {
+        /// Where.
+        at: PlanItem,
+        /// The rule.
+        rule: &'static str,
+    },
+}
+
 /// Every output vertex of a tessellation as a linear function of the cage; made by
-/// [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan).
+/// [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan), or from
+/// checked [`PlanParts`] ([`from_parts`](Self::from_parts)).
 ///
 /// Points are numbered in one array: the cage's vertices first (`0..cage_len`), then each
 /// refined level's points ([`levels`](Self::levels), in order).
@@ -86,12 +249,16 @@ pub struct PlanGeneral {
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
 /// use subdiv_schemes::Builtin;
+/// use subdiv_tess::dual::PlanEntry;
 /// use subdiv_tess::{DualOptions, DualTessellator};
 ///
 /// let mesh = Mesh::build(shapes::ngon_prism(5))?;
 /// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())?;
 /// let out = tess.tessellate(&vec![4; mesh.face_count()])?.clone();
 /// let plan = tess.evaluation_plan();
+/// assert_eq!(plan.vertex_count(), out.positions.len());
+/// let stencils = plan.entries().filter(|e| matches!(e, PlanEntry::General(_))).count();
+/// assert!(stencils > 0); // the prism's caps are pentagons: their points need exact stencils
 /// let (mut positions, mut normals) = (Vec::new(), Vec::new());
 /// plan.evaluate(mesh.positions(), &mut positions, &mut normals);
 /// for (a, b) in positions.iter().zip(&out.positions) {
@@ -102,36 +269,399 @@ pub struct PlanGeneral {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct EvaluationPlan {
     /// The cage's vertex count: points `0..cage_len`.
-    pub cage_len: u32,
-    /// The refined levels' point ranges, in order; each level's points combine the points of
-    /// the level before.
-    pub levels: Vec<Range<u32>>,
+    pub(crate) cage_len: u32,
+    /// The refined levels' point ranges, in order.
+    pub(crate) levels: Vec<Range<u32>>,
     /// Refined point `cage_len + k` is `Σ refine_weights[e] · point[refine_ids[e]]` over
     /// `e ∈ refine_rows[k]..refine_rows[k + 1]` (empty when there are no refined levels).
-    pub refine_rows: Vec<u32>,
-    /// See [`refine_rows`](Self::refine_rows).
-    pub refine_ids: Vec<u32>,
-    /// See [`refine_rows`](Self::refine_rows).
-    pub refine_weights: Vec<f64>,
-    /// Per output vertex, `kind << PLAN_KIND_SHIFT | index` ([`PLAN_BLOCK`], [`PLAN_BICUBIC`],
-    /// [`PLAN_GENERAL`]).
-    pub vertices: Vec<u32>,
+    pub(crate) refine_rows: Vec<u32>,
+    /// See `refine_rows`.
+    pub(crate) refine_ids: Vec<u32>,
+    /// See `refine_rows`.
+    pub(crate) refine_weights: Vec<f64>,
+    /// Per output vertex, `kind << PLAN_KIND_SHIFT | index` (`PLAN_BLOCK`, `PLAN_BICUBIC`,
+    /// `PLAN_GENERAL`); private, so that the encoding can change.
+    pub(crate) vertices: Vec<u32>,
     /// Bicubic faces' cell grids.
-    pub blocks: Vec<PlanBlock>,
+    pub(crate) blocks: Vec<PlanBlock>,
     /// Other points of bicubic patches.
-    pub bicubic: Vec<PlanBicubic>,
+    pub(crate) bicubic: Vec<PlanBicubic>,
     /// Points on exact stencils.
-    pub general: Vec<PlanGeneral>,
+    pub(crate) general: Vec<PlanGeneral>,
     /// Patches' point indices.
-    pub points: Vec<u32>,
+    pub(crate) points: Vec<u32>,
     /// Exact stencils' weights.
-    pub weights: Vec<f64>,
+    pub(crate) weights: Vec<f64>,
 }
 
 impl EvaluationPlan {
+    /// The cage's vertex count: points `0..cage_len` are the cage's.
+    pub fn cage_len(&self) -> usize {
+        self.cage_len as usize
+    }
+
     /// The number of points: the cage's and every refined level's.
     pub fn point_count(&self) -> usize {
         self.cage_len as usize + self.refine_rows.len().saturating_sub(1)
+    }
+
+    /// The number of output vertices (one [entry](Self::entries) each).
+    pub fn vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// The refined levels' point ranges, in order, from `cage_len` to
+    /// [`point_count`](Self::point_count); each level's points combine the points of the level
+    /// before (the cage, for the first).
+    pub fn levels(&self) -> &[Range<u32>] {
+        &self.levels
+    }
+
+    /// Per refined point, where its row starts: refined point `cage_len + k` is
+    /// `Σ refine_weights[e] · point[refine_ids[e]]` over `e ∈ refine_rows[k]..refine_rows[k + 1]`
+    /// (empty when there are no refined levels, else one more than the refined points).
+    pub fn refine_rows(&self) -> &[u32] {
+        &self.refine_rows
+    }
+
+    /// The refinement rows' point numbers: see [`refine_rows`](Self::refine_rows).
+    pub fn refine_ids(&self) -> &[u32] {
+        &self.refine_ids
+    }
+
+    /// The refinement rows' weights: see [`refine_rows`](Self::refine_rows).
+    pub fn refine_weights(&self) -> &[f64] {
+        &self.refine_weights
+    }
+
+    /// Bicubic faces' cell grids.
+    pub fn blocks(&self) -> &[PlanBlock] {
+        &self.blocks
+    }
+
+    /// Other points of bicubic patches.
+    pub fn bicubic(&self) -> &[PlanBicubic] {
+        &self.bicubic
+    }
+
+    /// Points on exact stencils.
+    pub fn general(&self) -> &[PlanGeneral] {
+        &self.general
+    }
+
+    /// The patches' point indices (into the points `0..point_count`), flattened: each record
+    /// names where its patch's run starts.
+    pub fn points(&self) -> &[u32] {
+        &self.points
+    }
+
+    /// The exact stencils' weights: per [`PlanGeneral`], three rows of its `len` (position,
+    /// `∂/∂s`, `∂/∂t`).
+    pub fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// Every output vertex's entry, in vertex order.
+    pub fn entries(&self) -> impl ExactSizeIterator<Item = PlanEntry<'_>> + '_ {
+        self.vertices.iter().map(|&e| self.decode(e))
+    }
+
+    /// Output vertex `vertex`'s entry; `None` past the last vertex.
+    pub fn entry(&self, vertex: usize) -> Option<PlanEntry<'_>> {
+        self.vertices.get(vertex).map(|&e| self.decode(e))
+    }
+
+    /// An entry of `vertices` as its record (a valid plan's: see [`validate`](Self::validate)).
+    fn decode(&self, entry: u32) -> PlanEntry<'_> {
+        let (kind, index) = split(entry);
+        let index = index as usize;
+        match kind {
+            PLAN_BLOCK => PlanEntry::Block(&self.blocks[index]),
+            PLAN_BICUBIC => PlanEntry::Bicubic(&self.bicubic[index]),
+            _ => PlanEntry::General(&self.general[index]),
+        }
+    }
+
+    /// Puts a plan together from its parts and checks it ([`validate`](Self::validate)): the
+    /// way in for a plan stored or made elsewhere.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::dual::{EvaluationPlan, PlanError, PlanItem};
+    /// use subdiv_tess::{DualOptions, DualTessellator};
+    ///
+    /// let mesh = Mesh::build(shapes::cube())?;
+    /// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default())?;
+    /// tess.tessellate(&vec![3; mesh.face_count()])?;
+    /// let plan = tess.evaluation_plan();
+    /// assert_eq!(EvaluationPlan::from_parts(plan.clone().into_parts())?, plan);
+    ///
+    /// let mut parts = plan.into_parts();
+    /// parts.weights[7] = f64::NAN;
+    /// let error = EvaluationPlan::from_parts(parts).unwrap_err();
+    /// assert!(matches!(error, PlanError::NonFinite { at: PlanItem::Weight(7), .. }));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// The first rule the parts break, as [`validate`](Self::validate) names them.
+    pub fn from_parts(parts: PlanParts) -> Result<Self, PlanError> {
+        let plan = Self::encode(parts)?;
+        plan.validate()?;
+        Ok(plan)
+    }
+
+    /// The parts, without checks: for tests of an evaluator's own checks (that it calls
+    /// [`validate`](Self::validate) before indexing). The plan may break any rule, and then
+    /// [`evaluate`](Self::evaluate), [`over_cage`](Self::over_cage) and
+    /// [`entries`](Self::entries) may panic. Entries that name no record, or more records than
+    /// a plan can number, are still refused.
+    ///
+    /// # Errors
+    /// As [`from_parts`](Self::from_parts), for the entries only.
+    #[doc(hidden)]
+    pub fn from_parts_unchecked(parts: PlanParts) -> Result<Self, PlanError> {
+        Self::encode(parts)
+    }
+
+    /// The plan's arrays, for storing it or building another ([`from_parts`](Self::from_parts)).
+    pub fn into_parts(self) -> PlanParts {
+        let vertices = self
+            .vertices
+            .iter()
+            .map(|&e| {
+                let (kind, index) = split(e);
+                match kind {
+                    PLAN_BLOCK => PlanRecord::Block(index),
+                    PLAN_BICUBIC => PlanRecord::Bicubic(index),
+                    _ => PlanRecord::General(index),
+                }
+            })
+            .collect();
+        PlanParts {
+            cage_len: self.cage_len,
+            levels: self.levels,
+            refine_rows: self.refine_rows,
+            refine_ids: self.refine_ids,
+            refine_weights: self.refine_weights,
+            vertices,
+            blocks: self.blocks,
+            bicubic: self.bicubic,
+            general: self.general,
+            points: self.points,
+            weights: self.weights,
+        }
+    }
+
+    /// The parts with their entries encoded; entries must name records that exist.
+    fn encode(parts: PlanParts) -> Result<Self, PlanError> {
+        let counts = [parts.blocks.len(), parts.bicubic.len(), parts.general.len()];
+        if counts.iter().any(|&n| n > MAX_RECORDS) {
+            return Err(PlanError::Structure { at: PlanItem::Plan, rule: "more than 2^30 records of one kind" });
+        }
+        if u32::try_from(parts.vertices.len()).is_err() {
+            return Err(PlanError::Structure { at: PlanItem::Plan, rule: "more than 2^32 - 1 output vertices" });
+        }
+        let mut vertices = Vec::with_capacity(parts.vertices.len());
+        for (v, record) in parts.vertices.iter().enumerate() {
+            let (kind, index) = match *record {
+                PlanRecord::Block(k) => (PLAN_BLOCK, k),
+                PlanRecord::Bicubic(k) => (PLAN_BICUBIC, k),
+                PlanRecord::General(k) => (PLAN_GENERAL, k),
+            };
+            check_index(PlanItem::Vertex(v), RECORD_NAMES[kind as usize], index, counts[kind as usize])?;
+            vertices.push(kind << PLAN_KIND_SHIFT | index);
+        }
+        Ok(Self {
+            cage_len: parts.cage_len,
+            levels: parts.levels,
+            refine_rows: parts.refine_rows,
+            refine_ids: parts.refine_ids,
+            refine_weights: parts.refine_weights,
+            vertices,
+            blocks: parts.blocks,
+            bicubic: parts.bicubic,
+            general: parts.general,
+            points: parts.points,
+            weights: parts.weights,
+        })
+    }
+
+    /// Checks every rule an evaluator relies on, so that evaluating the plan indexes only what
+    /// exists and computes with finite numbers:
+    /// - the refinement: `refine_ids` and `refine_weights` have one length, the rows start at
+    ///   0, never go back and end at that length; the levels follow each other from
+    ///   `cage_len` to [`point_count`](Self::point_count); each refined point's row reads only
+    ///   the level before (the cage, for the first level);
+    /// - every point index of a patch names a point, and every weight, parameter and
+    ///   chain-rule entry is finite;
+    /// - every record's run of point indices (16 for bicubic patches, `len` for stencils) and
+    ///   of weights (3 · `len`) lies inside its array; stencils have at least one point;
+    /// - every entry names a record that exists; a block's rate is at least 1, its cells
+    ///   (`base..base + rate²`) are output vertices, and they are exactly the vertices whose
+    ///   entry names it.
+    ///
+    /// A plan from [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan)
+    /// passes; evaluators of plans from elsewhere (the GPU's upload) check first.
+    ///
+    /// # Errors
+    /// The first rule broken, naming the item ([`PlanItem`]) that breaks it.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let len = |n: usize| n as u64;
+        let (cage, points) = (self.cage_len as usize, self.point_count());
+        // The refinement.
+        if self.refine_weights.len() != self.refine_ids.len() {
+            return Err(PlanError::Length {
+                at: PlanItem::Plan,
+                what: "the number of refinement weights",
+                got: len(self.refine_weights.len()),
+                expected: len(self.refine_ids.len()),
+            });
+        }
+        if let (Some(&first), Some(&last)) = (self.refine_rows.first(), self.refine_rows.last()) {
+            if first != 0 {
+                return Err(PlanError::Length {
+                    at: PlanItem::Plan,
+                    what: "the first refinement row's start",
+                    got: first.into(),
+                    expected: 0,
+                });
+            }
+            if last as usize != self.refine_ids.len() {
+                return Err(PlanError::Length {
+                    at: PlanItem::Plan,
+                    what: "the last refinement row's end",
+                    got: last.into(),
+                    expected: len(self.refine_ids.len()),
+                });
+            }
+        }
+        let mut previous = 0..cage;
+        for (k, level) in self.levels.iter().enumerate() {
+            if level.start as usize != previous.end {
+                return Err(PlanError::Length {
+                    at: PlanItem::Level(k),
+                    what: "the first point",
+                    got: level.start.into(),
+                    expected: len(previous.end),
+                });
+            }
+            if level.end < level.start || level.end as usize > points {
+                return Err(PlanError::OutOfRange {
+                    at: PlanItem::Level(k),
+                    what: "the end",
+                    index: level.end.into(),
+                    valid: u64::from(level.start)..len(points) + 1,
+                });
+            }
+            let here = level.start as usize..level.end as usize;
+            for p in here.clone() {
+                let (start, end) = (self.refine_rows[p - cage], self.refine_rows[p - cage + 1]);
+                if end < start {
+                    return Err(PlanError::Structure {
+                        at: PlanItem::RefinedPoint(p),
+                        rule: "its refinement row ends before it starts",
+                    });
+                }
+                if end as usize > self.refine_ids.len() {
+                    return Err(PlanError::PastEnd {
+                        at: PlanItem::RefinedPoint(p),
+                        array: "refinement rows' entries",
+                        start: start.into(),
+                        end: end.into(),
+                        len: len(self.refine_ids.len()),
+                    });
+                }
+                for e in start as usize..end as usize {
+                    let id = self.refine_ids[e] as usize;
+                    if !previous.contains(&id) {
+                        return Err(PlanError::OutOfRange {
+                            at: PlanItem::RefinedPoint(p),
+                            what: "point (of the level before)",
+                            index: len(id),
+                            valid: len(previous.start)..len(previous.end),
+                        });
+                    }
+                    finite(PlanItem::RefinedPoint(p), "weight", self.refine_weights[e])?;
+                }
+            }
+            previous = here;
+        }
+        if previous.end != points {
+            return Err(PlanError::Length {
+                at: PlanItem::Plan,
+                what: "the end of the last level",
+                got: len(previous.end),
+                expected: len(points),
+            });
+        }
+        // The patches' points and the stencils' weights.
+        for (k, &p) in self.points.iter().enumerate() {
+            check_index(PlanItem::PatchPoint(k), "point", p, points)?;
+        }
+        for (k, &w) in self.weights.iter().enumerate() {
+            finite(PlanItem::Weight(k), "weight", w)?;
+        }
+        // The records.
+        let run = |at: PlanItem, array: &'static str, start: u32, count: u64, of: usize| {
+            let end = u64::from(start) + count;
+            if end > len(of) {
+                return Err(PlanError::PastEnd { at, array, start: start.into(), end, len: len(of) });
+            }
+            Ok(())
+        };
+        let (vertices, patch_points) = (self.vertices.len(), self.points.len());
+        for (k, b) in self.blocks.iter().enumerate() {
+            let at = PlanItem::Block(k);
+            if b.rate == 0 {
+                return Err(PlanError::Structure { at, rule: "a rate of 0: a block without cells" });
+            }
+            run(at, "patch point indices", b.points, 16, patch_points)?;
+            run(at, "cell vertices", b.base, u64::from(b.rate) * u64::from(b.rate), vertices)?;
+            let cells = b.base as usize..b.base as usize + (b.rate as usize).pow(2);
+            let own = PLAN_BLOCK << PLAN_KIND_SHIFT | k as u32;
+            if let Some(v) = cells.clone().find(|&v| self.vertices[v] != own) {
+                return Err(PlanError::Structure {
+                    at: PlanItem::Vertex(v),
+                    rule: "a block's cell whose entry names another record",
+                });
+            }
+        }
+        for (k, b) in self.bicubic.iter().enumerate() {
+            let at = PlanItem::Bicubic(k);
+            run(at, "patch point indices", b.points, 16, patch_points)?;
+            finite(at, "s", b.s)?;
+            finite(at, "t", b.t)?;
+            b.ju.iter().try_for_each(|&x| finite(at, "ju", x))?;
+            b.jv.iter().try_for_each(|&x| finite(at, "jv", x))?;
+        }
+        for (k, g) in self.general.iter().enumerate() {
+            let at = PlanItem::General(k);
+            if g.len == 0 {
+                return Err(PlanError::Structure { at, rule: "a stencil over no points" });
+            }
+            run(at, "patch point indices", g.points, g.len.into(), patch_points)?;
+            run(at, "weights", g.weights, 3 * u64::from(g.len), self.weights.len())?;
+            g.ju.iter().try_for_each(|&x| finite(at, "ju", x))?;
+            g.jv.iter().try_for_each(|&x| finite(at, "jv", x))?;
+        }
+        // The entries.
+        let counts = [self.blocks.len(), self.bicubic.len(), self.general.len()];
+        for (v, &e) in self.vertices.iter().enumerate() {
+            let (kind, index) = split(e);
+            let Some(&count) = counts.get(kind as usize) else {
+                return Err(PlanError::Structure { at: PlanItem::Vertex(v), rule: "an entry of no kind" });
+            };
+            check_index(PlanItem::Vertex(v), RECORD_NAMES[kind as usize], index, count)?;
+            if kind == PLAN_BLOCK {
+                let b = &self.blocks[index as usize];
+                if !(b.base as usize..b.base as usize + (b.rate as usize).pow(2)).contains(&v) {
+                    return Err(PlanError::Structure { at: PlanItem::Vertex(v), rule: "not one of its block's cells" });
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Evaluates every output vertex on `cage` (one position per cage vertex): positions and
@@ -154,22 +684,16 @@ impl EvaluationPlan {
         }
         positions.clear();
         normals.clear();
-        for (v, &entry) in self.vertices.iter().enumerate() {
-            let index = (entry & ((1 << PLAN_KIND_SHIFT) - 1)) as usize;
-            let (p, du, dv) = match entry >> PLAN_KIND_SHIFT {
-                PLAN_BLOCK => {
-                    let b = &self.blocks[index];
+        for (v, entry) in self.entries().enumerate() {
+            let (p, du, dv) = match entry {
+                PlanEntry::Block(b) => {
                     let local = v as u32 - b.base;
                     let n = f64::from(b.rate);
                     let (s, t) = ((f64::from(local % b.rate) + 0.5) / n, (f64::from(local / b.rate) + 0.5) / n);
                     self.bicubic_at(&points, b.points, s, t, [1.0, 0.0], [0.0, 1.0])
                 }
-                PLAN_BICUBIC => {
-                    let b = &self.bicubic[index];
-                    self.bicubic_at(&points, b.points, b.s, b.t, b.ju, b.jv)
-                }
-                _ => {
-                    let g = &self.general[index];
+                PlanEntry::Bicubic(b) => self.bicubic_at(&points, b.points, b.s, b.t, b.ju, b.jv),
+                PlanEntry::General(g) => {
                     let (len, w) = (g.len as usize, g.weights as usize);
                     let ids = &self.points[g.points as usize..g.points as usize + len];
                     let row = |r: usize| {
@@ -228,22 +752,20 @@ impl EvaluationPlan {
         // value: the new patch, its length and weights.
         type Source = (u32, u32, u64, u64);
         let mut composed: HashMap<Source, (u32, u32, u32)> = HashMap::new();
-        let mut blocks: HashMap<usize, u32> = HashMap::new();
+        // By base: a block's cells are its vertices, so blocks have distinct bases.
+        let mut blocks: HashMap<u32, u32> = HashMap::new();
         let entry = |kind: u32, index: usize| kind << PLAN_KIND_SHIFT | index as u32;
-        for &e in &self.vertices {
-            let index = (e & ((1 << PLAN_KIND_SHIFT) - 1)) as usize;
-            let new = match e >> PLAN_KIND_SHIFT {
-                PLAN_BLOCK => {
-                    let k = *blocks.entry(index).or_insert_with(|| {
-                        let b = self.blocks[index];
+        for e in self.entries() {
+            let new = match e {
+                PlanEntry::Block(&b) => {
+                    let k = *blocks.entry(b.base).or_insert_with(|| {
                         let points = patch(&mut out, b.points, 16);
                         out.blocks.push(PlanBlock { points, ..b });
                         out.blocks.len() as u32 - 1
                     });
                     entry(PLAN_BLOCK, k as usize)
                 }
-                PLAN_BICUBIC => {
-                    let b = self.bicubic[index];
+                PlanEntry::Bicubic(&b) => {
                     let cv = &self.points[b.points as usize..b.points as usize + 16];
                     if cv.iter().all(|&c| (c as usize) < cage) {
                         let points = patch(&mut out, b.points, 16);
@@ -269,8 +791,7 @@ impl EvaluationPlan {
                         entry(PLAN_GENERAL, out.general.len() - 1)
                     }
                 }
-                _ => {
-                    let g = self.general[index];
+                PlanEntry::General(&g) => {
                     let ids = &self.points[g.points as usize..(g.points + g.len) as usize];
                     let key = (g.points, g.len, u64::from(g.weights), u64::MAX);
                     let (points, len, weights) = if ids.iter().all(|&c| (c as usize) < cage) {
@@ -313,6 +834,30 @@ impl EvaluationPlan {
         let (p, a, b) = super::eval::bicubic_at(|k| points[cv[k] as usize], s, t);
         (p, ju[0] * a + ju[1] * b, jv[0] * a + jv[1] * b)
     }
+}
+
+/// An entry of `EvaluationPlan::vertices` as its kind and record number.
+fn split(entry: u32) -> (u32, u32) {
+    (entry >> PLAN_KIND_SHIFT, entry & ((1 << PLAN_KIND_SHIFT) - 1))
+}
+
+/// What each kind of entry names, for errors.
+const RECORD_NAMES: [&str; 3] = ["block", "bicubic point", "stencil point"];
+
+/// [`PlanError::OutOfRange`] unless `index < count`.
+fn check_index(at: PlanItem, what: &'static str, index: u32, count: usize) -> Result<(), PlanError> {
+    if index as usize >= count {
+        return Err(PlanError::OutOfRange { at, what, index: index.into(), valid: 0..count as u64 });
+    }
+    Ok(())
+}
+
+/// [`PlanError::NonFinite`] unless `value` is finite.
+fn finite(at: PlanItem, what: &'static str, value: f64) -> Result<(), PlanError> {
+    if !value.is_finite() {
+        return Err(PlanError::NonFinite { at, what, value });
+    }
+    Ok(())
 }
 
 /// Sparse sums over the cage's points, three rows at once (position, `∂/∂s`, `∂/∂t`), with a
