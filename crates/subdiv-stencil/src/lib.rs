@@ -23,6 +23,7 @@ mod exact;
 pub mod grid;
 mod linalg;
 mod mesh_eval;
+mod parallel;
 mod surface;
 mod table;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------

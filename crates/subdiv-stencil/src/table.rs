@@ -6,10 +6,10 @@ use std::ops::RangeInclusive;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::DVec3;
-use rayon::prelude::*;
 use subdiv_mesh::BoundaryInterpolation;
 use subdiv_schemes::{Builtin, PatchMatrices, PatchType, Scheme};
 
+use crate::parallel::{self, Threads};
 use crate::{Dyadic, StencilError, StencilEvaluator, SurfaceStencil};
 
 /// The grids of a face at rate `n` that a tessellator samples.
@@ -362,7 +362,9 @@ pub const TABLE_VERSION: u32 = 1;
 
 impl StencilTables {
     /// The tables of `scheme` for every patch type of `patch_types` at every rate of `rates`,
-    /// the patch types in parallel. The result is the same whatever the thread count.
+    /// the patch types in parallel with the `rayon` feature (on by default), one after the
+    /// other without it. The result, or the first patch type's error, is the same either way
+    /// and whatever the thread count.
     ///
     /// ```
     /// use subdiv_mesh::BoundaryInterpolation;
@@ -386,13 +388,23 @@ impl StencilTables {
         boundary: BoundaryInterpolation,
         rates: RangeInclusive<u32>,
     ) -> Result<Self, StencilError> {
-        let per_type: Vec<Vec<StencilTable>> = patch_types
-            .par_iter()
-            .map(|&t| {
-                let matrices = PatchMatrices::of(scheme, t, boundary)?;
-                StencilTable::compute_rates(&matrices, boundary, rates.clone())
-            })
-            .collect::<Result<_, _>>()?;
+        Self::compute_on(Threads::Any, scheme, patch_types, boundary, rates)
+    }
+
+    /// [`compute`](Self::compute) on `threads`.
+    fn compute_on(
+        threads: Threads,
+        scheme: &Scheme,
+        patch_types: &[PatchType],
+        boundary: BoundaryInterpolation,
+        rates: RangeInclusive<u32>,
+    ) -> Result<Self, StencilError> {
+        let per_type: Vec<Vec<StencilTable>> = parallel::map(patch_types, threads, |&t| {
+            let matrices = PatchMatrices::of(scheme, t, boundary)?;
+            StencilTable::compute_rates(&matrices, boundary, rates.clone())
+        })
+        .into_iter()
+        .collect::<Result<_, _>>()?;
         Ok(Self {
             scheme: scheme.name.clone(),
             fingerprint: scheme_fingerprint(scheme),
@@ -778,5 +790,38 @@ impl<'a> Reader<'a> {
 
     fn corrupt(&self, detail: &str) -> StencilError {
         StencilError::TableCorrupt { offset: self.at, detail: detail.to_string() }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tables computed one patch type after the other on the calling thread are those of
+    /// the default path (in parallel with the `rayon` feature), bit for bit, and so is the
+    /// error when a patch type fails.
+    #[test]
+    fn the_serial_path_gives_the_bits_of_the_parallel_one() {
+        let edge = BoundaryInterpolation::EdgeOnly;
+        let types = [
+            PatchType::Interior { valence: 3 },
+            PatchType::Interior { valence: 5 },
+            PatchType::Boundary { faces: 2, index: 0 },
+            PatchType::Interior { valence: 6 },
+            PatchType::Boundary { faces: 3, index: 1 },
+        ];
+        for builtin in [Builtin::CatmullClark, Builtin::Loop] {
+            let scheme = builtin.scheme();
+            let parallel = StencilTables::compute_on(Threads::Any, scheme, &types, edge, 1..=5).unwrap();
+            let serial = StencilTables::compute_on(Threads::Calling, scheme, &types, edge, 1..=5).unwrap();
+            assert_eq!(parallel.tables().len(), types.len() * 5);
+            assert_eq!(serial.to_bytes(), parallel.to_bytes(), "{builtin}");
+            assert_eq!(StencilTables::compute(scheme, &types, edge, 1..=5).unwrap(), parallel, "{builtin}");
+        }
+        let failing = [PatchType::Interior { valence: 5 }, PatchType::Interior { valence: 1 }, types[2]];
+        let scheme = Builtin::CatmullClark.scheme();
+        let parallel = StencilTables::compute_on(Threads::Any, scheme, &failing, edge, 1..=2).unwrap_err();
+        let serial = StencilTables::compute_on(Threads::Calling, scheme, &failing, edge, 1..=2).unwrap_err();
+        assert_eq!(serial, parallel);
     }
 }
