@@ -2,7 +2,10 @@
 //!
 //! Input: a control mesh ([`subdiv_mesh::Mesh`]) and a scheme. Output: a [`TessMesh`]
 //! (positions and normals of exact limit points, each vertex's face and `Bfr` parameters,
-//! triangles with their faces, and polygons). Two tessellators:
+//! triangles with their faces, and polygons), or the caller's own buffers and vertex type
+//! through a [`TessSink`] ([`sink`]: [`FlatMesh`]'s f32 buffers, [`VertexBuffers`] of any
+//! `bytemuck::Pod` vertex). Two tessellators, both reusable objects that keep their allocations
+//! between calls:
 //!
 //! - The [`dual`] tessellator ([`DualTessellator`], paper 000 §5.5, Schaefer and Warren's
 //!   dual-grid stitching) samples each face uniformly at its own integer rate: every face owns
@@ -59,6 +62,7 @@ mod mesh;
 mod par;
 pub mod quadtree;
 pub mod rates;
+pub mod sink;
 
 pub use dual::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, MAX_DUAL_RATE};
 pub use error::TessError;
@@ -66,3 +70,4 @@ pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessMesh};
 pub use par::Parallelism;
 pub use quadtree::{FaceCurvature, QuadtreeOptions, QuadtreeStats, QuadtreeTessellator};
+pub use sink::{BuffersBuilder, TessCounts, TessSink, TessTriangle, TessVertex, VertexBuffers};

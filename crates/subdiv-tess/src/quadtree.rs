@@ -30,7 +30,7 @@ use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, surf
 use crate::Parallelism;
 use crate::bezier::Bicubic;
 use crate::flatness::{self, Tolerance};
-use crate::{SurfaceParameter, TessError, TessMesh};
+use crate::{SurfaceParameter, TessCounts, TessError, TessMesh, TessSink, TessTriangle, TessVertex};
 
 /// Bits of the fixed denominator of root coordinates: a node of depth `d` has corners at
 /// multiples of `2^(FULL_BITS − d)`.
@@ -181,6 +181,19 @@ pub struct QuadtreeTessellator {
     /// Per input face, its corners' half-edges.
     corners: Vec<Vec<HalfEdgeId>>,
     diagonal: f64,
+    /// [`tessellate_into`](Self::tessellate_into)'s buffers, kept between calls.
+    scratch: Scratch,
+}
+
+/// The buffers of one tessellation that do not depend on its output type.
+#[derive(Debug, Default)]
+struct Scratch {
+    /// The global id of every parameter point.
+    ids: HashMap<VertexKey, u32>,
+    /// Per vertex, the root and root point that made it.
+    creators: Vec<(usize, i64, i64)>,
+    /// Per leaf, in root and leaf order, its centre's vertex.
+    centres: Vec<u32>,
 }
 
 impl std::fmt::Debug for QuadtreeTessellator {
@@ -253,7 +266,7 @@ impl QuadtreeTessellator {
         }
         let corners = mesh.face_ids().map(|f| mesh.face_half_edges(f).collect()).collect();
         let diagonal = mesh.bounding_box().map_or(0.0, |(lo, hi)| lo.distance(hi));
-        let mut tess = Self { levels, shapes: HashMap::new(), roots, corners, diagonal };
+        let mut tess = Self { levels, shapes: HashMap::new(), roots, corners, diagonal, scratch: Scratch::default() };
         tess.classify_shapes(scheme)?;
         Ok(tess)
     }
@@ -363,6 +376,58 @@ impl QuadtreeTessellator {
     /// # Errors
     /// As [`tessellate`](Self::tessellate).
     pub fn tessellate_with_stats(&self, options: &QuadtreeOptions) -> Result<(TessMesh, QuadtreeStats), TessError> {
+        let mut out = TessMesh::default();
+        let stats = self.write(options, &mut Scratch::default(), &mut out)?;
+        Ok((out, stats))
+    }
+
+    /// [`tessellate`](Self::tessellate) into `sink` (see [`TessSink`]): the caller's buffers and
+    /// vertex type; polygons (the leaves with their hanging vertices) to sinks that
+    /// [want them](TessSink::wants_polygons). The tessellator keeps its intermediate buffers
+    /// (the vertex keys' table, the vertices' parameter points and the leaves' centres) for
+    /// the next call; [`tessellate`](Self::tessellate) takes `&self` (so that
+    /// [`ErrorRates`](crate::rates::ErrorRates), which borrows the tessellator, and threads
+    /// can share it) and makes them anew each time.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::{FlatMesh, QuadtreeOptions, QuadtreeTessellator, TessMesh, Tolerance};
+    ///
+    /// let mesh = Mesh::build(shapes::cube())?;
+    /// let mut tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
+    /// let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2));
+    /// let mut flat = FlatMesh::default();
+    /// let stats = tess.tessellate_into(&options, &mut flat)?;
+    /// assert!(stats.extraordinary_leaves > 0);
+    /// let mut mesh = TessMesh::default();
+    /// tess.tessellate_into(&options, &mut mesh)?; // the same buffers again, as `tessellate`'s
+    /// assert_eq!(mesh, tess.tessellate(&options)?);
+    /// assert_eq!(flat.indices.len(), 3 * mesh.triangles.len());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate); `sink` is then not called.
+    pub fn tessellate_into<S: TessSink + ?Sized>(
+        &mut self,
+        options: &QuadtreeOptions,
+        sink: &mut S,
+    ) -> Result<QuadtreeStats, TessError> {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let done = self.write(options, &mut scratch, sink);
+        self.scratch = scratch;
+        done
+    }
+
+    /// The tessellation into `sink`, with `scratch`'s buffers; `sink` is called only after
+    /// everything that may fail.
+    fn write<S: TessSink + ?Sized>(
+        &self,
+        options: &QuadtreeOptions,
+        scratch: &mut Scratch,
+        sink: &mut S,
+    ) -> Result<QuadtreeStats, TessError> {
         let epsilon = options.tolerance.absolute(self.diagonal)?;
         let max_depth = options.max_depth.min(DEPTH_LIMIT);
         let count = AtomicUsize::new(0);
@@ -378,15 +443,20 @@ impl QuadtreeTessellator {
         for (root, leaves) in self.roots.iter().zip(&forest) {
             for leaf in leaves {
                 stats.max_depth = stats.max_depth.max(leaf.depth + root.depth());
+                if self.at_extraordinary(*root, leaf) {
+                    stats.extraordinary_leaves += 1;
+                } else {
+                    stats.max_regular_depth = stats.max_regular_depth.max(leaf.depth + root.depth());
+                }
             }
         }
 
         // Global ids, in root and leaf order (deterministic whatever the thread count).
-        let mut ids: HashMap<VertexKey, u32> = HashMap::new();
-        let mut creators: Vec<(usize, i64, i64)> = Vec::new();
-        let mut centres: Vec<Vec<u32>> = Vec::with_capacity(forest.len());
+        let Scratch { ids, creators, centres } = scratch;
+        ids.clear();
+        creators.clear();
+        centres.clear();
         for (r, (root, leaves)) in self.roots.iter().zip(&forest).enumerate() {
-            let mut root_centres = Vec::with_capacity(leaves.len());
             for leaf in leaves {
                 let h = FULL >> leaf.depth;
                 for (x, y) in [(leaf.x, leaf.y), (leaf.x + h, leaf.y), (leaf.x + h, leaf.y + h), (leaf.x, leaf.y + h)] {
@@ -397,61 +467,73 @@ impl QuadtreeTessellator {
                     });
                 }
                 creators.push((r, leaf.x + h / 2, leaf.y + h / 2));
-                root_centres.push((creators.len() - 1) as u32);
+                centres.push((creators.len() - 1) as u32);
             }
-            centres.push(root_centres);
         }
         if u32::try_from(creators.len()).is_err() {
             return Err(TessError::TooManyPolygons { limit: options.max_polygons, epsilon });
         }
 
         // Every vertex evaluated once, exactly.
-        let evaluated: Vec<(DVec3, DVec3, SurfaceParameter)> =
-            crate::par::try_map(parallel, &creators, |&(r, x, y)| {
-                let root = self.roots[r];
-                let (position, normal) = self.eval(root, x, y)?;
-                let (u, v) = bfr(root, x, y);
-                Ok::<_, TessError>((position, normal, SurfaceParameter { face: root.face, u, v }))
-            })?;
-        let mut out = TessMesh::default();
-        for (p, n, s) in evaluated {
-            out.positions.push(p);
-            out.normals.push(n);
-            out.parameters.push(s);
-        }
+        let evaluated: Vec<TessVertex> = crate::par::try_map(parallel, creators, |&(r, x, y)| {
+            let root = self.roots[r];
+            let (position, normal) = self.eval(root, x, y)?;
+            let (u, v) = bfr(root, x, y);
+            Ok::<_, TessError>(TessVertex { position, normal, parameter: SurfaceParameter { face: root.face, u, v } })
+        })?;
 
         // Polygons with their hanging vertices, and their fans.
         let roots: Vec<(Root, &Vec<Leaf>)> = self.roots.iter().copied().zip(&forest).collect();
+        let ids = &*ids;
         let rings: Vec<Vec<Ring>> = crate::par::map(parallel, roots, |(root, leaves)| {
-            leaves.iter().map(|leaf| self.ring(root, leaf, &ids)).collect()
+            leaves.iter().map(|leaf| self.ring(root, leaf, ids)).collect()
         });
-        out.polygon_offsets.push(0);
-        for (r, root) in self.roots.iter().enumerate() {
-            for ((ring, params), (&centre, leaf)) in rings[r].iter().zip(centres[r].iter().zip(&forest[r])) {
-                out.polygon_vertices.extend(ring);
-                out.polygon_offsets.push(out.polygon_vertices.len() as u32);
-                out.polygon_faces.push(root.face);
+        let corners: usize = rings.iter().flatten().map(|(ring, _)| ring.len()).sum();
+        if u32::try_from(corners).is_err() {
+            return Err(TessError::TooManyPolygons { limit: options.max_polygons, epsilon });
+        }
+
+        let polygons = sink.wants_polygons();
+        sink.begin(&TessCounts {
+            vertices: evaluated.len(),
+            triangles: corners,
+            polygons: if polygons { centres.len() } else { 0 },
+            polygon_vertices: if polygons { corners } else { 0 },
+        });
+        for (k, vertex) in evaluated.iter().enumerate() {
+            sink.vertex(k as u32, vertex);
+        }
+        let (mut triangle, mut leaf_centres) = (0, centres.iter());
+        for (root, (root_rings, leaves)) in self.roots.iter().zip(rings.iter().zip(&forest)) {
+            for ((ring, params), (&centre, leaf)) in root_rings.iter().zip(leaf_centres.by_ref().zip(leaves)) {
                 let h = FULL >> leaf.depth;
                 let c = bfr(*root, leaf.x + h / 2, leaf.y + h / 2);
                 for k in 0..ring.len() {
                     let l = (k + 1) % ring.len();
-                    out.triangles.push([centre, ring[k], ring[l]]);
-                    out.triangle_faces.push(root.face);
                     let (a, b) = (bfr(*root, params[k].0, params[k].1), bfr(*root, params[l].0, params[l].1));
-                    out.triangle_parameters.push([[c.0, c.1], [a.0, a.1], [b.0, b.1]]);
+                    sink.triangle(
+                        triangle,
+                        &TessTriangle {
+                            vertices: [centre, ring[k], ring[l]],
+                            face: root.face,
+                            parameters: [[c.0, c.1], [a.0, a.1], [b.0, b.1]],
+                        },
+                    );
+                    triangle += 1;
                 }
             }
         }
-        for (leaves, root) in forest.iter().zip(&self.roots) {
-            for leaf in leaves {
-                if self.at_extraordinary(*root, leaf) {
-                    stats.extraordinary_leaves += 1;
-                } else {
-                    stats.max_regular_depth = stats.max_regular_depth.max(leaf.depth + root.depth());
+        if polygons {
+            let mut polygon = 0;
+            for (root, root_rings) in self.roots.iter().zip(&rings) {
+                for (ring, _) in root_rings {
+                    sink.polygon(polygon, ring, root.face);
+                    polygon += 1;
                 }
             }
         }
-        Ok((out, stats))
+        sink.end();
+        Ok(stats)
     }
 
     /// Whether a leaf's piece is the extraordinary corner's.

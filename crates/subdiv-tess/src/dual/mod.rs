@@ -74,7 +74,7 @@ pub use self::plan::{
 use self::topology::{Builder, BuilderBuffers, Topology};
 use crate::par::{self, Parallelism};
 use crate::rates::RingDepths;
-use crate::{SurfaceParameter, TessError, TessMesh};
+use crate::{SurfaceParameter, TessError, TessMesh, TessSink};
 
 /// The largest rate [`DualTessellator::tessellate`] takes.
 pub const MAX_DUAL_RATE: u32 = 128;
@@ -293,6 +293,57 @@ impl DualTessellator {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn tessellate_with_rings(&mut self, rates: &[u32], rings: &RingDepths) -> Result<&TessMesh, TessError> {
+        self.check_rings(rings)?;
+        self.rebuild(rates, Some(rings))?;
+        self.fill_output();
+        Ok(&self.output)
+    }
+
+    /// [`tessellate`](Self::tessellate) into `sink` (see [`TessSink`]): the caller's buffers
+    /// and vertex type. Polygons (the quads, where [`DualOptions::quads`] lists them) go to
+    /// sinks that [want them](TessSink::wants_polygons). Afterwards [`mesh`](Self::mesh) is
+    /// the same output and the animation paths work as after
+    /// [`tessellate`](Self::tessellate) (the sink is written from it).
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+    ///
+    /// let mesh = Mesh::build(shapes::cube())?;
+    /// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::DEFAULT)?;
+    /// let mut flat = FlatMesh::default();
+    /// tess.tessellate_into(&[1, 2, 3, 4, 5, 6], &mut flat)?;
+    /// let mut written = FlatMesh::default();
+    /// tess.write_flat(&mut written);
+    /// assert_eq!(flat, written);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate); `sink` is then not called.
+    pub fn tessellate_into<S: TessSink + ?Sized>(&mut self, rates: &[u32], sink: &mut S) -> Result<(), TessError> {
+        self.tessellate(rates)?.write_to(sink);
+        Ok(())
+    }
+
+    /// [`tessellate_with_rings`](Self::tessellate_with_rings) into `sink`, as
+    /// [`tessellate_into`](Self::tessellate_into).
+    ///
+    /// # Errors
+    /// As [`tessellate_with_rings`](Self::tessellate_with_rings); `sink` is then not called.
+    pub fn tessellate_with_rings_into<S: TessSink + ?Sized>(
+        &mut self,
+        rates: &[u32],
+        rings: &RingDepths,
+        sink: &mut S,
+    ) -> Result<(), TessError> {
+        self.tessellate_with_rings(rates, rings)?.write_to(sink);
+        Ok(())
+    }
+
+    /// Checks that `rings` has one depth per vertex and per face, none too deep.
+    fn check_rings(&self, rings: &RingDepths) -> Result<(), TessError> {
         let (vertices, faces) = (self.vertex_count, self.face_count());
         if rings.vertices.len() != vertices {
             return Err(TessError::RingCount { what: "vertices", expected: vertices, got: rings.vertices.len() });
@@ -306,12 +357,10 @@ impl DualTessellator {
                     TessError::RingDepth { element: format!("{kind} {k}"), depth, max: MAX_DUAL_RING_DEPTH }
                 })
             };
-        if let Some(e) = too_deep(&rings.vertices, "vertex").or_else(|| too_deep(&rings.centres, "face")) {
-            return Err(e);
+        match too_deep(&rings.vertices, "vertex").or_else(|| too_deep(&rings.centres, "face")) {
+            Some(e) => Err(e),
+            None => Ok(()),
         }
-        self.rebuild(rates, Some(rings))?;
-        self.fill_output();
-        Ok(&self.output)
     }
 
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
@@ -570,7 +619,7 @@ pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u
 
 /// A vertex of [`FlatMesh::vertices`]: `px py pz nx ny nz` in f32.
 #[inline]
-fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
+pub(crate) fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
     [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
 }
 

@@ -1,0 +1,523 @@
+//! Output sinks: where a tessellation goes (lyon's `GeometryBuilder` in spirit).
+//!
+//! A tessellator does not choose the caller's vertex type. It hands its output to a
+//! [`TessSink`]: first [`begin`](TessSink::begin) with the counts (so that the sink reserves or
+//! resizes once, and no call after it allocates), then every vertex in index order, every
+//! triangle in output order, the polygons in output order if the sink
+//! [wants them](TessSink::wants_polygons), and [`end`](TessSink::end). Three sinks come with
+//! the crate:
+//!
+//! - [`TessMesh`]: everything, in f64 (what [`QuadtreeTessellator::tessellate`] and
+//!   [`DualTessellator::tessellate`] return);
+//! - [`FlatMesh`]: `px py pz nx ny nz` as f32 and `u32` triangle indices, the bytes
+//!   [`DualTessellator::write_flat`] writes;
+//! - [`BuffersBuilder`]: a caller's own [`bytemuck::Pod`] vertex type, made by a closure from
+//!   each [`TessVertex`], into [`VertexBuffers`] that a renderer uploads as they are
+//!   (`bytemuck::cast_slice(&buffers.vertices)`).
+//!
+//! Both tessellators write into a sink ([`DualTessellator::tessellate_into`],
+//! [`QuadtreeTessellator::tessellate_into`]), and any [`TessMesh`] can be replayed into one
+//! ([`TessMesh::write_to`]). A sink is called only when the tessellation succeeded: on an
+//! error it is left as it was.
+//!
+//! ```
+//! use subdiv_mesh::{shapes, Mesh};
+//! use subdiv_schemes::Builtin;
+//! use subdiv_tess::{BuffersBuilder, DualOptions, DualTessellator, TessVertex, VertexBuffers};
+//!
+//! /// The vertex a renderer wants: position and the face's parameters, 20 bytes.
+//! #[derive(Clone, Copy, bytemuck::Pod, bytemuck::Zeroable)]
+//! #[repr(C)]
+//! struct Vertex {
+//!     position: [f32; 3],
+//!     uv: [f32; 2],
+//! }
+//!
+//! let mesh = Mesh::build(shapes::cube())?;
+//! let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::DEFAULT)?;
+//! let mut buffers: VertexBuffers<Vertex> = VertexBuffers::new();
+//! let rates = vec![4; mesh.face_count()];
+//! tess.tessellate_into(&rates, &mut BuffersBuilder::new(&mut buffers, |v: &TessVertex| Vertex {
+//!     position: v.position.as_vec3().to_array(),
+//!     uv: [v.parameter.u as f32, v.parameter.v as f32],
+//! }))?;
+//! let bytes: &[u8] = bytemuck::cast_slice(&buffers.vertices);
+//! assert_eq!(bytes.len(), 20 * buffers.vertices.len());
+//! assert_eq!(buffers.indices.len(), 3 * tess.mesh().triangles.len());
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+//!
+//! [`QuadtreeTessellator::tessellate`]: crate::QuadtreeTessellator::tessellate
+//! [`QuadtreeTessellator::tessellate_into`]: crate::QuadtreeTessellator::tessellate_into
+//! [`DualTessellator::tessellate`]: crate::DualTessellator::tessellate
+//! [`DualTessellator::tessellate_into`]: crate::DualTessellator::tessellate_into
+//! [`DualTessellator::write_flat`]: crate::DualTessellator::write_flat
+
+use glam::DVec3;
+use subdiv_mesh::FaceId;
+
+use crate::dual::flat_vertex;
+use crate::{FlatMesh, SurfaceParameter, TessMesh};
+
+/// How much a tessellation will hand to a sink, given to [`TessSink::begin`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TessCounts {
+    /// The number of vertices.
+    pub vertices: usize,
+    /// The number of triangles.
+    pub triangles: usize,
+    /// The number of polygons the sink will get (0 unless it
+    /// [wants them](TessSink::wants_polygons) and the tessellation has them).
+    pub polygons: usize,
+    /// The number of vertex indices over those polygons.
+    pub polygon_vertices: usize,
+}
+
+/// An output vertex: a limit point of the surface, evaluated once.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TessVertex {
+    /// The position.
+    pub position: DVec3,
+    /// The unit normal from the exact tangents (at an extraordinary vertex from its limit
+    /// tangent directions).
+    pub normal: DVec3,
+    /// The face and `Bfr` parameters the vertex was evaluated at.
+    pub parameter: SurfaceParameter,
+}
+
+/// An output triangle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TessTriangle {
+    /// Its vertices, counter-clockwise as the input faces.
+    pub vertices: [u32; 3],
+    /// Its input face.
+    pub face: FaceId,
+    /// Its corners' `Bfr` parameters `[u, v]` in its own face (see
+    /// [`TessMesh::triangle_parameters`]).
+    pub parameters: [[f64; 2]; 3],
+}
+
+/// Receives a tessellation: [`begin`](Self::begin), then every vertex (indices `0..`
+/// in order), every triangle in output order, the polygons in output order if
+/// [`wants_polygons`](Self::wants_polygons), and [`end`](Self::end).
+///
+/// Implement it to put the output straight into one's own buffers (see the [module
+/// docs](self)); [`BuffersBuilder`] covers the common case of a `Pod` vertex type.
+pub trait TessSink {
+    /// Called first, once, with the counts of what follows: reserve or resize here.
+    fn begin(&mut self, counts: &TessCounts);
+
+    /// Vertex `index` (called for `0, 1, 2, …` in order).
+    fn vertex(&mut self, index: u32, vertex: &TessVertex);
+
+    /// Triangle `index` (called for `0, 1, 2, …` in order).
+    fn triangle(&mut self, index: u32, triangle: &TessTriangle);
+
+    /// Whether the sink takes polygons (the dual tessellator's quads, where its options list
+    /// them; the quadtree's leaves with their hanging vertices). Default: `false`.
+    fn wants_polygons(&self) -> bool {
+        false
+    }
+
+    /// Polygon `index` of input face `face`: its vertices, counter-clockwise. Only called
+    /// when [`wants_polygons`](Self::wants_polygons); the default ignores it.
+    fn polygon(&mut self, index: u32, vertices: &[u32], face: FaceId) {
+        let _ = (index, vertices, face);
+    }
+
+    /// Called last, once. The default does nothing.
+    fn end(&mut self) {}
+}
+
+impl<S: TessSink + ?Sized> TessSink for &mut S {
+    fn begin(&mut self, counts: &TessCounts) {
+        (**self).begin(counts);
+    }
+
+    fn vertex(&mut self, index: u32, vertex: &TessVertex) {
+        (**self).vertex(index, vertex);
+    }
+
+    fn triangle(&mut self, index: u32, triangle: &TessTriangle) {
+        (**self).triangle(index, triangle);
+    }
+
+    fn wants_polygons(&self) -> bool {
+        (**self).wants_polygons()
+    }
+
+    fn polygon(&mut self, index: u32, vertices: &[u32], face: FaceId) {
+        (**self).polygon(index, vertices, face);
+    }
+
+    fn end(&mut self) {
+        (**self).end();
+    }
+}
+
+/// Everything: the mesh is cleared (keeping its allocations) and refilled, equal to the
+/// tessellator's own [`TessMesh`] output.
+impl TessSink for TessMesh {
+    fn begin(&mut self, counts: &TessCounts) {
+        self.clear();
+        self.positions.reserve(counts.vertices);
+        self.normals.reserve(counts.vertices);
+        self.parameters.reserve(counts.vertices);
+        self.triangles.reserve(counts.triangles);
+        self.triangle_faces.reserve(counts.triangles);
+        self.triangle_parameters.reserve(counts.triangles);
+        self.polygon_offsets.reserve(counts.polygons + 1);
+        self.polygon_offsets.push(0);
+        self.polygon_vertices.reserve(counts.polygon_vertices);
+        self.polygon_faces.reserve(counts.polygons);
+    }
+
+    #[inline]
+    fn vertex(&mut self, _: u32, vertex: &TessVertex) {
+        self.positions.push(vertex.position);
+        self.normals.push(vertex.normal);
+        self.parameters.push(vertex.parameter);
+    }
+
+    #[inline]
+    fn triangle(&mut self, _: u32, triangle: &TessTriangle) {
+        self.triangles.push(triangle.vertices);
+        self.triangle_faces.push(triangle.face);
+        self.triangle_parameters.push(triangle.parameters);
+    }
+
+    fn wants_polygons(&self) -> bool {
+        true
+    }
+
+    fn polygon(&mut self, _: u32, vertices: &[u32], face: FaceId) {
+        self.polygon_vertices.extend_from_slice(vertices);
+        self.polygon_offsets.push(self.polygon_vertices.len() as u32);
+        self.polygon_faces.push(face);
+    }
+}
+
+/// `px py pz nx ny nz` in f32 per vertex and three `u32` indices per triangle, the buffers
+/// cleared (keeping their allocations) and refilled: the bytes of
+/// [`DualTessellator::write_flat`](crate::DualTessellator::write_flat).
+impl TessSink for FlatMesh {
+    fn begin(&mut self, counts: &TessCounts) {
+        self.vertices.clear();
+        self.vertices.reserve(6 * counts.vertices);
+        self.indices.clear();
+        self.indices.reserve(3 * counts.triangles);
+    }
+
+    #[inline]
+    fn vertex(&mut self, _: u32, vertex: &TessVertex) {
+        self.vertices.extend_from_slice(&flat_vertex(vertex.position, vertex.normal));
+    }
+
+    #[inline]
+    fn triangle(&mut self, _: u32, triangle: &TessTriangle) {
+        self.indices.extend_from_slice(&triangle.vertices);
+    }
+}
+
+/// Vertices of the caller's type and `u32` triangle indices (three per triangle), filled by
+/// a [`BuffersBuilder`]: lyon's `VertexBuffers`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct VertexBuffers<V> {
+    /// The vertices, in output order.
+    pub vertices: Vec<V>,
+    /// Three indices per triangle, counter-clockwise.
+    pub indices: Vec<u32>,
+}
+
+impl<V> VertexBuffers<V> {
+    /// Empty buffers.
+    pub fn new() -> Self {
+        Self { vertices: Vec::new(), indices: Vec::new() }
+    }
+}
+
+/// A [`TessSink`] that fills [`VertexBuffers`] with vertices made by `constructor` from each
+/// [`TessVertex`] (lyon's `BuffersBuilder`). The buffers are cleared first, keeping their
+/// allocations; with a [`bytemuck::Pod`] vertex type, `bytemuck::cast_slice(&buffers.vertices)`
+/// is what a GPU vertex buffer takes. See the [module docs](self) for an example.
+#[derive(Debug)]
+pub struct BuffersBuilder<'a, V, F> {
+    buffers: &'a mut VertexBuffers<V>,
+    constructor: F,
+}
+
+impl<'a, V: bytemuck::Pod, F: Fn(&TessVertex) -> V> BuffersBuilder<'a, V, F> {
+    /// A sink into `buffers` making each vertex with `constructor`.
+    pub fn new(buffers: &'a mut VertexBuffers<V>, constructor: F) -> Self {
+        Self { buffers, constructor }
+    }
+}
+
+impl<V: bytemuck::Pod, F: Fn(&TessVertex) -> V> TessSink for BuffersBuilder<'_, V, F> {
+    fn begin(&mut self, counts: &TessCounts) {
+        self.buffers.vertices.clear();
+        self.buffers.vertices.reserve(counts.vertices);
+        self.buffers.indices.clear();
+        self.buffers.indices.reserve(3 * counts.triangles);
+    }
+
+    #[inline]
+    fn vertex(&mut self, _: u32, vertex: &TessVertex) {
+        self.buffers.vertices.push((self.constructor)(vertex));
+    }
+
+    #[inline]
+    fn triangle(&mut self, _: u32, triangle: &TessTriangle) {
+        self.buffers.indices.extend_from_slice(&triangle.vertices);
+    }
+}
+
+impl TessMesh {
+    /// Replays this mesh into `sink`, as the tessellator that made it would have written it
+    /// (polygons included when the sink wants them).
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::{DualOptions, DualTessellator, FlatMesh, TessMesh};
+    ///
+    /// let mesh = Mesh::build(shapes::ngon_prism(5))?;
+    /// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::DEFAULT)?;
+    /// let out = tess.tessellate(&vec![3; mesh.face_count()])?;
+    /// let (mut copy, mut flat) = (TessMesh::default(), FlatMesh::default());
+    /// out.write_to(&mut copy);
+    /// out.write_to(&mut flat);
+    /// assert_eq!(&copy, out);
+    /// assert_eq!(flat.vertices.len(), 6 * out.positions.len());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn write_to<S: TessSink + ?Sized>(&self, sink: &mut S) {
+        let polygons = sink.wants_polygons();
+        sink.begin(&TessCounts {
+            vertices: self.positions.len(),
+            triangles: self.triangles.len(),
+            polygons: if polygons { self.polygon_count() } else { 0 },
+            polygon_vertices: if polygons { self.polygon_vertices.len() } else { 0 },
+        });
+        let vertices = self.positions.iter().zip(&self.normals).zip(&self.parameters);
+        for (k, ((&position, &normal), &parameter)) in vertices.enumerate() {
+            sink.vertex(k as u32, &TessVertex { position, normal, parameter });
+        }
+        let triangles = self.triangles.iter().zip(&self.triangle_faces).zip(&self.triangle_parameters);
+        for (k, ((&vertices, &face), &parameters)) in triangles.enumerate() {
+            sink.triangle(k as u32, &TessTriangle { vertices, face, parameters });
+        }
+        if polygons {
+            for (k, &face) in self.polygon_faces.iter().enumerate() {
+                sink.polygon(k as u32, self.polygon(k), face);
+            }
+        }
+        sink.end();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use subdiv_mesh::{Mesh, PolygonSoup, shapes};
+    use subdiv_schemes::Builtin;
+
+    use super::*;
+    use crate::rates::ErrorRates;
+    use crate::{DualOptions, DualTessellator, QuadtreeOptions, QuadtreeTessellator, Tolerance};
+
+    fn meshes() -> Vec<(&'static str, Mesh)> {
+        let soups: [(&str, PolygonSoup); 4] = [
+            ("cube", shapes::cube()),
+            ("pentagonal prism", shapes::ngon_prism(5)),
+            ("built-in model", shapes::default_model()),
+            ("3 × 2 grid", shapes::quad_grid(3, 2)),
+        ];
+        soups.into_iter().map(|(name, soup)| (name, Mesh::build(soup).expect("a shape builds"))).collect()
+    }
+
+    /// The flat buffers of `mesh`, as [`DualTessellator::write_flat`] makes them.
+    fn flat_of(mesh: &TessMesh) -> FlatMesh {
+        let vertices = mesh.positions.iter().zip(&mesh.normals).flat_map(|(p, n)| flat_vertex(*p, *n)).collect();
+        FlatMesh { vertices, indices: mesh.triangles.as_flattened().to_vec() }
+    }
+
+    /// A sink that checks the call order and counts against `begin`'s.
+    #[derive(Default)]
+    struct Checker {
+        counts: TessCounts,
+        seen: TessCounts,
+        polygons: bool,
+        ended: bool,
+    }
+
+    impl TessSink for Checker {
+        fn begin(&mut self, counts: &TessCounts) {
+            assert_eq!(self.seen, TessCounts::default(), "begin comes first");
+            self.counts = *counts;
+        }
+
+        fn vertex(&mut self, index: u32, vertex: &TessVertex) {
+            assert_eq!(index as usize, self.seen.vertices);
+            assert!((vertex.normal.length() - 1.0).abs() < 1e-12 || vertex.normal == DVec3::ZERO);
+            self.seen.vertices += 1;
+        }
+
+        fn triangle(&mut self, index: u32, triangle: &TessTriangle) {
+            assert_eq!(self.seen.vertices, self.counts.vertices, "vertices before triangles");
+            assert_eq!(index as usize, self.seen.triangles);
+            assert!(triangle.vertices.iter().all(|&v| (v as usize) < self.counts.vertices));
+            self.seen.triangles += 1;
+        }
+
+        fn wants_polygons(&self) -> bool {
+            self.polygons
+        }
+
+        fn polygon(&mut self, index: u32, vertices: &[u32], _: FaceId) {
+            assert!(self.polygons, "polygons only when asked for");
+            assert_eq!(self.seen.triangles, self.counts.triangles, "triangles before polygons");
+            assert_eq!(index as usize, self.seen.polygons);
+            self.seen.polygons += 1;
+            self.seen.polygon_vertices += vertices.len();
+        }
+
+        fn end(&mut self) {
+            assert_eq!(self.seen, self.counts, "every call announced by begin");
+            self.ended = true;
+        }
+    }
+
+    #[test]
+    fn dual_sinks_give_the_tessellators_output() {
+        let cc = Builtin::CatmullClark.scheme();
+        for (name, mesh) in meshes() {
+            let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
+            let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 1 + f % 5).collect();
+            let expected = tess.tessellate(&rates).unwrap().clone();
+            let mut written = FlatMesh::default();
+            tess.write_flat(&mut written);
+            assert_eq!(written, flat_of(&expected), "{name}");
+
+            // Sinks that already hold another output are cleared first.
+            let (mut mesh_sink, mut flat) = (expected.clone(), FlatMesh { vertices: vec![1.0; 7], indices: vec![9] });
+            mesh_sink.positions.push(DVec3::ONE);
+            tess.tessellate_into(&rates, &mut mesh_sink).unwrap();
+            tess.tessellate_into(&rates, &mut flat).unwrap();
+            assert_eq!(mesh_sink, expected, "{name}: TessMesh");
+            assert_eq!(flat, written, "{name}: FlatMesh");
+            assert_eq!(tess.mesh(), &expected, "{name}: the output is kept");
+            for polygons in [false, true] {
+                let mut checker = Checker { polygons, ..Checker::default() };
+                tess.tessellate_into(&rates, &mut checker).unwrap();
+                assert!(checker.ended);
+                let listed = if polygons { expected.polygon_count() } else { 0 };
+                assert_eq!(checker.seen.polygons, listed, "{name}");
+            }
+        }
+    }
+
+    #[test]
+    fn dual_sinks_with_rings() {
+        let cc = Builtin::CatmullClark.scheme();
+        for (name, mesh) in meshes().into_iter().take(3) {
+            let bounds = QuadtreeTessellator::new(cc, &mesh).unwrap();
+            let rates = ErrorRates::new(Tolerance::Relative(2e-2)).rates(&bounds, &mesh).unwrap();
+            let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT.with_quads(false)).unwrap();
+            let expected = tess.tessellate_with_rings(&rates.faces, &rates.rings).unwrap().clone();
+            let (mut mesh_sink, mut flat) = (TessMesh::default(), FlatMesh::default());
+            tess.tessellate_with_rings_into(&rates.faces, &rates.rings, &mut mesh_sink).unwrap();
+            tess.tessellate_with_rings_into(&rates.faces, &rates.rings, &mut flat).unwrap();
+            assert_eq!(mesh_sink, expected, "{name}");
+            assert_eq!(flat, flat_of(&expected), "{name}");
+        }
+    }
+
+    #[test]
+    fn quadtree_sinks_give_its_output_and_reuse_buffers() {
+        let cc = Builtin::CatmullClark.scheme();
+        // The grid has a boundary, which the quadtree does not take.
+        for (name, mesh) in meshes().into_iter().take(3) {
+            let mut tess = QuadtreeTessellator::new(cc, &mesh).unwrap();
+            for tolerance in [1e-2, 3e-3, 1e-2] {
+                let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(tolerance));
+                let (expected, stats) = tess.tessellate_with_stats(&options).unwrap();
+                let (mut mesh_sink, mut flat) = (TessMesh::default(), FlatMesh::default());
+                assert_eq!(tess.tessellate_into(&options, &mut mesh_sink).unwrap(), stats);
+                assert_eq!(tess.tessellate_into(&options, &mut flat).unwrap(), stats);
+                assert_eq!(mesh_sink, expected, "{name} at {tolerance}");
+                assert_eq!(flat, flat_of(&expected), "{name} at {tolerance}");
+                let mut checker = Checker { polygons: true, ..Checker::default() };
+                tess.tessellate_into(&options, &mut checker).unwrap();
+                assert!(checker.ended);
+                assert_eq!(checker.seen.polygons, expected.polygon_count());
+            }
+            // A failed call leaves the sink alone.
+            let mut untouched = Checker::default();
+            let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)).with_max_polygons(10);
+            assert!(tess.tessellate_into(&options, &mut untouched).is_err());
+            assert_eq!(untouched.counts, TessCounts::default());
+        }
+    }
+
+    /// A renderer's vertex: position and normal in f32, the layout of [`FlatMesh`].
+    #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+    #[repr(C)]
+    struct Vertex {
+        position: [f32; 3],
+        normal: [f32; 3],
+    }
+
+    #[test]
+    fn pod_vertices_are_the_flat_bytes() {
+        let cc = Builtin::CatmullClark.scheme();
+        let make = |v: &TessVertex| Vertex { position: v.position.as_vec3().into(), normal: v.normal.as_vec3().into() };
+        let mut buffers = VertexBuffers::new();
+        for (name, mesh) in meshes() {
+            let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
+            let rates = vec![3; mesh.face_count()];
+            tess.tessellate_into(&rates, &mut BuffersBuilder::new(&mut buffers, make)).unwrap();
+            let mut flat = FlatMesh::default();
+            tess.write_flat(&mut flat);
+            let bytes: &[u8] = bytemuck::cast_slice(&buffers.vertices);
+            assert_eq!(bytes, bytemuck::cast_slice::<f32, u8>(&flat.vertices), "{name}");
+            assert_eq!(buffers.indices, flat.indices, "{name}");
+        }
+        // Any vertex type: the parameters alone.
+        let mesh = Mesh::build(shapes::cube()).unwrap();
+        let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
+        let mut uv = VertexBuffers::<[f32; 2]>::new();
+        let builder = &mut BuffersBuilder::new(&mut uv, |v: &TessVertex| [v.parameter.u as f32, v.parameter.v as f32]);
+        tess.tessellate_into(&[2; 6], builder).unwrap();
+        let out = tess.mesh();
+        assert_eq!(uv.vertices.len(), out.positions.len());
+        assert!(uv.vertices.iter().zip(&out.parameters).all(|(a, p)| *a == [p.u as f32, p.v as f32]));
+    }
+
+    #[test]
+    fn polygons_are_opt_in() {
+        let cc = Builtin::CatmullClark.scheme();
+        let mesh = Mesh::build(shapes::ngon_prism(5)).unwrap();
+        let rates = vec![4; mesh.face_count()];
+        for quads in [false, true] {
+            let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT.with_quads(quads)).unwrap();
+            let (mut plain, mut asking) = (Checker::default(), Checker { polygons: true, ..Checker::default() });
+            tess.tessellate_into(&rates, &mut plain).unwrap();
+            tess.tessellate_into(&rates, &mut asking).unwrap();
+            assert_eq!(plain.seen.polygons, 0);
+            // The dual tessellator's polygons are its quads, listed when its options say so.
+            assert_eq!(asking.seen.polygons > 0, quads);
+            assert_eq!(asking.seen.polygon_vertices, 4 * asking.seen.polygons);
+            assert_eq!(plain.seen.triangles, asking.seen.triangles);
+        }
+        // The quadtree always has its leaves; a sink gets them only when it asks.
+        let mut tess = QuadtreeTessellator::new(cc, &mesh).unwrap();
+        let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2));
+        let (mut plain, mut asking) = (Checker::default(), Checker { polygons: true, ..Checker::default() });
+        tess.tessellate_into(&options, &mut plain).unwrap();
+        tess.tessellate_into(&options, &mut asking).unwrap();
+        assert_eq!(plain.seen.polygons, 0);
+        assert!(asking.seen.polygon_vertices >= 4 * asking.seen.polygons && asking.seen.polygons > 0);
+        // Hanging vertices: the leaves' polygons have as many corners as their fans' triangles.
+        assert_eq!(asking.seen.polygon_vertices, asking.seen.triangles);
+    }
+}
