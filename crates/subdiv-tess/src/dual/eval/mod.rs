@@ -100,7 +100,7 @@ pub(crate) struct Evaluator {
     needed: usize,
     bases: Vec<Option<Arc<RateBasis>>>,
     /// Per output vertex of the last [`prepare`](Self::prepare), how it is evaluated.
-    routes: Vec<Route>,
+    routes: Vec<PackedRoute>,
     records: Vec<Record>,
     /// Per record, its patch and parameter (for [`Self::patch_grids`]).
     places: Vec<Place>,
@@ -313,10 +313,12 @@ impl Evaluator {
         // Only vertices outside the blocks can be pointwise: their sites are the explicit ones.
         self.pointwise.clear();
         self.pointwise.extend(
-            topo.explicit_sites().filter(|&(v, _)| self.routes[v as usize] == Route::BicubicPoint).map(|(v, site)| {
-                let (u, w) = site.point.to_f64();
-                (v, site.face, [u, w])
-            }),
+            topo.explicit_sites().filter(|&(v, _)| self.routes[v as usize].get() == Route::BicubicPoint).map(
+                |(v, site)| {
+                    let (u, w) = site.point.to_f64();
+                    (v, site.face, [u, w])
+                },
+            ),
         );
         // The levels the records and patch grids read (the templates read the cage): the next
         // cages are refined to those only.

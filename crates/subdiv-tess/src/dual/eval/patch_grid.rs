@@ -87,7 +87,7 @@ impl Evaluator {
                     self.grid_params.truncate(g.basis as usize);
                     self.patch_grids.truncate(first as usize);
                 }
-                self.routes[block.base as usize..(block.base + block.len()) as usize].fill(Route::Template);
+                self.routes[block.base as usize..(block.base + block.len()) as usize].fill(Route::Template.into());
             }
             if template != TemplateUse::Own {
                 let ty = self.face_types[block.face as usize].expect("a typed face");
@@ -109,7 +109,7 @@ impl Evaluator {
         let base = block.base as usize;
         let mut last = usize::MAX;
         for v in base..base + (block.rate * block.rate) as usize {
-            let Route::Record(record) = self.routes[v] else { continue };
+            let Route::Record(record) = self.routes[v].get() else { continue };
             if self.places[record as usize].grid.is_none() {
                 continue;
             }
@@ -141,7 +141,7 @@ impl Evaluator {
             let vertices = &sorted[starts[g] as usize..starts[g + 1] as usize];
             if let Some(grid) = self.patch_grid(vertices, s, t) {
                 for &v in vertices {
-                    self.routes[v as usize] = Route::PatchGrid;
+                    self.routes[v as usize] = Route::PatchGrid.into();
                 }
                 self.patch_grids.push(grid);
             }
@@ -155,7 +155,7 @@ impl Evaluator {
     /// scratch).
     pub(super) fn patch_grid(&mut self, vertices: &[u32], s: &mut Vec<f64>, t: &mut Vec<f64>) -> Option<PatchGrid> {
         let (records, places, routes) = (&self.records, &self.places, &self.routes);
-        let index = |v: u32| match routes[v as usize] {
+        let index = |v: u32| match routes[v as usize].get() {
             Route::Record(r) => r as usize,
             _ => unreachable!("patch grids gather records"),
         };

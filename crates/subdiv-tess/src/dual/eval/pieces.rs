@@ -184,7 +184,7 @@ impl Evaluator {
         // The CPU's features, looked up once per call.
         let arch = pulp::Arch::new();
         crate::par::for_each_init(parallel, pieces, Scratch::new, |scratch, piece| {
-            self.run_piece(arch, piece, scratch)
+            self.run_piece(arch, piece, scratch);
         });
     }
 
@@ -229,7 +229,7 @@ impl Evaluator {
                 for (b, batch) in routes.chunks(BATCH).enumerate() {
                     let mut m = 0;
                     for (k, &route) in batch.iter().enumerate() {
-                        let (x, du, dv) = match route {
+                        let (x, du, dv) = match route.get() {
                             // Written by their grids above.
                             Route::PatchGrid => continue,
                             Route::BicubicPoint => {

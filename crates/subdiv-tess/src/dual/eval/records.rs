@@ -130,15 +130,15 @@ impl Evaluator {
     pub(super) fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
         let n = topo.vertex_count as usize;
         self.routes.clear();
-        self.routes.resize(n, Route::BicubicPoint);
+        self.routes.resize(n, Route::BicubicPoint.into());
         self.records.clear();
         self.ids.clear();
         for (b, block) in topo.blocks.iter().enumerate() {
             let cells = block.base as usize..(block.base + block.len()) as usize;
             if let FacePlan::Bicubic { .. } = self.faces[block.face as usize] {
-                self.routes[cells].fill(Route::BlockCell);
+                self.routes[cells].fill(Route::BlockCell.into());
             } else if self.block_templates[b].copies() {
-                self.routes[cells].fill(Route::Template);
+                self.routes[cells].fill(Route::Template.into());
             }
         }
         // The dual-grid tables the level-0 patches' cell points read (but those of faces that
@@ -187,7 +187,7 @@ impl Evaluator {
         self.places.extend_from_slice(&chunk.places);
         let (records, ids) = (self.records.len() as u32, self.ids.len() as u32);
         for &(vertex, record) in &chunk.assigned {
-            self.routes[vertex as usize] = Route::Record(records + record);
+            self.routes[vertex as usize] = Route::Record(records + record).into();
         }
         // The chunk's fresh stencils join the kept ones (a key an earlier chunk added takes
         // that copy: the same weights).
@@ -223,7 +223,7 @@ impl Evaluator {
         for block in &topo.blocks {
             let (base, end) = (block.base as usize, (block.base + block.len()) as usize);
             // A block's points are all of one kind (`prepare_records` marks them together).
-            if base < end && matches!(self.routes[base], Route::BlockCell | Route::Template) {
+            if base < end && matches!(self.routes[base].get(), Route::BlockCell | Route::Template) {
                 push(at, base);
                 at = end;
             }
@@ -252,7 +252,7 @@ impl Evaluator {
         for i in spans.iter().flat_map(Clone::clone) {
             // `record_spans` left out the blocks of those kinds, and only blocks have them.
             debug_assert!(
-                !matches!(self.routes[i], Route::BlockCell | Route::Template),
+                !matches!(self.routes[i].get(), Route::BlockCell | Route::Template),
                 "vertex {i} outside the record spans"
             );
             let site = topo.site(i as u32);

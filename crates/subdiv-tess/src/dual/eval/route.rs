@@ -16,6 +16,53 @@ pub(super) enum Route {
     Record(u32),
 }
 
+/// A [`Route`] in 4 bytes: the number of a record, or one of the four values above the
+/// largest record number for the other routes. The evaluator keeps one per output vertex and
+/// writes them all on every full call (32 MB at torus_big's rate 32); with the 8-byte enum
+/// stored, torus_big's full path measured 9-15 % slower (most likely these writes, doubled;
+/// not isolated: see docs/perf-log.md). The packing
+/// lives here alone: everything else reads [`get`](Self::get) and writes `Route::….into()`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) struct PackedRoute(u32);
+
+impl PackedRoute {
+    const BLOCK_CELL: u32 = u32::MAX;
+    const BICUBIC_POINT: u32 = u32::MAX - 1;
+    const TEMPLATE: u32 = u32::MAX - 2;
+    const PATCH_GRID: u32 = u32::MAX - 3;
+
+    /// The route.
+    #[inline(always)]
+    pub(super) fn get(self) -> Route {
+        match self.0 {
+            Self::BLOCK_CELL => Route::BlockCell,
+            Self::BICUBIC_POINT => Route::BicubicPoint,
+            Self::TEMPLATE => Route::Template,
+            Self::PATCH_GRID => Route::PatchGrid,
+            record => Route::Record(record),
+        }
+    }
+}
+
+impl From<Route> for PackedRoute {
+    /// # Panics
+    /// For a record number among the four reserved values (a topology has fewer than
+    /// `u32::MAX - 4` vertices, hence records).
+    #[inline(always)]
+    fn from(route: Route) -> Self {
+        Self(match route {
+            Route::BlockCell => Self::BLOCK_CELL,
+            Route::BicubicPoint => Self::BICUBIC_POINT,
+            Route::Template => Self::TEMPLATE,
+            Route::PatchGrid => Self::PATCH_GRID,
+            Route::Record(record) => {
+                assert!(record < Self::PATCH_GRID, "record number {record} out of range");
+                record
+            }
+        })
+    }
+}
+
 /// Whether a block reads a face type's [`Template`] ([`Evaluator::plan_copies`] decides it,
 /// [`Evaluator::patch_grids`] settles it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

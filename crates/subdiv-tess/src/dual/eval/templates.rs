@@ -325,7 +325,7 @@ impl Evaluator {
         }
         for (k, &route) in self.routes[base..base + block.len() as usize].iter().enumerate() {
             // The other cells are in patch grids.
-            let Route::Record(record) = route else { continue };
+            let Route::Record(record) = route.get() else { continue };
             let (r, place) = (&self.records[record as usize], &self.places[record as usize]);
             let p = index(place.patch);
             if r.table == NO_TABLE {

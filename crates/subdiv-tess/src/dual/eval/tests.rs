@@ -85,13 +85,13 @@ fn patch_grids_equal_the_records() {
         ev.prepare_records(&topo, &rates, true).unwrap();
         let routes = ev.routes.clone();
         ev.patch_grids(&topo);
-        let gridded = ev.routes.iter().filter(|&&k| k == Route::PatchGrid).count();
+        let gridded = ev.routes.iter().filter(|k| k.get() == Route::PatchGrid).count();
         assert!(4 * gridded > ev.records.len(), "{gridded} of {} in patch grids", ev.records.len());
         let (mut ps, mut ns) = (Vec::new(), Vec::new());
         ev.evaluate(&topo, true, &mut ps, &mut ns);
         let mut worst: f64 = 0.0;
         for (v, &route) in ev.routes.iter().enumerate() {
-            if let (Route::PatchGrid, Route::Record(r)) = (route, routes[v]) {
+            if let (Route::PatchGrid, Route::Record(r)) = (route.get(), routes[v].get()) {
                 let (p, du, dv) = ev.general(&ev.records[r as usize]);
                 worst = worst.max((p - ps[v]).length()).max((normal(du, dv) - ns[v]).length());
             }

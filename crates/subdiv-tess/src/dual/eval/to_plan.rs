@@ -94,7 +94,7 @@ impl Evaluator {
             if plan.vertices[v] != UNSET {
                 continue;
             }
-            let Route::Record(record) = self.routes[v] else { unreachable!("vertex {v} has no plan") };
+            let Route::Record(record) = self.routes[v].get() else { unreachable!("vertex {v} has no plan") };
             let r = &self.records[record as usize];
             let len = r.len as usize;
             let points = *patches.entry((r.level, r.ids)).or_insert_with(|| {
