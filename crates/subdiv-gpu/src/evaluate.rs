@@ -5,11 +5,13 @@
 //! combination of the cage's points, through the refined levels some patches need) and the
 //! triangles. They are uploaded once per rate configuration:
 //! - the **control points** buffer (rewritten every frame by
-//!   [`GpuTessellation::update_control_points`]); every combination is taken over the cage's
-//!   own points ([`EvaluationPlan::over_cage`]: the refined levels some patches live on are
-//!   composed into the weights in f64), so one pass evaluates everything, and f32 refined
-//!   points, whose error of the model's size × 2^-24 small patches' tangents would magnify,
-//!   never exist;
+//!   [`GpuTessellation::write_control_points`] before the evaluation is
+//!   [recorded](GpuTessellation::record) into the caller's encoder, or by
+//!   [`GpuTessellation::update_control_points`], which submits both); every combination is
+//!   taken over the cage's own points ([`EvaluationPlan::over_cage`]: the refined levels some
+//!   patches live on are composed into the weights in f64), so one pass evaluates everything,
+//!   and f32 refined points, whose error of the model's size × 2^-24 small patches' tangents
+//!   would magnify, never exist;
 //! - per range of output vertices, the **entries** (a vertex's kind and record), the records
 //!   (bicubic faces' cell grids, bicubic points, exact-stencil points), the **patches** (their
 //!   point indices) and the **combinations** (stencil weights), each a storage buffer of at most
