@@ -43,6 +43,14 @@ pub enum Error {
         /// The rates given, in words.
         given: &'static str,
     },
+    /// Refinement to so many levels that the faces would not fit 32-bit ids.
+    #[error("refining {levels} levels would make at least {faces} faces, more than 32-bit face ids can name")]
+    RefineLevels {
+        /// The levels asked for.
+        levels: usize,
+        /// A lower bound of the faces they would make.
+        faces: u64,
+    },
     /// A grid size outside `1..=`[`MAX_GRID`](crate::MAX_GRID).
     #[error("grid {n}: the grid size must be from 1 to {max}")]
     Grid {

@@ -91,7 +91,8 @@ impl Surface {
     /// count by about 4.
     ///
     /// # Errors
-    /// [`Error::Scheme`] for a mesh the scheme does not take.
+    /// [`Error::Scheme`] for a mesh the scheme does not take; [`Error::RefineLevels`] for more
+    /// faces than 32-bit ids hold.
     pub fn refine(&self, levels: usize) -> Result<Mesh, Error> {
         self.refine_with_progress(levels, |_| {})
     }
@@ -101,6 +102,14 @@ impl Surface {
     /// # Errors
     /// As [`refine`](Self::refine).
     pub fn refine_with_progress(&self, levels: usize, progress: impl FnMut(usize)) -> Result<Mesh, Error> {
+        // A primal split's first level makes about one face per half-edge, each later one four
+        // per face (a lower bound for the other splits too, close enough to refuse in advance
+        // what 32-bit ids could not hold).
+        let first = self.mesh.half_edge_count() as u64;
+        let faces = (1..levels).fold(if levels == 0 { 0 } else { first }, |n, _| n.saturating_mul(4));
+        if faces > u64::from(u32::MAX) {
+            return Err(Error::RefineLevels { levels, faces });
+        }
         Ok(Refiner::with_progress(&self.mesh, &self.scheme, levels, &RefineOptions::DEFAULT, progress)?.into_mesh())
     }
 
@@ -460,6 +469,7 @@ mod tests {
             Surface::new(Mesh::build(shapes::cube()).unwrap(), Builtin::Loop.scheme()).refine(1),
             Err(Error::Scheme(_))
         ));
+        assert!(matches!(s.refine(40), Err(Error::RefineLevels { levels: 40, .. })));
     }
 
     #[test]
