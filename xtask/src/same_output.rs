@@ -1,7 +1,8 @@
 //! `cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv]`: runs the README's
 //! commands with two builds of `subdiv` on the cube, valence56, spot_control_mesh and the
 //! built-in model, and compares the files they write byte for byte (a refactoring must not
-//! change a bit of them). `--after` defaults to this checkout's release build (built first).
+//! change a bit of them). `--after` defaults to this checkout's release build (built first, into
+//! `CARGO_TARGET_DIR` if set, and copied before use).
 //! Prints one line per command and fails naming the first file that differs.
 
 use std::path::{Path, PathBuf};
@@ -39,15 +40,22 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
         }
     }
     let before = before.ok_or_else(|| USAGE.to_string())?;
+    let work = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
     let after = match after {
         Some(after) => after,
         None => {
             crate::cargo(&["build", "--release", "--quiet", "-p", "subdiv-cli"])?;
-            crate::root().join("target/release/subdiv")
+            // Copied out at once: a target folder shared with other checkouts (CARGO_TARGET_DIR)
+            // may get another build of it while the commands run.
+            let target =
+                std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| crate::root().join("target"), PathBuf::from);
+            let built = target.join("release/subdiv");
+            let copy = work.path().join("subdiv-after");
+            std::fs::copy(&built, &copy).map_err(|e| format!("{}: {e}", built.display()))?;
+            copy
         }
     };
     let shared = crate::shared_dir();
-    let work = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
     let (mut compared, mut skipped) = (0, 0);
     for mesh in MESHES {
         let mesh_path = mesh.map(|m| shared.join(m));

@@ -5,10 +5,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use subdiv::eval::{EigenEvaluator, EvalError, Method};
 use subdiv::mesh::{BoundaryInterpolation, FaceId};
-use subdiv::schemes::RefineOptions;
-use subdiv::stencil::{LimitPoint, StencilError};
+use subdiv::{EvalMethod, EvalOptions, GridPoint, MAX_GRID, Surface};
 
 use crate::UserError;
 use crate::input::LoadedMesh;
@@ -25,7 +23,7 @@ pub(crate) struct EvalArgs {
     /// Every face at the grid (i/N, j/N): quads (N+1)² points, j outer, i inner; triangles of
     /// triangle schemes i + j ≤ N; other faces of quad schemes the (N+1)² grid of every
     /// sub-face, as OpenSubdiv's Bfr lays them out.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=4096))]
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=i64::from(MAX_GRID)))]
     grid: Option<u32>,
     /// Points from a file: one `face u v` per line (Bfr parameters; commas or spaces; `#`
     /// starts a comment). f64 parameters are used exactly (rounded to a multiple of 2^-60 only
@@ -61,61 +59,40 @@ enum MethodArg {
     Auto,
 }
 
-/// One output row: the face, its parameters as printed, and the limit point.
-type Row = (usize, f64, f64, LimitPoint);
-
 pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError> {
     let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
     let scheme = args.scheme.resolve()?;
-    let options = RefineOptions {
-        boundary: args.boundary.map(|b| match b {
+    let method = match args.method {
+        MethodArg::Eigen => EvalMethod::Eigen,
+        MethodArg::Stencil => EvalMethod::Stencil,
+        MethodArg::Auto => EvalMethod::Auto,
+    };
+    let mut options = EvalOptions::DEFAULT.with_method(method);
+    if let Some(boundary) = args.boundary {
+        options = options.with_boundary(match boundary {
             Boundary::EdgeOnly => BoundaryInterpolation::EdgeOnly,
             Boundary::EdgeAndCorner => BoundaryInterpolation::EdgeAndCorner,
             Boundary::None => BoundaryInterpolation::None,
-        }),
-        ..RefineOptions::DEFAULT
-    };
+        });
+    }
     let start = Instant::now();
-    let method = match args.method {
-        MethodArg::Eigen => Method::Eigen,
-        MethodArg::Stencil => Method::Stencil,
-        MethodArg::Auto => Method::Auto,
-    };
-    let evaluator = EigenEvaluator::new(&scheme, &mesh, &options, method)
-        .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
+    let named = |error: subdiv::Error| UserError(format!("{}: {error}", loaded.name));
+    let evaluator = Surface::new(mesh, &scheme).evaluator(&options).map_err(named)?;
     let mut skipped = 0;
     let rows = match (args.grid, &args.samples) {
         (Some(n), _) => {
-            let mut rows = Vec::new();
-            let named = |error: EvalError| UserError(format!("{}: {error}", loaded.name));
-            let exact = evaluator.stencil();
-            for face in mesh.face_ids() {
-                if method == Method::Stencil {
-                    // Exact rational grid points, as before there was a choice.
-                    let points = exact.grid(face, n).map_err(|e| named(e.into()))?;
-                    skipped += usize::from(points.is_empty());
-                    rows.extend(points.into_iter().map(|(g, p)| (face.index(), g.u, g.v, p)));
-                    continue;
-                }
-                if !exact.has_surface(face).map_err(|e| named(e.into()))? {
-                    skipped += 1;
-                    continue;
-                }
-                // The eigenbasis takes the f64 parameters printed.
-                for g in exact.domain(face).map_err(|e| named(e.into()))?.grid(n) {
-                    rows.push((face.index(), g.u, g.v, evaluator.eval(face, g.u, g.v).map_err(named)?));
-                }
-            }
-            rows
+            let grid = evaluator.grid(n).map_err(named)?;
+            skipped = grid.holes;
+            grid.points
         }
         (None, Some(path)) => {
             let samples = read_samples(path)?;
             let mut rows = Vec::with_capacity(samples.len());
             for (line, face, u, v) in samples {
-                match evaluator.eval(face, u, v) {
-                    Ok(point) => rows.push((face.index(), u, v, point)),
+                match evaluator.evaluate(face, u, v) {
+                    Ok(point) => rows.push(GridPoint { face, u, v, point }),
                     // Checked after the point's domain: a hole skips only valid samples.
-                    Err(EvalError::Stencil(StencilError::NoSurface { .. })) => skipped += 1,
+                    Err(error) if error.is_hole() => skipped += 1,
                     Err(error) => return Err(UserError(format!("{}:{line}: {error}", path.display()))),
                 }
             }
@@ -131,7 +108,7 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
         None => write(out)?,
     }
     let mut stderr = std::io::stderr();
-    let at_vertices = rows.iter().filter(|r| !r.3.exact_derivatives).count();
+    let at_vertices = rows.iter().filter(|r| !r.point.exact_derivatives).count();
     let _ = writeln!(
         stderr,
         "subdiv eval: {} with {}: {} points in {seconds:.3} s ({:.0} points/s)",
@@ -180,15 +157,24 @@ fn read_samples(path: &Path) -> Result<Vec<(usize, FaceId, f64, f64)>, UserError
 }
 
 /// `osd_limit`'s CSV: `face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz`, shortest round-trip f64s.
-fn write_csv(w: &mut dyn Write, rows: &[Row]) -> std::io::Result<()> {
+fn write_csv(w: &mut dyn Write, rows: &[GridPoint]) -> std::io::Result<()> {
     let mut w = std::io::BufWriter::new(w);
     writeln!(w, "face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz")?;
-    for (face, u, v, p) in rows {
+    for GridPoint { face, u, v, point: p } in rows {
         let (x, du, dv) = (p.position, p.du, p.dv);
         writeln!(
             w,
-            "{face},{u:?},{v:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
-            x.x, x.y, x.z, du.x, du.y, du.z, dv.x, dv.y, dv.z
+            "{},{u:?},{v:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
+            face.index(),
+            x.x,
+            x.y,
+            x.z,
+            du.x,
+            du.y,
+            du.z,
+            dv.x,
+            dv.y,
+            dv.z
         )?;
     }
     w.flush()

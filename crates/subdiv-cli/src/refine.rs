@@ -4,8 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use subdiv::mesh::{FaceId, Mesh, PolygonSoup};
-use subdiv::schemes::{RefineOptions, Refiner};
+use subdiv::Surface;
 
 use crate::UserError;
 use crate::input::LoadedMesh;
@@ -43,14 +42,12 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
         indicatif::ProgressStyle::with_template("{msg} [{bar:30}] level {pos}/{len} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let refined = Refiner::with_progress(&mesh, &scheme, levels, &RefineOptions::DEFAULT, |level| {
-        bar.set_position(level as u64);
-    })
-    .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?
-    .into_mesh();
+    let refined = Surface::new(mesh, &scheme)
+        .refine_with_progress(levels, |level| bar.set_position(level as u64))
+        .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
-    let soup = without_holes(&refined);
+    let soup = subdiv::without_holes(&refined);
     match &args.output {
         Some(path) => subdiv::io::write_obj(path, &soup)?,
         None => subdiv::io::write_obj_to(&mut *out, &soup)?,
@@ -66,17 +63,4 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
         faces as f64 / seconds.max(1e-9) / 1e6,
     );
     Ok(())
-}
-
-/// The refined mesh as a soup, hole faces left out (their vertices stay, so numbering does not
-/// change), as OpenSubdiv's refinement output does.
-fn without_holes(mesh: &Mesh) -> PolygonSoup {
-    let mut soup = PolygonSoup::with_capacity(mesh.vertex_count(), mesh.face_count(), mesh.half_edge_count());
-    for &p in mesh.positions() {
-        soup.push_vertex(p);
-    }
-    for f in mesh.face_ids().filter(|&f| !mesh.is_hole(f)) {
-        soup.push_face(mesh.face_vertices(FaceId::new(f.raw())).iter().copied());
-    }
-    soup
 }

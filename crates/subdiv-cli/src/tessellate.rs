@@ -3,14 +3,13 @@
 //! quadtree — written as GLB or OBJ, with each vertex's face and parameters on request.
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
-use subdiv::io::{GlbMesh, write_glb};
 use subdiv::mesh::{DVec3, Mesh};
-use subdiv::schemes::Scheme;
-use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE, DualRates, ErrorRates, RingDepths, ScreenSpace};
-use subdiv::tess::{DualOptions, DualTessellator, QuadtreeOptions, QuadtreeTessellator, TessMesh, Tolerance};
+use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE};
+use subdiv::tess::{DualOptions, DualTessellator};
+use subdiv::{FaceRates, Rates, Surface, TessInfo, TessOptions, Tessellation, Tolerance};
 
 use crate::UserError;
 use crate::args::{parse_list, parse_size};
@@ -105,7 +104,6 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     if args.polygons && format == Format::Glb {
         return Err(UserError("--polygons needs an .obj output (GLB holds triangles)".to_string()));
     }
-    let tolerance = args.tolerance.map(|t| if args.relative { Tolerance::Relative(t) } else { Tolerance::Absolute(t) });
     if args.gpu && args.method == Method::Quadtree {
         return Err(UserError(
             "--gpu evaluates the dual method's vertices; --method quadtree has no GPU path".to_string(),
@@ -117,84 +115,104 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", loaded.name));
+    let options = options(args)?;
+    let mut surface = Surface::new(mesh, &scheme);
     let start = Instant::now();
-    let bar = Spinner::new(mesh.face_count());
-    let (result, detail) = match args.method {
-        Method::Quadtree => {
-            let tolerance = tolerance.ok_or_else(|| UserError("--method quadtree needs --tolerance".to_string()))?;
-            let tess = QuadtreeTessellator::new(&scheme, &mesh).map_err(|e| located(&e))?;
-            let epsilon = tolerance.absolute(tess.diagonal()).map_err(|e| located(&e))?;
-            bar.say("quadtree");
-            let (result, stats) = tess
-                .tessellate_with_stats(&QuadtreeOptions::DEFAULT.with_tolerance(tolerance))
-                .map_err(|e| located(&e))?;
-            (result, format!("ε = {epsilon:.3e}, depth ≤ {}", stats.max_depth))
-        }
-        Method::Dual => {
-            let (rates, rings, policy) = dual_rates(args, tolerance, &scheme, &mesh, &loaded.name)?;
-            let options = DualOptions { quads: args.polygons, ..DualOptions::default() };
-            let mut tess = DualTessellator::new(&scheme, &mesh, &options).map_err(|e| located(&e))?;
-            bar.say("dual-grid stitching");
-            match &rings {
-                Some(rings) => tess.tessellate_with_rings(&rates, rings),
-                None => tess.tessellate(&rates),
-            }
-            .map_err(|e| located(&e))?;
-            let gpu = if args.gpu {
-                bar.say("evaluating on the GPU");
-                Some(gpu_evaluate(&tess, &mesh)?)
-            } else {
-                None
+    let bar = Spinner::new(surface.mesh().face_count());
+    let (result, gpu_detail) = if args.gpu {
+        gpu_tessellate(&mut surface, &options, &bar, located)?
+    } else {
+        bar.say(if args.method == Method::Quadtree { "quadtree" } else { "dual-grid stitching" });
+        (surface.tessellate(&options).map_err(|e| located(&e))?, String::new())
+    };
+    let detail = match (&result.info.quadtree, result.info.epsilon) {
+        (Some(stats), Some(epsilon)) => format!("ε = {epsilon:.3e}, depth ≤ {}", stats.max_depth),
+        _ => {
+            let policy = match (result.info.epsilon, &options.rates) {
+                (Some(epsilon), _) => format!("ε = {epsilon:.3e}"),
+                (None, Rates::Screen { pixels_per_edge, .. }) => format!("{pixels_per_edge} pixels per edge"),
+                (None, Rates::Uniform(rate)) => format!("uniform rate {rate}"),
+                (None, _) => "per-face rates".to_string(),
             };
-            let mut result = tess.into_mesh();
-            let mut detail = String::new();
-            if let Some((vertices, adapter)) = gpu {
-                // The GPU's f32 values replace the CPU's f64 ones.
-                for (k, v) in vertices.chunks_exact(6).enumerate() {
-                    let wide = |a: usize| DVec3::new(f64::from(v[a]), f64::from(v[a + 1]), f64::from(v[a + 2]));
-                    (result.positions[k], result.normals[k]) = (wide(0), wide(3));
-                }
-                detail = format!(", evaluated on {adapter}");
-            }
+            let rates = &result.info.rates;
             let (lo, hi) = rates.iter().fold((u32::MAX, 0), |(lo, hi), &r| (lo.min(r), hi.max(r)));
-            (result, format!("{policy}, rates {lo}..={hi}{detail}"))
+            format!("{policy}, rates {lo}..={hi}{gpu_detail}")
         }
     };
     let seconds = start.elapsed().as_secs_f64();
     bar.say("writing");
     match format {
-        Format::Glb => {
-            let positions: Vec<_> = result.positions.iter().map(|p| p.as_vec3()).collect();
-            let normals: Vec<_> = result.normals.iter().map(|n| n.as_vec3()).collect();
-            let indices = result.triangle_indices();
-            write_glb(&args.output, &GlbMesh { positions: &positions, normals: Some(&normals), indices: &indices })?;
-        }
-        Format::Obj => {
-            let faces = match (args.polygons, args.method) {
-                (false, _) => ObjFaces::Triangles,
-                (true, Method::Quadtree) => ObjFaces::Polygons,
-                (true, Method::Dual) => ObjFaces::PolygonsAndTriangles,
-            };
-            subdiv::io::write_atomic(&args.output, |w| write_obj(w, &result, faces))?;
-        }
+        Format::Glb => result.write_glb(&args.output)?,
+        Format::Obj => result.write_obj(&args.output, args.polygons)?,
     }
     if let Some(path) = &args.params {
-        write_params(path, &result)?;
+        result.write_params(path)?;
     }
     bar.finish();
-    let triangles = result.triangles.len();
+    let triangles = result.mesh.triangles.len();
     let _ = writeln!(
         std::io::stderr(),
         "subdiv tessellate: {} with {scheme} ({:?}, {detail}): {} faces, {} vertices, {triangles} triangles in \
          {seconds:.3} s ({:.2} M triangles/s) -> {}",
         loaded.name,
         args.method,
-        mesh.face_count(),
-        result.positions.len(),
+        surface.mesh().face_count(),
+        result.mesh.positions.len(),
         triangles as f64 / seconds.max(1e-9) / 1e6,
         args.output.display(),
     );
     Ok(())
+}
+
+/// The facade's options from the arguments: the rate policy (uniform at [`DEFAULT_RATE`]
+/// unless one is given), the method and the limits.
+fn options(args: &TessellateArgs) -> Result<TessOptions, UserError> {
+    let rates = if let Some(t) = args.tolerance {
+        Rates::Tolerance(if args.relative { Tolerance::Relative(t) } else { Tolerance::Absolute(t) })
+    } else if let Some(pixels_per_edge) = args.pixels {
+        let camera = parse_camera(args.camera.as_deref().unwrap_or_default())?;
+        let viewport = parse_size(&args.viewport, "--viewport", u32::MAX)?;
+        Rates::Screen { camera, viewport, pixels_per_edge }
+    } else if args.method == Method::Quadtree {
+        return Err(UserError("--method quadtree needs --tolerance".to_string()));
+    } else {
+        Rates::Uniform(args.rate.unwrap_or(DEFAULT_RATE))
+    };
+    let method = match args.method {
+        Method::Dual => subdiv::Method::Dual,
+        Method::Quadtree => subdiv::Method::Quadtree,
+    };
+    Ok(TessOptions { rates, method, max_rate: args.max_rate, polygons: args.polygons, ..TessOptions::DEFAULT })
+}
+
+/// `--gpu`: the dual tessellation at the facade's rates, its vertices evaluated on the GPU
+/// (f32) in place of the CPU's (f64); the detail names the adapter. Errors of the surface's
+/// work are `located`.
+fn gpu_tessellate(
+    surface: &mut Surface,
+    options: &TessOptions,
+    bar: &Spinner,
+    located: impl Fn(&dyn std::fmt::Display) -> UserError,
+) -> Result<(Tessellation, String), UserError> {
+    let FaceRates { faces, rings, epsilon } = surface.face_rates(options).map_err(|e| located(&e))?;
+    let dual = DualOptions { quads: options.polygons, ..DualOptions::default() };
+    let mut tess = DualTessellator::new(surface.scheme(), surface.mesh(), &dual).map_err(|e| located(&e))?;
+    bar.say("dual-grid stitching");
+    match &rings {
+        Some(rings) => tess.tessellate_with_rings(&faces, rings),
+        None => tess.tessellate(&faces),
+    }
+    .map_err(|e| located(&e))?;
+    bar.say("evaluating on the GPU");
+    let (vertices, adapter) = gpu_evaluate(&tess, surface.mesh())?;
+    let mut mesh = tess.into_mesh();
+    // The GPU's f32 values replace the CPU's f64 ones.
+    for (k, v) in vertices.chunks_exact(6).enumerate() {
+        let wide = |a: usize| DVec3::new(f64::from(v[a]), f64::from(v[a + 1]), f64::from(v[a + 2]));
+        (mesh.positions[k], mesh.normals[k]) = (wide(0), wide(3));
+    }
+    let info = TessInfo { method: subdiv::Method::Dual, rates: faces, epsilon, quadtree: None };
+    Ok((Tessellation { mesh, info }, format!(", evaluated on {adapter}")))
 }
 
 /// Evaluates `tess`'s last tessellation on the GPU: per vertex `px py pz nx ny nz` (f32), and
@@ -209,34 +227,6 @@ fn gpu_evaluate(tess: &DualTessellator, mesh: &Mesh) -> Result<(Vec<f32>, String
             .map_err(gpu_error)?;
     let vertices = on_gpu.read_vertices(&gpu).map_err(gpu_error)?;
     Ok((vertices, gpu.adapter_name()))
-}
-
-/// The per-face rates of the dual method, the rings around extraordinary points (for a
-/// tolerance), and the policy in words.
-fn dual_rates(
-    args: &TessellateArgs,
-    tolerance: Option<Tolerance>,
-    scheme: &Scheme,
-    mesh: &Mesh,
-    name: &str,
-) -> Result<(Vec<u32>, Option<RingDepths>, String), UserError> {
-    let located = |error: subdiv::tess::TessError| UserError(format!("{name}: {error}"));
-    if let Some(tolerance) = tolerance {
-        let bounds =
-            QuadtreeTessellator::new(scheme, mesh).map_err(|e| UserError(format!("{name}: --tolerance: {e}")))?;
-        let policy = ErrorRates { tolerance, max_rate: args.max_rate };
-        let DualRates { faces, rings } = policy.rates(&bounds, mesh).map_err(located)?;
-        let epsilon = tolerance.absolute(bounds.diagonal())?;
-        return Ok((faces, Some(rings), format!("ε = {epsilon:.3e}")));
-    }
-    if let Some(pixels) = args.pixels {
-        let camera = parse_camera(args.camera.as_deref().unwrap_or_default())?;
-        let viewport = parse_size(&args.viewport, "--viewport", u32::MAX)?;
-        let policy = ScreenSpace { max_rate: args.max_rate, ..ScreenSpace::new(camera, viewport, pixels) };
-        return Ok((policy.face_rates(mesh).map_err(located)?, None, format!("{pixels} pixels per edge")));
-    }
-    let rate = args.rate.unwrap_or(DEFAULT_RATE);
-    Ok((vec![rate; mesh.face_count()], None, format!("uniform rate {rate}")))
 }
 
 /// `--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ[,FOVY_DEG]`.
@@ -264,74 +254,4 @@ impl Spinner {
     fn finish(&self) {
         self.0.finish_and_clear();
     }
-}
-
-/// `vertex,face,u,v` per output vertex, in output order, written atomically.
-fn write_params(path: &Path, mesh: &TessMesh) -> Result<(), UserError> {
-    subdiv::io::write_atomic(path, |w| {
-        writeln!(w, "vertex,face,u,v")?;
-        for (k, p) in mesh.parameters.iter().enumerate() {
-            writeln!(w, "{k},{},{:?},{:?}", p.face.index(), p.u, p.v)?;
-        }
-        Ok(())
-    })?;
-    Ok(())
-}
-
-/// Which faces an OBJ output lists.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum ObjFaces {
-    Triangles,
-    /// The polygons alone: they cover the surface (the quadtree's leaves; its triangles' fan
-    /// centres stay unused).
-    Polygons,
-    /// The polygons and the triangles outside them (the dual tessellation's quads, and its
-    /// strip and vertex triangles).
-    PolygonsAndTriangles,
-}
-
-/// OBJ with `v` and `vn` lines, and faces as `f v//vn`.
-fn write_obj(w: &mut dyn Write, mesh: &TessMesh, faces: ObjFaces) -> std::io::Result<()> {
-    writeln!(w, "# subdiv tessellate")?;
-    for p in &mesh.positions {
-        writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
-    }
-    for n in &mesh.normals {
-        writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
-    }
-    let face = |w: &mut dyn Write, vertices: &[u32]| -> std::io::Result<()> {
-        write!(w, "f")?;
-        for &v in vertices {
-            write!(w, " {0}//{0}", v + 1)?;
-        }
-        writeln!(w)
-    };
-    if faces == ObjFaces::Triangles {
-        for t in &mesh.triangles {
-            face(w, t)?;
-        }
-        return Ok(());
-    }
-    for k in 0..mesh.polygon_count() {
-        face(w, mesh.polygon(k))?;
-    }
-    if faces == ObjFaces::PolygonsAndTriangles {
-        // A dual quad `a b c d` is the triangles `a b c` and `a c d`.
-        let mut covered = std::collections::HashSet::new();
-        for k in 0..mesh.polygon_count() {
-            let p = mesh.polygon(k);
-            for i in 1..p.len().saturating_sub(1) {
-                covered.insert(sorted([p[0], p[i], p[i + 1]]));
-            }
-        }
-        for t in mesh.triangles.iter().filter(|t| !covered.contains(&sorted(**t))) {
-            face(w, t)?;
-        }
-    }
-    Ok(())
-}
-
-fn sorted(mut t: [u32; 3]) -> [u32; 3] {
-    t.sort_unstable();
-    t
 }

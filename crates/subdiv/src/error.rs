@@ -1,0 +1,74 @@
+//! The facade's one error type.
+
+use subdiv_eval::EvalError;
+use subdiv_io::IoError;
+use subdiv_mesh::MeshError;
+use subdiv_schemes::SchemeError;
+use subdiv_stencil::StencilError;
+use subdiv_tess::TessError;
+
+/// Why a [`Surface`](crate::Surface) operation failed: the error of the crate that did the
+/// work, or a request the facade itself refuses. Every variant's message names the rule
+/// broken; none is a panic.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// The control mesh breaks a topology rule.
+    #[error(transparent)]
+    Mesh(#[from] MeshError),
+    /// Reading or writing a file failed (with its `file:line` where there is one).
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// The scheme refused the mesh or the request (refinement).
+    #[error(transparent)]
+    Scheme(#[from] SchemeError),
+    /// Exact stencils could not serve the request.
+    #[error(transparent)]
+    Stencil(#[from] StencilError),
+    /// Limit evaluation failed (a face out of range, a parameter outside its face, a hole, …).
+    #[error(transparent)]
+    Eval(#[from] EvalError),
+    /// Tessellation failed (rates, tolerances, cameras, unsupported features).
+    #[error(transparent)]
+    Tess(#[from] TessError),
+    /// [`Rates::Tolerance`](crate::Rates::Tolerance) for the dual method needs the quadtree's
+    /// curvature bounds, which do not take this mesh or scheme (closed Catmull-Clark meshes
+    /// without creases only).
+    #[error("rates to a tolerance: {0}")]
+    ToleranceBounds(#[source] TessError),
+    /// [`Method::Quadtree`](crate::Method::Quadtree) was asked for with rates other than
+    /// [`Rates::Tolerance`](crate::Rates::Tolerance).
+    #[error("the quadtree tessellator takes a tolerance (Rates::Tolerance), not {given} rates")]
+    QuadtreeRates {
+        /// The rates given, in words.
+        given: &'static str,
+    },
+    /// Refinement to so many levels that the faces would not fit 32-bit ids.
+    #[error("refining {levels} levels would make at least {faces} faces, more than 32-bit face ids can name")]
+    RefineLevels {
+        /// The levels asked for.
+        levels: usize,
+        /// A lower bound of the faces they would make.
+        faces: u64,
+    },
+    /// A grid size outside `1..=`[`MAX_GRID`](crate::MAX_GRID).
+    #[error("grid {n}: the grid size must be from 1 to {max}")]
+    Grid {
+        /// The size given.
+        n: u32,
+        /// The largest allowed.
+        max: u32,
+    },
+}
+
+impl Error {
+    /// Whether the error is a point asked of a hole (a face without limit surface), which
+    /// callers evaluating many points often skip rather than stop at.
+    pub fn is_hole(&self) -> bool {
+        matches!(
+            self,
+            Self::Eval(EvalError::Stencil(StencilError::NoSurface { .. }))
+                | Self::Stencil(StencilError::NoSurface { .. })
+        )
+    }
+}

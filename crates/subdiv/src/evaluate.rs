@@ -1,0 +1,146 @@
+//! Limit evaluation through the facade: [`EvalOptions`], [`Evaluator`] and its grids.
+
+use subdiv_eval::{EigenEvaluator, Method as EvalMethod};
+use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
+use subdiv_schemes::{RefineOptions, Scheme};
+use subdiv_stencil::LimitPoint;
+
+use crate::Error;
+
+/// The largest grid [`Evaluator::grid`] takes: `(n + 1)²` points per quad.
+pub const MAX_GRID: u32 = 4096;
+
+/// Options of [`Surface::evaluator`](crate::Surface::evaluator).
+///
+/// ```
+/// use subdiv::{EvalMethod, EvalOptions};
+/// use subdiv::mesh::BoundaryInterpolation;
+///
+/// let options = EvalOptions::DEFAULT.with_method(EvalMethod::Stencil).with_boundary(BoundaryInterpolation::EdgeAndCorner);
+/// assert_eq!(EvalOptions::default(), EvalOptions::DEFAULT);
+/// assert_eq!(options.refine.boundary, Some(BoundaryInterpolation::EdgeAndCorner));
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EvalOptions {
+    /// How faces are evaluated: eigenbasis (Stam, Lai-Cheng; any real parameter), exact
+    /// stencils, or eigenbasis on interior patches and stencils on boundary ones. Default:
+    /// [`EvalMethod::Auto`].
+    pub method: EvalMethod,
+    /// The boundary rule and the other options refinement takes. Default:
+    /// [`RefineOptions::DEFAULT`] (everything from the mesh's tags).
+    pub refine: RefineOptions,
+}
+
+impl EvalOptions {
+    /// The defaults: [`EvalMethod::Auto`], the mesh's tags.
+    pub const DEFAULT: Self = Self { method: EvalMethod::Auto, refine: RefineOptions::DEFAULT };
+
+    /// These options with [`method`](Self::method).
+    #[must_use]
+    pub const fn with_method(self, method: EvalMethod) -> Self {
+        Self { method, ..self }
+    }
+
+    /// These options with the boundary rule `boundary` (instead of the mesh's
+    /// `interpolateboundary` tag).
+    #[must_use]
+    pub const fn with_boundary(self, boundary: BoundaryInterpolation) -> Self {
+        Self { refine: RefineOptions { boundary: Some(boundary), ..self.refine }, ..self }
+    }
+}
+
+impl Default for EvalOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// One point of an [`Evaluator::grid`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GridPoint {
+    /// The face.
+    pub face: FaceId,
+    /// `u` as OpenSubdiv's `osd_limit` prints it (N-gons: the tiled sub-face coordinates).
+    pub u: f64,
+    /// `v`, likewise.
+    pub v: f64,
+    /// The limit point.
+    pub point: LimitPoint,
+}
+
+/// The points of an [`Evaluator::grid`] and the faces it skipped.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct EvalGrid {
+    /// The points, face by face, in `osd_limit`'s order.
+    pub points: Vec<GridPoint>,
+    /// The faces without a limit surface (holes), which have no points.
+    pub holes: usize,
+}
+
+/// The limit surface of a mesh at any face's `Bfr` parameters, prepared once
+/// ([`Surface::evaluator`](crate::Surface::evaluator)): positions and first derivatives.
+#[derive(Debug)]
+pub struct Evaluator {
+    inner: EigenEvaluator,
+}
+
+impl Evaluator {
+    /// Prepares `mesh` under `scheme`.
+    pub(crate) fn new(scheme: &Scheme, mesh: &Mesh, options: &EvalOptions) -> Result<Self, Error> {
+        Ok(Self { inner: EigenEvaluator::new(scheme, mesh, &options.refine, options.method)? })
+    }
+
+    /// The method faces were prepared with.
+    pub fn method(&self) -> EvalMethod {
+        self.inner.method()
+    }
+
+    /// The evaluator underneath (second derivatives, which face takes which route, the exact
+    /// stencil evaluator).
+    pub fn eigen(&self) -> &EigenEvaluator {
+        &self.inner
+    }
+
+    /// The limit point of `face` at `(u, v)` with its first derivatives (at an extraordinary
+    /// vertex itself, tangent directions: [`LimitPoint::exact_derivatives`] is then `false`).
+    ///
+    /// # Errors
+    /// [`Error::Eval`] for a face out of range, a parameter outside the face, a hole
+    /// ([`Error::is_hole`]), or a face [`EvalMethod::Eigen`] does not take.
+    #[inline]
+    pub fn evaluate(&self, face: FaceId, u: f64, v: f64) -> Result<LimitPoint, Error> {
+        Ok(self.inner.eval(face, u, v)?)
+    }
+
+    /// Every face at the grid `(i/n, j/n)` of `osd_limit --grid n`: quads `(n + 1)²` points,
+    /// `j` outer; triangles of triangle schemes `i + j ≤ n`; other faces of quad schemes the
+    /// grid of every `Bfr` sub-face. With [`EvalMethod::Stencil`] the exact rational grid
+    /// points are evaluated, otherwise the f64 parameters listed. Holes are counted, not
+    /// evaluated.
+    ///
+    /// # Errors
+    /// [`Error::Grid`] unless `1 ≤ n ≤` [`MAX_GRID`]; as [`evaluate`](Self::evaluate).
+    pub fn grid(&self, n: u32) -> Result<EvalGrid, Error> {
+        if !(1..=MAX_GRID).contains(&n) {
+            return Err(Error::Grid { n, max: MAX_GRID });
+        }
+        let mut grid = EvalGrid::default();
+        let exact = self.inner.stencil();
+        for face in (0..self.inner.face_count() as u32).map(FaceId::new) {
+            if self.method() == EvalMethod::Stencil {
+                let points = exact.grid(face, n)?;
+                grid.holes += usize::from(points.is_empty());
+                grid.points.extend(points.into_iter().map(|(g, point)| GridPoint { face, u: g.u, v: g.v, point }));
+                continue;
+            }
+            if !exact.has_surface(face)? {
+                grid.holes += 1;
+                continue;
+            }
+            for g in exact.domain(face)?.grid(n) {
+                grid.points.push(GridPoint { face, u: g.u, v: g.v, point: self.evaluate(face, g.u, g.v)? });
+            }
+        }
+        Ok(grid)
+    }
+}

@@ -1,0 +1,524 @@
+//! [`Surface`]: a control mesh under a scheme, and everything one does with its limit surface.
+
+use std::path::Path;
+use std::sync::OnceLock;
+
+use subdiv_mesh::{BuildOptions, FaceId, Mesh, PolygonSoup};
+use subdiv_schemes::{RefineOptions, Refiner, Scheme};
+use subdiv_stencil::LimitPoint;
+use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
+use subdiv_tess::{
+    DualOptions, DualTessellator, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink, TessTriangle,
+    TessVertex,
+};
+
+use crate::Error;
+use crate::evaluate::{EvalGrid, EvalOptions, Evaluator};
+use crate::tessellate::{FaceRates, Method, Rates, TessInfo, TessOptions, Tessellation};
+
+/// The limit surface of a control mesh under a subdivision scheme: refine it, evaluate it
+/// exactly with derivatives, tessellate it watertight at per-face rates or to a proven
+/// tolerance, and write the result as GLB or OBJ.
+///
+/// The work each operation needs is prepared on first use and kept: the evaluator's patches,
+/// the dual-grid tessellator (its templates and stencils, as `DualTessellator` keeps them
+/// across rates) and the quadtree's pieces (which the tolerance policy's bounds also use).
+///
+/// ```
+/// use subdiv::mesh::shapes;
+/// use subdiv::schemes::Builtin;
+/// use subdiv::{FaceId, Rates, Surface, TessOptions, Tolerance};
+///
+/// let mut surface = Surface::build(shapes::cube(), Builtin::CatmullClark.scheme())?;
+/// // The exact limit point at the centre of face 0, with its derivatives.
+/// let point = surface.evaluate(FaceId::new(0), 0.5, 0.5)?;
+/// assert!(point.du.cross(point.dv).length() > 0.0);
+/// // Every face at rate 4, then to 1% of the bounding box's diagonal.
+/// let coarse = surface.tessellate(&TessOptions::DEFAULT.with_rates(Rates::Uniform(4)))?;
+/// let fine = surface.tessellate(&TessOptions::DEFAULT.with_rates(Rates::Tolerance(Tolerance::Relative(1e-2))))?;
+/// assert!(fine.mesh.triangles.len() > coarse.mesh.triangles.len());
+/// fine.write_glb(std::env::temp_dir().join("subdiv-surface-doc.glb"))?;
+/// # Ok::<(), subdiv::Error>(())
+/// ```
+#[derive(Debug)]
+pub struct Surface {
+    mesh: Mesh,
+    scheme: Scheme,
+    /// The evaluator with the default options, made on the first [`Surface::evaluate`].
+    evaluator: OnceLock<Evaluator>,
+    /// The dual tessellator, with the options it was made with.
+    dual: Option<(DualOptions, DualTessellator)>,
+    /// The quadtree tessellator (also the tolerance policy's bounds).
+    quadtree: Option<QuadtreeTessellator>,
+}
+
+impl Surface {
+    /// The surface of `mesh` under `scheme` (prepared lazily: nothing fails here).
+    pub fn new(mesh: Mesh, scheme: &Scheme) -> Self {
+        Self { mesh, scheme: scheme.clone(), evaluator: OnceLock::new(), dual: None, quadtree: None }
+    }
+
+    /// The surface of a polygon soup, built into a mesh first.
+    ///
+    /// # Errors
+    /// [`Error::Mesh`] for the first topology rule the soup breaks.
+    pub fn build(soup: PolygonSoup, scheme: &Scheme) -> Result<Self, Error> {
+        Ok(Self::new(Mesh::build(soup)?, scheme))
+    }
+
+    /// The surface of the mesh file at `path` (`.obj` with OpenSubdiv's tags, `.gltf`,
+    /// `.glb`).
+    ///
+    /// # Errors
+    /// [`Error::Io`]: an unreadable file, or one that is no valid mesh (with the OBJ line of the
+    /// face, vertex or tag at fault).
+    pub fn load(path: impl AsRef<Path>, scheme: &Scheme) -> Result<Self, Error> {
+        Ok(Self::new(subdiv_io::load_mesh(path, &BuildOptions::default())?, scheme))
+    }
+
+    /// The control mesh.
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The scheme.
+    pub fn scheme(&self) -> &Scheme {
+        &self.scheme
+    }
+
+    /// The control mesh refined `levels` times (OpenSubdiv's rules for Catmull-Clark and Loop;
+    /// the mesh's boundary, crease, corner and hole tags). Each level multiplies the face
+    /// count by about 4.
+    ///
+    /// # Errors
+    /// [`Error::Scheme`] for a mesh the scheme does not take; [`Error::RefineLevels`] for more
+    /// faces than 32-bit ids hold.
+    pub fn refine(&self, levels: usize) -> Result<Mesh, Error> {
+        self.refine_with_progress(levels, |_| {})
+    }
+
+    /// [`refine`](Self::refine), calling `progress(level)` after each level (1 to `levels`).
+    ///
+    /// # Errors
+    /// As [`refine`](Self::refine).
+    pub fn refine_with_progress(&self, levels: usize, progress: impl FnMut(usize)) -> Result<Mesh, Error> {
+        // A primal split's first level makes about one face per half-edge, each later one four
+        // per face (a lower bound for the other splits too, close enough to refuse in advance
+        // what 32-bit ids could not hold).
+        let first = self.mesh.half_edge_count() as u64;
+        let faces = (1..levels).fold(if levels == 0 { 0 } else { first }, |n, _| n.saturating_mul(4));
+        if faces > u64::from(u32::MAX) {
+            return Err(Error::RefineLevels { levels, faces });
+        }
+        Ok(Refiner::with_progress(&self.mesh, &self.scheme, levels, &RefineOptions::DEFAULT, progress)?.into_mesh())
+    }
+
+    /// The limit point of `face` at its `Bfr` parameters `(u, v)`, with first derivatives: by
+    /// eigenbasis on interior patches of Catmull-Clark, Loop and bilinear, by exact stencils
+    /// elsewhere ([`EvalOptions::DEFAULT`]; [`evaluator`](Self::evaluator) takes others).
+    ///
+    /// # Errors
+    /// As [`Surface::evaluator`] (the first call prepares it) and [`Evaluator::evaluate`].
+    pub fn evaluate(&self, face: FaceId, u: f64, v: f64) -> Result<LimitPoint, Error> {
+        self.default_evaluator()?.evaluate(face, u, v)
+    }
+
+    /// Every face at the grid of `osd_limit --grid n`, as [`Evaluator::grid`], with
+    /// [`EvalOptions::DEFAULT`].
+    ///
+    /// # Errors
+    /// As [`Evaluator::grid`].
+    pub fn evaluate_grid(&self, n: u32) -> Result<EvalGrid, Error> {
+        self.default_evaluator()?.grid(n)
+    }
+
+    /// An evaluator of the limit surface with `options`.
+    ///
+    /// # Errors
+    /// [`Error::Eval`]: schemes without sub-patch matrices (√3, Doo-Sabin, mid-edge), creases and
+    /// corners, faces the scheme does not take.
+    pub fn evaluator(&self, options: &EvalOptions) -> Result<Evaluator, Error> {
+        Evaluator::new(&self.scheme, &self.mesh, options)
+    }
+
+    fn default_evaluator(&self) -> Result<&Evaluator, Error> {
+        if let Some(evaluator) = self.evaluator.get() {
+            return Ok(evaluator);
+        }
+        let made = self.evaluator(&EvalOptions::DEFAULT)?;
+        Ok(self.evaluator.get_or_init(|| made))
+    }
+
+    /// The per-face rates (and, for a tolerance, the rings around extraordinary points) that
+    /// `options.rates` gives the dual tessellator, capped at `options.max_rate` for
+    /// [`Rates::Tolerance`] and [`Rates::Screen`].
+    ///
+    /// # Errors
+    /// [`Error::ToleranceBounds`] for a tolerance policy on a mesh the quadtree's bounds do not
+    /// take (boundaries, holes, creases, schemes other than Catmull-Clark); [`Error::Tess`] for
+    /// a face needing more than `max_rate`, a bad tolerance, camera or viewport.
+    pub fn face_rates(&mut self, options: &TessOptions) -> Result<FaceRates, Error> {
+        let faces = self.mesh.face_count();
+        Ok(match &options.rates {
+            Rates::Uniform(rate) => FaceRates { faces: vec![*rate; faces], rings: None, epsilon: None },
+            Rates::PerFace(rates) => FaceRates { faces: rates.clone(), rings: None, epsilon: None },
+            Rates::Tolerance(tolerance) => {
+                let bounds = quadtree(&mut self.quadtree, &self.scheme, &self.mesh).map_err(|e| match e {
+                    Error::Tess(e) => Error::ToleranceBounds(e),
+                    e => e,
+                })?;
+                let policy = ErrorRates { tolerance: *tolerance, max_rate: options.max_rate };
+                let DualRates { faces, rings } = policy.rates(bounds, &self.mesh)?;
+                let epsilon = tolerance.absolute(bounds.diagonal())?;
+                FaceRates { faces, rings: Some(rings), epsilon: Some(epsilon) }
+            }
+            Rates::Screen { camera, viewport, pixels_per_edge } => {
+                let policy = ScreenSpace {
+                    max_rate: options.max_rate,
+                    ..ScreenSpace::new(*camera, *viewport, *pixels_per_edge)
+                };
+                FaceRates { faces: policy.face_rates(&self.mesh)?, rings: None, epsilon: None }
+            }
+        })
+    }
+
+    /// Tessellates the limit surface: watertight, every vertex an exact limit point with its
+    /// unit normal and `Bfr` parameters. The tessellators are kept for the next call (a new
+    /// one is made when [`TessOptions::polygons`] or [`TessOptions::parallelism`] change).
+    ///
+    /// # Errors
+    /// [`Error::QuadtreeRates`] for [`Method::Quadtree`] without [`Rates::Tolerance`]; as
+    /// [`face_rates`](Self::face_rates); [`Error::Tess`] for a mesh or scheme the tessellator
+    /// does not take (the quadtree: closed Catmull-Clark meshes without creases; the dual:
+    /// primal schemes with sub-patch matrices, no creases), rates outside `1..=128`, or a
+    /// tolerance the quadtree cannot meet within its depth and polygon limits.
+    pub fn tessellate(&mut self, options: &TessOptions) -> Result<Tessellation, Error> {
+        if options.method == Method::Dual {
+            // The dual tessellator's own output, copied whole rather than vertex by vertex.
+            let (info, rings) = self.dual_rates(options)?;
+            let tess = self.dual(options)?;
+            let mesh = match &rings {
+                Some(rings) => tess.tessellate_with_rings(&info.rates, rings)?,
+                None => tess.tessellate(&info.rates)?,
+            };
+            return Ok(Tessellation { mesh: mesh.clone(), info });
+        }
+        let mut mesh = TessMesh::default();
+        let info = self.tessellate_into(options, &mut mesh)?;
+        Ok(Tessellation { mesh, info })
+    }
+
+    /// [`tessellate`](Self::tessellate) into `sink` (the caller's buffers and vertex type, see
+    /// [`TessSink`]); polygons go to sinks that want them when [`TessOptions::polygons`] is set.
+    /// Returns how the tessellation was made.
+    ///
+    /// ```
+    /// use subdiv::mesh::shapes;
+    /// use subdiv::schemes::Builtin;
+    /// use subdiv::{FlatMesh, Surface, TessOptions};
+    ///
+    /// let mut surface = Surface::build(shapes::ngon_prism(5), Builtin::CatmullClark.scheme())?;
+    /// let mut flat = FlatMesh::default(); // px py pz nx ny nz (f32) and u32 indices
+    /// let info = surface.tessellate_into(&TessOptions::DEFAULT, &mut flat)?;
+    /// assert!(info.rates.iter().all(|&r| r == 8));
+    /// assert_eq!(flat.indices.len() % 3, 0);
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate); `sink` is then not called.
+    pub fn tessellate_into<S: TessSink + ?Sized>(
+        &mut self,
+        options: &TessOptions,
+        sink: &mut S,
+    ) -> Result<TessInfo, Error> {
+        match options.method {
+            Method::Dual => {
+                let (info, rings) = self.dual_rates(options)?;
+                let tess = self.dual(options)?;
+                match &rings {
+                    Some(rings) => tess.tessellate_with_rings_into(&info.rates, rings, sink)?,
+                    None => tess.tessellate_into(&info.rates, sink)?,
+                }
+                Ok(info)
+            }
+            Method::Quadtree => {
+                let Rates::Tolerance(tolerance) = options.rates else {
+                    return Err(Error::QuadtreeRates { given: options.rates.name() });
+                };
+                let tess = self.quadtree_mut()?;
+                let epsilon = tolerance.absolute(tess.diagonal())?;
+                let quadtree_options =
+                    QuadtreeOptions::DEFAULT.with_tolerance(tolerance).with_parallelism(options.parallelism);
+                let stats = if options.polygons {
+                    tess.tessellate_into(&quadtree_options, sink)?
+                } else {
+                    tess.tessellate_into(&quadtree_options, &mut WithoutPolygons(sink))?
+                };
+                Ok(TessInfo {
+                    method: Method::Quadtree,
+                    rates: Vec::new(),
+                    epsilon: Some(epsilon),
+                    quadtree: Some(stats),
+                })
+            }
+        }
+    }
+
+    /// The dual method's rates as a [`TessInfo`], and its rings.
+    fn dual_rates(&mut self, options: &TessOptions) -> Result<(TessInfo, Option<RingDepths>), Error> {
+        let FaceRates { faces, rings, epsilon } = self.face_rates(options)?;
+        Ok((TessInfo { method: Method::Dual, rates: faces, epsilon, quadtree: None }, rings))
+    }
+
+    /// The dual tessellator for `options`, made (again) when its options differ.
+    fn dual(&mut self, options: &TessOptions) -> Result<&mut DualTessellator, Error> {
+        let wanted = DualOptions { quads: options.polygons, parallelism: options.parallelism };
+        let tess = match self.dual.take() {
+            Some((made, tess)) if made == wanted => tess,
+            _ => DualTessellator::new(&self.scheme, &self.mesh, &wanted)?,
+        };
+        Ok(&mut self.dual.insert((wanted, tess)).1)
+    }
+
+    /// The quadtree tessellator, made on first use.
+    fn quadtree_mut(&mut self) -> Result<&mut QuadtreeTessellator, Error> {
+        quadtree(&mut self.quadtree, &self.scheme, &self.mesh)
+    }
+}
+
+/// The quadtree tessellator in `slot`, made there on first use.
+fn quadtree<'a>(
+    slot: &'a mut Option<QuadtreeTessellator>,
+    scheme: &Scheme,
+    mesh: &Mesh,
+) -> Result<&'a mut QuadtreeTessellator, Error> {
+    let tess = match slot.take() {
+        Some(tess) => tess,
+        None => QuadtreeTessellator::new(scheme, mesh)?,
+    };
+    Ok(slot.insert(tess))
+}
+
+/// A sink's view that takes no polygons.
+struct WithoutPolygons<'a, S: ?Sized>(&'a mut S);
+
+impl<S: TessSink + ?Sized> TessSink for WithoutPolygons<'_, S> {
+    fn begin(&mut self, counts: &TessCounts) {
+        self.0.begin(counts);
+    }
+
+    #[inline]
+    fn vertex(&mut self, index: u32, vertex: &TessVertex) {
+        self.0.vertex(index, vertex);
+    }
+
+    #[inline]
+    fn triangle(&mut self, index: u32, triangle: &TessTriangle) {
+        self.0.triangle(index, triangle);
+    }
+
+    fn end(&mut self) {
+        self.0.end();
+    }
+}
+
+/// `mesh` as a soup with its hole faces left out (their vertices stay, so the numbering does
+/// not change), as OpenSubdiv's refinement output lists it: what `subdiv refine` writes.
+pub fn without_holes(mesh: &Mesh) -> PolygonSoup {
+    let mut soup = PolygonSoup::with_capacity(mesh.vertex_count(), mesh.face_count(), mesh.half_edge_count());
+    for &p in mesh.positions() {
+        soup.push_vertex(p);
+    }
+    for f in mesh.face_ids().filter(|&f| !mesh.is_hole(f)) {
+        soup.push_face(mesh.face_vertices(f).iter().copied());
+    }
+    soup
+}
+
+#[cfg(test)]
+mod tests {
+    use subdiv_eval::EigenEvaluator;
+    use subdiv_mesh::DVec3;
+    use subdiv_mesh::shapes;
+    use subdiv_schemes::Builtin;
+    use subdiv_tess::rates::Camera;
+    use subdiv_tess::{FlatMesh, Parallelism, Tolerance};
+
+    use super::*;
+    use crate::EvalMethod;
+
+    fn surface(soup: PolygonSoup) -> Surface {
+        Surface::build(soup, Builtin::CatmullClark.scheme()).unwrap()
+    }
+
+    /// Each policy gives what the tessellators give when driven by hand, as the CLI drove
+    /// them before the facade.
+    #[test]
+    fn tessellations_equal_the_tessellators_own() {
+        let cc = Builtin::CatmullClark.scheme();
+        for soup in [shapes::cube(), shapes::ngon_prism(5), shapes::default_model(), shapes::quad_grid(3, 2)] {
+            let mesh = Mesh::build(soup.clone()).unwrap();
+            let mut s = surface(soup);
+            let faces = mesh.face_count();
+            let camera = Camera::look_at(DVec3::new(0.0, -5.0, 2.0), DVec3::ZERO, DVec3::Z);
+            let closed = mesh.boundary_edge_count() == 0;
+            let mut policies = vec![
+                Rates::Uniform(3),
+                Rates::PerFace((0..faces as u32).map(|f| 1 + f % 4).collect()),
+                Rates::Screen { camera, viewport: [640, 480], pixels_per_edge: 12.0 },
+            ];
+            if closed {
+                policies.push(Rates::Tolerance(Tolerance::Relative(3e-2)));
+            }
+            for polygons in [false, true] {
+                let dual = DualOptions::DEFAULT.with_quads(polygons);
+                let mut tess = DualTessellator::new(cc, &mesh, &dual).unwrap();
+                for rates in &policies {
+                    let options =
+                        TessOptions::DEFAULT.with_rates(rates.clone()).with_max_rate(32).with_polygons(polygons);
+                    let expected = match rates {
+                        Rates::Uniform(n) => tess.tessellate(&vec![*n; faces]).unwrap().clone(),
+                        Rates::PerFace(r) => tess.tessellate(r).unwrap().clone(),
+                        Rates::Screen { camera, viewport, pixels_per_edge } => {
+                            let policy =
+                                ScreenSpace { max_rate: 32, ..ScreenSpace::new(*camera, *viewport, *pixels_per_edge) };
+                            tess.tessellate(&policy.face_rates(&mesh).unwrap()).unwrap().clone()
+                        }
+                        Rates::Tolerance(t) => {
+                            let bounds = QuadtreeTessellator::new(cc, &mesh).unwrap();
+                            let r = ErrorRates { tolerance: *t, max_rate: 32 }.rates(&bounds, &mesh).unwrap();
+                            tess.tessellate_with_rings(&r.faces, &r.rings).unwrap().clone()
+                        }
+                    };
+                    let out = s.tessellate(&options).unwrap();
+                    assert_eq!(out.mesh, expected, "{rates:?}");
+                    assert_eq!(out.info.rates.len(), faces);
+                    assert_eq!(out.info.epsilon.is_some(), matches!(rates, Rates::Tolerance(_)));
+                    let mut flat = FlatMesh::default();
+                    s.tessellate_into(&options, &mut flat).unwrap();
+                    let mut written = FlatMesh::default();
+                    tess.write_flat(&mut written);
+                    assert_eq!(flat, written, "{rates:?}");
+                }
+            }
+            if closed {
+                let quadtree = QuadtreeTessellator::new(cc, &mesh).unwrap();
+                let tolerance = Tolerance::Relative(1e-2);
+                let (expected, stats) =
+                    quadtree.tessellate_with_stats(&QuadtreeOptions::DEFAULT.with_tolerance(tolerance)).unwrap();
+                let options =
+                    TessOptions::DEFAULT.with_method(Method::Quadtree).with_rates(Rates::Tolerance(tolerance));
+                let with = s.tessellate(&options.clone().with_polygons(true)).unwrap();
+                assert_eq!(with.mesh, expected);
+                assert_eq!(with.info.quadtree, Some(stats));
+                assert_eq!(with.info.epsilon, Some(tolerance.absolute(quadtree.diagonal()).unwrap()));
+                let without = s.tessellate(&options.with_parallelism(Parallelism::Serial)).unwrap();
+                assert_eq!(without.mesh.polygon_count(), 0);
+                assert_eq!(
+                    (&without.mesh.positions, &without.mesh.triangles),
+                    (&expected.positions, &expected.triangles)
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn bad_requests_are_typed_errors() {
+        let mut s = surface(shapes::quad_grid(2, 2));
+        let quadtree = TessOptions::DEFAULT.with_method(Method::Quadtree);
+        assert!(matches!(s.tessellate(&quadtree), Err(Error::QuadtreeRates { given: "uniform" })));
+        // The quadtree's bounds take no boundaries, and the dual tessellator no rate 0.
+        let tolerance = TessOptions::DEFAULT.with_rates(Rates::Tolerance(Tolerance::Relative(1e-2)));
+        assert!(matches!(s.tessellate(&tolerance), Err(Error::ToleranceBounds(_))));
+        assert!(matches!(s.tessellate(&quadtree.with_rates(tolerance.rates.clone())), Err(Error::Tess(_))));
+        assert!(matches!(s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::Uniform(0))), Err(Error::Tess(_))));
+        assert!(matches!(
+            s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::PerFace(vec![2; 3]))),
+            Err(Error::Tess(_))
+        ));
+        let mut flat = FlatMesh { vertices: vec![1.0], indices: vec![] };
+        assert!(s.tessellate_into(&TessOptions::DEFAULT.with_rates(Rates::Uniform(500)), &mut flat).is_err());
+        assert_eq!(flat.vertices, [1.0], "a failed call leaves the sink alone");
+        let bad_camera = Rates::Screen {
+            camera: Camera::look_at(DVec3::ZERO, DVec3::ZERO, DVec3::Z),
+            viewport: [10, 10],
+            pixels_per_edge: 1.0,
+        };
+        assert!(matches!(s.tessellate(&TessOptions::DEFAULT.with_rates(bad_camera)), Err(Error::Tess(_))));
+        // Evaluation: a face out of range, a parameter outside the face, a grid of 0.
+        assert!(matches!(s.evaluate(FaceId::new(99), 0.5, 0.5), Err(Error::Eval(_))));
+        assert!(s.evaluate(FaceId::new(0), 1.5, 0.5).is_err());
+        assert!(s.evaluate(FaceId::new(0), f64::NAN, 0.5).is_err());
+        assert!(matches!(s.evaluate_grid(0), Err(Error::Grid { n: 0, .. })));
+        assert!(matches!(s.evaluate_grid(crate::MAX_GRID + 1), Err(Error::Grid { .. })));
+        assert!(matches!(
+            Surface::new(Mesh::build(shapes::cube()).unwrap(), Builtin::DooSabin.scheme()).evaluate(
+                FaceId::new(0),
+                0.5,
+                0.5
+            ),
+            Err(Error::Eval(_))
+        ));
+        // Files.
+        assert!(matches!(Surface::load("no/such/cage.obj", Builtin::CatmullClark.scheme()), Err(Error::Io(_))));
+        let mut bowtie = shapes::cube();
+        bowtie.push_face([0, 1, 2].map(subdiv_mesh::VertexId::new));
+        assert!(matches!(Surface::build(bowtie, Builtin::CatmullClark.scheme()), Err(Error::Mesh(_))));
+        assert!(matches!(
+            Surface::new(Mesh::build(shapes::cube()).unwrap(), Builtin::Loop.scheme()).refine(1),
+            Err(Error::Scheme(_))
+        ));
+        assert!(matches!(s.refine(40), Err(Error::RefineLevels { levels: 40, .. })));
+    }
+
+    #[test]
+    fn evaluation_and_refinement_are_the_crates_own() {
+        let s = surface(shapes::default_model());
+        let eigen = EigenEvaluator::new(s.scheme(), s.mesh(), &RefineOptions::DEFAULT, EvalMethod::Auto).unwrap();
+        for face in [0, 7, 59].map(FaceId::new) {
+            assert_eq!(s.evaluate(face, 0.25, 0.75).unwrap(), eigen.eval(face, 0.25, 0.75).unwrap());
+        }
+        let grid = s.evaluate_grid(2).unwrap();
+        assert_eq!(grid.holes, 0);
+        assert_eq!(grid.points.len(), 9 * s.mesh().face_count());
+        assert!(grid.points.iter().all(|p| p.point == eigen.eval(p.face, p.u, p.v).unwrap()));
+        let exact = s.evaluator(&EvalOptions::DEFAULT.with_method(EvalMethod::Stencil)).unwrap().grid(2).unwrap();
+        assert_eq!(exact.points.len(), grid.points.len());
+        let mut levels = Vec::new();
+        let refined = s.refine_with_progress(2, |l| levels.push(l)).unwrap();
+        assert_eq!(levels, [1, 2]);
+        let expected = Refiner::new(s.mesh(), s.scheme(), 2, &RefineOptions::DEFAULT).unwrap().into_mesh();
+        assert_eq!(refined.positions(), expected.positions());
+        assert_eq!(without_holes(&refined).face_count(), refined.face_count());
+    }
+
+    #[test]
+    fn files_read_back() {
+        let dir = std::env::temp_dir().join(format!("subdiv-facade-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let cage = dir.join("cube.obj");
+        subdiv_io::write_obj(&cage, &shapes::cube()).unwrap();
+        let mut s = Surface::load(&cage, Builtin::CatmullClark.scheme()).unwrap();
+        for method in [Method::Dual, Method::Quadtree] {
+            let rates = Rates::Tolerance(Tolerance::Relative(2e-2));
+            let out =
+                s.tessellate(&TessOptions::DEFAULT.with_method(method).with_rates(rates).with_polygons(true)).unwrap();
+            let (glb, obj, csv) = (dir.join("out.glb"), dir.join("out.obj"), dir.join("out.csv"));
+            out.write_glb(&glb).unwrap();
+            let back = subdiv_io::load_mesh(&glb, &BuildOptions::default()).unwrap();
+            assert_eq!(back.face_count(), out.mesh.triangles.len());
+            for polygons in [false, true] {
+                out.write_obj(&obj, polygons).unwrap();
+                // Watertight either way: the faces build a closed mesh of the cube's genus.
+                let back = subdiv_io::load_mesh(&obj, &BuildOptions::default()).unwrap();
+                assert_eq!((back.boundary_edge_count(), back.genus()), (0, Some(0)), "{method:?}");
+                assert_eq!(back.face_size_histogram().contains_key(&4), polygons, "{method:?}");
+            }
+            out.write_params(&csv).unwrap();
+            let rows = std::fs::read_to_string(&csv).unwrap().lines().count();
+            assert_eq!(rows, out.mesh.positions.len() + 1);
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,295 @@
+//! Tessellation through the facade: [`TessOptions`] (rate policy, method, limits) and the
+//! [`Tessellation`] they give, with its files.
+
+use std::io::Write;
+use std::path::Path;
+
+use subdiv_io::{GlbMesh, write_atomic};
+use subdiv_tess::rates::{Camera, DEFAULT_MAX_RATE, RingDepths};
+use subdiv_tess::{Parallelism, QuadtreeStats, TessMesh, Tolerance};
+
+use crate::Error;
+
+/// How finely each face is cut (the dual method), or how flat the output must be (both
+/// methods; the only policy [`Method::Quadtree`] takes).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Rates {
+    /// Every face at this rate: `n × n` samples per quad, `1..=128`.
+    Uniform(u32),
+    /// One rate per face, in face order.
+    PerFace(Vec<u32>),
+    /// The rates (dual) or leaves (quadtree) that prove every limit point within the
+    /// tolerance of the output. Closed Catmull-Clark meshes without creases.
+    Tolerance(Tolerance),
+    /// Screen-space rates (paper 000 §6): each face cut so that its output edges are about
+    /// `pixels_per_edge` pixels long in a `viewport` seen by `camera`.
+    Screen {
+        /// The camera.
+        camera: Camera,
+        /// The image size in pixels, `[width, height]`.
+        viewport: [u32; 2],
+        /// The wanted length of an output edge, in pixels (> 0).
+        pixels_per_edge: f64,
+    },
+}
+
+impl Rates {
+    /// The policy's name, for messages.
+    pub(crate) fn name(&self) -> &'static str {
+        match self {
+            Self::Uniform(_) => "uniform",
+            Self::PerFace(_) => "per-face",
+            Self::Tolerance(_) => "tolerance",
+            Self::Screen { .. } => "screen-space",
+        }
+    }
+}
+
+/// Which tessellator cuts the surface.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Method {
+    /// Dual-grid stitching at per-face rates (Schaefer-Warren, paper 000 §5.5): any primal
+    /// scheme with sub-patch matrices, open meshes and holes; every [`Rates`] policy. The
+    /// default.
+    #[default]
+    Dual,
+    /// The error-driven quadtree with global vertex ids and polyline replacement (Lai-Cheng,
+    /// paper 002): closed Catmull-Clark meshes, [`Rates::Tolerance`] only.
+    Quadtree,
+}
+
+/// Options of [`Surface::tessellate`](crate::Surface::tessellate).
+///
+/// ```
+/// use subdiv::{Method, Parallelism, Rates, TessOptions, Tolerance};
+///
+/// let options = TessOptions::DEFAULT
+///     .with_rates(Rates::Tolerance(Tolerance::Relative(1e-3)))
+///     .with_max_rate(32)
+///     .with_parallelism(Parallelism::Serial);
+/// assert_eq!(options.method, Method::Dual);
+/// assert_eq!(TessOptions::default(), TessOptions::DEFAULT);
+/// assert_eq!(TessOptions::DEFAULT.rates, Rates::Uniform(8));
+/// ```
+#[derive(Clone, Debug, PartialEq)]
+pub struct TessOptions {
+    /// The rate policy. Default: [`Rates::Uniform`]`(8)` (what `subdiv tessellate` does
+    /// without one).
+    pub rates: Rates,
+    /// The tessellator. Default: [`Method::Dual`].
+    pub method: Method,
+    /// The largest rate [`Rates::Tolerance`] and [`Rates::Screen`] may give a face (dual; a
+    /// face that needs more to meet a tolerance is an error). Default:
+    /// [`DEFAULT_MAX_RATE`] (128, the largest the dual tessellator takes).
+    pub max_rate: u32,
+    /// Also list the output's polygons in [`TessMesh`]'s polygon lists: the dual
+    /// tessellation's quads (face grids, equal-rate strips, valence-4 vertices), or the
+    /// quadtree's leaves with their hanging vertices. Triangles are always output. Default:
+    /// `false`.
+    pub polygons: bool,
+    /// Whether the work may use rayon's threads (the output is the same, bit for bit, either
+    /// way). Default: [`Parallelism::Rayon`].
+    pub parallelism: Parallelism,
+}
+
+impl TessOptions {
+    /// The defaults: every face at rate 8 by the dual method, triangles only, on rayon's
+    /// threads.
+    pub const DEFAULT: Self = Self {
+        rates: Rates::Uniform(8),
+        method: Method::Dual,
+        max_rate: DEFAULT_MAX_RATE,
+        polygons: false,
+        parallelism: Parallelism::DEFAULT,
+    };
+
+    /// These options with [`rates`](Self::rates).
+    #[must_use]
+    pub fn with_rates(self, rates: Rates) -> Self {
+        Self { rates, ..self }
+    }
+
+    /// These options with [`method`](Self::method).
+    #[must_use]
+    pub fn with_method(self, method: Method) -> Self {
+        Self { method, ..self }
+    }
+
+    /// These options with [`max_rate`](Self::max_rate).
+    #[must_use]
+    pub fn with_max_rate(self, max_rate: u32) -> Self {
+        Self { max_rate, ..self }
+    }
+
+    /// These options with [`polygons`](Self::polygons).
+    #[must_use]
+    pub fn with_polygons(self, polygons: bool) -> Self {
+        Self { polygons, ..self }
+    }
+
+    /// These options with [`parallelism`](Self::parallelism).
+    #[must_use]
+    pub fn with_parallelism(self, parallelism: Parallelism) -> Self {
+        Self { parallelism, ..self }
+    }
+}
+
+impl Default for TessOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// What a rate policy gives the dual tessellator ([`Surface::face_rates`](crate::Surface::face_rates)).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FaceRates {
+    /// The rate of each face.
+    pub faces: Vec<u32>,
+    /// For [`Rates::Tolerance`]: the rings of exact points around extraordinary points that
+    /// the bound needs.
+    pub rings: Option<RingDepths>,
+    /// For [`Rates::Tolerance`]: the absolute tolerance `ε`.
+    pub epsilon: Option<f64>,
+}
+
+/// How a tessellation was made: what [`Surface::tessellate_into`](crate::Surface::tessellate_into)
+/// returns beside the output.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TessInfo {
+    /// The tessellator.
+    pub method: Method,
+    /// The rate of each face (dual; empty for the quadtree).
+    pub rates: Vec<u32>,
+    /// The absolute tolerance `ε`, for [`Rates::Tolerance`].
+    pub epsilon: Option<f64>,
+    /// The quadtree's statistics (quadtree only).
+    pub quadtree: Option<QuadtreeStats>,
+}
+
+/// A tessellation of the limit surface and how it was made
+/// ([`Surface::tessellate`](crate::Surface::tessellate)), with its files.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Tessellation {
+    /// The output: exact limit points with unit normals and their faces' `Bfr` parameters,
+    /// triangles, and polygons if [`TessOptions::polygons`].
+    pub mesh: TessMesh,
+    /// How it was made.
+    pub info: TessInfo,
+}
+
+impl Tessellation {
+    /// The output, keeping nothing else.
+    pub fn into_mesh(self) -> TessMesh {
+        self.mesh
+    }
+
+    /// Writes the triangles as GLB (f32 positions and normals, `u32` indices), atomically.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn write_glb(&self, path: impl AsRef<Path>) -> Result<(), Error> {
+        let positions: Vec<_> = self.mesh.positions.iter().map(|p| p.as_vec3()).collect();
+        let normals: Vec<_> = self.mesh.normals.iter().map(|n| n.as_vec3()).collect();
+        let indices = self.mesh.triangle_indices();
+        subdiv_io::write_glb(path, &GlbMesh { positions: &positions, normals: Some(&normals), indices: &indices })?;
+        Ok(())
+    }
+
+    /// Writes OBJ (`v`, `vn` and `f v//vn` lines), atomically: the triangles, or with
+    /// `polygons` the polygons where there are any — the quadtree's leaves alone (they cover
+    /// the surface), the dual tessellation's quads and the triangles outside them.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn write_obj(&self, path: impl AsRef<Path>, polygons: bool) -> Result<(), Error> {
+        write_atomic(path, |w| self.write_obj_to(w, polygons))?;
+        Ok(())
+    }
+
+    /// [`write_obj`](Self::write_obj) into any writer.
+    ///
+    /// # Errors
+    /// The writer's.
+    pub fn write_obj_to(&self, w: &mut dyn Write, polygons: bool) -> std::io::Result<()> {
+        let faces = match (polygons && self.mesh.polygon_count() > 0, self.info.method) {
+            (false, _) => ObjFaces::Triangles,
+            (true, Method::Quadtree) => ObjFaces::Polygons,
+            (true, Method::Dual) => ObjFaces::PolygonsAndTriangles,
+        };
+        write_obj(w, &self.mesh, faces)
+    }
+
+    /// Writes `vertex,face,u,v` per output vertex, in output order (`Bfr` parameters, shortest
+    /// round-trip f64s), as CSV, atomically.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the file.
+    pub fn write_params(&self, path: impl AsRef<Path>) -> Result<(), Error> {
+        write_atomic(path, |w| {
+            writeln!(w, "vertex,face,u,v")?;
+            for (k, p) in self.mesh.parameters.iter().enumerate() {
+                writeln!(w, "{k},{},{:?},{:?}", p.face.index(), p.u, p.v)?;
+            }
+            Ok(())
+        })?;
+        Ok(())
+    }
+}
+
+/// Which faces an OBJ output lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum ObjFaces {
+    Triangles,
+    /// The polygons alone: they cover the surface (the quadtree's leaves; its triangles' fan
+    /// centres stay unused).
+    Polygons,
+    /// The polygons and the triangles outside them (the dual tessellation's quads, and its
+    /// strip and vertex triangles).
+    PolygonsAndTriangles,
+}
+
+/// OBJ with `v` and `vn` lines, and faces as `f v//vn`.
+fn write_obj(w: &mut dyn Write, mesh: &TessMesh, faces: ObjFaces) -> std::io::Result<()> {
+    writeln!(w, "# subdiv tessellate")?;
+    for p in &mesh.positions {
+        writeln!(w, "v {} {} {}", p.x, p.y, p.z)?;
+    }
+    for n in &mesh.normals {
+        writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
+    }
+    let face = |w: &mut dyn Write, vertices: &[u32]| -> std::io::Result<()> {
+        write!(w, "f")?;
+        for &v in vertices {
+            write!(w, " {0}//{0}", v + 1)?;
+        }
+        writeln!(w)
+    };
+    if faces == ObjFaces::Triangles {
+        for t in &mesh.triangles {
+            face(w, t)?;
+        }
+        return Ok(());
+    }
+    for k in 0..mesh.polygon_count() {
+        face(w, mesh.polygon(k))?;
+    }
+    if faces == ObjFaces::PolygonsAndTriangles {
+        // A dual quad `a b c d` is the triangles `a b c` and `a c d`.
+        let mut covered = std::collections::HashSet::new();
+        for k in 0..mesh.polygon_count() {
+            let p = mesh.polygon(k);
+            for i in 1..p.len().saturating_sub(1) {
+                covered.insert(sorted([p[0], p[i], p[i + 1]]));
+            }
+        }
+        for t in mesh.triangles.iter().filter(|t| !covered.contains(&sorted(**t))) {
+            face(w, t)?;
+        }
+    }
+    Ok(())
+}
+
+fn sorted(mut t: [u32; 3]) -> [u32; 3] {
+    t.sort_unstable();
+    t
+}
