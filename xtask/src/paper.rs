@@ -6,7 +6,7 @@ use num_integer::Integer;
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
 use subdiv::stencil::curve::{NonUniformCubicGrid, basis_grid};
-use subdiv::stencil::grid::{SurfaceBasisGrid, SurfaceMask};
+use subdiv::stencil::surface_basis::{SurfaceBasisGrid, SurfaceMask};
 use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator, surface_stencil};
 
 /// `values / denominator` as exact fractions.

@@ -67,7 +67,7 @@ impl Complex {
 /// The spectrum of an extraordinary shape's keeping-child matrix `A`, and how well its kept
 /// part is semisimple.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Spectrum {
+pub struct EigenBasisSpectrum {
     /// All eigenvalues `(re, im)`, largest modulus first.
     pub eigenvalues: Vec<(f64, f64)>,
     /// How many (the first) are kept: modulus above [`KEPT_MODULUS`].
@@ -118,7 +118,7 @@ pub(crate) struct Extraordinary {
     /// Tangent-direction stencils at the vertex: the limits of the directions of `∂/∂s` along
     /// the first side and `∂/∂t` along the last.
     pub(crate) tangents: [Vec<f64>; 2],
-    pub(crate) spectrum: Spectrum,
+    pub(crate) spectrum: EigenBasisSpectrum,
 }
 
 #[derive(Clone, Debug)]
@@ -211,7 +211,7 @@ impl EigenBasis {
     }
 
     /// The spectrum of the keeping child's matrix, `None` for a polynomial patch.
-    pub fn spectrum(&self) -> Option<&Spectrum> {
+    pub fn spectrum(&self) -> Option<&EigenBasisSpectrum> {
         match &self.kind {
             Kind::Regular => None,
             Kind::Extraordinary(e) => Some(&e.spectrum),
@@ -381,7 +381,7 @@ struct Decomposition {
     left: Vec<Complex>,
     /// The left eigenvector of 1, summing to 1.
     limit: Vec<f64>,
-    spectrum: Spectrum,
+    spectrum: EigenBasisSpectrum,
 }
 
 impl Decomposition {
@@ -509,7 +509,7 @@ impl Decomposition {
         let all = Mat::<faer::c64>::from_fn(size, size, |r, c| right.U()[(r, c)]);
         let sv = all.singular_values().map_err(|e| format!("SVD failed: {e:?}"))?;
         let eigenvector_condition = sv.first().copied().unwrap_or(0.0) / sv.last().copied().unwrap_or(0.0);
-        let spectrum = Spectrum {
+        let spectrum = EigenBasisSpectrum {
             eigenvalues: eigenvalues_all,
             kept: r_all,
             subdominant: values_out.get(1).map_or(0.0, |l| l.modulus()),

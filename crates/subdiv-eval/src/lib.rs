@@ -55,7 +55,7 @@ mod mesh;
 mod poly;
 mod surface;
 
-pub use basis::{DIRECT_LEVELS, EigenBasis, KEPT_MODULUS, MAX_VALENCE, Spectrum};
+pub use basis::{DIRECT_LEVELS, EigenBasis, EigenBasisSpectrum, KEPT_MODULUS, MAX_VALENCE};
 pub use error::EvalError;
 pub use mesh::{EigenEvaluator, LimitPoint2, Method};
 pub use poly::PolyKind;

@@ -243,9 +243,10 @@ fn centre_face(mesh: &Mesh) -> FaceId {
         .expect("the canonical mesh has faces")
 }
 
-/// The spectral part of Reif's C1 conditions at one valence.
+/// The spectrum of the [`LocalMatrix`] at one valence, and the spectral part of Reif's C1
+/// conditions on it.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Spectrum {
+pub struct LocalSpectrum {
     /// Eigenvalues of the local matrix, largest modulus first, as `(re, im)`.
     pub eigenvalues: Vec<(f64, f64)>,
     /// λ0 = 1 and it is simple.
@@ -258,7 +259,7 @@ pub struct Spectrum {
 
 const TOLERANCE: f64 = 1e-10;
 
-impl Spectrum {
+impl LocalSpectrum {
     /// The spectrum of `scheme`'s local matrix at valence `valence`.
     ///
     /// # Errors
@@ -334,7 +335,7 @@ pub struct Analysis {
     /// The neighbourhood's radius in rings of faces.
     pub radius: usize,
     /// The spectral conditions.
-    pub spectrum: Spectrum,
+    pub spectrum: LocalSpectrum,
     /// The characteristic map; `None` when the subdominant eigenvalue is not a real double
     /// one (there is no planar characteristic map to check).
     pub characteristic_map: Option<CharacteristicMap>,
@@ -357,7 +358,7 @@ impl Analysis {
     pub fn of(scheme: &Scheme, valence: usize) -> Result<Self, SchemeError> {
         let canonical = Canonical::new(scheme, valence, MAX_RADIUS + 1 + EXTENSION)?;
         let matrix = canonical.invariant()?;
-        let spectrum = Spectrum::of_matrix(&matrix)?;
+        let spectrum = LocalSpectrum::of_matrix(&matrix)?;
         let characteristic_map = if spectrum.subdominant_real_double && spectrum.unit_dominant_simple {
             Some(characteristic_map(&canonical, &matrix, spectrum.eigenvalues[1].0)?)
         } else {

@@ -18,7 +18,7 @@
 //! Chaikin, the four-point and six-point interpolating schemes, Schaefer and Warren's
 //! non-polynomial curve scheme, and the non-uniform cubic B-spline refined by knot insertion.
 //!
-//! Analysis ([`Analysis`], [`LocalMatrix`], [`Spectrum`]) derives each scheme's local
+//! Analysis ([`Analysis`], [`LocalMatrix`], [`LocalSpectrum`]) derives each scheme's local
 //! subdivision matrix by running the engine on a canonical mesh and applies Reif's C1 test,
 //! characteristic map included; [`c1_table`] lists the verdicts at valences 3 to 16.
 //! [`PatchMatrices`] derives the sub-patch matrices of the primal schemes the same way: for a
@@ -88,7 +88,7 @@ mod refine;
 mod scheme;
 mod stencil;
 
-pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, Spectrum};
+pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, LocalSpectrum};
 pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError};

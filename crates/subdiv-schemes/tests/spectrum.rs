@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 
 use subdiv_mesh::BoundaryInterpolation;
-use subdiv_schemes::{Analysis, Builtin, LocalMatrix, PatchMatrices, PatchType, SchemeError, Spectrum};
+use subdiv_schemes::{Analysis, Builtin, LocalMatrix, LocalSpectrum, PatchMatrices, PatchType, SchemeError};
 
 /// The derived matrices of `builtin` pass the spectral conditions at k = 3..=64 and their
 /// subdominant eigenvalue is `closed_form(k)` to 1e-12: the one-ring matrix, and the square
@@ -13,7 +13,7 @@ fn assert_subdominant(builtin: Builtin, closed_form: impl Fn(f64) -> f64) {
     let modulus = |z: &(f64, f64)| z.0.hypot(z.1);
     for k in 3..=64 {
         let expected = closed_form(k as f64);
-        let spectrum = Spectrum::of(builtin.scheme(), k).unwrap();
+        let spectrum = LocalSpectrum::of(builtin.scheme(), k).unwrap();
         assert!(
             (spectrum.subdominant() - expected).abs() < 1e-12,
             "{builtin} k = {k}: {} vs {expected}",

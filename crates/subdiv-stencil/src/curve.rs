@@ -52,7 +52,7 @@ use crate::rational::{Rational, SolveError, SparseRow, exact_weight, solve_spars
 
 /// The largest grid rate [`BasisGrid::new`] and [`EigenGrid::new`] accept: the systems have
 /// about `rate × support width` unknowns.
-pub const MAX_RATE: u32 = 1024;
+pub const MAX_CURVE_RATE: u32 = 1024;
 
 /// The mask of a uniform curve scheme in exact rationals: `φ(x) = Σ_k weights[k] ·
 /// φ(arity·x − (first + k))`, with no zero at either end.
@@ -302,10 +302,10 @@ fn check_rate(rate: u32) -> Result<i64, StencilError> {
     if rate == 0 {
         return Err(StencilError::Rate { rate: 0, reason: "the grid (1/rate)Z needs a rate of at least 1" });
     }
-    if rate > MAX_RATE {
+    if rate > MAX_CURVE_RATE {
         return Err(StencilError::Rate {
             rate: u64::from(rate),
-            reason: "above curve::MAX_RATE: the exact systems grow with the rate",
+            reason: "above MAX_CURVE_RATE: the exact systems grow with the rate",
         });
     }
     Ok(i64::from(rate))
@@ -394,7 +394,7 @@ impl BasisGrid {
     /// equations for `φ`, and `2·rate` normalisations for `φ′`.
     ///
     /// # Errors
-    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_RATE`];
+    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_CURVE_RATE`];
     /// [`StencilError::CurveScalingSystem`] when either system is inconsistent or has more than
     /// one solution (the scheme does not converge, or is not C¹).
     pub fn new(mask: &ExactMask, rate: u32) -> Result<Self, StencilError> {
@@ -671,7 +671,7 @@ impl NonUniformCubicGrid {
     /// Solves the five-family scaling system at `rate`.
     ///
     /// # Errors
-    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_RATE`];
+    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_CURVE_RATE`];
     /// [`StencilError::CurveScalingSystem`] if the system had no unique solution.
     pub fn new(rate: u32) -> Result<Self, StencilError> {
         let n = check_rate(rate)?;

@@ -199,7 +199,7 @@ pub enum StencilError {
         /// What went wrong.
         detail: String,
     },
-    // ---- surface route 1 (grid.rs) ---------------------------------------------------------
+    // ---- surface route 1 (surface_basis.rs) -----------------------------------------------
     /// The regular rules of a surface scheme do not give an exact scaling relation: a weight
     /// that is not a small fraction, a refined point off the dilated lattice, a rule that does
     /// not sum to exactly 1.

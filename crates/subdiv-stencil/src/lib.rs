@@ -13,6 +13,8 @@
 //!   The sub-patch matrices come from [`subdiv_schemes::PatchMatrices`], derived by the
 //!   refinement engine, so this works for every primal scheme at regular, extraordinary and
 //!   boundary patches. A [`StencilEvaluator`] shares the work between the points of one patch.
+//!   [`surface_basis`] holds route 1 on surfaces: the basis function of a scheme's regular rules
+//!   from their scaling relation on (1/n)ℤ², exactly.
 //! - **Tables** ([`StencilTable`], [`StencilTables`], [`StencilCache`]): the stencils of the
 //!   primal and dual grids a tessellator samples, per patch type and rate, in a versioned binary
 //!   format, or computed on demand.
@@ -20,11 +22,11 @@
 mod address;
 mod error;
 mod exact;
-pub mod grid;
 mod linalg;
 mod mesh_eval;
 mod parallel;
 mod surface;
+pub mod surface_basis;
 mod table;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
 pub mod curve;
@@ -41,5 +43,6 @@ pub use mesh_eval::{
 };
 pub use surface::{EvaluatorStats, StencilEvaluator, SurfaceStencil, surface_stencil};
 pub use table::{
-    DEFAULT_TABLES, Grid, MAX_RATE, StencilCache, StencilTable, StencilTables, TABLE_MAGIC, TABLE_VERSION, TableSpec,
+    DEFAULT_TABLES, Grid, MAX_TABLE_RATE, StencilCache, StencilTable, StencilTables, TABLE_MAGIC, TABLE_VERSION,
+    TableSpec,
 };

@@ -151,7 +151,7 @@ impl StencilTable {
     ///
     /// # Errors
     /// As [`PatchMatrices::of`] (as [`StencilError::Scheme`]) and [`surface_stencil`](crate::surface_stencil);
-    /// [`StencilError::Rate`] for rate 0 or above [`MAX_RATE`].
+    /// [`StencilError::Rate`] for rate 0 or above [`MAX_TABLE_RATE`].
     pub fn compute(
         scheme: &Scheme,
         patch_type: PatchType,
@@ -321,14 +321,16 @@ impl StencilTable {
 }
 
 /// The largest rate a table takes: its dual grid has `(2n)²` cells' worth of denominators and
-/// `n²` points, so 1024 is far beyond what tessellation asks for.
-pub const MAX_RATE: u32 = 1024;
+/// `n²` points, so 1024 is far beyond what tessellation asks for. (The curve grids'
+/// [`MAX_CURVE_RATE`](crate::curve::MAX_CURVE_RATE) is the same number for another reason: it
+/// bounds exact rational systems.)
+pub const MAX_TABLE_RATE: u32 = 1024;
 
 fn check_rate(rate: u32) -> Result<(), StencilError> {
-    if rate == 0 || rate > MAX_RATE {
+    if rate == 0 || rate > MAX_TABLE_RATE {
         return Err(StencilError::Rate {
             rate: u64::from(rate),
-            reason: "stencil tables take rates 1 to 1024 (MAX_RATE)",
+            reason: "stencil tables take rates 1 to 1024 (MAX_TABLE_RATE)",
         });
     }
     Ok(())

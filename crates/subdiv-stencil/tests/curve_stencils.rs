@@ -5,7 +5,7 @@
 use glam::DVec3;
 use proptest::prelude::*;
 use subdiv_schemes::{CurveScheme, NonUniformCubicBSpline};
-use subdiv_stencil::curve::{BasisGrid, EigenGrid, ExactMask, MAX_RATE, NonUniformCubicGrid, basis_grid};
+use subdiv_stencil::curve::{BasisGrid, EigenGrid, ExactMask, MAX_CURVE_RATE, NonUniformCubicGrid, basis_grid};
 use subdiv_stencil::{Rational, StencilError};
 
 fn r(p: i64, q: i64) -> Rational {
@@ -243,7 +243,7 @@ fn non_uniform_grid_agrees_with_de_boor_evaluation() {
 fn typed_errors() {
     let four = scheme("four-point");
     assert!(matches!(basis_grid(&four, 0), Err(StencilError::Rate { rate: 0, .. })));
-    assert!(matches!(basis_grid(&four, MAX_RATE + 1), Err(StencilError::Rate { .. })));
+    assert!(matches!(basis_grid(&four, MAX_CURVE_RATE + 1), Err(StencilError::Rate { .. })));
     let mask = ExactMask::from_scheme(&four).unwrap();
     assert!(matches!(EigenGrid::new(&mask, 0), Err(StencilError::Rate { .. })));
     assert!(matches!(NonUniformCubicGrid::new(0), Err(StencilError::Rate { .. })));

@@ -6,7 +6,7 @@ use num_integer::Integer;
 use proptest::prelude::*;
 use subdiv_mesh::BoundaryInterpolation;
 use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
-use subdiv_stencil::grid::{SurfaceBasisGrid, SurfaceMask, regular_patch_stencil};
+use subdiv_stencil::surface_basis::{SurfaceBasisGrid, SurfaceMask, regular_patch_stencil};
 use subdiv_stencil::{Dyadic, Rational, StencilError, SurfaceStencil, surface_stencil};
 
 /// The schemes both routes serve at the regular patch.

@@ -54,7 +54,7 @@ use crate::{Dyadic, StencilError, SurfaceStencil};
 
 /// The largest grid rate [`SurfaceBasisGrid`] accepts: a whole grid has about
 /// `rate² × area(support)` points, and a residue cycle up to `rate − 1` residues.
-pub const MAX_RATE: u32 = 128;
+pub const MAX_SURFACE_BASIS_RATE: u32 = 128;
 
 /// A 2×2 integer matrix, row by row.
 type Matrix = [[i64; 2]; 2];
@@ -139,7 +139,7 @@ const REACH: i64 = 6;
 /// ```
 /// use subdiv_schemes::Builtin;
 /// use subdiv_stencil::Rational;
-/// use subdiv_stencil::grid::{Lattice, SurfaceMask};
+/// use subdiv_stencil::surface_basis::{Lattice, SurfaceMask};
 ///
 /// let cc = SurfaceMask::from_scheme(Builtin::CatmullClark.scheme())?;
 /// assert_eq!((cc.lattice(), cc.arity(), cc.weights().len()), (Lattice::Quad, 2, 25));
@@ -409,7 +409,7 @@ impl ExactStencil {
 /// ```
 /// use subdiv_schemes::Builtin;
 /// use subdiv_stencil::Rational;
-/// use subdiv_stencil::grid::{SurfaceBasisGrid, SurfaceMask};
+/// use subdiv_stencil::surface_basis::{SurfaceBasisGrid, SurfaceMask};
 ///
 /// let loop_ = SurfaceMask::from_scheme(Builtin::Loop.scheme())?;
 /// let grid = SurfaceBasisGrid::new(&loop_, 1)?;
@@ -473,7 +473,7 @@ impl SurfaceBasisGrid {
     /// Every residue: the whole grid over the support.
     ///
     /// # Errors
-    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_RATE`];
+    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_SURFACE_BASIS_RATE`];
     /// [`StencilError::SurfaceScalingSystem`] when a system has no unique solution.
     pub fn new(mask: &SurfaceMask, rate: u32) -> Result<Self, StencilError> {
         let n = i64::from(rate);
@@ -488,10 +488,10 @@ impl SurfaceBasisGrid {
     /// # Errors
     /// As [`new`](Self::new).
     pub fn at_residues(mask: &SurfaceMask, rate: u32, residues: &[[i64; 2]]) -> Result<Self, StencilError> {
-        if rate == 0 || rate > MAX_RATE {
+        if rate == 0 || rate > MAX_SURFACE_BASIS_RATE {
             return Err(StencilError::Rate {
                 rate: u64::from(rate),
-                reason: "surface grids take rates 1 to grid::MAX_RATE (the grid grows with its square)",
+                reason: "surface grids take rates 1 to MAX_SURFACE_BASIS_RATE (the grid grows with its square)",
             });
         }
         let n = i64::from(rate);
@@ -822,7 +822,7 @@ impl Builder<'_> {
 /// ```
 /// use subdiv_schemes::Builtin;
 /// use subdiv_stencil::{Dyadic, Rational};
-/// use subdiv_stencil::grid::regular_patch_stencil;
+/// use subdiv_stencil::surface_basis::regular_patch_stencil;
 ///
 /// let s = regular_patch_stencil(Builtin::CatmullClark.scheme(), Dyadic::new(1, 1, 2))?;
 /// // The centre of a regular Catmull-Clark face: (1/48)(1, 23, 23, 1) ⊗ itself at the middle.
@@ -833,7 +833,7 @@ impl Builder<'_> {
 ///
 /// # Errors
 /// [`StencilError::OutsideDomain`] for a point outside the face, [`StencilError::Rate`] for a
-/// reduced denominator above [`MAX_RATE`], the errors of [`SurfaceMask::of`] and
+/// reduced denominator above [`MAX_SURFACE_BASIS_RATE`], the errors of [`SurfaceMask::of`] and
 /// [`PatchMatrices::of`] (√3 has no sub-patch matrices: use [`SurfaceBasisGrid::stencil_at`]),
 /// and [`StencilError::SurfaceMask`] if the patch's parameters are not lattice points.
 pub fn regular_patch_stencil(scheme: &Scheme, point: Dyadic) -> Result<ExactStencil, StencilError> {
@@ -841,7 +841,7 @@ pub fn regular_patch_stencil(scheme: &Scheme, point: Dyadic) -> Result<ExactSten
     let Dyadic { u, v, denominator: rate } = point.reduced();
     let point = [u, v];
     let rate = u32::try_from(rate)
-        .map_err(|_| StencilError::Rate { rate: rate.unsigned_abs(), reason: "above grid::MAX_RATE" })?;
+        .map_err(|_| StencilError::Rate { rate: rate.unsigned_abs(), reason: "above MAX_SURFACE_BASIS_RATE" })?;
     let mask = SurfaceMask::of(scheme)?;
     let matrices = PatchMatrices::of(scheme, PatchType::regular(scheme), BoundaryInterpolation::EdgeOnly)?;
     let not_lattice = || StencilError::SurfaceMask {
