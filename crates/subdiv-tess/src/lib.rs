@@ -60,6 +60,7 @@ mod error;
 pub mod flatness;
 mod mesh;
 mod par;
+pub mod plan;
 pub mod quadtree;
 pub mod rates;
 pub mod sink;

@@ -58,8 +58,7 @@
 //! exact stencils and kept across calls. [`DualTessellator::update_cage`] re-evaluates
 //! positions and normals for a moved cage without any topology or stencil work.
 
-mod eval;
-mod plan;
+pub(crate) mod eval;
 mod topology;
 
 use glam::DVec3;
@@ -68,11 +67,11 @@ use subdiv_schemes::{Scheme, Split};
 use subdiv_stencil::FaceDomain;
 
 use self::eval::Evaluator;
-pub use self::plan::{
-    EvaluationPlan, PlanBicubic, PlanBlock, PlanEntry, PlanError, PlanGeneral, PlanItem, PlanParts, PlanRecord,
-};
 use self::topology::{Builder, BuilderBuffers, Topology};
 use crate::par::{self, Parallelism};
+pub use crate::plan::{
+    EvaluationPlan, PlanBicubic, PlanBlock, PlanEntry, PlanError, PlanGeneral, PlanItem, PlanParts, PlanRecord,
+};
 use crate::rates::RingDepths;
 use crate::{SurfaceParameter, TessError, TessMesh, TessSink};
 
@@ -651,7 +650,9 @@ impl TopologyBuilder {
 }
 
 /// The most triangles for which the flat paths write their indices after the evaluation, on
-/// the same thread: below, waking a second thread for them costs more than it saves.
+/// the same thread: below, waking a second thread for them costs more than it saves (the cube
+/// at rate 8, 2 threads, full path: 126-131 M triangles/s with it, 104-108 without; `70f0147`,
+/// docs/perf-log.md).
 const BESIDE: u32 = 1 << 12;
 
 /// The flat paths' two halves for the vertices and triangles of `t`: `evaluate` fills
@@ -677,12 +678,16 @@ fn beside<E: Send>(
     }
 }
 
+/// The fewest indices [`copy_indices`] copies on rayon's threads. Not measured on its own
+/// (it came with the animation path's copy, `f7b878e`); a copy below it is a few microseconds.
+const PARALLEL_COPY: usize = 1 << 16;
+
 /// `indices` into `out` (which keeps its allocation), on rayon's threads if `parallel` and
 /// there are enough to be worth waking them (a copy of tens of megabytes at high rates, which
 /// one core does at a fraction of the memory's speed).
 fn copy_indices(indices: &[u32], parallel: bool, out: &mut Vec<u32>) {
     out.clear();
-    if parallel && indices.len() >= 1 << 16 {
+    if parallel && indices.len() >= PARALLEL_COPY {
         par::extend_map(true, out, indices, |&k| k);
     } else {
         out.extend_from_slice(indices);

@@ -76,7 +76,7 @@ impl RateBasis {
 
 /// The uniform cubic B-spline basis at `t ∈ [0, 1]`.
 #[inline(always)]
-pub(in crate::dual) fn basis(t: f64) -> [f64; 4] {
+pub(crate) fn basis(t: f64) -> [f64; 4] {
     let s = 1.0 - t;
     let (t2, t3) = (t * t, t * t * t);
     [s * s * s / 6.0, (3.0 * t3 - 6.0 * t2 + 4.0) / 6.0, (-3.0 * t3 + 3.0 * t2 + 3.0 * t + 1.0) / 6.0, t3 / 6.0]
@@ -84,7 +84,7 @@ pub(in crate::dual) fn basis(t: f64) -> [f64; 4] {
 
 /// The derivative of [`basis`].
 #[inline(always)]
-pub(in crate::dual) fn derivative(t: f64) -> [f64; 4] {
+pub(crate) fn derivative(t: f64) -> [f64; 4] {
     let s = 1.0 - t;
     [-0.5 * s * s, (3.0 * t * t - 4.0 * t) * 0.5, (-3.0 * t * t + 2.0 * t + 1.0) * 0.5, 0.5 * t * t]
 }
@@ -97,23 +97,29 @@ pub(super) fn bicubic(cv: &[u32; 16], cage: &[DVec3], u: f64, v: f64) -> (DVec3,
 }
 
 /// The bicubic patch with control point `k = j · 4 + i` at `(i − 1, j − 1)` given by
-/// `point(k)`, at `(u, v)`: position, `∂/∂u`, `∂/∂v`.
+/// `point(k)`, at `(u, v)`: position, `∂/∂u`, `∂/∂v`. The one bicubic sum: the blocks and
+/// the patch grids run the same [`columns`] and [`combine`] (a row's columns shared by its
+/// points), so every route gives these bits; the GPU's shader is checked against it by the
+/// GPU tests (positions within 1e-7 of the bounding box).
 #[inline(always)]
-pub(in crate::dual) fn bicubic_at(point: impl Fn(usize) -> DVec3, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
-    let (bu, du, bv, dv) = (basis(u), derivative(u), basis(v), derivative(v));
-    let (mut p, mut a, mut b) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
-    for j in 0..4 {
-        let (mut c, mut e) = (DVec3::ZERO, DVec3::ZERO);
-        for i in 0..4 {
-            let x = point(j * 4 + i);
-            c += bu[i] * x;
-            e += du[i] * x;
-        }
-        p += bv[j] * c;
-        a += bv[j] * e;
-        b += dv[j] * c;
-    }
-    (p, a, b)
+pub(crate) fn bicubic_at(point: impl Fn(usize) -> DVec3, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
+    let c: [DVec3; 16] = std::array::from_fn(point);
+    let (bu, du) = (basis(u), derivative(u));
+    let (col, dcol) = (columns(&c, basis(v)), columns(&c, derivative(v)));
+    (combine(bu, &col), combine(du, &col), combine(bu, &dcol))
+}
+
+/// The 4 column combinations `Σ_j w[j] · c[4j + i]` of a patch's control points (`c[j · 4 + i]`
+/// at `(i − 1, j − 1)`) for one row's `v` weights.
+#[inline(always)]
+pub(super) fn columns(c: &[DVec3; 16], w: [f64; 4]) -> [DVec3; 4] {
+    std::array::from_fn(|i| w[0] * c[i] + w[1] * c[4 + i] + w[2] * c[8 + i] + w[3] * c[12 + i])
+}
+
+/// `Σ_i w[i] · col[i]`: a point of a row from its [`columns`] and its `u` weights.
+#[inline(always)]
+pub(super) fn combine(w: [f64; 4], col: &[DVec3; 4]) -> DVec3 {
+    w[0] * col[0] + w[1] * col[1] + w[2] * col[2] + w[3] * col[3]
 }
 
 /// A unit normal from two tangents (zero where they are parallel).
@@ -138,10 +144,7 @@ pub(super) fn grid_block<S: Sink>(
     let n = basis.b.len();
     for j in 0..n {
         let (bv, dv) = (basis.b[j], basis.d[j]);
-        let col: [DVec3; 4] =
-            std::array::from_fn(|i| bv[0] * c[i] + bv[1] * c[4 + i] + bv[2] * c[8 + i] + bv[3] * c[12 + i]);
-        let dcol: [DVec3; 4] =
-            std::array::from_fn(|i| dv[0] * c[i] + dv[1] * c[4 + i] + dv[2] * c[8 + i] + dv[3] * c[12 + i]);
+        let (col, dcol) = (columns(&c, bv), columns(&c, dv));
         // By coordinate: [x, y, z][column].
         let split = |v: &[DVec3; 4]| [v.map(|p| p.x), v.map(|p| p.y), v.map(|p| p.z)];
         let (col, dcol) = (split(&col), split(&dcol));

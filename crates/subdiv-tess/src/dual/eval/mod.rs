@@ -56,11 +56,11 @@ use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
-use super::plan::{
-    EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
-};
 use super::topology::Topology;
 use crate::TessError;
+use crate::plan::{
+    EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
+};
 use crate::quadtree::{check_bicubic, regular_grid};
 
 mod kernels;
@@ -74,7 +74,7 @@ mod tests;
 mod to_plan;
 
 use self::kernels::*;
-pub(super) use self::kernels::{basis, bicubic_at, derivative};
+pub(crate) use self::kernels::{basis, bicubic_at, derivative};
 use self::patch_grid::*;
 use self::pieces::*;
 use self::records::*;

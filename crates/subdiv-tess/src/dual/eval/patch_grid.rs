@@ -239,15 +239,10 @@ impl Evaluator {
         let mut ks = [0u32; BATCH];
         let mut m = 0;
         for ([bt, dt], row) in ts.iter().zip(vertices.chunks_exact(ns)) {
-            let col: [DVec3; 4] =
-                std::array::from_fn(|i| bt[0] * c[i] + bt[1] * c[4 + i] + bt[2] * c[8 + i] + bt[3] * c[12 + i]);
-            let dcol: [DVec3; 4] =
-                std::array::from_fn(|i| dt[0] * c[i] + dt[1] * c[4 + i] + dt[2] * c[8 + i] + dt[3] * c[12 + i]);
+            let (col, dcol) = (columns(&c, *bt), columns(&c, *dt));
             // By batches (across rows): positions and cross products, then the normalisations.
             for ([bs, ds], &v) in ss.iter().zip(row) {
-                let p = bs[0] * col[0] + bs[1] * col[1] + bs[2] * col[2] + bs[3] * col[3];
-                let s = ds[0] * col[0] + ds[1] * col[1] + ds[2] * col[2] + ds[3] * col[3];
-                let t = bs[0] * dcol[0] + bs[1] * dcol[1] + bs[2] * dcol[2] + bs[3] * dcol[3];
+                let (p, s, t) = (combine(*bs, &col), combine(*ds, &col), combine(*bs, &dcol));
                 let (du, dv) = (g.ju[0] * s + g.ju[1] * t, g.jv[0] * s + g.jv[1] * t);
                 (xs[m], cs[m], ks[m]) = (p, du.cross(dv), v);
                 m += 1;

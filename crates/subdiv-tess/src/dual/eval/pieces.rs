@@ -5,7 +5,9 @@ use super::*;
 /// The fewest vertices [`Evaluator::evaluate_into`] shares among threads: waking a sleeping
 /// thread costs about what a thousand vertices take (tens of microseconds in a virtual
 /// machine), and past that the pieces stay small, so that the calling thread can do them all
-/// when the others wake late.
+/// when the others wake late. Measured on 16 cores (`cargo xtask bench tess --threads 16`, the
+/// cube at rate 8, full path): 36-43 M triangles/s without it, 60-108 with it, 57-68 on one
+/// thread; on two cores it is neutral (docs/perf-log.md, `1e2d766`).
 pub(super) const PARALLEL_VERTICES: usize = 1024;
 
 /// What the blocks and typed faces of one thread reuse from piece to piece (made anew for

@@ -265,16 +265,7 @@ impl Evaluator {
             let mut j = [[1.0, 0.0], [0.0, 1.0]];
             let mut done = false;
             for (level, kept) in last.iter_mut().enumerate() {
-                // Neighbouring points share their faces: the last resolution per level is kept.
-                let resolved = match kept {
-                    Some((g, r)) if *g == f => r.clone(),
-                    _ => {
-                        let r = self.levels.resolve(level, f);
-                        *kept = Some((f, r.clone()));
-                        r
-                    }
-                };
-                match resolved {
+                match self.resolve_kept(level, f, kept) {
                     Some(Resolved::Children { children, domain }) => {
                         let (child, at, factor) = domain.child_of(p);
                         f = FaceId::new((children.start + child) as u32);
@@ -282,14 +273,8 @@ impl Evaluator {
                         j = j.map(|row| row.map(|x| x * factor));
                     }
                     Some(Resolved::Patch { patch, frame, .. }) => {
-                        let (ids, len) = *patches.entry((level, f.index() as u32)).or_insert_with(|| {
-                            let start = out.ids.len() as u32;
-                            out.ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
-                            // Padded to a multiple of `LANES` with the first id (its weights are 0).
-                            let first = out.ids[start as usize];
-                            out.ids.resize(start as usize + padded(patch.vertices.len()), first);
-                            (start, patch.vertices.len() as u32)
-                        });
+                        let (ids, len) =
+                            *patches.entry((level, f.index() as u32)).or_insert_with(|| patch_ids(patch, &mut out.ids));
                         let (ju, jv) = frame.chain(j);
                         out.assigned.push((i as u32, out.records.len() as u32));
                         // A point of a level-0 patch's own dual grid reads the shared table.
@@ -357,6 +342,24 @@ impl Evaluator {
         Ok((k, FRESH))
     }
 
+    /// `f`'s resolution on `level`, kept in `kept` for the next point (neighbouring points
+    /// share their faces).
+    fn resolve_kept<'a>(
+        &'a self,
+        level: usize,
+        f: FaceId,
+        kept: &mut Option<(FaceId, Option<Resolved<'a>>)>,
+    ) -> Option<Resolved<'a>> {
+        match kept {
+            Some((g, r)) if *g == f => r.clone(),
+            _ => {
+                let r = self.levels.resolve(level, f);
+                *kept = Some((f, r.clone()));
+                r
+            }
+        }
+    }
+
     /// A general-route vertex on the current cage.
     #[inline(always)]
     pub(super) fn general(&self, r: &Record) -> (DVec3, DVec3, DVec3) {
@@ -411,4 +414,14 @@ fn chunks_of(spans: &[std::ops::Range<usize>]) -> Vec<&[std::ops::Range<usize>]>
         chunks.push(&spans[first..]);
     }
     chunks
+}
+
+/// `patch`'s control points appended to `ids`, padded to a multiple of [`LANES`] with the
+/// first (its weights are 0): their first index and their number.
+fn patch_ids(patch: &subdiv_schemes::FoundPatch, ids: &mut Vec<u32>) -> (u32, u32) {
+    let start = ids.len();
+    ids.extend(patch.vertices.iter().map(|v| v.index() as u32));
+    let first = ids[start];
+    ids.resize(start + padded(patch.vertices.len()), first);
+    (start as u32, patch.vertices.len() as u32)
 }

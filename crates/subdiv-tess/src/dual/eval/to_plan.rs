@@ -6,6 +6,17 @@ impl Evaluator {
     /// The evaluation of `topo`'s vertices (prepared) as plain arrays: see [`EvaluationPlan`].
     pub(crate) fn plan(&self, topo: &Topology) -> EvaluationPlan {
         let mut plan = EvaluationPlan { cage_len: self.positions[0].len() as u32, ..EvaluationPlan::default() };
+        let starts = self.plan_levels(&mut plan);
+        plan.vertices = vec![UNSET; topo.vertex_count as usize];
+        self.plan_bicubic(topo, &starts, &mut plan);
+        self.plan_typed(topo, &mut plan);
+        self.plan_records(topo, &starts, &mut plan);
+        plan
+    }
+
+    /// The refined levels' rows into `plan`; returns each level's first point in the one
+    /// array of points.
+    fn plan_levels(&self, plan: &mut EvaluationPlan) -> Vec<u32> {
         // Each level's first point in the one array of points.
         let mut starts = Vec::with_capacity(self.positions.len());
         let mut total = 0u32;
@@ -26,9 +37,11 @@ impl Evaluator {
                 plan.levels.push(starts[l + 1]..starts[l + 1] + stencils.child_count() as u32);
             }
         }
-        const UNSET: u32 = u32::MAX;
-        let entry = |kind: u32, index: usize| kind << PLAN_KIND_SHIFT | index as u32;
-        plan.vertices = vec![UNSET; topo.vertex_count as usize];
+        starts
+    }
+
+    /// The bicubic faces' blocks, the patch grids and the pointwise bicubic vertices.
+    fn plan_bicubic(&self, topo: &Topology, starts: &[u32], plan: &mut EvaluationPlan) {
         let mut face_patches: HashMap<u32, u32> = HashMap::new();
         for block in &topo.blocks {
             if let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] {
@@ -63,6 +76,10 @@ impl Evaluator {
             plan.vertices[v as usize] = entry(PLAN_BICUBIC, plan.bicubic.len());
             plan.bicubic.push(PlanBicubic { points: at, s, t, ju: [1.0, 0.0], jv: [0.0, 1.0] });
         }
+    }
+
+    /// The typed faces' cell points.
+    fn plan_typed(&self, topo: &Topology, plan: &mut EvaluationPlan) {
         // The typed faces' cell points: their templates' rows (`∂/∂u` and `∂/∂v` already) over
         // their cage points, each template's cell once.
         let mut cells: HashMap<(u32, u32), u32> = HashMap::new();
@@ -87,6 +104,10 @@ impl Evaluator {
                 plan.general.push(PlanGeneral { points, len: len as u32, weights, ju: [1.0, 0.0], jv: [0.0, 1.0] });
             }
         }
+    }
+
+    /// The general records (every vertex not planned yet).
+    fn plan_records(&self, topo: &Topology, starts: &[u32], plan: &mut EvaluationPlan) {
         // The general records' patches and weights, each once.
         let mut patches: HashMap<(u32, u32), u32> = HashMap::new();
         let mut weights: HashMap<(u32, u32), u32> = HashMap::new();
@@ -121,6 +142,13 @@ impl Evaluator {
             plan.vertices[v] = entry(PLAN_GENERAL, plan.general.len());
             plan.general.push(PlanGeneral { points, len: r.len, weights: w, ju: r.ju, jv: r.jv });
         }
-        plan
     }
+}
+
+/// A vertex not planned yet.
+const UNSET: u32 = u32::MAX;
+
+/// A vertex's entry: its kind and the index of its record in that kind's list.
+fn entry(kind: u32, index: usize) -> u32 {
+    kind << PLAN_KIND_SHIFT | index as u32
 }

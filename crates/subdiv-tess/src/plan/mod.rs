@@ -17,17 +17,22 @@
 //!   boundaries, vertex limit points); points at the same place of the same patch shape share
 //!   their weights.
 //!
-//! A plan from [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan)
+//! A plan from [`DualTessellator::evaluation_plan`](crate::DualTessellator::evaluation_plan)
 //! meets every rule of [`EvaluationPlan::validate`]; one put together elsewhere
 //! ([`EvaluationPlan::from_parts`]) is checked against them, so that its evaluators index only
 //! what exists.
 
 use std::borrow::Cow;
-use std::fmt;
 use std::ops::Range;
 
 use glam::DVec3;
 use hashbrown::HashMap;
+
+mod error;
+mod validate;
+
+pub use self::error::{PlanError, PlanItem};
+use self::validate::check_index;
 
 // How `EvaluationPlan::vertices` encodes an entry: `kind << PLAN_KIND_SHIFT | index`.
 pub(crate) const PLAN_BLOCK: u32 = 0;
@@ -135,112 +140,8 @@ pub struct PlanParts {
     pub weights: Vec<f64>,
 }
 
-/// What part of an [`EvaluationPlan`] a [`PlanError`] is about.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-#[non_exhaustive]
-pub enum PlanItem {
-    /// The plan as a whole (how its arrays' lengths agree).
-    Plan,
-    /// A refined level: its number in [`EvaluationPlan::levels`].
-    Level(usize),
-    /// A refined point's row ([`EvaluationPlan::refine_rows`]), by its number among all
-    /// points (at least [`EvaluationPlan::cage_len`]).
-    RefinedPoint(usize),
-    /// An output vertex's entry.
-    Vertex(usize),
-    /// A block: its number in [`EvaluationPlan::blocks`].
-    Block(usize),
-    /// A bicubic point: its number in [`EvaluationPlan::bicubic`].
-    Bicubic(usize),
-    /// A stencil point: its number in [`EvaluationPlan::general`].
-    General(usize),
-    /// A patch's point index: its place in [`EvaluationPlan::points`].
-    PatchPoint(usize),
-    /// A stencil weight: its place in [`EvaluationPlan::weights`].
-    Weight(usize),
-}
-
-impl fmt::Display for PlanItem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Self::Plan => write!(f, "evaluation plan"),
-            Self::Level(k) => write!(f, "evaluation plan, level {k}"),
-            Self::RefinedPoint(p) => write!(f, "evaluation plan, refined point {p}"),
-            Self::Vertex(v) => write!(f, "evaluation plan, vertex {v}"),
-            Self::Block(k) => write!(f, "evaluation plan, block {k}"),
-            Self::Bicubic(k) => write!(f, "evaluation plan, bicubic point {k}"),
-            Self::General(k) => write!(f, "evaluation plan, stencil point {k}"),
-            Self::PatchPoint(k) => write!(f, "evaluation plan, patch point index {k}"),
-            Self::Weight(k) => write!(f, "evaluation plan, weight {k}"),
-        }
-    }
-}
-
-/// A rule of [`EvaluationPlan::validate`] that a plan breaks, with the item that breaks it.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[non_exhaustive]
-pub enum PlanError {
-    /// An index that names nothing: a record, a point, or a point outside the level a
-    /// refinement row may read.
-    #[error("{at}: {what} {index} is not in {}..{}", valid.start, valid.end)]
-    OutOfRange {
-        /// Where.
-        at: PlanItem,
-        /// What the index names (`"block"`, `"point"`, …).
-        what: &'static str,
-        /// The index.
-        index: u64,
-        /// The indices allowed.
-        valid: Range<u64>,
-    },
-    /// A record's run in one of the flat arrays ends past the array's end.
-    #[error("{at}: its {array} {start}..{end} run past the end ({len})")]
-    PastEnd {
-        /// Where.
-        at: PlanItem,
-        /// Which array (`"patch point indices"`, `"weights"`, `"cell vertices"`).
-        array: &'static str,
-        /// The run's start.
-        start: u64,
-        /// The run's end.
-        end: u64,
-        /// The array's length.
-        len: u64,
-    },
-    /// A length or an offset that disagrees with the rest of the plan.
-    #[error("{at}: {what} is {got}, expected {expected}")]
-    Length {
-        /// Where.
-        at: PlanItem,
-        /// What was counted or where something starts.
-        what: &'static str,
-        /// Its value.
-        got: u64,
-        /// What the plan's other arrays make it.
-        expected: u64,
-    },
-    /// A weight, parameter or chain-rule entry that is NaN or infinite.
-    #[error("{at}: {what} {value} is not finite")]
-    NonFinite {
-        /// Where.
-        at: PlanItem,
-        /// Which value (`"weight"`, `"s"`, `"ju"`, …).
-        what: &'static str,
-        /// The value.
-        value: f64,
-    },
-    /// A rule about the plan's shape (the text says which).
-    #[error("{at}: {rule}")]
-    Structure {
-        /// Where.
-        at: PlanItem,
-        /// The rule.
-        rule: &'static str,
-    },
-}
-
 /// Every output vertex of a tessellation as a linear function of the cage; made by
-/// [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan), or from
+/// [`DualTessellator::evaluation_plan`](crate::DualTessellator::evaluation_plan), or from
 /// checked [`PlanParts`] ([`from_parts`](Self::from_parts)).
 ///
 /// Points are numbered in one array: the cage's vertices first (`0..cage_len`), then each
@@ -488,182 +389,6 @@ impl EvaluationPlan {
         })
     }
 
-    /// Checks every rule an evaluator relies on, so that evaluating the plan indexes only what
-    /// exists and computes with finite numbers:
-    /// - the refinement: `refine_ids` and `refine_weights` have one length, the rows start at
-    ///   0, never go back and end at that length; the levels follow each other from
-    ///   `cage_len` to [`point_count`](Self::point_count); each refined point's row reads only
-    ///   the level before (the cage, for the first level);
-    /// - every point index of a patch names a point, and every weight, parameter and
-    ///   chain-rule entry is finite;
-    /// - every record's run of point indices (16 for bicubic patches, `len` for stencils) and
-    ///   of weights (3 · `len`) lies inside its array; stencils have at least one point;
-    /// - every entry names a record that exists; a block's rate is at least 1, its cells
-    ///   (`base..base + rate²`) are output vertices, and they are exactly the vertices whose
-    ///   entry names it.
-    ///
-    /// A plan from [`DualTessellator::evaluation_plan`](super::DualTessellator::evaluation_plan)
-    /// passes; evaluators of plans from elsewhere (the GPU's upload) check first.
-    ///
-    /// # Errors
-    /// The first rule broken, naming the item ([`PlanItem`]) that breaks it.
-    pub fn validate(&self) -> Result<(), PlanError> {
-        let len = |n: usize| n as u64;
-        let (cage, points) = (self.cage_len as usize, self.point_count());
-        // The refinement.
-        if self.refine_weights.len() != self.refine_ids.len() {
-            return Err(PlanError::Length {
-                at: PlanItem::Plan,
-                what: "the number of refinement weights",
-                got: len(self.refine_weights.len()),
-                expected: len(self.refine_ids.len()),
-            });
-        }
-        if let (Some(&first), Some(&last)) = (self.refine_rows.first(), self.refine_rows.last()) {
-            if first != 0 {
-                return Err(PlanError::Length {
-                    at: PlanItem::Plan,
-                    what: "the first refinement row's start",
-                    got: first.into(),
-                    expected: 0,
-                });
-            }
-            if last as usize != self.refine_ids.len() {
-                return Err(PlanError::Length {
-                    at: PlanItem::Plan,
-                    what: "the last refinement row's end",
-                    got: last.into(),
-                    expected: len(self.refine_ids.len()),
-                });
-            }
-        }
-        let mut previous = 0..cage;
-        for (k, level) in self.levels.iter().enumerate() {
-            if level.start as usize != previous.end {
-                return Err(PlanError::Length {
-                    at: PlanItem::Level(k),
-                    what: "the first point",
-                    got: level.start.into(),
-                    expected: len(previous.end),
-                });
-            }
-            if level.end < level.start || level.end as usize > points {
-                return Err(PlanError::OutOfRange {
-                    at: PlanItem::Level(k),
-                    what: "the end",
-                    index: level.end.into(),
-                    valid: u64::from(level.start)..len(points) + 1,
-                });
-            }
-            let here = level.start as usize..level.end as usize;
-            for p in here.clone() {
-                let (start, end) = (self.refine_rows[p - cage], self.refine_rows[p - cage + 1]);
-                if end < start {
-                    return Err(PlanError::Structure {
-                        at: PlanItem::RefinedPoint(p),
-                        rule: "its refinement row ends before it starts",
-                    });
-                }
-                if end as usize > self.refine_ids.len() {
-                    return Err(PlanError::PastEnd {
-                        at: PlanItem::RefinedPoint(p),
-                        array: "refinement rows' entries",
-                        start: start.into(),
-                        end: end.into(),
-                        len: len(self.refine_ids.len()),
-                    });
-                }
-                for e in start as usize..end as usize {
-                    let id = self.refine_ids[e] as usize;
-                    if !previous.contains(&id) {
-                        return Err(PlanError::OutOfRange {
-                            at: PlanItem::RefinedPoint(p),
-                            what: "point (of the level before)",
-                            index: len(id),
-                            valid: len(previous.start)..len(previous.end),
-                        });
-                    }
-                    finite(PlanItem::RefinedPoint(p), "weight", self.refine_weights[e])?;
-                }
-            }
-            previous = here;
-        }
-        if previous.end != points {
-            return Err(PlanError::Length {
-                at: PlanItem::Plan,
-                what: "the end of the last level",
-                got: len(previous.end),
-                expected: len(points),
-            });
-        }
-        // The patches' points and the stencils' weights.
-        for (k, &p) in self.points.iter().enumerate() {
-            check_index(PlanItem::PatchPoint(k), "point", p, points)?;
-        }
-        for (k, &w) in self.weights.iter().enumerate() {
-            finite(PlanItem::Weight(k), "weight", w)?;
-        }
-        // The records.
-        let run = |at: PlanItem, array: &'static str, start: u32, count: u64, of: usize| {
-            let end = u64::from(start) + count;
-            if end > len(of) {
-                return Err(PlanError::PastEnd { at, array, start: start.into(), end, len: len(of) });
-            }
-            Ok(())
-        };
-        let (vertices, patch_points) = (self.vertices.len(), self.points.len());
-        for (k, b) in self.blocks.iter().enumerate() {
-            let at = PlanItem::Block(k);
-            if b.rate == 0 {
-                return Err(PlanError::Structure { at, rule: "a rate of 0: a block without cells" });
-            }
-            run(at, "patch point indices", b.points, 16, patch_points)?;
-            run(at, "cell vertices", b.base, u64::from(b.rate) * u64::from(b.rate), vertices)?;
-            let cells = b.base as usize..b.base as usize + (b.rate as usize).pow(2);
-            let own = PLAN_BLOCK << PLAN_KIND_SHIFT | k as u32;
-            if let Some(v) = cells.clone().find(|&v| self.vertices[v] != own) {
-                return Err(PlanError::Structure {
-                    at: PlanItem::Vertex(v),
-                    rule: "a block's cell whose entry names another record",
-                });
-            }
-        }
-        for (k, b) in self.bicubic.iter().enumerate() {
-            let at = PlanItem::Bicubic(k);
-            run(at, "patch point indices", b.points, 16, patch_points)?;
-            finite(at, "s", b.s)?;
-            finite(at, "t", b.t)?;
-            b.ju.iter().try_for_each(|&x| finite(at, "ju", x))?;
-            b.jv.iter().try_for_each(|&x| finite(at, "jv", x))?;
-        }
-        for (k, g) in self.general.iter().enumerate() {
-            let at = PlanItem::General(k);
-            if g.len == 0 {
-                return Err(PlanError::Structure { at, rule: "a stencil over no points" });
-            }
-            run(at, "patch point indices", g.points, g.len.into(), patch_points)?;
-            run(at, "weights", g.weights, 3 * u64::from(g.len), self.weights.len())?;
-            g.ju.iter().try_for_each(|&x| finite(at, "ju", x))?;
-            g.jv.iter().try_for_each(|&x| finite(at, "jv", x))?;
-        }
-        // The entries.
-        let counts = [self.blocks.len(), self.bicubic.len(), self.general.len()];
-        for (v, &e) in self.vertices.iter().enumerate() {
-            let (kind, index) = split(e);
-            let Some(&count) = counts.get(kind as usize) else {
-                return Err(PlanError::Structure { at: PlanItem::Vertex(v), rule: "an entry of no kind" });
-            };
-            check_index(PlanItem::Vertex(v), RECORD_NAMES[kind as usize], index, count)?;
-            if kind == PLAN_BLOCK {
-                let b = &self.blocks[index as usize];
-                if !(b.base as usize..b.base as usize + (b.rate as usize).pow(2)).contains(&v) {
-                    return Err(PlanError::Structure { at: PlanItem::Vertex(v), rule: "not one of its block's cells" });
-                }
-            }
-        }
-        Ok(())
-    }
-
     /// Evaluates every output vertex on `cage` (one position per cage vertex): positions and
     /// unit normals (zero where the tangents are parallel), in f64: the tessellator's own
     /// values, to rounding.
@@ -775,10 +500,10 @@ impl EvaluationPlan {
                         let key = (b.points, 16, b.s.to_bits(), b.t.to_bits());
                         let (points, len, weights) = *composed.entry(key).or_insert_with(|| {
                             let (bs, ds, bt, dt) = (
-                                super::eval::basis(b.s),
-                                super::eval::derivative(b.s),
-                                super::eval::basis(b.t),
-                                super::eval::derivative(b.t),
+                                crate::dual::eval::basis(b.s),
+                                crate::dual::eval::derivative(b.s),
+                                crate::dual::eval::basis(b.t),
+                                crate::dual::eval::derivative(b.t),
                             );
                             for (k, &c) in cv.iter().enumerate() {
                                 let (i, j) = (k % 4, k / 4);
@@ -831,7 +556,7 @@ impl EvaluationPlan {
         jv: [f64; 2],
     ) -> (DVec3, DVec3, DVec3) {
         let cv = &self.points[at as usize..at as usize + 16];
-        let (p, a, b) = super::eval::bicubic_at(|k| points[cv[k] as usize], s, t);
+        let (p, a, b) = crate::dual::eval::bicubic_at(|k| points[cv[k] as usize], s, t);
         (p, ju[0] * a + ju[1] * b, jv[0] * a + jv[1] * b)
     }
 }
@@ -843,22 +568,6 @@ fn split(entry: u32) -> (u32, u32) {
 
 /// What each kind of entry names, for errors.
 const RECORD_NAMES: [&str; 3] = ["block", "bicubic point", "stencil point"];
-
-/// [`PlanError::OutOfRange`] unless `index < count`.
-fn check_index(at: PlanItem, what: &'static str, index: u32, count: usize) -> Result<(), PlanError> {
-    if index as usize >= count {
-        return Err(PlanError::OutOfRange { at, what, index: index.into(), valid: 0..count as u64 });
-    }
-    Ok(())
-}
-
-/// [`PlanError::NonFinite`] unless `value` is finite.
-fn finite(at: PlanItem, what: &'static str, value: f64) -> Result<(), PlanError> {
-    if !value.is_finite() {
-        return Err(PlanError::NonFinite { at, what, value });
-    }
-    Ok(())
-}
 
 /// Sparse sums over the cage's points, three rows at once (position, `∂/∂s`, `∂/∂t`), with a
 /// dense scratch row and the list of touched points.
