@@ -18,11 +18,10 @@ mod adapter;
 mod error;
 mod evaluate;
 mod render;
+mod scene;
 
 pub use adapter::{Gpu, GpuOptions};
 pub use error::GpuError;
 pub use evaluate::{GpuEvalOptions, GpuTessellation, RateCache};
-pub use render::{
-    CAGE_VERTEX_STRIDE, Cage, GpuCage, GpuMesh, Image, Lines, MAX_IMAGE_SIDE, RenderOptions, Renderer, Scene,
-    VERTEX_STRIDE, View, bounds, unique_edges,
-};
+pub use render::{CAGE_VERTEX_STRIDE, Image, MAX_IMAGE_SIDE, RenderOptions, Renderer, VERTEX_STRIDE};
+pub use scene::{Cage, GpuCage, GpuMesh, Lines, Scene, View, bounds, unique_edges};
