@@ -32,8 +32,8 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
     let start = Instant::now();
     // A progress bar on stderr when the run is long (indicatif draws nothing when stderr is not
     // a terminal).
-    let estimated_faces = mesh.half_edge_count() as f64 * 4f64.powi(levels as i32 - 1);
-    let bar = if estimated_faces > 2e6 {
+    let surface = Surface::new(mesh, &scheme);
+    let bar = if surface.refined_faces_at_least(levels) > 2_000_000 {
         indicatif::ProgressBar::new(levels as u64).with_message(format!("refining with {}", scheme.name()))
     } else {
         indicatif::ProgressBar::hidden()
@@ -42,7 +42,7 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
         indicatif::ProgressStyle::with_template("{msg} [{bar:30}] level {pos}/{len} {elapsed}")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
-    let refined = Surface::new(mesh, &scheme)
+    let refined = surface
         .refine_with_progress(levels, |level| bar.set_position(level as u64))
         .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
     bar.finish_and_clear();

@@ -189,8 +189,9 @@ impl GpuTessellation {
     /// and `indices` (its triangles, three per triangle), and evaluates every vertex on `cage`.
     ///
     /// # Errors
-    /// [`GpuError::Tessellation`] for a cage that does not fit the
-    /// plan, [`GpuError::TooLarge`] when the points or the vertex buffer exceed what the device
+    /// [`GpuError::Tessellation`] for a cage that does not fit the plan, or for a plan that
+    /// breaks a rule of [`EvaluationPlan::validate`](subdiv_tess::EvaluationPlan::validate)
+    /// (`TessError::Plan`), [`GpuError::TooLarge`] when the points or the vertex buffer exceed what the device
     /// can bind or allocate, [`GpuError::Indices`] for an index past the vertices,
     /// [`GpuError::Wgpu`] when the device refuses a buffer or the shader.
     pub fn new(
@@ -574,8 +575,10 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
             weights.clear();
         }
         for entry in entries.by_ref().take(step) {
+            // Runs are shared by start and length: a valid plan may start two runs of
+            // different lengths at one offset.
             let mut patch = |at: u32, len: u32, range: &mut Range| {
-                *patches.entry(at).or_insert_with(|| {
+                *patches.entry((at, len)).or_insert_with(|| {
                     let local = range.patches.len() as u32;
                     range.patches.extend_from_slice(&plan.points()[at as usize..(at + len) as usize]);
                     local
@@ -604,7 +607,7 @@ fn split(plan: &EvaluationPlan, budget: u64, step: usize) -> Vec<Range> {
                 }
                 PlanEntry::General(g) => {
                     let points = patch(g.points, g.len, &mut range);
-                    let w = *weights.entry(g.weights).or_insert_with(|| {
+                    let w = *weights.entry((g.weights, g.len)).or_insert_with(|| {
                         let local = range.weights.len() as u32;
                         let rows = &plan.weights()[g.weights as usize..(g.weights + 3 * g.len) as usize];
                         range.weights.extend(rows.iter().map(|&x| x as f32));

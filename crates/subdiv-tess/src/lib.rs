@@ -4,8 +4,9 @@
 //! (positions and normals of exact limit points, each vertex's face and `Bfr` parameters,
 //! triangles with their faces, and polygons), or the caller's own buffers and vertex type
 //! through a [`TessSink`] ([`sink`]: [`FlatMesh`]'s f32 buffers, [`VertexBuffers`] of any
-//! `bytemuck::Pod` vertex). Two tessellators, both reusable objects that keep their allocations
-//! between calls:
+//! `bytemuck::Pod` vertex). Two tessellators, prepared once per mesh and reusable (the dual one
+//! keeps all its buffers between calls; the quadtree's `tessellate_into` keeps its vertex table,
+//! creators and centres, and allocates its leaves anew):
 //!
 //! - The [`dual`] tessellator ([`DualTessellator`], paper 000 §5.5, Schaefer and Warren's
 //!   dual-grid stitching) samples each face uniformly at its own integer rate: every face owns

@@ -4,7 +4,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use subdiv_mesh::{BuildOptions, FaceId, Mesh, PolygonSoup};
-use subdiv_schemes::{RefineOptions, Refiner, Scheme};
+use subdiv_schemes::{RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::LimitPoint;
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv_tess::{
@@ -97,16 +97,31 @@ impl Surface {
         self.refine_with_progress(levels, |_| {})
     }
 
+    /// A lower bound of the faces `levels` levels of refinement make under this surface's
+    /// scheme, which [`refine`](Self::refine) checks against 32-bit ids: the primal splits'
+    /// exact counts (a quad split's first level makes one quad per half-edge, every later one
+    /// four per face; a triangle split four per triangle), and for the dual, mid-edge and √3
+    /// splits the faces alone (each face keeps at least one child face; more holds only away
+    /// from borders, so the bound does not count it).
+    pub fn refined_faces_at_least(&self, levels: usize) -> u64 {
+        if levels == 0 {
+            return self.mesh.face_count() as u64;
+        }
+        let f = self.mesh.face_count() as u64;
+        let (first, growth) = match self.scheme.split() {
+            Split::Quad => (self.mesh.half_edge_count() as u64, 4u64),
+            Split::Triangle => (4 * f, 4),
+            Split::Dual | Split::Midedge | Split::Sqrt3 => (f, 1),
+        };
+        (1..levels).fold(first, |n, _| n.saturating_mul(growth))
+    }
+
     /// [`refine`](Self::refine), calling `progress(level)` after each level (1 to `levels`).
     ///
     /// # Errors
     /// As [`refine`](Self::refine).
     pub fn refine_with_progress(&self, levels: usize, progress: impl FnMut(usize)) -> Result<Mesh, Error> {
-        // A primal split's first level makes about one face per half-edge, each later one four
-        // per face (a lower bound for the other splits too, close enough to refuse in advance
-        // what 32-bit ids could not hold).
-        let first = self.mesh.half_edge_count() as u64;
-        let faces = (1..levels).fold(if levels == 0 { 0 } else { first }, |n, _| n.saturating_mul(4));
+        let faces = self.refined_faces_at_least(levels);
         if faces > u64::from(u32::MAX) {
             return Err(Error::RefineLevels { levels, faces });
         }
@@ -470,6 +485,29 @@ mod tests {
             Err(Error::Scheme(_))
         ));
         assert!(matches!(s.refine(40), Err(Error::RefineLevels { levels: 40, .. })));
+    }
+
+    /// The refinement bound is exact for the primal splits and never above the real count for
+    /// the others (√3 and mid-edge refine far past what 4× growth would refuse).
+    #[test]
+    fn refined_face_bounds_are_lower_bounds() {
+        for (builtin, soup) in [
+            (Builtin::CatmullClark, shapes::default_model()),
+            (Builtin::Loop, shapes::icosahedron()),
+            (Builtin::Sqrt3, shapes::icosahedron()),
+            (Builtin::Midedge, shapes::cube()),
+            (Builtin::DooSabin, shapes::cube()),
+        ] {
+            let s = Surface::new(Mesh::build(soup).unwrap(), builtin.scheme());
+            for levels in 0..3 {
+                let real = s.refine(levels).unwrap().face_count() as u64;
+                let bound = s.refined_faces_at_least(levels);
+                assert!(bound <= real, "{builtin:?} at {levels} levels: bound {bound}, {real} faces");
+                if matches!(builtin, Builtin::CatmullClark | Builtin::Loop) {
+                    assert_eq!(bound, real, "{builtin:?} at {levels} levels");
+                }
+            }
+        }
     }
 
     #[test]

@@ -479,7 +479,7 @@ impl DualTessellator {
     /// accepted (the failure came from a stencil), untouched if not.
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_rates(rates)?;
-        let done = self.flat_forked(rates, out);
+        let done = self.build_flat(rates, out);
         if done.is_err() {
             out.vertices.clear();
             out.indices.clear();
@@ -490,9 +490,9 @@ impl DualTessellator {
         Ok(())
     }
 
-    /// [`tessellate_flat`](Self::tessellate_flat) after the blocks' planning: the topology,
-    /// then its indices on a second thread beside the evaluation.
-    fn flat_forked(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
+    /// [`tessellate_flat`](Self::tessellate_flat) after its rates' check: the topology, then
+    /// its indices beside (on a second thread, for large calls) the preparation and evaluation.
+    fn build_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         let Self { evaluator, builder, topology, options, .. } = self;
         builder.build(evaluator.domains(), rates, None, topology);
         let (t, parallel) = (&*topology, options.parallelism.forks());
