@@ -358,6 +358,25 @@ fn equal_rates_give_quads() {
     assert_eq!(out.positions.len(), 24 * 24);
 }
 
+/// New options on a prepared tessellator give what a tessellator made with them gives.
+#[test]
+fn set_options_equals_a_fresh_tessellator() {
+    let mesh = Mesh::build(shapes::default_model()).unwrap();
+    let cc = Builtin::CatmullClark.scheme();
+    let rates = rates_for(&mesh, 7, 9);
+    let mut kept = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
+    assert!(kept.tessellate(&rates).unwrap().polygon_count() > 0);
+    for options in [
+        DualOptions::DEFAULT.with_quads(false).with_parallelism(Parallelism::Serial),
+        DualOptions::DEFAULT.with_quads(true).with_parallelism(Parallelism::Rayon),
+    ] {
+        kept.set_options(&options);
+        assert_eq!(kept.options(), &options);
+        let mut fresh = DualTessellator::new(cc, &mesh, &options).unwrap();
+        assert_eq!(kept.tessellate(&rates).unwrap(), fresh.tessellate(&rates).unwrap(), "{options:?}");
+    }
+}
+
 #[test]
 fn bad_input_is_a_typed_error() {
     let cube = Mesh::build(shapes::cube()).unwrap();

@@ -46,8 +46,8 @@ pub struct Surface {
     scheme: Scheme,
     /// The evaluator with the default options, made on the first [`Surface::evaluate`].
     evaluator: OnceLock<Evaluator>,
-    /// The dual tessellator, with the options it was made with.
-    dual: Option<(DualOptions, DualTessellator)>,
+    /// The dual tessellator (its options set per call).
+    dual: Option<DualTessellator>,
     /// The quadtree tessellator (also the tolerance policy's bounds).
     quadtree: Option<QuadtreeTessellator>,
 }
@@ -286,14 +286,17 @@ impl Surface {
         Ok((TessInfo { method: Method::Dual, rates: faces, epsilon, quadtree: None }, rings))
     }
 
-    /// The dual tessellator for `options`, made (again) when its options differ.
+    /// The dual tessellator with `options`' quads and parallelism, made on first use (later
+    /// calls keep its patches, stencils and templates whatever their options).
     fn dual(&mut self, options: &TessOptions) -> Result<&mut DualTessellator, Error> {
         let wanted = DualOptions { quads: options.polygons, parallelism: options.parallelism };
         let tess = match self.dual.take() {
-            Some((made, tess)) if made == wanted => tess,
-            _ => DualTessellator::new(&self.scheme, &self.mesh, &wanted)?,
+            Some(tess) => tess,
+            None => DualTessellator::new(&self.scheme, &self.mesh, &wanted)?,
         };
-        Ok(&mut self.dual.insert((wanted, tess)).1)
+        let tess = self.dual.insert(tess);
+        tess.set_options(&wanted);
+        Ok(tess)
     }
 
     /// The quadtree tessellator, made on first use.

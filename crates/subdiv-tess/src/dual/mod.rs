@@ -238,6 +238,19 @@ impl DualTessellator {
         Ok(self.evaluator.seed_tables(tables))
     }
 
+    /// Takes new options: [`parallelism`](DualOptions::parallelism) from the next call on,
+    /// [`quads`](DualOptions::quads) from the next tessellation (the animation paths keep the
+    /// last one's polygons). Nothing prepared is lost.
+    pub fn set_options(&mut self, options: &DualOptions) {
+        self.options = *options;
+        self.builder.quads = options.quads;
+    }
+
+    /// The options (as made, or as last [set](Self::set_options)).
+    pub fn options(&self) -> &DualOptions {
+        &self.options
+    }
+
     /// The number of input faces (the length [`tessellate`](Self::tessellate)'s rates must have).
     pub fn face_count(&self) -> usize {
         self.builder.mesh.face_count()

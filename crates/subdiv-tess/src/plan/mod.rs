@@ -38,7 +38,7 @@ use self::validate::check_index;
 pub(crate) const PLAN_BLOCK: u32 = 0;
 pub(crate) const PLAN_BICUBIC: u32 = 1;
 pub(crate) const PLAN_GENERAL: u32 = 2;
-pub(crate) const PLAN_KIND_SHIFT: u32 = 30;
+const PLAN_KIND_SHIFT: u32 = 30;
 /// The most records of one kind an entry can name.
 const MAX_RECORDS: usize = 1 << PLAN_KIND_SHIFT;
 
@@ -274,7 +274,7 @@ impl EvaluationPlan {
 
     /// An entry of `vertices` as its record (a valid plan's: see [`validate`](Self::validate)).
     fn decode(&self, entry: u32) -> PlanEntry<'_> {
-        let (kind, index) = split(entry);
+        let (kind, index) = unpack(entry);
         let index = index as usize;
         match kind {
             PLAN_BLOCK => PlanEntry::Block(&self.blocks[index]),
@@ -332,7 +332,7 @@ impl EvaluationPlan {
             .vertices
             .iter()
             .map(|&e| {
-                let (kind, index) = split(e);
+                let (kind, index) = unpack(e);
                 match kind {
                     PLAN_BLOCK => PlanRecord::Block(index),
                     PLAN_BICUBIC => PlanRecord::Bicubic(index),
@@ -372,7 +372,7 @@ impl EvaluationPlan {
                 PlanRecord::General(k) => (PLAN_GENERAL, k),
             };
             check_index(PlanItem::Vertex(v), RECORD_NAMES[kind as usize], index, counts[kind as usize])?;
-            vertices.push(kind << PLAN_KIND_SHIFT | index);
+            vertices.push(pack(kind, index as usize));
         }
         Ok(Self {
             cage_len: parts.cage_len,
@@ -479,7 +479,6 @@ impl EvaluationPlan {
         let mut composed: HashMap<Source, (u32, u32, u32)> = HashMap::new();
         // By base: a block's cells are its vertices, so blocks have distinct bases.
         let mut blocks: HashMap<u32, u32> = HashMap::new();
-        let entry = |kind: u32, index: usize| kind << PLAN_KIND_SHIFT | index as u32;
         for e in self.entries() {
             let new = match e {
                 PlanEntry::Block(&b) => {
@@ -488,14 +487,14 @@ impl EvaluationPlan {
                         out.blocks.push(PlanBlock { points, ..b });
                         out.blocks.len() as u32 - 1
                     });
-                    entry(PLAN_BLOCK, k as usize)
+                    pack(PLAN_BLOCK, k as usize)
                 }
                 PlanEntry::Bicubic(&b) => {
                     let cv = &self.points[b.points as usize..b.points as usize + 16];
                     if cv.iter().all(|&c| (c as usize) < cage) {
                         let points = patch(&mut out, b.points, 16);
                         out.bicubic.push(PlanBicubic { points, ..b });
-                        entry(PLAN_BICUBIC, out.bicubic.len() - 1)
+                        pack(PLAN_BICUBIC, out.bicubic.len() - 1)
                     } else {
                         let key = (b.points, 16, b.s.to_bits(), b.t.to_bits());
                         let (points, len, weights) = *composed.entry(key).or_insert_with(|| {
@@ -513,7 +512,7 @@ impl EvaluationPlan {
                             scratch.push_to(&mut out)
                         });
                         out.general.push(PlanGeneral { points, len, weights, ju: b.ju, jv: b.jv });
-                        entry(PLAN_GENERAL, out.general.len() - 1)
+                        pack(PLAN_GENERAL, out.general.len() - 1)
                     }
                 }
                 PlanEntry::General(&g) => {
@@ -537,7 +536,7 @@ impl EvaluationPlan {
                         })
                     };
                     out.general.push(PlanGeneral { points, len, weights, ju: g.ju, jv: g.jv });
-                    entry(PLAN_GENERAL, out.general.len() - 1)
+                    pack(PLAN_GENERAL, out.general.len() - 1)
                 }
             };
             out.vertices.push(new);
@@ -561,8 +560,14 @@ impl EvaluationPlan {
     }
 }
 
-/// An entry of `EvaluationPlan::vertices` as its kind and record number.
-fn split(entry: u32) -> (u32, u32) {
+/// An entry of `EvaluationPlan::vertices`: a record's kind and its number in that kind's
+/// list (the one encoding; [`unpack`] reads it).
+pub(crate) fn pack(kind: u32, index: usize) -> u32 {
+    kind << PLAN_KIND_SHIFT | index as u32
+}
+
+/// An entry of `EvaluationPlan::vertices` as its kind and record number ([`pack`]'s inverse).
+pub(super) fn unpack(entry: u32) -> (u32, u32) {
     (entry >> PLAN_KIND_SHIFT, entry & ((1 << PLAN_KIND_SHIFT) - 1))
 }
 

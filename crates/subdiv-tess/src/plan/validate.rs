@@ -136,7 +136,7 @@ impl EvaluationPlan {
             run(at, "patch point indices", b.points, 16, patch_points)?;
             run(at, "cell vertices", b.base, u64::from(b.rate) * u64::from(b.rate), vertices)?;
             let cells = b.base as usize..b.base as usize + (b.rate as usize).pow(2);
-            let own = PLAN_BLOCK << PLAN_KIND_SHIFT | k as u32;
+            let own = pack(PLAN_BLOCK, k);
             if let Some(v) = cells.clone().find(|&v| self.vertices[v] != own) {
                 return Err(PlanError::Structure {
                     at: PlanItem::Vertex(v),
@@ -165,7 +165,7 @@ impl EvaluationPlan {
         // The entries.
         let counts = [self.blocks.len(), self.bicubic.len(), self.general.len()];
         for (v, &e) in self.vertices.iter().enumerate() {
-            let (kind, index) = split(e);
+            let (kind, index) = unpack(e);
             let Some(&count) = counts.get(kind as usize) else {
                 return Err(PlanError::Structure { at: PlanItem::Vertex(v), rule: "an entry of no kind" });
             };

@@ -58,9 +58,7 @@ use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEva
 
 use super::topology::Topology;
 use crate::TessError;
-use crate::plan::{
-    EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PLAN_KIND_SHIFT, PlanBicubic, PlanBlock, PlanGeneral,
-};
+use crate::plan::{EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PlanBicubic, PlanBlock, PlanGeneral};
 use crate::quadtree::{check_bicubic, regular_grid};
 
 mod kernels;

@@ -50,7 +50,7 @@ impl Evaluator {
                 face_patches.insert(block.face, at);
                 let base = block.base as usize;
                 let end = base + (block.rate * block.rate) as usize;
-                plan.vertices[base..end].fill(entry(PLAN_BLOCK, plan.blocks.len()));
+                plan.vertices[base..end].fill(crate::plan::pack(PLAN_BLOCK, plan.blocks.len()));
                 plan.blocks.push(PlanBlock { base: block.base, rate: block.rate, points: at });
             }
         }
@@ -62,7 +62,7 @@ impl Evaluator {
             for b in 0..nt {
                 for a in 0..ns {
                     let v = self.grid_vertices[g.vertices as usize + b * ns + a];
-                    plan.vertices[v as usize] = entry(PLAN_BICUBIC, plan.bicubic.len());
+                    plan.vertices[v as usize] = crate::plan::pack(PLAN_BICUBIC, plan.bicubic.len());
                     plan.bicubic.push(PlanBicubic { points: at, s: params[a], t: params[ns + b], ju: g.ju, jv: g.jv });
                 }
             }
@@ -73,7 +73,7 @@ impl Evaluator {
                 plan.points.extend_from_slice(cv);
                 plan.points.len() as u32 - 16
             });
-            plan.vertices[v as usize] = entry(PLAN_BICUBIC, plan.bicubic.len());
+            plan.vertices[v as usize] = crate::plan::pack(PLAN_BICUBIC, plan.bicubic.len());
             plan.bicubic.push(PlanBicubic { points: at, s, t, ju: [1.0, 0.0], jv: [0.0, 1.0] });
         }
     }
@@ -100,7 +100,7 @@ impl Evaluator {
                     }
                     at
                 });
-                plan.vertices[(block.base + k) as usize] = entry(PLAN_GENERAL, plan.general.len());
+                plan.vertices[(block.base + k) as usize] = crate::plan::pack(PLAN_GENERAL, plan.general.len());
                 plan.general.push(PlanGeneral { points, len: len as u32, weights, ju: [1.0, 0.0], jv: [0.0, 1.0] });
             }
         }
@@ -139,7 +139,7 @@ impl Evaluator {
                 }
                 at
             });
-            plan.vertices[v] = entry(PLAN_GENERAL, plan.general.len());
+            plan.vertices[v] = crate::plan::pack(PLAN_GENERAL, plan.general.len());
             plan.general.push(PlanGeneral { points, len: r.len, weights: w, ju: r.ju, jv: r.jv });
         }
     }
@@ -147,8 +147,3 @@ impl Evaluator {
 
 /// A vertex not planned yet.
 const UNSET: u32 = u32::MAX;
-
-/// A vertex's entry: its kind and the index of its record in that kind's list.
-fn entry(kind: u32, index: usize) -> u32 {
-    kind << PLAN_KIND_SHIFT | index as u32
-}
