@@ -111,7 +111,7 @@ fn run_curve(args: &StencilArgs, scheme: &CurveScheme, out: &mut impl Write) -> 
 fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Result<(), UserError> {
     let scheme = builtin.scheme();
     let valence = args.valence.map_or(scheme.regular_valence(), |k| k as usize);
-    let matrices = PatchMatrices::of(scheme, PatchType::Interior { valence }, BoundaryInterpolation::EdgeOnly)?;
+    let matrices = PatchMatrices::of(scheme, PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)?;
     let points: Vec<Dyadic> = match &args.at {
         Some(at) => {
             let (u, v) = at.split_once(',').ok_or_else(|| UserError(format!("--at {at}: expected U,V")))?;

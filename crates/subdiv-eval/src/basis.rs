@@ -178,7 +178,7 @@ impl EigenBasis {
         if !(3..=MAX_VALENCE).contains(&valence) {
             return Err(EvalError::Valence { valence, max: MAX_VALENCE });
         }
-        let matrices = PatchMatrices::of(scheme, PatchType::Interior { valence }, BoundaryInterpolation::EdgeOnly)?;
+        let matrices = PatchMatrices::of(scheme, PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)?;
         Self::of(&matrices, 0)
     }
 
@@ -240,9 +240,12 @@ impl EigenBasis {
         let Some(this) = matrices.shapes.get(shape) else {
             return Err(unsupported("no such shape"));
         };
-        let PatchType::Interior { valence } = matrices.patch_type else {
+        let PatchType::Interior { valence, sharp } = matrices.patch_type else {
             return Err(unsupported("boundary patches are evaluated by exact stencils"));
         };
+        if !sharp.is_smooth() {
+            return Err(unsupported("patches with sharp features are evaluated by exact stencils"));
+        }
         // Regular: every child has one shape whose children all have it (a B-spline patch
         // refines into B-spline patches); the fit then checks that the surface is polynomial.
         let closed = |r: usize| matrices.shapes[r].children.iter().all(|c| c.shape == r);

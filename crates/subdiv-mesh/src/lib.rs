@@ -28,6 +28,7 @@ mod error;
 mod ids;
 mod mesh;
 mod patch;
+mod region;
 pub mod shapes;
 mod soup;
 
@@ -36,6 +37,7 @@ pub use error::MeshError;
 pub use ids::{EdgeId, FaceId, HalfEdgeId, VertexId};
 pub use mesh::{BoundaryLoop, Components, Mesh, OutgoingHalfEdges, RegularValence};
 pub use patch::Patch;
+pub use region::Region;
 pub use soup::{BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, PolygonSoup, Tags, TriangleSubdivision};
 
 pub use glam::DVec3;

@@ -19,14 +19,33 @@ pub struct Patch {
     /// The patch's shape: per face of the walk its size and, per side, the corner's place in
     /// [`vertices`](Self::vertices) and what lies across (a boundary, a face outside the patch
     /// or which face of the walk); then per vertex its valence and whether it is on a
-    /// boundary. Equal signatures mean equal shapes, down to the valences of the outermost
-    /// ring.
+    /// boundary; then, only where the patch has any, its sharp features: every interior side
+    /// and every vertex whose sharpness is not 0, by place, with the class of its sharpness
+    /// (infinitely sharp or semi-sharp). Equal signatures mean equal shapes, down to the
+    /// valences of the outermost ring. Semi-sharp values are not told apart: the sub-patch
+    /// matrices exist for stationary features only (sharpness 0 or infinite), and a patch
+    /// with a semi-sharp feature matches none of them.
     pub signature: Vec<u32>,
 }
 
 /// Codes in a signature for what lies across a side; faces of the walk follow as `2 + index`.
 const ACROSS_BOUNDARY: u32 = 0;
 const ACROSS_OUTSIDE: u32 = 1;
+
+/// Marks the start of a signature's sharp features (no count or place of the smooth part
+/// reaches it), so that smooth patches keep the signature they had without the section.
+const SHARP_FEATURES: u32 = u32::MAX;
+
+/// The class of a sharpness in a signature: 0 smooth, 1 infinitely sharp, 2 semi-sharp.
+fn sharpness_class(sharpness: f64) -> u32 {
+    if sharpness >= crate::Tags::INFINITELY_SHARP {
+        1
+    } else if sharpness > 0.0 {
+        2
+    } else {
+        0
+    }
+}
 
 impl Mesh {
     /// The rings of faces around `centre`, up to `radius`: ring 0 is `centre`, ring `r` the
@@ -125,6 +144,10 @@ impl Mesh {
         let mut signature = Vec::new();
         let mut walk_index: HashMap<FaceId, u32> = HashMap::new();
         let mut queue = std::collections::VecDeque::from([start]);
+        // (side number in walk order, class) of the sharp interior sides; boundary sides are
+        // told by `ACROSS_BOUNDARY` (refinement makes them infinitely sharp anyway).
+        let mut sharp = Vec::new();
+        let mut side = 0u32;
         walk_index.insert(start_face, 0);
         while let Some(entry) = queue.pop_front() {
             let size = self.face_size(self.face(entry));
@@ -138,6 +161,11 @@ impl Mesh {
                     count
                 });
                 signature.push(p);
+                let class = sharpness_class(self.edge_sharpness(self.edge(h)));
+                if class != 0 && self.twin(h).is_some() {
+                    sharp.extend([side, class]);
+                }
+                side += 1;
                 signature.push(match self.twin(h) {
                     None => ACROSS_BOUNDARY,
                     Some(t) if !in_patch(self.face(t)) => ACROSS_OUTSIDE,
@@ -155,6 +183,18 @@ impl Mesh {
         for &v in &vertices {
             signature.push(self.valence(v) as u32);
             signature.push(u32::from(self.is_boundary_vertex(v)));
+        }
+        let corners = vertices.iter().enumerate().filter_map(|(p, &v)| {
+            let class = sharpness_class(self.vertex_sharpness(v));
+            (class != 0).then_some([p as u32, class])
+        });
+        let corners: Vec<[u32; 2]> = corners.collect();
+        if !sharp.is_empty() || !corners.is_empty() {
+            signature.push(SHARP_FEATURES);
+            signature.extend(sharp);
+            // Sides and vertices apart: a side count is never `SHARP_FEATURES`.
+            signature.push(SHARP_FEATURES);
+            signature.extend(corners.into_iter().flatten());
         }
         Patch { vertices, signature }
     }

@@ -119,7 +119,7 @@ impl Canonical {
             });
         }
         let triangles = matches!(scheme.split(), Split::Triangle | Split::Sqrt3);
-        let pillow = Mesh::build(crate::canonical::pillow(valence, rings, triangles))
+        let pillow = Mesh::build(crate::canonical::pillow(valence, rings, triangles, crate::SharpFeatures::SMOOTH))
             .map_err(|e| SchemeError::Internal(e.to_string()))?;
         let centre_is_face = matches!(scheme.split(), Split::Dual | Split::Midedge);
         let mesh = if centre_is_face {

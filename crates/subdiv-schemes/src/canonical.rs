@@ -4,15 +4,18 @@
 
 use std::collections::HashMap;
 
-use subdiv_mesh::{DVec3, PolygonSoup, VertexId};
+use subdiv_mesh::{CornerTag, CreaseTag, DVec3, PolygonSoup, Tags, VertexId};
+
+use crate::SharpFeatures;
 
 /// `k` sectors of a regular grid of `rings` rings around vertex 0 in the plane z = 0 (quads, or
 /// triangles), and a mirrored copy far below, joined along their rims by a band of quads (split
 /// into triangles for triangle schemes) so that the mesh is closed and every vertex has valence
 /// 3 or more. Sector `s` spans the directions `e_s` and `e_{s+1}` (`e_s` at angle 2πs/k); its
 /// grid point `(i, j)` sits at `i·e_s + j·e_{s+1}`. Vertex 1 is sector 0's `(1, 0)`, and the
-/// first face is sector 0's cell at the centre, starting at vertex 0.
-pub(crate) fn pillow(k: usize, rings: usize, triangles: bool) -> PolygonSoup {
+/// first face is sector 0's cell at the centre, starting at vertex 0. `sharp` makes spokes of
+/// the top sheet infinitely sharp all the way to the rim, and vertex 0 a corner.
+pub(crate) fn pillow(k: usize, rings: usize, triangles: bool, sharp: SharpFeatures) -> PolygonSoup {
     let mut soup = PolygonSoup::new();
     let fan = Fan { sectors: k, closed: true, rings, triangles };
     let top = fan.sheet(&mut soup, DVec3::ZERO, false);
@@ -38,16 +41,19 @@ pub(crate) fn pillow(k: usize, rings: usize, triangles: bool) -> PolygonSoup {
             soup.push_face([b, a, a2, b2]);
         }
     }
+    top.sharpen(&mut soup, (0..k).filter(|&s| sharp.edge(s)), rings, sharp.corner);
     soup
 }
 
 /// `faces` sectors of a regular grid of `rings` rings around vertex 0, open: vertex 0 is on
 /// the boundary with `faces` faces around it, and sector 0's spoke (from vertex 0 through
 /// vertex 1) is a boundary edge. The first face is sector 0's cell at the centre, starting at
-/// vertex 0, so its first side lies on the boundary.
-pub(crate) fn open_fan(faces: usize, rings: usize, triangles: bool) -> PolygonSoup {
+/// vertex 0, so its first side lies on the boundary. `sharp` makes interior spokes
+/// infinitely sharp, and vertex 0 a corner.
+pub(crate) fn open_fan(faces: usize, rings: usize, triangles: bool, sharp: SharpFeatures) -> PolygonSoup {
     let mut soup = PolygonSoup::new();
-    Fan { sectors: faces, closed: false, rings, triangles }.sheet(&mut soup, DVec3::ZERO, false);
+    let sheet = Fan { sectors: faces, closed: false, rings, triangles }.sheet(&mut soup, DVec3::ZERO, false);
+    sheet.sharpen(&mut soup, (1..faces).filter(|&s| sharp.edge(s)), rings, sharp.corner);
     soup
 }
 
@@ -67,6 +73,23 @@ struct Sheet {
 }
 
 impl Sheet {
+    /// Tags the edges of `spokes` infinitely sharp from the centre to the rim, and the centre
+    /// a corner if `corner`: a straight crease through every vertex on the way, so that the
+    /// only irregular place is the centre.
+    fn sharpen(&self, soup: &mut PolygonSoup, spokes: impl Iterator<Item = usize>, rings: usize, corner: bool) {
+        for s in spokes {
+            let mut from = self.centre;
+            for i in 1..=rings {
+                let to = self.id(s, i, 0);
+                soup.tags.creases.push(CreaseTag { vertices: [from, to], sharpness: Tags::INFINITELY_SHARP });
+                from = to;
+            }
+        }
+        if corner {
+            soup.tags.corners.push(CornerTag { vertex: self.centre, sharpness: Tags::INFINITELY_SHARP });
+        }
+    }
+
     /// Sector `s`'s grid point `(i, j)`; points with `i = 0` belong to the next sector, as its
     /// `(j, 0)` (for an open fan, the last spoke is a sector of its own with `j = 0` only).
     fn id(&self, s: usize, i: usize, j: usize) -> VertexId {

@@ -93,7 +93,8 @@ pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, Po
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError};
 pub use patch::{
-    ChildDomain, FoundPatch, MeshPatches, PatchMatrices, PatchShape, PatchType, SubPatch, child_faces, sub_patch_starts,
+    ChildDomain, FoundPatch, MeshPatches, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces,
+    sub_patch_starts,
 };
 pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
 pub use scheme::{

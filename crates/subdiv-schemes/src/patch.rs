@@ -37,13 +37,28 @@ const MAX_RADIUS: usize = 3;
 const MAX_LEVELS: usize = 5;
 
 /// Which canonical patch to start from: a face whose corner 0 is the only irregular place.
+///
+/// Corner 0's fan, and its stationary sharp features ([`SharpFeatures`]: infinitely sharp
+/// edges and corners). Semi-sharp features are not stationary and have no patch type: a
+/// face near one is refined until its sharpness is spent (see `subdiv-stencil`'s
+/// `PatchLevels`).
+///
+/// **How many there are.** An interior vertex of valence `k` has `2^k` sets of sharp spokes,
+/// each with or without a corner, and the set is counted from the patch's face (spoke 0 is
+/// the face's first side), so up to valence `K` there are `Σ_{k=2..K} 2^(k+1)` interior types
+/// (a smooth vertex: one per valence). A boundary vertex with `f` faces has `2^(f−1)` sets of
+/// sharp interior spokes, with or without a corner, for each of its `f` faces: up to `F`
+/// faces, `Σ_{f=1..F} f · 2^f`. They are derived on demand, only for the configurations a
+/// mesh has, and cached per process.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum PatchType {
     /// Corner 0 is an interior vertex of this valence; the scheme's regular valence (4, or 6
-    /// for triangles) gives the regular patch.
+    /// for triangles) without sharp features gives the regular patch.
     Interior {
-        /// The valence of corner 0 (3 or more).
+        /// The valence of corner 0 (2 or more for quad splits, 3 or more for triangles).
         valence: usize,
+        /// Its sharp features; spokes count counter-clockwise from the face's first side.
+        sharp: SharpFeatures,
     },
     /// Corner 0 is a boundary vertex with this many faces around it, and the face is the
     /// `index`-th of them counted counter-clockwise from the boundary: index 0 has its first
@@ -54,13 +69,61 @@ pub enum PatchType {
         faces: usize,
         /// The face's place in the fan, `0..faces`.
         index: usize,
+        /// Its sharp features; spokes count counter-clockwise from the boundary edge on face
+        /// 0's first side (spokes 0 and `faces` are the boundary, sharp by the boundary rule,
+        /// and not in the set).
+        sharp: SharpFeatures,
     },
 }
 
+/// The stationary sharp features at a [`PatchType`]'s vertex: which of its spokes (the edges
+/// from the vertex) are infinitely sharp, and whether the vertex is an infinitely sharp
+/// corner. Sharpness ≥ 10 ([`Tags::INFINITELY_SHARP`](subdiv_mesh::Tags::INFINITELY_SHARP))
+/// is infinite, as in OpenSubdiv.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct SharpFeatures {
+    /// Bit `s` is set when spoke `s` is infinitely sharp (so spokes 0 to 63 can be).
+    pub edges: u64,
+    /// Whether the vertex is an infinitely sharp corner.
+    pub corner: bool,
+}
+
+impl SharpFeatures {
+    /// No sharp feature.
+    pub const SMOOTH: Self = Self { edges: 0, corner: false };
+
+    /// Whether there is no sharp feature.
+    pub fn is_smooth(self) -> bool {
+        self == Self::SMOOTH
+    }
+
+    /// Whether spoke `s` is infinitely sharp.
+    pub fn edge(self, s: usize) -> bool {
+        s < 64 && self.edges >> s & 1 == 1
+    }
+}
+
 impl PatchType {
+    /// The smooth interior patch type of this valence.
+    pub fn interior(valence: usize) -> Self {
+        Self::Interior { valence, sharp: SharpFeatures::SMOOTH }
+    }
+
+    /// The smooth boundary patch type: the `index`-th of `faces` faces.
+    pub fn boundary(faces: usize, index: usize) -> Self {
+        Self::Boundary { faces, index, sharp: SharpFeatures::SMOOTH }
+    }
+
     /// The regular interior patch of `scheme`.
     pub fn regular(scheme: &Scheme) -> Self {
-        Self::Interior { valence: scheme.regular_valence() }
+        Self::interior(scheme.regular_valence())
+    }
+
+    /// The sharp features.
+    pub fn sharp(self) -> SharpFeatures {
+        match self {
+            Self::Interior { sharp, .. } | Self::Boundary { sharp, .. } => sharp,
+        }
     }
 }
 
@@ -208,7 +271,7 @@ impl PatchMatrices {
     /// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
     ///
     /// let cc = Builtin::CatmullClark.scheme();
-    /// let m = PatchMatrices::of(cc, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly)?;
+    /// let m = PatchMatrices::of(cc, PatchType::interior(5), BoundaryInterpolation::EdgeOnly)?;
     /// // 2k + 8 control points, and the child at the extraordinary corner keeps the shape.
     /// assert_eq!(m.shapes[0].size, 18);
     /// assert_eq!(m.shapes[0].children[0].shape, 0);
@@ -257,13 +320,26 @@ impl PatchMatrices {
             split @ (Split::Dual | Split::Midedge | Split::Sqrt3) => return Err(split_not_supported(scheme, split)),
         };
         let (valence, invalid) = match patch_type {
-            PatchType::Interior { valence } => {
-                (valence, (valence < 3).then_some("an interior patch needs valence 3 or more"))
+            PatchType::Interior { valence, .. } if triangles && valence < 3 => {
+                (valence, Some("an interior patch of triangles needs valence 3 or more"))
             }
-            PatchType::Boundary { faces, index } => (
+            PatchType::Interior { valence, .. } if valence < 2 => {
+                (valence, Some("an interior patch needs valence 2 or more"))
+            }
+            PatchType::Interior { valence, sharp } => (
+                valence,
+                (valence < 64 && sharp.edges >> valence != 0)
+                    .then_some("a sharp spoke beyond the vertex's valence"),
+            ),
+            PatchType::Boundary { faces, index, sharp } => (
                 faces + 1,
-                (faces == 0 || index >= faces)
-                    .then_some("a boundary patch needs one face or more, and an index below the face count"),
+                if faces == 0 || index >= faces {
+                    Some("a boundary patch needs one face or more, and an index below the face count")
+                } else if sharp.edge(0) || (faces < 64 && sharp.edges >> faces != 0) {
+                    Some("sharp spokes of a boundary patch are its interior spokes, 1 to faces − 1")
+                } else {
+                    None
+                },
             ),
         };
         if let Some(reason) = invalid {
@@ -272,11 +348,14 @@ impl PatchMatrices {
         for radius in 1..=MAX_RADIUS {
             let rings = radius + 3;
             let mut soup = match patch_type {
-                PatchType::Interior { valence } => crate::canonical::pillow(valence, rings, triangles),
-                PatchType::Boundary { faces, .. } => crate::canonical::open_fan(faces, rings, triangles),
+                PatchType::Interior { valence, sharp } => crate::canonical::pillow(valence, rings, triangles, sharp),
+                PatchType::Boundary { faces, sharp, .. } => crate::canonical::open_fan(faces, rings, triangles, sharp),
             };
             soup.tags.boundary_interpolation = Some(boundary);
             let mesh = Mesh::build(soup).map_err(|e| SchemeError::Internal(e.to_string()))?;
+            // With the boundary rule applied, as refinement (and `PatchLevels`) sees a mesh:
+            // the corners edge-and-corner makes are in the signatures.
+            let mesh = Refiner::new(&mesh, scheme, 0, &RefineOptions::DEFAULT)?.into_mesh();
             if let Some(found) = Derivation::new(scheme, mesh, radius).run(patch_type)? {
                 return Ok(found);
             }
@@ -308,6 +387,8 @@ impl PatchMatrices {
 #[derive(Clone, Debug)]
 pub struct MeshPatches {
     tables: Vec<Arc<PatchMatrices>>,
+    /// Per patch radius, every table's shapes by signature: (table, shape).
+    lookup: Vec<(usize, HashMap<Vec<u32>, (usize, usize)>)>,
 }
 
 /// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
@@ -350,42 +431,143 @@ impl MeshPatches {
     /// # Errors
     /// As [`PatchMatrices::of`], for the first vertex whose patch type fails.
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, SchemeError> {
+        Self::for_vertices(scheme, mesh, options, mesh.vertices())
+    }
+
+    /// The matrices for the faces `faces` of `mesh` only: the patch types at the vertices
+    /// their patches may hold (within 3 rings, the largest patch radius). Refining a part of a
+    /// mesh leaves a rim whose vertices no face asked for needs.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn near(
+        scheme: &Scheme,
+        mesh: &Mesh,
+        options: &RefineOptions,
+        faces: impl IntoIterator<Item = FaceId>,
+    ) -> Result<Self, SchemeError> {
+        let mut corners: Vec<VertexId> = faces.into_iter().flat_map(|f| mesh.face_vertices(f).iter().copied()).collect();
+        corners.sort_unstable();
+        corners.dedup();
+        let mut near: Vec<VertexId> = mesh.face_rings(&corners, MAX_RADIUS).into_keys().collect();
+        near.sort_unstable();
+        Self::for_vertices(scheme, mesh, options, near)
+    }
+
+    fn for_vertices(
+        scheme: &Scheme,
+        mesh: &Mesh,
+        options: &RefineOptions,
+        vertices: impl IntoIterator<Item = VertexId>,
+    ) -> Result<Self, SchemeError> {
         let boundary = options.boundary_for(mesh);
         let mut types = Vec::new();
-        for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v)) {
-            let faces = mesh.vertex_faces(v).count();
-            if mesh.is_boundary_vertex(v) {
-                types.extend((0..faces).map(|index| PatchType::Boundary { faces, index }));
-            } else {
-                types.push(PatchType::Interior { valence: mesh.valence(v) });
-            }
+        for v in vertices.into_iter().filter(|&v| !mesh.is_isolated(v)) {
+            vertex_types(scheme, mesh, v, &mut types)?;
         }
         let mut seen = std::collections::HashSet::new();
         types.retain(|t| seen.insert(*t));
-        let tables = types.into_iter().map(|t| PatchMatrices::of(scheme, t, boundary)).collect::<Result<_, _>>()?;
-        Ok(Self { tables })
+        let tables: Vec<Arc<PatchMatrices>> =
+            types.into_iter().map(|t| PatchMatrices::of(scheme, t, boundary)).collect::<Result<_, _>>()?;
+        // One lookup over every table, per radius; the first table with a shape keeps it
+        // (equal signatures have equal matrices).
+        let mut lookup: Vec<(usize, HashMap<Vec<u32>, (usize, usize)>)> = Vec::new();
+        for (t, table) in tables.iter().enumerate() {
+            let at = match lookup.iter().position(|(r, _)| *r == table.radius) {
+                Some(at) => at,
+                None => {
+                    lookup.push((table.radius, HashMap::new()));
+                    lookup.len() - 1
+                }
+            };
+            for (signature, &shape) in &table.by_signature {
+                lookup[at].1.entry(signature.clone()).or_insert((t, shape));
+            }
+        }
+        Ok(Self { tables, lookup })
     }
 
     /// The patch of `face` in the first rotation whose shape is known, or `None` (a face whose
-    /// patch holds two irregular vertices, which a further refinement separates).
+    /// patch holds two irregular vertices, which a further refinement separates, or a
+    /// semi-sharp feature, which refinement spends).
     pub fn find(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
         mesh.face_half_edges(face).find_map(|start| self.at(mesh, start))
     }
 
     /// The patch starting at `start`, if its shape is known.
     pub fn at(&self, mesh: &Mesh, start: HalfEdgeId) -> Option<FoundPatch> {
-        let mut gathered: Option<(usize, Patch)> = None;
-        for table in &self.tables {
-            if gathered.as_ref().is_none_or(|(r, _)| *r != table.radius) {
-                gathered = Some((table.radius, mesh.patch(start, table.radius)));
-            }
-            let (_, patch) = gathered.as_ref().expect("gathered above");
-            if let Some(shape) = table.find(&patch.signature) {
-                return Some(FoundPatch { start, vertices: patch.vertices.clone(), matrices: table.clone(), shape });
-            }
-        }
-        None
+        self.lookup.iter().find_map(|(radius, shapes)| {
+            let patch = mesh.patch(start, *radius);
+            let &(table, shape) = shapes.get(&patch.signature)?;
+            Some(FoundPatch { start, vertices: patch.vertices, matrices: self.tables[table].clone(), shape })
+        })
     }
+}
+
+/// Appends the patch types of `v`'s faces to `types`: one per face for a boundary vertex or
+/// an interior one with sharp spokes (each counted from its face), one for a smooth interior
+/// vertex; none where a feature at `v` is semi-sharp (not stationary: its faces are refined
+/// until it is spent).
+fn vertex_types(scheme: &Scheme, mesh: &Mesh, v: VertexId, types: &mut Vec<PatchType>) -> Result<(), SchemeError> {
+    const SEMI_SHARP: u8 = 2;
+    let class = |s: f64| -> u8 {
+        if s >= subdiv_mesh::Tags::INFINITELY_SHARP {
+            1
+        } else if s > 0.0 {
+            SEMI_SHARP
+        } else {
+            0
+        }
+    };
+    let corner = class(mesh.vertex_sharpness(v));
+    if corner == SEMI_SHARP {
+        return Ok(());
+    }
+    // The spokes counter-clockwise: spoke s is the first side of the fan's face s, and the
+    // last side of face s − 1. A boundary fan starts at its boundary half-edge.
+    let boundary = mesh.is_boundary_vertex(v);
+    let first = if boundary {
+        mesh.outgoing(v).find(|&h| mesh.twin(h).is_none()).expect("a boundary vertex has a boundary half-edge")
+    } else {
+        mesh.outgoing(v).next().expect("a vertex with faces has an outgoing half-edge")
+    };
+    let mut spokes = Vec::new();
+    let mut h = Some(first);
+    while let Some(at) = h {
+        spokes.push(class(mesh.edge_sharpness(mesh.edge(at))));
+        let incoming = mesh.prev(at);
+        h = mesh.twin(incoming).filter(|&t| t != first);
+        if h.is_none() && boundary {
+            spokes.push(class(mesh.edge_sharpness(mesh.edge(incoming))));
+        }
+    }
+    if spokes.contains(&SEMI_SHARP) {
+        return Ok(());
+    }
+    let faces = if boundary { spokes.len() - 1 } else { spokes.len() };
+    let sharp_spoke = |s: usize| spokes[s] == 1 && !(boundary && (s == 0 || s == faces));
+    if (0..spokes.len()).any(|s| s >= 64 && sharp_spoke(s)) {
+        return Err(SchemeError::ValenceNotSupported {
+            scheme: scheme.name.clone(),
+            valence: spokes.len(),
+            reason: "infinitely sharp edges are supported at vertices of up to 64 edges",
+        });
+    }
+    let mask = |rotation: usize| -> u64 {
+        (0..faces.min(64)).filter(|&s| sharp_spoke((s + rotation) % spokes.len())).fold(0, |m, s| m | 1 << s)
+    };
+    let corner = corner == 1;
+    if boundary {
+        let sharp = SharpFeatures { edges: mask(0), corner };
+        types.extend((0..faces).map(|index| PatchType::Boundary { faces, index, sharp }));
+    } else if mask(0) == 0 {
+        types.push(PatchType::Interior { valence: faces, sharp: SharpFeatures { edges: 0, corner } });
+    } else {
+        types.extend(
+            (0..faces).map(|j| PatchType::Interior { valence: faces, sharp: SharpFeatures { edges: mask(j), corner } }),
+        );
+    }
+    Ok(())
 }
 
 /// A shape whose children are still to be found: where its patch lies.

@@ -166,6 +166,22 @@ impl Stencils {
         pattern
     }
 
+    /// The same rows over another numbering of the parent level: parent `p` becomes
+    /// `parents[p]`, of `parent_count` vertices (how a part of a mesh, refined on its own,
+    /// gives stencils over the whole mesh).
+    ///
+    /// # Panics
+    /// When `parents` does not name every parent vertex, or names one at or past
+    /// `parent_count`.
+    pub fn with_parents(&self, parents: &[u32], parent_count: usize) -> Self {
+        assert_eq!(parents.len(), self.parent_count, "one new number per parent vertex");
+        assert!(parents.iter().all(|&p| (p as usize) < parent_count), "parents within the new count");
+        let mut out = self.clone();
+        out.indices.iter_mut().for_each(|i| *i = parents[*i as usize]);
+        out.parent_count = parent_count;
+        out
+    }
+
     /// Number of rows: the refined level's vertices.
     pub fn child_count(&self) -> usize {
         self.runs.last().map_or(0, |run| run.rows_end as usize)

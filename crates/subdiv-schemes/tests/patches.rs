@@ -17,9 +17,9 @@ fn extraordinary_patch_sizes_follow_stam() {
     let cc = Builtin::CatmullClark.scheme();
     let lp = Builtin::Loop.scheme();
     for k in [3, 5, 8, 17] {
-        let m = PatchMatrices::of(cc, PatchType::Interior { valence: k }, EDGE_ONLY).unwrap();
+        let m = PatchMatrices::of(cc, PatchType::interior(k), EDGE_ONLY).unwrap();
         assert_eq!((m.radius, m.shapes[0].size), (1, 2 * k + 8));
-        let m = PatchMatrices::of(lp, PatchType::Interior { valence: k }, EDGE_ONLY).unwrap();
+        let m = PatchMatrices::of(lp, PatchType::interior(k), EDGE_ONLY).unwrap();
         assert_eq!((m.radius, m.shapes[0].size), (1, k + 6));
     }
 }
@@ -45,15 +45,15 @@ fn regular_catmull_clark_sub_patches_are_bicubic_knot_insertion() {
 #[test]
 fn every_sub_patch_row_is_affine() {
     let cases = [
-        (Builtin::CatmullClark, PatchType::Interior { valence: 5 }),
-        (Builtin::CatmullClark, PatchType::Boundary { faces: 1, index: 0 }),
-        (Builtin::CatmullClark, PatchType::Boundary { faces: 4, index: 2 }),
-        (Builtin::Loop, PatchType::Interior { valence: 7 }),
-        (Builtin::Loop, PatchType::Boundary { faces: 2, index: 1 }),
-        (Builtin::Butterfly, PatchType::Interior { valence: 4 }),
-        (Builtin::Kobbelt, PatchType::Interior { valence: 3 }),
-        (Builtin::SwQuad, PatchType::Interior { valence: 6 }),
-        (Builtin::Bilinear, PatchType::Boundary { faces: 3, index: 0 }),
+        (Builtin::CatmullClark, PatchType::interior(5)),
+        (Builtin::CatmullClark, PatchType::boundary(1, 0)),
+        (Builtin::CatmullClark, PatchType::boundary(4, 2)),
+        (Builtin::Loop, PatchType::interior(7)),
+        (Builtin::Loop, PatchType::boundary(2, 1)),
+        (Builtin::Butterfly, PatchType::interior(4)),
+        (Builtin::Kobbelt, PatchType::interior(3)),
+        (Builtin::SwQuad, PatchType::interior(6)),
+        (Builtin::Bilinear, PatchType::boundary(3, 0)),
     ];
     for (builtin, patch_type) in cases {
         for boundary in [EDGE_ONLY, BoundaryInterpolation::EdgeAndCorner] {
@@ -75,24 +75,27 @@ fn every_sub_patch_row_is_affine() {
 #[test]
 fn unsupported_splits_and_valences_are_typed_errors() {
     for builtin in [Builtin::DooSabin, Builtin::Midedge, Builtin::Sqrt3] {
-        let err = PatchMatrices::compute(builtin.scheme(), PatchType::Interior { valence: 5 }, EDGE_ONLY).unwrap_err();
+        let err = PatchMatrices::compute(builtin.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
         assert!(matches!(err, SchemeError::SplitNotSupported { what: "sub-patch matrices", .. }), "{err}");
     }
     let cc = Builtin::CatmullClark.scheme();
-    let err = PatchMatrices::compute(cc, PatchType::Interior { valence: 2 }, EDGE_ONLY).unwrap_err();
+    // Valence 2 exists for quads (two faces sharing two sides), not for triangles.
+    let err = PatchMatrices::compute(cc, PatchType::interior(1), EDGE_ONLY).unwrap_err();
+    assert!(matches!(err, SchemeError::ValenceNotSupported { valence: 1, .. }));
+    let err = PatchMatrices::compute(Builtin::Loop.scheme(), PatchType::interior(2), EDGE_ONLY).unwrap_err();
     assert!(matches!(err, SchemeError::ValenceNotSupported { valence: 2, .. }));
     for (faces, index) in [(0, 0), (2, 2)] {
-        let err = PatchMatrices::compute(cc, PatchType::Boundary { faces, index }, EDGE_ONLY).unwrap_err();
+        let err = PatchMatrices::compute(cc, PatchType::boundary(faces, index), EDGE_ONLY).unwrap_err();
         assert!(matches!(err, SchemeError::ValenceNotSupported { .. }));
     }
     // Butterfly has no boundary rules.
     let err =
-        PatchMatrices::compute(Builtin::Butterfly.scheme(), PatchType::Boundary { faces: 3, index: 0 }, EDGE_ONLY)
+        PatchMatrices::compute(Builtin::Butterfly.scheme(), PatchType::boundary(3, 0), EDGE_ONLY)
             .unwrap_err();
     assert!(matches!(err, SchemeError::FeatureNotSupported { feature: "boundaries", .. }), "{err}");
     // Kobbelt's virtual points reach past every patch radius around a valence-5 vertex.
     let err =
-        PatchMatrices::compute(Builtin::Kobbelt.scheme(), PatchType::Interior { valence: 5 }, EDGE_ONLY).unwrap_err();
+        PatchMatrices::compute(Builtin::Kobbelt.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
     assert!(matches!(err, SchemeError::ValenceNotSupported { valence: 5, .. }), "{err}");
 }
 

@@ -21,7 +21,7 @@ fn assert_subdominant(builtin: Builtin, closed_form: impl Fn(f64) -> f64) {
         );
         assert!(spectrum.passes(), "{builtin} k = {k}");
 
-        let patch_type = PatchType::Interior { valence: k };
+        let patch_type = PatchType::interior(k);
         let m = PatchMatrices::of(builtin.scheme(), patch_type, BoundaryInterpolation::EdgeOnly).unwrap();
         let (_, keeping) = m.keeping(0).expect("the extraordinary child keeps the shape");
         let values = keeping.eigenvalues().unwrap();

@@ -31,7 +31,7 @@ pub struct ExactSurfaceStencil {
 /// use subdiv_stencil::{exact_surface_stencil, Dyadic, Rational};
 ///
 /// let cc = Builtin::CatmullClark.scheme();
-/// let m = PatchMatrices::of(cc, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly)?;
+/// let m = PatchMatrices::of(cc, PatchType::interior(5), BoundaryInterpolation::EdgeOnly)?;
 /// let s = exact_surface_stencil(&m, 0, Dyadic::new(0, 0, 1))?;
 /// // The extraordinary vertex: k/(k + 5) on itself.
 /// assert_eq!(s.position[0], Rational::new(1, 2).unwrap());

@@ -20,14 +20,21 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use subdiv_mesh::{DVec3, FaceId, Mesh};
 use subdiv_schemes::{
-    ChildDomain, FoundPatch, MeshPatches, PatchMatrices, RefineOptions, Refiner, Scheme, Split, child_faces,
+    ChildDomain, FoundPatch, MeshPatches, PatchMatrices, RefineOptions, Refiner, Scheme, Split, Stencils, child_faces,
 };
 
 use crate::address::step;
 use crate::{Dyadic, Grid, StencilError, StencilEvaluator, SurfaceStencil};
 
-/// Refinement levels after which every face's patch must have a shape.
-const MAX_LEVELS: usize = 8;
+/// Refinement levels after which every face's patch must have a shape: semi-sharp features
+/// below sharpness 10 are spent after at most 10 levels (each level takes 1), and irregular
+/// vertices, N-gons and features in one patch are apart within 3 more.
+const MAX_LEVELS: usize = 16;
+
+/// Rings of faces around the faces to refine that a level refines with them (the rest of the
+/// mesh is left out): their children's patches reach at most 3 rings (the largest patch
+/// radius), and each vertex's rule reads one more ring.
+const REGION_RINGS: usize = 4;
 
 /// The largest denominator exponent of an f64 parameter used exactly: `2^60` stays below the
 /// bound of [`Address::of`](crate::Address::of) (`i64::MAX / 4`) after the doublings of a descent.
@@ -328,8 +335,8 @@ pub fn dyadic_from_f64(u: f64, v: f64) -> Option<Dyadic> {
 enum Resolution {
     /// Through its patch.
     Patch(FoundPatch),
-    /// Through its children on the next level.
-    Children,
+    /// Through its children, these faces of the next level.
+    Children(std::ops::Range<usize>),
     /// Not at all: a hole (tagged, or made by the boundary rule `none`).
     Hole,
 }
@@ -390,20 +397,63 @@ pub enum Resolved<'a> {
 pub struct PatchLevels {
     split: Split,
     levels: Vec<Level>,
+    /// `stencils[l]`: level `l + 1`'s vertices over level `l`'s.
+    stencils: Vec<Stencils>,
+}
+
+/// The next level: a part of the current one refined (or all of it), its stencils over the
+/// whole current level, and the faces each refined face becomes.
+struct Next {
+    mesh: Mesh,
+    stencils: Stencils,
+    /// Per face of `refine` (in its order), its children on the next level.
+    children: Vec<std::ops::Range<usize>>,
+}
+
+impl Next {
+    fn of(scheme: &Scheme, current: &Mesh, refine: &[FaceId], options: &RefineOptions) -> Result<Self, StencilError> {
+        let region = if scheme.has_crease_rules() {
+            let region = current.region(refine, REGION_RINGS).map_err(|e| StencilError::Internal(e.to_string()))?;
+            (region.faces.len() < current.face_count()).then_some(region)
+        } else {
+            None
+        };
+        let Some(region) = region else {
+            let refiner = Refiner::new(current, scheme, 1, options)?;
+            let stencils = refiner.levels()[0].clone();
+            let children = refine.iter().map(|&f| children(current, scheme.split(), f)).collect();
+            return Ok(Self { mesh: refiner.into_mesh(), stencils, children });
+        };
+        let refiner = Refiner::new(&region.mesh, scheme, 1, options)?;
+        let parents: Vec<u32> = region.vertices.iter().map(|v| v.index() as u32).collect();
+        let stencils = refiner.levels()[0].with_parents(&parents, current.vertex_count());
+        let children = refine
+            .iter()
+            .map(|&f| {
+                let local = region.face_of(f).ok_or_else(|| internal(f, "the region lacks a face it refines"))?;
+                Ok(children(&region.mesh, scheme.split(), local))
+            })
+            .collect::<Result<_, StencilError>>()?;
+        Ok(Self { mesh: refiner.into_mesh(), stencils, children })
+    }
 }
 
 impl PatchLevels {
     /// Prepares `mesh` under `scheme` with the boundary rule and options of refinement
     /// (`options`, else the mesh's tags): finds every face's patch, refining the mesh as often
-    /// as faces without a patch shape need (an N-gon once; the cube's faces twice).
+    /// as faces without a patch shape need (an N-gon once; the cube's faces twice; a face next
+    /// to a semi-sharp edge of sharpness `s` until `s` is spent, ⌈s⌉ times, then as its
+    /// stationary features need). Each level refines only the faces that need it and
+    /// [`REGION_RINGS`] rings around them, so a level costs as much as those faces, not the
+    /// mesh (a semi-sharp crease of sharpness 6 on a car would otherwise be 4^6 times the
+    /// car). Schemes without crease rules refine the whole mesh (a part of it has a boundary
+    /// they cannot refine).
     ///
     /// # Errors
     /// [`StencilError::Scheme`] for a scheme without sub-patch matrices (dual, mid-edge, √3:
     /// `SplitNotSupported`; Kobbelt next to valences other than 3, 4: `ValenceNotSupported`), a
     /// face the scheme does not take, or boundaries a scheme has no rules for;
-    /// [`StencilError::FeatureNotSupported`] for creases and corners (sharpness tags), which the
-    /// sub-patch matrices do not model; [`StencilError::NoPatch`] if a face finds no patch
-    /// within 8 levels (an internal error).
+    /// [`StencilError::NoPatch`] if a face finds no patch within 16 levels (an internal error).
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, StencilError> {
         let patch_size = match scheme.split() {
             Split::Quad => 4,
@@ -414,61 +464,51 @@ impl PatchLevels {
                 4
             }
         };
-        Self::check_features(scheme, mesh)?;
         // Level 0 with the boundary rule applied (boundary edges sharp, holes of `none`).
         let base = Refiner::new(mesh, scheme, 0, options)?.into_mesh();
         let mut levels = Vec::new();
+        let mut stencils = Vec::new();
         let mut wanted: Vec<FaceId> = base.face_ids().collect();
         let mut current = base;
         loop {
-            let patches = MeshPatches::new(scheme, &current, options)?;
+            let patches = if wanted.len() == current.face_count() {
+                MeshPatches::new(scheme, &current, options)?
+            } else {
+                MeshPatches::near(scheme, &current, options, wanted.iter().copied())?
+            };
             let mut faces = HashMap::with_capacity(wanted.len());
-            let mut next = Vec::new();
+            let mut refine = Vec::new();
             for &f in &wanted {
-                let resolution = if current.is_hole(f) {
-                    Resolution::Hole
+                if current.is_hole(f) {
+                    faces.insert(f, Resolution::Hole);
                 } else if let Some(found) =
                     (current.face_size(f) == patch_size).then(|| patches.find(&current, f)).flatten()
                 {
-                    Resolution::Patch(found)
+                    faces.insert(f, Resolution::Patch(found));
                 } else {
-                    next.extend(children(&current, scheme.split(), f).map(|c| FaceId::new(c as u32)));
-                    Resolution::Children
-                };
-                faces.insert(f, resolution);
+                    refine.push(f);
+                }
             }
-            if next.is_empty() {
+            if refine.is_empty() {
                 levels.push(Level { mesh: current, faces });
                 break;
             }
             if levels.len() + 1 == MAX_LEVELS {
-                let face = levels.first().map_or_else(|| wanted[0], |_| next[0]);
-                return Err(StencilError::NoPatch { face: face.index(), levels: MAX_LEVELS });
+                return Err(StencilError::NoPatch { face: refine[0].index(), levels: MAX_LEVELS });
             }
-            let refined = Refiner::new(&current, scheme, 1, options)?.into_mesh();
+            let next = Next::of(scheme, &current, &refine, options)?;
+            let mut next_wanted = Vec::new();
+            for (&f, children) in refine.iter().zip(next.children) {
+                next_wanted.extend(children.clone().map(|c| FaceId::new(c as u32)));
+                faces.insert(f, Resolution::Children(children));
+            }
+            next_wanted.sort_unstable();
             levels.push(Level { mesh: current, faces });
-            current = refined;
-            wanted = next;
+            stencils.push(next.stencils);
+            current = next.mesh;
+            wanted = next_wanted;
         }
-        Ok(Self { split: scheme.split(), levels })
-    }
-
-    /// Creases and corners change the surface in ways the sub-patch matrices (derived on smooth
-    /// canonical meshes with boundaries) do not know.
-    fn check_features(scheme: &Scheme, mesh: &Mesh) -> Result<(), StencilError> {
-        let unsupported = |feature: &'static str, element: String| StencilError::FeatureNotSupported {
-            scheme: scheme.name().to_string(),
-            feature,
-            element,
-        };
-        if let Some(e) = mesh.edges().find(|&e| !mesh.is_boundary_edge(e) && mesh.edge_sharpness(e) > 0.0) {
-            let [a, b] = mesh.edge_vertices(e);
-            return Err(unsupported("creases (edge sharpness)", format!("edge {a}-{b}")));
-        }
-        if let Some(v) = mesh.vertices().find(|&v| mesh.vertex_sharpness(v) > 0.0) {
-            return Err(unsupported("corners (vertex sharpness)", format!("{v}")));
-        }
-        Ok(())
+        Ok(Self { split: scheme.split(), levels, stencils })
     }
 
     /// The scheme's split.
@@ -482,12 +522,21 @@ impl PatchLevels {
     }
 
     /// The mesh of `level`: level 0 is the input with the boundary rule applied (same faces,
-    /// same vertices), level `l + 1` is level `l` refined once.
+    /// same vertices), level `l + 1` is the part of level `l` that needed it refined once
+    /// (see [`new`](Self::new); its vertices are given over level `l`'s by
+    /// [`stencils`](Self::stencils)).
     ///
     /// # Panics
     /// If `level >= level_count()`.
     pub fn mesh(&self, level: usize) -> &Mesh {
         &self.levels[level].mesh
+    }
+
+    /// The refinement stencils between the levels: entry `l` gives level `l + 1`'s vertices
+    /// over level `l`'s (empty when every face has a patch on level 0). Applied from the cage
+    /// down, they give every level's control points of a moved cage.
+    pub fn stencils(&self) -> &[Stencils] {
+        &self.stencils
     }
 
     /// The number of faces of the input mesh.
@@ -501,8 +550,8 @@ impl PatchLevels {
         let l = self.levels.get(level)?;
         Some(match l.faces.get(&face)? {
             Resolution::Hole => Resolved::Hole,
-            Resolution::Children => Resolved::Children {
-                children: children(&l.mesh, self.split, face),
+            Resolution::Children(children) => Resolved::Children {
+                children: children.clone(),
                 domain: if level == 0 {
                     FaceDomain::of(self.split, l.mesh.face_size(face)).unwrap_or(FaceDomain::Quad)
                 } else if self.split == Split::Triangle {
@@ -915,16 +964,84 @@ mod tests {
     }
 
     #[test]
-    fn creases_holes_and_bad_points_are_typed_errors() {
+    fn infinitely_sharp_creases_are_the_crease_polygon_s_b_spline() {
+        // A ring of edges of a torus (j = 0), infinitely sharp: the limit along it is the
+        // uniform cubic B-spline of the ring's vertices, and the two sides' normals differ.
+        let (m, n) = (8, 6);
+        let mut soup = shapes::quad_torus(m, n);
+        let id = |i: usize| subdiv_mesh::VertexId::new(((i % m) * n) as u32);
+        for i in 0..m {
+            soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [id(i), id(i + 1)], sharpness: 10.0 });
+        }
+        let mesh = Mesh::build(soup).unwrap();
+        let p = |i: usize| mesh.position(id(i + m));
+        let eval = LimitEvaluator::new(Builtin::CatmullClark.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+        for i in 0..m {
+            // Face (i, 0) has the crease as its first side; face (i, n − 1) as its last side's
+            // opposite, v = 1.
+            let (above, below) = (FaceId::new((i * n) as u32), FaceId::new((i * n + n - 1) as u32));
+            for u in [0.0, 0.25, 0.5, 0.75] {
+                let b = [
+                    (1.0f64 - u).powi(3) / 6.0,
+                    (3.0 * u.powi(3) - 6.0 * u * u + 4.0) / 6.0,
+                    (-3.0 * u.powi(3) + 3.0 * u * u + 3.0 * u + 1.0) / 6.0,
+                    u.powi(3) / 6.0,
+                ];
+                let want = p(i + m - 1) * b[0] + p(i) * b[1] + p(i + 1) * b[2] + p(i + 2) * b[3];
+                let (a, c) = (eval.eval(above, u, 0.0).unwrap(), eval.eval(below, u, 1.0).unwrap());
+                assert!((a.position - want).length() < 1e-13, "face {above} at {u}: {:?} vs {want:?}", a.position);
+                assert!((c.position - want).length() < 1e-13, "face {below} at {u}");
+                let (na, nc) = (a.du.cross(a.dv).normalize(), c.du.cross(c.dv).normalize());
+                assert!(na.dot(nc) < 0.999, "the crease at {u} is smooth: {na:?} {nc:?}");
+                // Along the crease both sides have the curve's tangent.
+                assert!(a.du.normalize().dot(c.du.normalize()) > 1.0 - 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn semi_sharp_features_equal_the_refined_mesh_s_surface() {
+        // An edge of sharpness 2.5 and a corner of sharpness 1.5 are spent after 3 levels: the
+        // surface of the cage over face f's corner square [0, 1/8]² is the surface of the
+        // 3 times refined mesh over child 0 of child 0 of child 0 of f.
         let cc = Builtin::CatmullClark.scheme();
         let mut soup = shapes::cube();
-        soup.tags
-            .creases
-            .push(subdiv_mesh::CreaseTag { vertices: [0, 2].map(subdiv_mesh::VertexId::new), sharpness: 2.0 });
+        let [a, b] = [soup.face(FaceId::new(0))[0], soup.face(FaceId::new(0))[1]];
+        soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 2.5 });
+        soup.tags.corners.push(subdiv_mesh::CornerTag { vertex: b, sharpness: 1.5 });
         let mesh = Mesh::build(soup).unwrap();
-        let error = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap_err();
-        assert!(matches!(error, StencilError::FeatureNotSupported { .. }), "{error}");
+        let refined = refine_uniform_n(&mesh, cc, 3);
+        let coarse = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap();
+        let fine = LimitEvaluator::new(cc, &refined.0, &RefineOptions::DEFAULT).unwrap();
+        for f in mesh.face_ids() {
+            let mut child = f;
+            for level in &refined.1 {
+                child = FaceId::new(child_faces(Split::Quad, level, child).unwrap().start as u32);
+            }
+            for (u, v) in [(0.0, 0.0), (1.0 / 16.0, 0.0), (0.0, 1.0 / 32.0), (1.0 / 8.0, 1.0 / 8.0), (0.05, 0.1)] {
+                let (x, y) = (coarse.eval(f, u, v).unwrap(), fine.eval(child, 8.0 * u, 8.0 * v).unwrap());
+                assert!((x.position - y.position).length() < 1e-13, "{f} at ({u}, {v})");
+                if x.exact_derivatives && y.exact_derivatives {
+                    assert!((x.du - y.du * 8.0).length() < 1e-11, "{f} at ({u}, {v}): {:?} {:?}", x.du, y.du * 8.0);
+                    assert!((x.dv - y.dv * 8.0).length() < 1e-11);
+                }
+            }
+        }
+    }
 
+    /// `mesh` refined `levels` times, with the mesh of every level before the last.
+    fn refine_uniform_n(mesh: &Mesh, scheme: &Scheme, levels: usize) -> (Mesh, Vec<Mesh>) {
+        let mut all = vec![mesh.clone()];
+        for _ in 0..levels {
+            all.push(refine(all.last().unwrap(), scheme, &RefineOptions::DEFAULT).unwrap());
+        }
+        let last = all.pop().unwrap();
+        (last, all)
+    }
+
+    #[test]
+    fn holes_and_bad_points_are_typed_errors() {
+        let cc = Builtin::CatmullClark.scheme();
         let mut soup = shapes::cube();
         soup.tags.holes.push(FaceId::new(1));
         let mesh = Mesh::build(soup).unwrap();

@@ -51,7 +51,7 @@ const TOLERANCE: f64 = 1e-9;
 /// use subdiv_stencil::{surface_stencil, Dyadic};
 ///
 /// let cc = Builtin::CatmullClark.scheme();
-/// let m = PatchMatrices::of(cc, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly)?;
+/// let m = PatchMatrices::of(cc, PatchType::interior(5), BoundaryInterpolation::EdgeOnly)?;
 /// // The extraordinary vertex itself: (k²·v + 4·Σ e + Σ f) / (k (k + 5)).
 /// let s = surface_stencil(&m, 0, Dyadic::new(0, 0, 1))?;
 /// assert!((s.position[0] - 25.0 / 50.0).abs() < 1e-12);
@@ -83,7 +83,7 @@ pub fn surface_stencil(matrices: &PatchMatrices, shape: usize, point: Dyadic) ->
 /// use subdiv_stencil::{Dyadic, StencilEvaluator};
 ///
 /// let loop_ = Builtin::Loop.scheme();
-/// let m = PatchMatrices::of(loop_, PatchType::Interior { valence: 7 }, BoundaryInterpolation::EdgeOnly)?;
+/// let m = PatchMatrices::of(loop_, PatchType::interior(7), BoundaryInterpolation::EdgeOnly)?;
 /// let mut evaluator = StencilEvaluator::new(m.clone()); // or `&*m`
 /// // Any order gives the same bits.
 /// let far = StencilEvaluator::new(&*m).stencil(0, Dyadic::new(2, 1, 5))?.clone();

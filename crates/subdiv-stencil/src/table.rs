@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::DVec3;
 use subdiv_mesh::BoundaryInterpolation;
-use subdiv_schemes::{Builtin, PatchMatrices, PatchType, Scheme};
+use subdiv_schemes::{Builtin, PatchMatrices, PatchType, Scheme, SharpFeatures};
 
 use crate::parallel::{self, Threads};
 use crate::{Dyadic, StencilError, StencilEvaluator, SurfaceStencil};
@@ -126,7 +126,7 @@ impl GridStencils {
 /// use subdiv_stencil::{Grid, StencilTable};
 ///
 /// let cc = Builtin::CatmullClark.scheme();
-/// let table = StencilTable::compute(cc, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly, 3)?;
+/// let table = StencilTable::compute(cc, PatchType::interior(5), BoundaryInterpolation::EdgeOnly, 3)?;
 /// assert_eq!((table.len(Grid::Primal), table.len(Grid::Dual)), (16, 9));
 /// // Stored: the primal points with u ≥ v, 10 of 16, and 6 of the 9 dual ones.
 /// assert_eq!(table.stored_points(), 16);
@@ -374,7 +374,7 @@ impl StencilTables {
     /// use subdiv_stencil::StencilTables;
     ///
     /// let loop_ = Builtin::Loop.scheme();
-    /// let types = [PatchType::Interior { valence: 5 }, PatchType::Interior { valence: 6 }];
+    /// let types = [PatchType::interior(5), PatchType::interior(6)];
     /// let tables = StencilTables::compute(loop_, &types, BoundaryInterpolation::EdgeOnly, 1..=4)?;
     /// assert_eq!(tables.tables().len(), 8);
     /// let bytes = tables.to_bytes();
@@ -439,13 +439,20 @@ impl StencilTables {
         out.extend_from_slice(&self.fingerprint.to_le_bytes());
         put_u32(&mut out, self.tables.len() as u32);
         for t in &self.tables {
+            // Kinds 2 and 3 are 0 and 1 with sharp features, which follow as the spoke mask
+            // (u64) and the corner flag (u8), so that smooth tables keep their bytes.
             let (kind, a, b) = match t.patch_type {
-                PatchType::Interior { valence } => (0, valence, 0),
-                PatchType::Boundary { faces, index } => (1, faces, index),
+                PatchType::Interior { valence, .. } => (0, valence, 0),
+                PatchType::Boundary { faces, index, .. } => (1, faces, index),
             };
-            out.push(kind);
+            let sharp = t.patch_type.sharp();
+            out.push(if sharp.is_smooth() { kind } else { kind + 2 });
             put_u32(&mut out, a as u32);
             put_u32(&mut out, b as u32);
+            if !sharp.is_smooth() {
+                out.extend_from_slice(&sharp.edges.to_le_bytes());
+                out.push(u8::from(sharp.corner));
+            }
             out.push(boundary_code(t.boundary));
             out.extend_from_slice(&t.matrices_fingerprint.to_le_bytes());
             out.push(t.face_size as u8);
@@ -521,10 +528,14 @@ impl StencilTables {
         for _ in 0..count {
             let kind = r.u8()?;
             let (a, b) = (r.u32()? as usize, r.u32()? as usize);
-            let patch_type = match kind {
-                0 => PatchType::Interior { valence: a },
-                1 => PatchType::Boundary { faces: a, index: b },
+            let sharp = match kind {
+                0 | 1 => SharpFeatures::SMOOTH,
+                2 | 3 => SharpFeatures { edges: r.u64()?, corner: r.u8()? != 0 },
                 _ => return Err(r.corrupt(&format!("unknown patch kind {kind}"))),
+            };
+            let patch_type = match kind {
+                0 | 2 => PatchType::Interior { valence: a, sharp },
+                _ => PatchType::Boundary { faces: a, index: b, sharp },
             };
             let boundary = match r.u8()? {
                 0 => BoundaryInterpolation::None,
@@ -622,9 +633,9 @@ impl StencilTables {
 /// use subdiv_stencil::{Grid, StencilCache};
 ///
 /// let cache = StencilCache::new(Builtin::CatmullClark.scheme(), BoundaryInterpolation::EdgeOnly);
-/// let table = cache.table(PatchType::Interior { valence: 3 }, 5)?;
+/// let table = cache.table(PatchType::interior(3), 5)?;
 /// // The second request is the same table.
-/// assert!(std::sync::Arc::ptr_eq(&table, &cache.table(PatchType::Interior { valence: 3 }, 5)?));
+/// assert!(std::sync::Arc::ptr_eq(&table, &cache.table(PatchType::interior(3), 5)?));
 /// assert_eq!(table.len(Grid::Dual), 25);
 /// # Ok::<(), subdiv_stencil::StencilError>(())
 /// ```
@@ -695,7 +706,7 @@ pub struct TableSpec {
 impl TableSpec {
     /// The patch types: one interior patch per valence.
     pub fn patch_types(&self) -> Vec<PatchType> {
-        self.valences.clone().map(|valence| PatchType::Interior { valence }).collect()
+        self.valences.clone().map(PatchType::interior).collect()
     }
 
     /// Computes the tables.
@@ -806,11 +817,11 @@ mod tests {
     fn the_serial_path_gives_the_bits_of_the_parallel_one() {
         let edge = BoundaryInterpolation::EdgeOnly;
         let types = [
-            PatchType::Interior { valence: 3 },
-            PatchType::Interior { valence: 5 },
-            PatchType::Boundary { faces: 2, index: 0 },
-            PatchType::Interior { valence: 6 },
-            PatchType::Boundary { faces: 3, index: 1 },
+            PatchType::interior(3),
+            PatchType::interior(5),
+            PatchType::boundary(2, 0),
+            PatchType::interior(6),
+            PatchType::boundary(3, 1),
         ];
         for builtin in [Builtin::CatmullClark, Builtin::Loop] {
             let scheme = builtin.scheme();
@@ -820,7 +831,7 @@ mod tests {
             assert_eq!(serial.to_bytes(), parallel.to_bytes(), "{builtin}");
             assert_eq!(StencilTables::compute(scheme, &types, edge, 1..=5).unwrap(), parallel, "{builtin}");
         }
-        let failing = [PatchType::Interior { valence: 5 }, PatchType::Interior { valence: 1 }, types[2]];
+        let failing = [PatchType::interior(5), PatchType::interior(1), types[2]];
         let scheme = Builtin::CatmullClark.scheme();
         let parallel = StencilTables::compute_on(Threads::Any, scheme, &failing, edge, 1..=2).unwrap_err();
         let serial = StencilTables::compute_on(Threads::Calling, scheme, &failing, edge, 1..=2).unwrap_err();

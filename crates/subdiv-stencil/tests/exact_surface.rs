@@ -58,14 +58,14 @@ fn regular_catmull_clark_is_the_bicubic_b_spline_in_fractions() {
 #[test]
 fn exact_stencils_equal_the_floating_point_ones() {
     let cases = [
-        (Builtin::CatmullClark, PatchType::Interior { valence: 5 }),
+        (Builtin::CatmullClark, PatchType::interior(5)),
         // Valence 8 reproduces linear functions (½ is an eigenvalue) but has no derivative at the
         // vertex: both routes must say so.
-        (Builtin::CatmullClark, PatchType::Interior { valence: 8 }),
-        (Builtin::CatmullClark, PatchType::Boundary { faces: 3, index: 1 }),
-        (Builtin::SwQuad, PatchType::Interior { valence: 5 }),
-        (Builtin::Loop, PatchType::Interior { valence: 3 }),
-        (Builtin::Butterfly, PatchType::Interior { valence: 4 }),
+        (Builtin::CatmullClark, PatchType::interior(8)),
+        (Builtin::CatmullClark, PatchType::boundary(3, 1)),
+        (Builtin::SwQuad, PatchType::interior(5)),
+        (Builtin::Loop, PatchType::interior(3)),
+        (Builtin::Butterfly, PatchType::interior(4)),
     ];
     for (builtin, patch_type) in cases {
         let m = PatchMatrices::of(builtin.scheme(), patch_type, EDGE_ONLY).unwrap();
@@ -95,7 +95,7 @@ fn exact_stencils_equal_the_floating_point_ones() {
 /// Fig. 6's first stencil (sw-quad, valence 5, at (1/3, 0)) over its common denominator.
 #[test]
 fn sw_quad_figure_6_denominator() {
-    let m = PatchMatrices::of(Builtin::SwQuad.scheme(), PatchType::Interior { valence: 5 }, EDGE_ONLY).unwrap();
+    let m = PatchMatrices::of(Builtin::SwQuad.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap();
     let s = exact_surface_stencil(&m, 0, Dyadic::new(1, 0, 3)).unwrap();
     let common = s.position.iter().fold(num_bigint::BigInt::from(1), |l, w| l.lcm(w.denom()));
     assert_eq!(common, num_bigint::BigInt::from(52200));
@@ -104,7 +104,7 @@ fn sw_quad_figure_6_denominator() {
 #[test]
 fn irrational_matrices_are_refused() {
     // Loop's weights at valence 5 involve cos(2π/5).
-    let m = PatchMatrices::of(Builtin::Loop.scheme(), PatchType::Interior { valence: 5 }, EDGE_ONLY).unwrap();
+    let m = PatchMatrices::of(Builtin::Loop.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap();
     let error = exact_surface_stencil(&m, 0, Dyadic::new(1, 1, 3)).unwrap_err();
     assert!(matches!(error, StencilError::NotRational { .. }), "{error}");
 }

@@ -24,12 +24,12 @@ fn assert_close(a: &SurfaceStencil, b: &SurfaceStencil, what: &str) {
 #[test]
 fn every_grid_point_equals_the_direct_stencil() {
     let cases = [
-        (Builtin::CatmullClark, PatchType::Interior { valence: 5 }, true),
-        (Builtin::CatmullClark, PatchType::Interior { valence: 4 }, true),
-        (Builtin::CatmullClark, PatchType::Boundary { faces: 3, index: 0 }, false),
-        (Builtin::Loop, PatchType::Interior { valence: 7 }, true),
-        (Builtin::Loop, PatchType::Interior { valence: 3 }, true),
-        (Builtin::Loop, PatchType::Boundary { faces: 2, index: 1 }, false),
+        (Builtin::CatmullClark, PatchType::interior(5), true),
+        (Builtin::CatmullClark, PatchType::interior(4), true),
+        (Builtin::CatmullClark, PatchType::boundary(3, 0), false),
+        (Builtin::Loop, PatchType::interior(7), true),
+        (Builtin::Loop, PatchType::interior(3), true),
+        (Builtin::Loop, PatchType::boundary(2, 1), false),
     ];
     for (builtin, patch_type, symmetric) in cases {
         let scheme = builtin.scheme();
@@ -88,7 +88,7 @@ fn grids_hold_the_points_a_tessellator_needs() {
 }
 
 fn small_tables() -> StencilTables {
-    let types = [PatchType::Interior { valence: 5 }, PatchType::Boundary { faces: 2, index: 0 }];
+    let types = [PatchType::interior(5), PatchType::boundary(2, 0)];
     StencilTables::compute(Builtin::CatmullClark.scheme(), &types, EDGE_ONLY, 1..=3).unwrap()
 }
 
@@ -100,8 +100,8 @@ fn the_format_round_trips_and_is_deterministic() {
     assert_eq!(small_tables().to_bytes(), bytes, "the same tables, byte for byte");
     let read = StencilTables::from_bytes(&bytes, Builtin::CatmullClark.scheme()).unwrap();
     assert_eq!(read, tables);
-    assert!(read.get(PatchType::Interior { valence: 5 }, EDGE_ONLY, 2).is_some());
-    assert!(read.get(PatchType::Interior { valence: 5 }, EDGE_ONLY, 4).is_none());
+    assert!(read.get(PatchType::interior(5), EDGE_ONLY, 2).is_some());
+    assert!(read.get(PatchType::interior(5), EDGE_ONLY, 4).is_none());
 }
 
 #[test]
@@ -142,7 +142,7 @@ fn the_loader_rejects_foreign_stale_and_corrupt_files() {
 #[test]
 fn the_cache_computes_once_and_is_shared_between_threads() {
     let cache = StencilCache::new(Builtin::Loop.scheme(), EDGE_ONLY);
-    let t = PatchType::Interior { valence: 5 };
+    let t = PatchType::interior(5);
     let tables: Vec<Arc<StencilTable>> = std::thread::scope(|scope| {
         let handles: Vec<_> = (0..4).map(|_| scope.spawn(|| cache.table(t, 7).unwrap())).collect();
         handles.into_iter().map(|h| h.join().unwrap()).collect()
@@ -151,7 +151,7 @@ fn the_cache_computes_once_and_is_shared_between_threads() {
     assert!(matches!(cache.table(t, 0), Err(StencilError::Rate { rate: 0, .. })));
     // Seeded tables are used as they are; another scheme's are refused.
     let seeded = StencilCache::new(Builtin::CatmullClark.scheme(), EDGE_ONLY).with_tables(small_tables()).unwrap();
-    assert_eq!(seeded.table(PatchType::Interior { valence: 5 }, 3).unwrap().rate(), 3);
+    assert_eq!(seeded.table(PatchType::interior(5), 3).unwrap().rate(), 3);
     assert!(StencilCache::new(Builtin::Loop.scheme(), EDGE_ONLY).with_tables(small_tables()).is_err());
 }
 

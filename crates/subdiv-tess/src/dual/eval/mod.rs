@@ -53,7 +53,7 @@ use std::sync::Arc;
 use glam::DVec3;
 use hashbrown::HashMap;
 use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
-use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, Split};
+use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme, Split, Stencils};
 use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
 use super::topology::Topology;
@@ -83,7 +83,6 @@ use self::templates::*;
 #[derive(Debug)]
 pub(crate) struct Evaluator {
     levels: PatchLevels,
-    refiner: Option<Refiner>,
     faces: Vec<FacePlan>,
     /// Per input face, its domain (`None`: a hole).
     domains: Vec<Option<FaceDomain>>,
@@ -159,7 +158,6 @@ impl Evaluator {
     pub(crate) fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
         let levels = PatchLevels::new(scheme, mesh, &RefineOptions::DEFAULT)?;
         let count = levels.level_count();
-        let refiner = level_refiner(scheme, &levels)?;
         let faces = face_plans(mesh, &levels)?;
         let domains = mesh
             .face_ids()
@@ -170,7 +168,6 @@ impl Evaluator {
             .collect::<Result<_, TessError>>()?;
         let mut evaluator = Self {
             levels,
-            refiner,
             faces,
             domains,
             pointwise: Vec::new(),
@@ -272,11 +269,9 @@ impl Evaluator {
 
     /// Refines the current cage to the first `levels` levels (those not refined yet).
     fn refine(&mut self, levels: usize) {
-        if let Some(refiner) = &self.refiner {
-            for (l, stencils) in refiner.levels().iter().enumerate().take(levels - 1).skip(self.refined - 1) {
-                let (parent, child) = self.positions.split_at_mut(l + 1);
-                stencils.apply(&parent[l], &mut child[0]);
-            }
+        for (l, stencils) in self.levels.stencils().iter().enumerate().take(levels - 1).skip(self.refined - 1) {
+            let (parent, child) = self.positions.split_at_mut(l + 1);
+            stencils.apply(&parent[l], &mut child[0]);
         }
         self.refined = self.refined.max(levels);
     }
@@ -329,24 +324,6 @@ impl Evaluator {
             .fold(1, usize::max);
         self.refine(self.needed);
         Ok(())
-    }
-}
-
-/// The refiner of the cage to the patch levels' refined levels (none when there are none),
-/// checked against them.
-fn level_refiner(scheme: &Scheme, levels: &PatchLevels) -> Result<Option<Refiner>, TessError> {
-    let count = levels.level_count();
-    if count > 1 {
-        let refiner = Refiner::new(levels.mesh(0), scheme, count - 1, &RefineOptions::DEFAULT)
-            .map_err(subdiv_stencil::StencilError::from)?;
-        for (l, s) in refiner.levels().iter().enumerate() {
-            if s.child_count() != levels.mesh(l + 1).vertex_count() {
-                return Err(TessError::Internal(format!("refinement level {} does not match the patch levels", l + 1)));
-            }
-        }
-        Ok(Some(refiner))
-    } else {
-        Ok(None)
     }
 }
 

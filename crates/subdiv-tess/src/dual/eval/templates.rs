@@ -125,14 +125,13 @@ impl Evaluator {
     /// order of the products' bits, so that it does not depend on how the mesh numbers its
     /// vertices.
     pub(super) fn cage_rows(&self, patches: &[FacePatch], rows: &mut Vec<(u32, f64)>, starts: &mut Vec<u32>) {
-        fn expand(refiner: Option<&Refiner>, level: usize, id: usize, w: f64, terms: &mut Vec<(u32, f64)>) {
-            match refiner {
-                Some(r) if level > 0 => {
-                    for (parent, x) in r.levels()[level - 1].row(id) {
-                        expand(refiner, level - 1, parent, w * x, terms);
-                    }
-                }
-                _ => terms.push((id as u32, w)),
+        fn expand(stencils: &[Stencils], level: usize, id: usize, w: f64, terms: &mut Vec<(u32, f64)>) {
+            if level == 0 {
+                terms.push((id as u32, w));
+                return;
+            }
+            for (parent, x) in stencils[level - 1].row(id) {
+                expand(stencils, level - 1, parent, w * x, terms);
             }
         }
         rows.clear();
@@ -145,7 +144,7 @@ impl Evaluator {
             };
             for v in &patch.vertices {
                 terms.clear();
-                expand(self.refiner.as_ref(), level as usize, v.index(), 1.0, &mut terms);
+                expand(self.levels.stencils(), level as usize, v.index(), 1.0, &mut terms);
                 terms.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits())));
                 let start = rows.len();
                 for &(x, w) in &terms {

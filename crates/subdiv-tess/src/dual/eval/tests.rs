@@ -189,7 +189,7 @@ fn worst_plan(a: &[DVec3], b: &[DVec3]) -> f64 {
     a.iter().zip(b).map(|(x, y)| (*x - *y).length()).fold(0.0, f64::max)
 }
 
-/// The cage refined by the evaluator's own `Refiner` (what `update_cage` uses) lands on the
+/// The cage refined by the patch levels' stencils (what `update_cage` uses) lands on the
 /// patch levels' meshes, vertex for vertex: the stencil records index those vertices.
 #[test]
 fn refined_cage_matches_the_patch_levels() {

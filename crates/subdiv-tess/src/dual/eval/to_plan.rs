@@ -24,9 +24,9 @@ impl Evaluator {
             starts.push(total);
             total += level.len() as u32;
         }
-        if let Some(refiner) = &self.refiner {
+        if !self.levels.stencils().is_empty() {
             plan.refine_rows.push(0);
-            for (l, stencils) in refiner.levels().iter().enumerate() {
+            for (l, stencils) in self.levels.stencils().iter().enumerate() {
                 for child in 0..stencils.child_count() {
                     for (parent, w) in stencils.row(child) {
                         plan.refine_ids.push(starts[l] + parent as u32);
