@@ -36,6 +36,10 @@ const MAX_RADIUS: usize = 3;
 /// Refinement levels after which the shapes must have closed up.
 const MAX_LEVELS: usize = 5;
 
+/// A stencil weight at most this large counts as zero: the engine's rows sum weights, and a
+/// weight that is zero in exact arithmetic (a crease rule's, say) stays within this of it.
+const ZERO_WEIGHT: f64 = 1e-14;
+
 /// Which canonical patch to start from: a face whose corner 0 is the only irregular place.
 ///
 /// Corner 0's fan, and its stationary sharp features ([`SharpFeatures`]: infinitely sharp
@@ -231,10 +235,20 @@ pub struct PatchShape {
     pub signature: Vec<u32>,
     /// The sub-patches, in the engine's child order.
     pub children: Vec<SubPatch>,
+    /// The control points the limit surface over the face can depend on, ascending (the face's
+    /// corners first): the least sets, over all shapes, that hold each face's corners and every
+    /// point a child matrix reads into a point of its child's set. The surface over a face is
+    /// the limit of its descendants' corners, so a point outside the set has no influence on
+    /// it: a bilinear face's points beyond its own corners, or the points across an infinitely
+    /// sharp edge. Every stencil is zero outside it. (A point inside may still have none; the
+    /// set only errs on the safe side.)
+    pub influence: Vec<u32>,
     /// The parameters `[u, v]` of the control points in the face's frame, where the matrices
     /// reproduce linear functions of the parameters from this shape on (a regular grid gives
     /// integer coordinates such as `(−1, 2)`); `None` where an irregular vertex of the face's
-    /// own domain breaks that (the extraordinary vertex's shape).
+    /// own domain breaks that (the extraordinary vertex's shape of Catmull-Clark and Loop).
+    /// Only the points of [`influence`](Self::influence) are determined; the others are given
+    /// 0.
     pub parameters: Option<[Vec<f64>; 2]>,
     /// The shape's symmetry under the reflection that swaps `u` and `v` (corner 0 stays,
     /// corners 1 and the last trade places), if it has it: the limit surface at `(v, u)` puts
@@ -629,6 +643,11 @@ impl<'a> Derivation<'a> {
             };
             self.shapes[shape].children = children;
         }
+        let face_size = if self.scheme.split() == Split::Triangle { 3 } else { 4 };
+        let influence = influence_sets(&self.shapes, face_size);
+        for (shape, influence) in self.shapes.iter_mut().zip(influence) {
+            shape.influence = influence;
+        }
         for s in 0..self.shapes.len() {
             self.shapes[s].parameters = parameter_coordinates(&self.shapes, s);
         }
@@ -636,7 +655,7 @@ impl<'a> Derivation<'a> {
             scheme: self.scheme.name.clone(),
             patch_type,
             radius: self.radius,
-            face_size: if self.scheme.split() == Split::Triangle { 3 } else { 4 },
+            face_size,
             shapes: self.shapes,
             by_signature: self.by_signature,
         }))
@@ -669,6 +688,7 @@ impl<'a> Derivation<'a> {
             size: patch.vertices.len(),
             signature: patch.signature,
             children: Vec::new(),
+            influence: Vec::new(),
             parameters: None,
             mirror,
         });
@@ -700,7 +720,7 @@ impl<'a> Derivation<'a> {
                 for (p, w) in stencils.row(v.index()) {
                     match column.get(&p) {
                         Some(&c) => entries[r * columns + c] += w,
-                        None if w.abs() > 1e-14 => return Ok(None),
+                        None if w.abs() > ZERO_WEIGHT => return Ok(None),
                         None => {}
                     }
                 }
@@ -717,10 +737,42 @@ impl<'a> Derivation<'a> {
     }
 }
 
+/// Each shape's [`PatchShape::influence`]: the least fixed point of "a face's corners
+/// influence it, and so does every point that a child's matrix reads (with a weight above
+/// [`ZERO_WEIGHT`]) into a point that influences the child".
+fn influence_sets(shapes: &[PatchShape], face_size: usize) -> Vec<Vec<u32>> {
+    let mut inside: Vec<Vec<bool>> = shapes.iter().map(|s| (0..s.size).map(|k| k < face_size).collect()).collect();
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for (s, shape) in shapes.iter().enumerate() {
+            for child in &shape.children {
+                for r in 0..child.rows() {
+                    if !inside[child.shape][r] {
+                        continue;
+                    }
+                    for (c, &w) in child.row(r).iter().enumerate() {
+                        if w.abs() > ZERO_WEIGHT && !inside[s][c] {
+                            inside[s][c] = true;
+                            changed = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    inside.iter().map(|set| (0..set.len() as u32).filter(|&k| set[k as usize]).collect()).collect()
+}
+
 /// The parameters `(u, v)` of the control points of `shape` in its face's frame, if the
 /// matrices reproduce linear functions of the parameters from `shape` on: the solution of
-/// `A_c · U_s = (±U_child + o_c) / 2` over every shape reachable from `shape` and each child.
-/// `None` next to an irregular vertex that is part of the shape's own domain.
+/// `A_c · U_s = (±U_child + o_c) / 2` over every shape reachable from `shape` and each child,
+/// on the points that influence the faces. The others have no weight in any stencil, so their
+/// parameters are free (a point across an infinitely sharp edge, or beyond a bilinear face's
+/// corners, would make the whole system singular): they are given 0. The rows of influencing
+/// points read no other points, so the restricted system is closed.
+/// `None` next to an irregular vertex that is part of the shape's own domain, or where the
+/// influencing points' parameters are not unique.
 fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Option<[Vec<f64>; 2]> {
     // The shapes reachable from `shape`, and where each one's unknowns start.
     let mut reach = vec![shape];
@@ -733,24 +785,29 @@ fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Option<[Vec<f64
         }
         i += 1;
     }
-    let mut start = vec![usize::MAX; shapes.len()];
+    // The unknown of each influencing control point of each reachable shape.
+    let mut unknown: Vec<Vec<Option<usize>>> = shapes.iter().map(|s| vec![None; s.size]).collect();
     let mut unknowns = 0;
     for &s in &reach {
-        start[s] = unknowns;
-        unknowns += shapes[s].size;
+        for &k in &shapes[s].influence {
+            unknown[s][k as usize] = Some(unknowns);
+            unknowns += 1;
+        }
     }
-    let equations: usize = reach.iter().map(|&s| shapes[s].children.iter().map(|c| c.rows()).sum::<usize>()).sum();
+    let equations: usize =
+        reach.iter().map(|&s| shapes[s].children.iter().map(|c| shapes[c.shape].influence.len()).sum::<usize>()).sum();
     let mut a = Mat::<f64>::zeros(equations, unknowns);
     let mut b = Mat::<f64>::zeros(equations, 2);
     let mut row = 0;
     for &s in &reach {
         for child in &shapes[s].children {
             let sign = if child.domain.flipped { -1.0 } else { 1.0 };
-            for r in 0..child.rows() {
-                for c in 0..child.columns() {
-                    a[(row, start[s] + c)] += child.get(r, c);
+            for &r in &shapes[child.shape].influence {
+                let r = r as usize;
+                for &c in &shapes[s].influence {
+                    a[(row, unknown[s][c as usize].expect("an influencing point"))] += child.get(r, c as usize);
                 }
-                a[(row, start[child.shape] + r)] -= sign / 2.0;
+                a[(row, unknown[child.shape][r].expect("an influencing point"))] -= sign / 2.0;
                 b[(row, 0)] = f64::from(child.domain.offset[0]) / 2.0;
                 b[(row, 1)] = f64::from(child.domain.offset[1]) / 2.0;
                 row += 1;
@@ -761,8 +818,9 @@ fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Option<[Vec<f64
     if (&a * &x - &b).norm_max() > 1e-9 || a.singular_values().ok()?.iter().any(|&s| s < 1e-9) {
         return None;
     }
+    let value = |k: usize, axis: usize| unknown[shape][k].map_or(0.0, |i| x[(i, axis)]);
     let size = shapes[shape].size;
-    Some([(0..size).map(|i| x[(i, 0)]).collect(), (0..size).map(|i| x[(i, 1)]).collect()])
+    Some([(0..size).map(|k| value(k, 0)).collect(), (0..size).map(|k| value(k, 1)).collect()])
 }
 
 fn split_not_supported(scheme: &Scheme, split: Split) -> SchemeError {
@@ -856,4 +914,87 @@ pub fn sub_patch_starts(
             child.face_half_edges(child_face).nth(rotation).expect("children have as many corners as the parent")
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Builtin;
+
+    fn matrices(builtin: Builtin, patch_type: PatchType) -> Arc<PatchMatrices> {
+        PatchMatrices::of(builtin.scheme(), patch_type, BoundaryInterpolation::EdgeOnly).unwrap()
+    }
+
+    #[test]
+    fn smooth_shapes_are_influenced_by_every_control_point() {
+        for (builtin, patch_type) in [
+            (Builtin::CatmullClark, PatchType::Interior { valence: 5 }),
+            (Builtin::CatmullClark, PatchType::Boundary { faces: 4, index: 1 }),
+            (Builtin::Loop, PatchType::Interior { valence: 7 }),
+            (Builtin::Loop, PatchType::Boundary { faces: 4, index: 0 }),
+        ] {
+            for shape in &matrices(builtin, patch_type).shapes {
+                assert_eq!(shape.influence, (0..shape.size as u32).collect::<Vec<_>>(), "{builtin:?} {patch_type:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_bilinear_face_is_influenced_by_its_corners_alone_and_reproduces_their_parameters() {
+        for patch_type in [
+            PatchType::Interior { valence: 3 },
+            PatchType::regular(Builtin::Bilinear.scheme()),
+            PatchType::Boundary { faces: 4, index: 2 },
+        ] {
+            for shape in &matrices(Builtin::Bilinear, patch_type).shapes {
+                assert_eq!(shape.influence, [0, 1, 2, 3], "{patch_type:?}");
+                let [u, v] = shape.parameters.as_ref().expect("bilinear reproduces linear functions everywhere");
+                let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+                for k in 0..shape.size {
+                    let want = corners.get(k).copied().unwrap_or((0.0, 0.0));
+                    assert!((u[k] - want.0).abs() < 1e-12 && (v[k] - want.1).abs() < 1e-12, "{patch_type:?} {k}");
+                }
+            }
+        }
+    }
+
+    /// The regular Catmull-Clark shape with one more control point that reaches no face, as a
+    /// point across an infinitely sharp edge would: each child's copy of it is the mean of the
+    /// parent's copy and the child's corner, so that its parameter is anything at all.
+    #[test]
+    fn points_without_influence_leave_the_parameters_unique_and_zero() {
+        let regular = matrices(Builtin::CatmullClark, PatchType::regular(Builtin::CatmullClark.scheme()));
+        let mut shapes = regular.shapes.clone();
+        for shape in &mut shapes {
+            shape.size += 1;
+            for (c, child) in shape.children.iter_mut().enumerate() {
+                let (rows, columns) = (child.rows + 1, child.columns + 1);
+                let mut entries = vec![0.0; rows * columns];
+                for r in 0..child.rows {
+                    entries[r * columns..r * columns + child.columns].copy_from_slice(child.row(r));
+                }
+                entries[child.rows * columns + child.columns] = 0.5;
+                entries[child.rows * columns + c] = 0.5;
+                *child = SubPatch { rows, columns, entries, ..child.clone() };
+            }
+        }
+        let influence = influence_sets(&shapes, 4);
+        // Every shape reaching the point reads it from no row of a face's set.
+        let size = shapes[0].size as u32;
+        for (shape, set) in shapes.iter_mut().zip(&influence) {
+            assert_eq!(*set, (0..size - 1).collect::<Vec<_>>());
+            shape.influence = set.clone();
+        }
+        let [u, v] = parameter_coordinates(&shapes, 0).expect("unique on the influencing points");
+        let [ru, rv] = regular.shapes[0].parameters.clone().unwrap();
+        assert_eq!((u[16], v[16]), (0.0, 0.0));
+        for k in 0..16 {
+            assert!((u[k] - ru[k]).abs() < 1e-12 && (v[k] - rv[k]).abs() < 1e-12, "{k}");
+        }
+        // Asked to determine the free point too, the system is singular.
+        for shape in &mut shapes {
+            shape.influence = (0..size).collect();
+        }
+        assert!(parameter_coordinates(&shapes, 0).is_none());
+    }
 }

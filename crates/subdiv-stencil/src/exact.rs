@@ -56,8 +56,8 @@ pub fn exact_surface_stencil(
         walk.iter().map(|&w| exact_matrix(matrices, sub(w))).collect::<Result<_, _>>()?;
 
     // M_τ over the cycle, applied first to last.
-    let periodic = walk[first].0.shape;
-    let size = matrices.shapes[periodic].size;
+    let periodic = &matrices.shapes[walk[first].0.shape];
+    let size = periodic.size;
     let mut m: Vec<Vec<Rational>> =
         (0..size).map(|i| (0..size).map(|j| Rational::from_integer(i64::from(i == j))).collect()).collect();
     let mut flips = 0;
@@ -65,33 +65,45 @@ pub fn exact_surface_stencil(
         m = multiply(&exact[k], &m);
         flips += usize::from(sub(*w).domain.flipped);
     }
+    // Solved on the points that influence the face, as the floating-point route does: the
+    // others have eigenvalues of their own, and weight 0.
+    let influence: Vec<usize> = periodic.influence.iter().map(|&k| k as usize).collect();
+    let m: Vec<Vec<Rational>> =
+        influence.iter().map(|&i| influence.iter().map(|&j| m[i][j].clone()).collect()).collect();
+    let on_influence = |w: &[Rational]| -> Vec<Rational> { influence.iter().map(|&k| w[k].clone()).collect() };
+    let widen = |w: Vec<Rational>| -> Vec<Rational> {
+        let mut out = vec![Rational::zero(); size];
+        influence.iter().zip(w).for_each(|(&k, x)| out[k] = x);
+        out
+    };
     let fail = |what: &str, detail: String| StencilError::Eigen {
         scheme: matrices.scheme.clone(),
         detail: format!("exact {what} at {point:?}: {detail}"),
     };
-    let ones = vec![Rational::one(); size];
+    let ones = vec![Rational::one(); influence.len()];
     let mut position =
-        left_eigenvector(&m, &Rational::one(), &[(&ones, Rational::one())]).map_err(|e| fail("positions", e))?;
+        widen(left_eigenvector(&m, &Rational::one(), &[(&ones, Rational::one())]).map_err(|e| fail("positions", e))?);
     let period = walk.len() - first;
     let lambda = Rational::new(if flips % 2 == 1 { -1 } else { 1 }, num_bigint::BigInt::from(1) << period)
         .expect("a nonzero denominator");
     // Whether the surface has parameter derivatives at the cycle's point: the same test as the
     // floating-point route's (the derivative pair must dominate the cycle's spectrum).
-    let steps: Vec<&SubPatch> = walk[first..].iter().map(|&w| sub(w)).collect();
+    let steps: Vec<(&SubPatch, &[u32])> =
+        walk[first..].iter().map(|&w| (sub(w), matrices.shapes[w.0.shape].influence.as_slice())).collect();
     let differentiable = |u: &[f64], v: &[f64]| -> Result<bool, StencilError> {
         Ok(periodic_derivatives(&steps, u, v).map_err(|e| fail("derivatives", e))?.is_some())
     };
-    let mut derivatives = match &matrices.shapes[periodic].parameters {
+    let mut derivatives = match &periodic.parameters {
         Some([u, v]) if differentiable(u, v)? => {
             // The parameters come from a least-squares solve: looser.
-            let u = exact_vector(matrices, u, 1e-11)?;
-            let v = exact_vector(matrices, v, 1e-11)?;
+            let u = on_influence(&exact_vector(matrices, u, 1e-11)?);
+            let v = on_influence(&exact_vector(matrices, v, 1e-11)?);
             let (zero, one) = (Rational::zero(), Rational::one());
             let du = left_eigenvector(&m, &lambda, &[(&ones, zero.clone()), (&u, one.clone()), (&v, zero.clone())])
                 .map_err(|e| fail("∂/∂u", e))?;
             let dv = left_eigenvector(&m, &lambda, &[(&ones, zero.clone()), (&u, zero), (&v, one)])
                 .map_err(|e| fail("∂/∂v", e))?;
-            Some([du, dv])
+            Some([widen(du), widen(dv)])
         }
         _ => None,
     };

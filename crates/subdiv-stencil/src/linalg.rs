@@ -14,11 +14,16 @@ const RESIDUAL_TOLERANCE: f64 = 1e-8;
 /// shifted matrix whose singular values are below [`NULL_TOLERANCE`].
 pub(crate) fn eigenspace(m: &Mat<f64>, lambda: f64, left: bool) -> Result<Vec<Vec<f64>>, String> {
     let n = m.nrows();
-    let shifted = Mat::<f64>::from_fn(n, n, |i, j| {
-        let x = if left { m[(j, i)] } else { m[(i, j)] };
-        x - if i == j { lambda } else { 0.0 }
-    });
-    let svd = shifted.svd().map_err(|e| format!("SVD failed: {e:?}"))?;
+    null_space(&Mat::<f64>::from_fn(n, n, |i, j| m[(i, j)] - if i == j { lambda } else { 0.0 }), left)
+}
+
+/// An orthonormal basis of the null space of the square matrix `a` (`a x = 0`), or of its left
+/// null space (`w a = 0`) if `left`: the right singular vectors whose singular values are below
+/// [`NULL_TOLERANCE`].
+pub(crate) fn null_space(a: &Mat<f64>, left: bool) -> Result<Vec<Vec<f64>>, String> {
+    let n = a.nrows();
+    let a = if left { a.transpose().to_owned() } else { a.clone() };
+    let svd = a.svd().map_err(|e| format!("SVD failed: {e:?}"))?;
     let sigma = svd.S().column_vector();
     let v = svd.V();
     Ok((0..n).filter(|&c| sigma[c] < NULL_TOLERANCE).map(|c| (0..n).map(|r| v[(r, c)]).collect()).collect())

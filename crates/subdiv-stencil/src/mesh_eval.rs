@@ -1056,4 +1056,126 @@ mod tests {
         let doo_sabin = LimitEvaluator::new(Builtin::DooSabin.scheme(), &mesh, &RefineOptions::DEFAULT);
         assert!(matches!(doo_sabin, Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported { .. }))));
     }
+
+    /// `k` sectors of a `rings`-ring grid (quads, or triangles) over a half-disk around vertex 0,
+    /// which is on the boundary with `k` faces; gently curved so that normals vary.
+    fn open_fan(k: usize, rings: usize, triangles: bool) -> subdiv_mesh::PolygonSoup {
+        let mut soup = subdiv_mesh::PolygonSoup::new();
+        let direction = |s: usize| {
+            let a = std::f64::consts::PI * s as f64 / k as f64;
+            DVec3::new(a.cos(), a.sin(), 0.0)
+        };
+        let inside = |i: usize, j: usize| if triangles { i + j <= rings } else { i.max(j) <= rings };
+        let centre = soup.push_vertex(DVec3::new(0.0, 0.0, 0.3));
+        let mut ids = HashMap::new();
+        for s in 0..=k {
+            for i in 1..=rings {
+                for j in 0..=if s < k { rings } else { 0 } {
+                    if inside(i, j) {
+                        let p = direction(s) * i as f64 + direction(s + 1) * j as f64;
+                        let p = p + DVec3::new(0.0, 0.0, 0.3 - 0.05 * p.length_squared() + 0.1 * p.x);
+                        ids.insert((s, i, j), soup.push_vertex(p));
+                    }
+                }
+            }
+        }
+        let id = |s: usize, i: usize, j: usize| match (i, j) {
+            (0, 0) => centre,
+            (0, j) => ids[&(s + 1, j, 0)],
+            _ => ids[&(s, i, j)],
+        };
+        for s in 0..k {
+            for i in 0..rings {
+                for j in 0..rings {
+                    if !triangles {
+                        soup.push_face([id(s, i, j), id(s, i + 1, j), id(s, i + 1, j + 1), id(s, i, j + 1)]);
+                        continue;
+                    }
+                    if i + j < rings {
+                        soup.push_face([id(s, i, j), id(s, i + 1, j), id(s, i, j + 1)]);
+                    }
+                    if i + j + 1 < rings {
+                        soup.push_face([id(s, i + 1, j), id(s, i + 1, j + 1), id(s, i, j + 1)]);
+                    }
+                }
+            }
+        }
+        soup
+    }
+
+    #[test]
+    fn tangents_at_boundary_vertices_span_each_faces_own_plane() {
+        // Catmull-Clark's ½ is defective at four faces (a Jordan block under 0.61), and at six
+        // the two leading modes vanish on the boundary; Loop's eight faces make a thin wedge.
+        for (scheme, k) in
+            [(Builtin::CatmullClark, 4), (Builtin::CatmullClark, 6), (Builtin::Loop, 4), (Builtin::Loop, 8)]
+        {
+            let triangles = scheme == Builtin::Loop;
+            let mesh = Mesh::build(open_fan(k, 3, triangles)).unwrap();
+            let eval = LimitEvaluator::new(scheme.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+            let corners: &[(f64, f64)] = if triangles {
+                &[(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)]
+            } else {
+                &[(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+            };
+            let centre = if triangles { (1.0 / 3.0, 1.0 / 3.0) } else { (0.5, 0.5) };
+            let mut seen = 0;
+            for f in mesh.face_ids() {
+                let Some(c) = mesh.face_vertices(f).iter().position(|v| v.index() == 0) else { continue };
+                seen += 1;
+                let (u0, v0) = corners[c];
+                // Towards the face's centre by h.
+                let near = |h: f64| eval.eval(f, u0 + h * (centre.0 - u0), v0 + h * (centre.1 - v0)).unwrap();
+                let at = eval.eval(f, u0, v0).unwrap();
+                let what = format!("{scheme:?} k = {k} face {f}");
+                assert!(!at.exact_derivatives, "{what}");
+                let angle = at.du.angle_between(at.dv).to_degrees();
+                assert!(angle > 1.0 && angle < 179.0, "{what}: du and dv {angle}° apart");
+                let normal = at.du.cross(at.dv).normalize();
+                for h in [0.5f64.powi(3), 0.5f64.powi(10), 0.5f64.powi(20)] {
+                    let p = near(h);
+                    assert!(p.exact_derivatives, "{what}");
+                    let dot = normal.dot(p.du.cross(p.dv).normalize());
+                    assert!(dot > 0.9, "{what}: the normal at h = {h} is {dot} off");
+                }
+                // Lengths like the exact derivatives next to the vertex (not 1e7 of them).
+                let p = near(0.125);
+                let exact = p.du.length().max(p.dv.length());
+                for d in [at.du, at.dv] {
+                    assert!(
+                        d.length() < 20.0 * exact && d.length() > exact / 20.0,
+                        "{what}: {} vs {exact}",
+                        d.length()
+                    );
+                }
+            }
+            assert_eq!(seen, k, "{scheme:?}");
+        }
+    }
+
+    #[test]
+    fn bilinear_is_each_faces_interpolant_with_exact_derivatives() {
+        // Valence 3 (the cube), 5 (the pole) and a boundary vertex of four faces.
+        for soup in [shapes::cube(), shapes::pole(5), open_fan(4, 2, false)] {
+            let mesh = Mesh::build(soup).unwrap();
+            let eval = LimitEvaluator::new(Builtin::Bilinear.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+            for f in mesh.face_ids() {
+                let c: Vec<DVec3> = mesh.face_vertices(f).iter().map(|&v| mesh.position(v)).collect();
+                for j in 0..=4 {
+                    for i in 0..=4 {
+                        let (u, v) = (f64::from(i) / 4.0, f64::from(j) / 4.0);
+                        let got = eval.eval(f, u, v).unwrap();
+                        let want =
+                            c[0] * (1.0 - u) * (1.0 - v) + c[1] * u * (1.0 - v) + c[2] * u * v + c[3] * (1.0 - u) * v;
+                        let du = (c[1] - c[0]) * (1.0 - v) + (c[2] - c[3]) * v;
+                        let dv = (c[3] - c[0]) * (1.0 - u) + (c[2] - c[1]) * u;
+                        assert!(got.exact_derivatives, "{f} ({u}, {v})");
+                        for (a, b) in [(got.position, want), (got.du, du), (got.dv, dv)] {
+                            assert!((a - b).length() < 1e-12, "{f} ({u}, {v}): {a} vs {b}");
+                        }
+                    }
+                }
+            }
+        }
+    }
 }

@@ -5,10 +5,12 @@ use std::borrow::Borrow;
 use std::collections::HashMap;
 
 use faer::Mat;
+use faer::c64;
+use faer::linalg::solvers::{DenseSolveCore, SolveLstsq};
 use subdiv_schemes::{PatchMatrices, SubPatch};
 
 use crate::address::{check_domain, step};
-use crate::linalg::{eigenspace, normalised_left_eigenvectors};
+use crate::linalg::{normalised_left_eigenvectors, null_space};
 use crate::{Dyadic, StencilError};
 
 /// Weights over a patch's control points (in [`subdiv_mesh::Patch`] order) giving a point of
@@ -40,8 +42,10 @@ const TOLERANCE: f64 = 1e-9;
 /// are the left eigenvectors for `±2^−|τ|`, normalised on the linear functions `u` and `v` of
 /// the periodic shape ([`PatchShape::parameters`](subdiv_schemes::PatchShape::parameters)),
 /// times `±2^|σ|`. At a point that is its own extraordinary vertex (the period keeps an
-/// irregular shape) the tangents come from the subdominant eigenvectors instead (see
-/// [`SurfaceStencil::exact_derivatives`]).
+/// irregular shape) the tangents come from the leading eigenvectors that the face sees instead
+/// (see [`SurfaceStencil::exact_derivatives`]). Every eigenproblem is solved on the control
+/// points that influence the face
+/// ([`PatchShape::influence`](subdiv_schemes::PatchShape::influence)); the others get weight 0.
 ///
 /// For many points of one patch, a [`StencilEvaluator`] shares the work between them.
 ///
@@ -233,9 +237,10 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
     /// The stencil over `shape`'s control points from the stencil over its child `child`'s:
     /// `w ← w · A`; derivatives also times ±2, since `u' = ±(2u − o)`.
     fn back(&self, stencil: &SurfaceStencil, shape: usize, child: u8) -> SurfaceStencil {
-        let sub = &self.matrices().shapes[shape].children[usize::from(child)];
+        let parent = &self.matrices().shapes[shape];
+        let sub = &parent.children[usize::from(child)];
         let derivative = |w: &[f64]| {
-            if stencil.exact_derivatives { derivative_back(w, sub) } else { times(w, sub, 1.0) }
+            if stencil.exact_derivatives { derivative_back(w, sub, &parent.influence) } else { times(w, sub, 1.0) }
         };
         SurfaceStencil {
             position: times(&stencil.position, sub, 1.0),
@@ -246,37 +251,51 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
     }
 
     /// The stencil at the first state of a cycle of states, from the eigenvectors of the
-    /// cycle's composite matrix `M_τ`.
+    /// cycle's composite matrix `M_τ`. They are solved on the control points that influence the
+    /// face ([`PatchShape::influence`](subdiv_schemes::PatchShape::influence)): the others
+    /// only add eigenvalues of their own (a bilinear face's points beyond its corners repeat ½,
+    /// which made its eigenvectors not unique), and get weight 0.
     fn periodic(&self, cycle: &[(State, u8)], point: Dyadic) -> Result<SurfaceStencil, StencilError> {
         let matrices = self.matrices();
-        let periodic = cycle[0].0.shape;
-        let size = matrices.shapes[periodic].size;
+        let periodic = &matrices.shapes[cycle[0].0.shape];
+        let size = periodic.size;
         // M_τ, applied first to last.
         let mut m_tau = Mat::<f64>::identity(size, size);
         let mut steps = Vec::with_capacity(cycle.len());
         for &(state, c) in cycle {
-            let child = &matrices.shapes[state.shape].children[usize::from(c)];
+            let parent = &matrices.shapes[state.shape];
+            let child = &parent.children[usize::from(c)];
             let a = Mat::<f64>::from_fn(child.rows(), child.columns(), |i, j| child.get(i, j));
             m_tau = &a * &m_tau;
-            steps.push(child);
+            steps.push((child, parent.influence.as_slice()));
         }
-        let ones = vec![1.0; size];
+        // Rows of influencing points read influencing points only, at every step, so this is
+        // the cycle's matrix on them.
+        let influence: Vec<usize> = periodic.influence.iter().map(|&k| k as usize).collect();
+        let m = Mat::<f64>::from_fn(influence.len(), influence.len(), |i, j| m_tau[(influence[i], influence[j])]);
+        let widen = |w: Vec<f64>| {
+            let mut out = vec![0.0; size];
+            influence.iter().zip(w).for_each(|(&k, x)| out[k] = x);
+            out
+        };
+        let ones = vec![1.0; influence.len()];
         let fail = |detail: String| eigen_error(matrices, format!("{detail} at {point:?}"));
-        let position = normalised_left_eigenvectors(&m_tau, 1.0, std::slice::from_ref(&ones), &[vec![1.0]])
+        let position = normalised_left_eigenvectors(&m, 1.0, std::slice::from_ref(&ones), &[vec![1.0]])
             .map_err(|detail| fail(format!("eigenvalue 1: {detail}")))?
             .vectors
             .remove(0);
-        let derivatives = match &matrices.shapes[periodic].parameters {
+        let derivatives = match &periodic.parameters {
             Some([u, v]) => {
                 periodic_derivatives(&steps, u, v).map_err(|detail| fail(format!("derivatives: {detail}")))?
             }
             None => None,
         };
         let stencil = match derivatives {
-            Some((du, dv)) => SurfaceStencil { position, du, dv, exact_derivatives: true },
+            Some((du, dv)) => SurfaceStencil { position: widen(position), du, dv, exact_derivatives: true },
             None => {
-                let (du, dv) = irregular_tangents(matrices, &m_tau, matrices.face_size)?;
-                SurfaceStencil { position, du, dv, exact_derivatives: false }
+                let probes = face_probes(matrices, cycle[0].0.shape, &influence)?;
+                let (du, dv) = irregular_tangents(&m, &probes).map_err(fail)?;
+                SurfaceStencil { position: widen(position), du: widen(du), dv: widen(dv), exact_derivatives: false }
             }
         };
         Ok(stencil)
@@ -298,13 +317,17 @@ fn times(w: &[f64], sub: &SubPatch, scale: f64) -> Vec<f64> {
     out
 }
 
-/// A derivative stencil carried to the parent: `±2 w·A` (`u' = ±(2u − o)`), put back on the
-/// vectors that sum to zero. Rounding must not feed the position direction, which every step
-/// doubles: across a cycle of `k` steps it would grow `2^k`-fold.
-fn derivative_back(w: &[f64], sub: &SubPatch) -> Vec<f64> {
-    let mut out = times(w, sub, if sub.domain.flipped { -2.0 } else { 2.0 });
-    let mean = out.iter().sum::<f64>() / out.len() as f64;
-    out.iter_mut().for_each(|x| *x -= mean);
+/// A derivative stencil carried to the parent: `±2 w·A` (`u' = ±(2u − o)`), kept on the
+/// parent's `influence` and put back on the vectors there that sum to zero. Rounding must not
+/// feed the position direction, which every step doubles: across a cycle of `k` steps it would
+/// grow `2^k`-fold; nor the points that do not influence the face, whose own eigenvalues the
+/// iteration would pick up.
+fn derivative_back(w: &[f64], sub: &SubPatch, influence: &[u32]) -> Vec<f64> {
+    let full = times(w, sub, if sub.domain.flipped { -2.0 } else { 2.0 });
+    let mut out = vec![0.0; full.len()];
+    influence.iter().for_each(|&k| out[k as usize] = full[k as usize]);
+    let mean = out.iter().sum::<f64>() / influence.len() as f64;
+    influence.iter().for_each(|&k| out[k as usize] -= mean);
     out
 }
 
@@ -316,21 +339,33 @@ fn derivative_back(w: &[f64], sub: &SubPatch) -> Vec<f64> {
 /// derivative pair as its eigenvalue 1; where the surface has parameter derivatives that pair
 /// dominates, so a few rounds converge and each step is well conditioned.
 ///
+/// `steps` are the cycle's sub-patches, each with its parent's
+/// [`influence`](subdiv_schemes::PatchShape::influence); the iteration stays on those points.
+///
 /// `None` where the pair does not dominate: at an extraordinary vertex whose subdominant
 /// eigenvalue exceeds the pair's (Catmull-Clark at valence 8, where ½ is also an eigenvalue, so
 /// the matrices reproduce linear functions, but the 0.61 of the characteristic map wins) the
 /// iteration grows, and the parameterization has no derivative there.
-pub(crate) fn periodic_derivatives(steps: &[&SubPatch], u: &[f64], v: &[f64]) -> Result<Option<Derivatives>, String> {
+pub(crate) fn periodic_derivatives(
+    steps: &[(&SubPatch, &[u32])],
+    u: &[f64],
+    v: &[f64],
+) -> Result<Option<Derivatives>, String> {
     let size = u.len();
+    let influence = steps[0].1;
     // w·M_τ with M_τ = A_last ⋯ A_first: the last step first.
-    let round = |w: &[f64]| -> Vec<f64> { steps.iter().rev().fold(w.to_vec(), |w, child| derivative_back(&w, child)) };
+    let round = |w: &[f64]| -> Vec<f64> {
+        steps.iter().rev().fold(w.to_vec(), |w, &(child, influence)| derivative_back(&w, child, influence))
+    };
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let rounds = 64 / steps.len() + 2;
     // Two starting vectors with components on both derivatives: the linear functions,
     // centred (the stencils reproduce them, so they are far from orthogonal to the pair).
     let centre = |p: &[f64]| {
-        let mean = p.iter().sum::<f64>() / size as f64;
-        p.iter().map(|x| x - mean).collect::<Vec<f64>>()
+        let mean = influence.iter().map(|&k| p[k as usize]).sum::<f64>() / influence.len() as f64;
+        let mut out = vec![0.0; size];
+        influence.iter().for_each(|&k| out[k as usize] = p[k as usize] - mean);
+        out
     };
     let mut basis = [centre(u), centre(v)];
     for w in &mut basis {
@@ -373,56 +408,212 @@ fn eigen_error(matrices: &PatchMatrices, detail: String) -> StencilError {
     StencilError::Eigen { scheme: matrices.scheme.clone(), detail }
 }
 
-/// Tangent directions at an irregular fixed point: the left eigenvectors of the two largest
-/// eigenvalues after 1, made dual to the right ones (the characteristic map), and turned to
-/// the map's directions of the face's first side (for `du`) and last side (for `dv`).
-fn irregular_tangents(
-    matrices: &PatchMatrices,
-    m: &Mat<f64>,
-    face_size: usize,
-) -> Result<(Vec<f64>, Vec<f64>), StencilError> {
+/// How far apart eigenvalues may be and count as one: a defective eigenvalue comes out of the
+/// solver split by about the square root of the rounding (Catmull-Clark's ½ at a boundary
+/// vertex of four faces, a 2 × 2 Jordan block, as ½ ± 1e-8 i).
+const CLUSTER: f64 = 1e-6;
+
+/// The smallest sine of the angle between the two side directions, in the characteristic map,
+/// that counts as spanning a plane.
+const SPAN: f64 = 1e-6;
+
+/// Tangent directions at an irregular fixed point, from the cycle's matrix `m` on the control
+/// points that influence the face (so an eigenvector the face cannot see, such as one living
+/// across an infinitely sharp edge, is not among them) and the limit stencils of the face's
+/// `probes` (see [`face_probes`]: the ends of its two sides first, then points on and inside
+/// it).
+///
+/// Near the point the surface over the face is `x₀ + Σ λⁿ (l·x) φ_r`, one term per eigenvalue
+/// `λ` after 1 (left eigenvector `l`, right `r`, `φ_r` the limit function of `r` on the face),
+/// so the face's tangent plane — the limit of its normals — is spanned by the `l·x` of the
+/// two leading terms that the face sees. So the eigenvalues are taken by decreasing modulus
+/// (equal ones as one cluster, with its whole eigenspace); a cluster whose right eigenvectors
+/// vanish at every probe is one the face does not see, and is skipped; clusters are added
+/// until the probes' values (the characteristic map of the face) span a plane. `du` and `dv`
+/// are the left vectors, made dual to the right ones, combined with the unit direction of the
+/// first and of the last side in that map (the map at corner 1 and at corner `face_size − 1`);
+/// a side the terms vanish on (a boundary side, when two modes of the interior lead) takes the
+/// probe furthest from the other side instead, the edge of the face's image on its side, which
+/// keeps the plane and the orientation. A complex pair enters as the real and imaginary parts
+/// of its eigenvectors (the real 2-plane it turns in); a defective eigenvalue with one 2 × 2
+/// Jordan block as one term (see [`eigen_terms`]). For the smooth interior vertex this is the
+/// subdominant pair; at a Catmull-Clark boundary vertex of four faces 0.61 and the defective ½
+/// (whose generalized eigenvector is the boundary curve's tangent); of six faces, on the two
+/// faces at the boundary, the two interior modes 0.63 and 0.58, as the limit of their normals
+/// is (these boundary rules are not tangent-plane continuous there: the boundary curve's ½
+/// leaves that plane).
+fn irregular_tangents(m: &Mat<f64>, probes: &[Vec<f64>]) -> Result<Derivatives, String> {
     let n = m.nrows();
-    let fail = |detail: &str| eigen_error(matrices, detail.to_string());
-    let mut values = m.eigenvalues().map_err(|e| fail(&format!("eigen solver: {e:?}")))?;
-    values.sort_by(|a, b| b.norm().total_cmp(&a.norm()));
-    let subdominant: Vec<f64> = values.iter().skip(1).take(2).map(|z| z.re).collect();
-    if values.len() < 3 || values[1].im.abs() > TOLERANCE || values[2].im.abs() > TOLERANCE {
-        return Err(fail("the subdominant eigenvalues are not real"));
-    }
-    // Right and left eigenvectors of the subdominant values (one double value, or two simple).
-    let space = |lambda: f64, left: bool, dimension: usize| -> Result<Vec<Vec<f64>>, StencilError> {
-        let basis = eigenspace(m, lambda, left).map_err(|e| fail(&e))?;
-        if basis.len() != dimension {
-            return Err(fail(&format!("the eigenspace of {lambda} has dimension {}, not {dimension}", basis.len())));
-        }
-        Ok(basis)
-    };
-    let (right, left) = if (subdominant[0] - subdominant[1]).abs() < TOLERANCE {
-        (space(subdominant[0], false, 2)?, space(subdominant[0], true, 2)?)
-    } else {
-        let r = [space(subdominant[0], false, 1)?, space(subdominant[1], false, 1)?].concat();
-        let l = [space(subdominant[0], true, 1)?, space(subdominant[1], true, 1)?].concat();
-        (r, l)
-    };
-    // Dual basis: l'_a · r_b = δ_ab.
+    let values = m.eigenvalues().map_err(|e| format!("eigen solver: {e:?}"))?;
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let g =
-        [[dot(&left[0], &right[0]), dot(&left[0], &right[1])], [dot(&left[1], &right[0]), dot(&left[1], &right[1])]];
-    let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
-    if det.abs() < TOLERANCE {
-        return Err(fail("the subdominant left and right eigenvectors are not dual"));
-    }
-    // l'_a = Σ_c H[a][c] l_c with H = G⁻¹, so that l'_a · r_b = (H G)[a][b].
-    let h = [[g[1][1] / det, -g[0][1] / det], [-g[1][0] / det, g[0][0] / det]];
-    let dual: Vec<Vec<f64>> =
-        (0..2).map(|a| (0..n).map(|i| h[a][0] * left[0][i] + h[a][1] * left[1][i]).collect()).collect();
-    // Directions of the face's first and last sides in the characteristic map (corners come
-    // first in a patch, starting at corner 0).
-    let direction = |corner: usize| {
-        let (x, y) = (right[0][corner] - right[0][0], right[1][corner] - right[1][0]);
-        let length = x.hypot(y);
-        (x / length, y / length)
+    let mut terms: Vec<Term> = Vec::new();
+    // Whether two vectors over the terms are independent.
+    let independent = |a: &[f64], b: &[f64]| {
+        let (aa, bb, ab) = (dot(a, a), dot(b, b), dot(a, b));
+        aa.min(bb) > TOLERANCE * TOLERANCE && aa * bb - ab * ab > SPAN * SPAN * aa * bb
     };
-    let combine = |(c, s): (f64, f64)| -> Vec<f64> { (0..n).map(|i| c * dual[0][i] + s * dual[1][i]).collect() };
-    Ok((combine(direction(1)), combine(direction(face_size - 1))))
+    for (lambda, count) in clusters(&values) {
+        if (lambda - c64::new(1.0, 0.0)).norm() < CLUSTER {
+            continue;
+        }
+        let cluster = eigen_terms(m, lambda, count, probes)?;
+        if cluster.iter().all(|t| t.view.iter().all(|x| x.abs() < TOLERANCE)) {
+            continue;
+        }
+        terms.extend(cluster);
+        // The probes' values span a plane: some two probes are independent over the terms.
+        let at = |probe: usize| -> Vec<f64> { terms.iter().map(|t| t.view[probe]).collect() };
+        let spans = (0..probes.len()).any(|a| (a + 1..probes.len()).any(|b| independent(&at(a), &at(b))));
+        if !spans {
+            continue;
+        }
+        // A side the terms vanish on takes the probe furthest from the other side's direction:
+        // the edge of the face's image on its side.
+        let seen = |d: &[f64]| dot(d, d) > TOLERANCE * TOLERANCE;
+        let side = |probe: usize, other: usize| {
+            let d = at(probe);
+            if seen(&d) {
+                return d;
+            }
+            let o = at(other);
+            let cosine = |p: &[f64]| dot(p, &o) / (dot(p, p) * dot(&o, &o)).sqrt();
+            (2..probes.len()).map(at).filter(|p| seen(p)).min_by(|a, b| cosine(a).total_cmp(&cosine(b))).unwrap_or(d)
+        };
+        let (first, last) = (side(0, 1), side(1, 0));
+        if !independent(&first, &last) {
+            return Err("the face's sides have one direction in its characteristic map".into());
+        }
+        // A side's unit direction in the characteristic map, on the left vectors.
+        let along = |d: &[f64]| -> Vec<f64> {
+            let length = dot(d, d).sqrt();
+            (0..n).map(|i| d.iter().zip(&terms).map(|(c, t)| c * t.left[i]).sum::<f64>() / length).collect()
+        };
+        return Ok((along(&first), along(&last)));
+    }
+    Err("the leading eigenvectors that the face sees do not span a plane over it".into())
+}
+
+/// Where [`irregular_tangents`] reads the characteristic map of a face whose corner 0 is the
+/// fixed point, in 1/4 units: corner 1 (the end of the first side), the last corner (of the
+/// last side), then points between them on the face's far sides. All lie at one scale: where
+/// the leading eigenvalues differ, the map turns points towards the stronger term as they near
+/// the fixed point, so directions at two scales do not compare.
+const QUAD_PROBES: [(i64, i64); 7] = [(4, 0), (0, 4), (4, 4), (4, 2), (2, 4), (4, 1), (1, 4)];
+/// As [`QUAD_PROBES`], for triangles (their far side is `u + v = 1`).
+const TRIANGLE_PROBES: [(i64, i64); 5] = [(4, 0), (0, 4), (2, 2), (3, 1), (1, 3)];
+
+/// The limit position stencils, on the control points `influence` lists, of the probe points
+/// of the face of `shape`: their values on an eigenvector are its limit function there, the
+/// characteristic map (which is 0 at the fixed point, whose position stencil is the left
+/// eigenvector for 1). The probes' own fixed points are regular corners, so this recurses no
+/// further.
+fn face_probes(matrices: &PatchMatrices, shape: usize, influence: &[usize]) -> Result<Vec<Vec<f64>>, StencilError> {
+    let points: &[(i64, i64)] = if matrices.face_size == 3 { &TRIANGLE_PROBES } else { &QUAD_PROBES };
+    let mut evaluator = StencilEvaluator::new(matrices);
+    points
+        .iter()
+        .map(|&(u, v)| {
+            let s = evaluator.stencil(shape, Dyadic::new(u, v, 4))?;
+            Ok(influence.iter().map(|&k| s.position[k]).collect())
+        })
+        .collect()
+}
+
+/// One eigen-term of the surface near an irregular fixed point, as a face's sides see it.
+struct Term {
+    /// The right vector at each probe: the term's coordinate of the probes' points in the
+    /// characteristic map.
+    view: Vec<f64>,
+    /// The left vector, dual to the right one: the term's coefficient is `left · x`.
+    left: Vec<f64>,
+}
+
+/// The eigenvalues of `values` grouped into clusters (within [`CLUSTER`] of each other), with
+/// their sizes, by decreasing modulus; a complex pair as its member with positive imaginary
+/// part, counted once.
+fn clusters(values: &[c64]) -> Vec<(c64, usize)> {
+    let mut out: Vec<(c64, usize)> = Vec::new();
+    for &z in values {
+        let z = if z.im < 0.0 { z.conj() } else { z };
+        match out.iter_mut().find(|(c, k)| (*c / *k as f64 - z).norm() < CLUSTER) {
+            Some((sum, k)) => {
+                *sum += z;
+                *k += 1;
+            }
+            None => out.push((z, 1)),
+        }
+    }
+    // Pairs were folded onto one member: count them once.
+    let mut out: Vec<(c64, usize)> = out
+        .into_iter()
+        .map(|(sum, k)| {
+            let mean = sum / k as f64;
+            if mean.im.abs() < CLUSTER { (c64::new(mean.re, 0.0), k) } else { (mean, k / 2) }
+        })
+        .collect();
+    out.sort_by(|a, b| b.0.norm().total_cmp(&a.0.norm()).then(b.0.re.total_cmp(&a.0.re)));
+    out
+}
+
+/// The terms of the cluster of `count` eigenvalues at `lambda` (a real one, or a complex pair
+/// with `λ̄`) as the face's `probes` see them: per eigenvector of unit length (for a pair, of
+/// its real invariant plane) the left vector dual to it. A 2 × 2 Jordan block, `M r = λ r`,
+/// `M g = λ g + r`, is one term: its left eigenvector `l` (`l·r = 0`, normalised by
+/// `l·g = 1`), whose coefficient leads both `n λⁿ⁻¹ φ_r` and `λⁿ φ_g`; a probe sees it through
+/// `r`, or through `g` where `r` vanishes (the boundary curve at a Catmull-Clark boundary
+/// vertex of four faces, whose tangent is `g`'s).
+fn eigen_terms(m: &Mat<f64>, lambda: c64, count: usize, probes: &[Vec<f64>]) -> Result<Vec<Term>, String> {
+    let n = m.nrows();
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let view = |r: &[f64]| -> Vec<f64> { probes.iter().map(|p| dot(p, r)).collect() };
+    let complex = lambda.im != 0.0;
+    // A pair's real invariant plane is the null space of M² − 2 Re λ M + |λ|².
+    let shifted = if complex {
+        let (s, p) = (2.0 * lambda.re, lambda.norm_sqr());
+        let m2 = m * m;
+        Mat::<f64>::from_fn(n, n, |i, j| m2[(i, j)] - s * m[(i, j)] + if i == j { p } else { 0.0 })
+    } else {
+        Mat::<f64>::from_fn(n, n, |i, j| m[(i, j)] - if i == j { lambda.re } else { 0.0 })
+    };
+    let right = null_space(&shifted, false)?;
+    let left = null_space(&shifted, true)?;
+    let dimension = if complex { 2 * count } else { count };
+    let d = right.len();
+    if d != left.len() || d == 0 {
+        return Err(format!("the eigenspaces of {lambda} have dimensions {d} and {}", left.len()));
+    }
+    let gram = Mat::<f64>::from_fn(d, d, |a, b| dot(&left[a], &right[b]));
+    let smallest =
+        gram.singular_values().map_err(|e| format!("SVD failed: {e:?}"))?.into_iter().fold(f64::MAX, f64::min);
+    if d == dimension && smallest > CLUSTER {
+        // Semisimple: l'_a = Σ_c H[a][c] l_c with H = (L R)⁻¹, so that l'_a · r_b = δ_ab.
+        let h = gram.partial_piv_lu().inverse();
+        return Ok((0..d)
+            .map(|a| Term {
+                view: view(&right[a]),
+                left: (0..n).map(|i| (0..d).map(|c| h[(a, c)] * left[c][i]).sum()).collect(),
+            })
+            .collect());
+    }
+    if complex || d != 1 || dimension != 2 {
+        return Err(format!(
+            "the eigenvalue {lambda} ({dimension}-fold, {d} eigenvectors) is defective beyond one 2 × 2 block"
+        ));
+    }
+    // (M − λ) g = r, made unique by g·r = 0 (the extra row gives the system the full rank that
+    // least squares needs).
+    let r = &right[0];
+    let a = Mat::<f64>::from_fn(n + 1, n, |i, j| if i < n { shifted[(i, j)] } else { r[j] });
+    let b = Mat::<f64>::from_fn(n + 1, 1, |i, _| if i < n { r[i] } else { 0.0 });
+    let g = a.qr().solve_lstsq(&b);
+    if (&a * &g - &b).norm_max() > CLUSTER {
+        return Err(format!("the eigenvalue {lambda} is defective beyond one 2 × 2 block"));
+    }
+    let g: Vec<f64> = (0..n).map(|i| g[(i, 0)]).collect();
+    let pairing = dot(&left[0], &g);
+    let (seen, generalized) = (view(r), view(&g));
+    Ok(vec![Term {
+        view: seen.iter().zip(generalized).map(|(&s, g)| if s.abs() > TOLERANCE { s } else { g }).collect(),
+        left: left[0].iter().map(|x| x / pairing).collect(),
+    }])
 }
