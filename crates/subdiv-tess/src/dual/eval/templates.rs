@@ -43,6 +43,12 @@ pub(super) const MAX_TEMPLATE_WEIGHTS: usize = 1 << 24;
 /// The most cage points a typed face may depend on (more: its own records).
 pub(super) const MAX_TYPED_POINTS: usize = 64;
 
+/// The deepest level a typed face's patches may lie on: the cube's corners need 2. Deeper
+/// faces (next to semi-sharp features) take records: a face resolved on level `l` has up to
+/// `4^l` patches, and its cage rows sum `25^l` paths per point (the bishop's sharpness 6 made
+/// that minutes).
+const MAX_TYPED_LEVEL: usize = 2;
+
 /// A template's key: the face type (or, with `Evaluator::copy_faces` off, the face, marked by
 /// the flag) and the rate.
 pub(super) type TemplateKey = (bool, u32, u32);
@@ -237,6 +243,9 @@ impl Evaluator {
         signature: &mut Vec<u64>,
         patches: &mut Vec<FacePatch>,
     ) -> bool {
+        if level > MAX_TYPED_LEVEL {
+            return false;
+        }
         match self.levels.resolve(level, face) {
             Some(Resolved::Children { children, domain }) => {
                 if domain != FaceDomain::Quad {
