@@ -928,10 +928,10 @@ mod tests {
     #[test]
     fn smooth_shapes_are_influenced_by_every_control_point() {
         for (builtin, patch_type) in [
-            (Builtin::CatmullClark, PatchType::Interior { valence: 5 }),
-            (Builtin::CatmullClark, PatchType::Boundary { faces: 4, index: 1 }),
-            (Builtin::Loop, PatchType::Interior { valence: 7 }),
-            (Builtin::Loop, PatchType::Boundary { faces: 4, index: 0 }),
+            (Builtin::CatmullClark, PatchType::interior(5)),
+            (Builtin::CatmullClark, PatchType::boundary(4, 1)),
+            (Builtin::Loop, PatchType::interior(7)),
+            (Builtin::Loop, PatchType::boundary(4, 0)),
         ] {
             for shape in &matrices(builtin, patch_type).shapes {
                 assert_eq!(shape.influence, (0..shape.size as u32).collect::<Vec<_>>(), "{builtin:?} {patch_type:?}");
@@ -942,9 +942,9 @@ mod tests {
     #[test]
     fn a_bilinear_face_is_influenced_by_its_corners_alone_and_reproduces_their_parameters() {
         for patch_type in [
-            PatchType::Interior { valence: 3 },
+            PatchType::interior(3),
             PatchType::regular(Builtin::Bilinear.scheme()),
-            PatchType::Boundary { faces: 4, index: 2 },
+            PatchType::boundary(4, 2),
         ] {
             for shape in &matrices(Builtin::Bilinear, patch_type).shapes {
                 assert_eq!(shape.influence, [0, 1, 2, 3], "{patch_type:?}");
