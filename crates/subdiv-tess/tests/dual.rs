@@ -6,6 +6,8 @@
 
 mod dual_support;
 
+use std::collections::HashMap;
+
 use glam::DVec3;
 use proptest::prelude::*;
 use subdiv_mesh::{FaceId, Mesh, PolygonSoup, shapes};
@@ -135,15 +137,67 @@ fn shared_meshes_are_on_the_limit_surface_and_watertight() {
 }
 
 #[test]
+fn creased_meshes_are_watertight_and_on_the_limit_surface() {
+    for (name, builtin, mesh) in creased_meshes() {
+        for rates in [vec![3; mesh.face_count()], vec![8; mesh.face_count()], rates_for(&mesh, 17, 7)] {
+            let out = tessellate(builtin, &mesh, &rates);
+            check_facing(&out, &mesh);
+            assert!(check(&out).is_empty(), "{name}: cracks");
+            assert_eq!(euler(&out), input_euler(&mesh), "{name}");
+            // One vertex per position: welded along the creases too.
+            let mut seen: HashMap<[u64; 3], usize> = HashMap::new();
+            for (i, p) in out.positions.iter().enumerate() {
+                let key = p.to_array().map(f64::to_bits);
+                assert!(seen.insert(key, i).is_none(), "{name}: vertex {i} repeats a position");
+            }
+        }
+        eprintln!("{name}");
+        on_limit_surface(builtin, &mesh, &rates_for(&mesh, 19, 6));
+    }
+}
+
+/// The points a tessellation puts on an infinitely sharp edge lie on the crease curve: on a
+/// torus's sharp ring of regular crease vertices, the cubic B-spline of the ring's vertices.
+#[test]
+fn crease_points_are_on_the_crease_curve() {
+    let (name, builtin, mesh) = creased_meshes().swap_remove(2);
+    let out = tessellate(builtin, &mesh, &vec![5; mesh.face_count()]);
+    let (m, n) = (6usize, 5usize);
+    let ring: Vec<DVec3> = (0..m).map(|i| mesh.position(subdiv_mesh::VertexId::new((i * n) as u32))).collect();
+    let mut on_ring = 0;
+    for (s, p) in out.parameters.iter().zip(&out.positions) {
+        // Face (i, 0) has the ring as its first side (v = 0).
+        let (f, i) = (s.face.index(), s.face.index() / n);
+        if f % n != 0 || s.v != 0.0 {
+            continue;
+        }
+        let u = s.u;
+        let b = [
+            (1.0 - u).powi(3) / 6.0,
+            (3.0 * u.powi(3) - 6.0 * u * u + 4.0) / 6.0,
+            (-3.0 * u.powi(3) + 3.0 * u * u + 3.0 * u + 1.0) / 6.0,
+            u.powi(3) / 6.0,
+        ];
+        let want: DVec3 = (0..4).map(|k| ring[(i + m + k - 1) % m] * b[k]).sum();
+        assert!((*p - want).length() < 1e-13, "{name}: face {f} at u = {u}: {p:?} vs {want:?}");
+        on_ring += 1;
+    }
+    assert!(on_ring >= m * 4, "{name}: {on_ring} points on the ring");
+}
+
+#[test]
 fn update_cage_equals_a_fresh_tessellation() {
-    for (builtin, soup) in [
+    for (builtin, mesh) in [
         (Builtin::CatmullClark, shapes::cube()),
         (Builtin::CatmullClark, shapes::ngon_prism(5)),
         (Builtin::CatmullClark, shapes::quad_torus(5, 4)),
         (Builtin::CatmullClark, shapes::quad_grid(3, 2)),
         (Builtin::Loop, shapes::icosahedron()),
-    ] {
-        let mesh = Mesh::build(soup).unwrap();
+    ]
+    .into_iter()
+    .map(|(builtin, soup)| (builtin, Mesh::build(soup).unwrap()))
+    .chain(creased_meshes().into_iter().map(|(_, builtin, mesh)| (builtin, mesh)))
+    {
         let rates = rates_for(&mesh, 21, 9);
         let mut tess = DualTessellator::new(builtin.scheme(), &mesh, &DualOptions::default()).unwrap();
         tess.tessellate(&rates).unwrap();
@@ -213,15 +267,18 @@ fn check_plan(name: &str, tess: &DualTessellator, cage: &[DVec3], out: &TessMesh
 
 #[test]
 fn evaluation_plans_reproduce_the_tessellator() {
-    for (builtin, name, soup) in [
+    for (name, builtin, mesh) in [
         (Builtin::CatmullClark, "cube", shapes::cube()),
         (Builtin::CatmullClark, "pentagonal prism", shapes::ngon_prism(5)),
         (Builtin::CatmullClark, "torus", shapes::quad_torus(5, 4)),
         (Builtin::CatmullClark, "grid", shapes::quad_grid(3, 2)),
         (Builtin::CatmullClark, "default model", shapes::default_model()),
         (Builtin::Loop, "icosahedron", shapes::icosahedron()),
-    ] {
-        let mesh = Mesh::build(soup).unwrap();
+    ]
+    .into_iter()
+    .map(|(builtin, name, soup)| (name, builtin, Mesh::build(soup).unwrap()))
+    .chain(creased_meshes())
+    {
         let rates = rates_for(&mesh, 5, 9);
         let mut tess = DualTessellator::new(builtin.scheme(), &mesh, &DualOptions::default()).unwrap();
         let out = tess.tessellate(&rates).unwrap().clone();

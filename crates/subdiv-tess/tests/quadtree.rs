@@ -6,7 +6,7 @@
 use std::collections::HashMap;
 
 use proptest::prelude::*;
-use subdiv_mesh::{Mesh, PolygonSoup, shapes};
+use subdiv_mesh::{FaceId, Mesh, PolygonSoup, shapes};
 use subdiv_schemes::{Builtin, RefineOptions};
 use subdiv_stencil::LimitEvaluator;
 use subdiv_tess::check::LimitSamples;
@@ -180,11 +180,21 @@ fn bad_input_gives_typed_errors() {
     assert!(matches!(bilinear, Err(TessError::Scheme { .. })), "{bilinear:?}");
     let grid = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &Mesh::build(shapes::quad_grid(2, 2)).unwrap());
     assert!(matches!(grid, Err(TessError::Unsupported { .. })));
-    let mut creased = Mesh::build(shapes::cube()).unwrap();
-    let edge = creased.edges().next().unwrap();
-    creased.set_edge_sharpness(edge, 2.0);
-    let creased = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &creased);
-    assert!(matches!(creased, Err(TessError::Surface(_))), "{creased:?}");
+}
+
+#[test]
+fn semi_sharp_cubes_are_within_tolerance_of_the_limit_surface() {
+    // A semi-sharp edge and corner, refined until spent; infinitely sharp ones are refused.
+    let creased = |sharpness: f64| {
+        let mut soup = shapes::cube();
+        let [a, b] = [soup.face(FaceId::new(0))[0], soup.face(FaceId::new(0))[1]];
+        soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness });
+        soup.tags.corners.push(subdiv_mesh::CornerTag { vertex: a, sharpness: sharpness / 2.0 });
+        Mesh::build(soup).unwrap()
+    };
+    guarantee(&creased(2.5), 9, &[1e-2, 1e-3]);
+    let sharp = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &creased(10.0));
+    assert!(matches!(sharp, Err(TessError::Unsupported { feature: "infinitely sharp creases", .. })), "{sharp:?}");
 }
 
 /// A closed mesh with random valences: a quad torus whose faces are split into triangles and

@@ -234,6 +234,16 @@ impl QuadtreeTessellator {
         if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {
             return Err(TessError::Unsupported { feature: "holes", element: format!("{f}") });
         }
+        // Semi-sharp features are refined away by the patch levels; infinitely sharp ones stay,
+        // and their patches have no bound here yet (the dual tessellator takes them).
+        let infinite = subdiv_mesh::Tags::INFINITELY_SHARP;
+        if let Some(e) = mesh.edges().find(|&e| mesh.edge_sharpness(e) >= infinite) {
+            let [a, b] = mesh.edge_vertices(e);
+            return Err(TessError::Unsupported { feature: "infinitely sharp creases", element: format!("edge {a}-{b}") });
+        }
+        if let Some(v) = mesh.vertices().find(|&v| mesh.vertex_sharpness(v) >= infinite) {
+            return Err(TessError::Unsupported { feature: "infinitely sharp corners", element: format!("{v}") });
+        }
         let levels = PatchLevels::new(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?;
         let mut roots = Vec::new();
         for face in mesh.face_ids() {

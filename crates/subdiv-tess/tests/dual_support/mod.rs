@@ -353,3 +353,44 @@ pub(crate) fn random_rings(mesh: &Mesh, seed: u64, max: u32) -> RingDepths {
     };
     RingDepths { vertices: depths(mesh.vertex_count(), 0x5151), centres: depths(mesh.face_count(), 0xC3C3) }
 }
+
+/// Meshes with sharp features: infinitely sharp crease loops and paths (straight, turning,
+/// ending in darts), corners, and semi-sharp edges and corners, Catmull-Clark and Loop.
+pub(crate) fn creased_meshes() -> Vec<(&'static str, Builtin, Mesh)> {
+    use subdiv_mesh::{CornerTag, CreaseTag};
+    let crease = |soup: &mut PolygonSoup, path: &[u32], sharpness: f64| {
+        for w in path.windows(2) {
+            soup.tags.creases.push(CreaseTag { vertices: [VertexId::new(w[0]), VertexId::new(w[1])], sharpness });
+        }
+    };
+    let corner = |soup: &mut PolygonSoup, v: u32, sharpness: f64| {
+        soup.tags.corners.push(CornerTag { vertex: VertexId::new(v), sharpness });
+    };
+    let mut out = Vec::new();
+    // The cube's top face ringed by sharp edges, one of its corners a corner.
+    let mut cube = shapes::cube();
+    let top: Vec<u32> = cube.face(FaceId::new(0)).iter().map(|v| v.index() as u32).collect();
+    crease(&mut cube, &[top[0], top[1], top[2], top[3], top[0]], 10.0);
+    corner(&mut cube, top[2], 10.0);
+    out.push(("cube, sharp loop and corner", Builtin::CatmullClark, Mesh::build(cube).unwrap()));
+    // Semi-sharp: an edge of sharpness 2.5 beside one of 1.2, a corner of 1.5.
+    let mut cube = shapes::cube();
+    crease(&mut cube, &[top[0], top[1], top[2]], 2.5);
+    corner(&mut cube, top[3], 1.5);
+    out.push(("cube, semi-sharp", Builtin::CatmullClark, Mesh::build(cube).unwrap()));
+    // A torus with a straight sharp ring (regular crease vertices) and a dart path.
+    let (m, n) = (6u32, 5u32);
+    let mut torus = shapes::quad_torus(m as usize, n as usize);
+    let ring: Vec<u32> = (0..=m).map(|i| (i % m) * n).collect();
+    crease(&mut torus, &ring, 10.0);
+    crease(&mut torus, &[2, 3], 10.0);
+    out.push(("torus, sharp ring and dart", Builtin::CatmullClark, Mesh::build(torus).unwrap()));
+    // Loop: an icosahedron with a sharp path ending in darts, and a semi-sharp edge.
+    let mut ico = shapes::icosahedron();
+    let f0: Vec<u32> = ico.face(FaceId::new(0)).iter().map(|v| v.index() as u32).collect();
+    crease(&mut ico, &[f0[0], f0[1], f0[2]], 10.0);
+    let f5: Vec<u32> = ico.face(FaceId::new(5)).iter().map(|v| v.index() as u32).collect();
+    crease(&mut ico, &[f5[0], f5[1]], 1.5);
+    out.push(("icosahedron, sharp path and semi-sharp edge", Builtin::Loop, Mesh::build(ico).unwrap()));
+    out
+}

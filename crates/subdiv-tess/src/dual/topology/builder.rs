@@ -71,7 +71,8 @@ pub(crate) struct BuilderBuffers {
     faces: Vec<Option<FaceCells>>,
     /// Per half-edge: its corner number in its face.
     corner: Vec<u32>,
-    /// Per half-edge on a border: its first border point and their number.
+    /// Per half-edge on a border: its border points nearest its origin and nearest its
+    /// destination (an infinitely sharp edge's two half-edges share their points).
     border: Vec<(u32, u32)>,
     row: Vec<RowPoint>,
     other: Vec<RowPoint>,
@@ -433,9 +434,20 @@ impl<'a> Builder<'a> {
         }
     }
 
-    /// Whether half-edge `h` (of a face with a surface) has no surface across it.
+    /// Whether half-edge `h` (of a face with a surface) is a border: no surface across it, or
+    /// an infinitely sharp edge, where the surface has a crease that dual points would cut off.
     pub(super) fn is_border(&self, h: HalfEdgeId) -> bool {
-        self.mesh.twin(h).is_none_or(|t| self.buf.faces[self.mesh.face(t).index()].is_none())
+        self.across(h).is_none() || self.is_sharp(h)
+    }
+
+    /// The half-edge across `h` if its face has a surface.
+    fn across(&self, h: HalfEdgeId) -> Option<HalfEdgeId> {
+        self.mesh.twin(h).filter(|&t| self.buf.faces[self.mesh.face(t).index()].is_some())
+    }
+
+    /// Whether `h`'s edge is infinitely sharp (a crease of the limit surface).
+    fn is_sharp(&self, h: HalfEdgeId) -> bool {
+        self.mesh.edge_sharpness(self.mesh.edge(h)) >= subdiv_mesh::Tags::INFINITELY_SHARP
     }
 
     /// The strip along the edge of half-edge `h` (its face has a surface): against the other
@@ -473,6 +485,23 @@ impl<'a> Builder<'a> {
                 p.num = p.den - p.num;
             }
             self.strip(&row, &other, f as u32);
+        } else if let Some(t) = self.across(h).filter(|&t| t.index() < h.index()) {
+            // The second side of an infinitely sharp edge: against the first side's points,
+            // so that both sides share them (welded, watertight).
+            let g = self.mesh.face(t).index();
+            self.side_row(g, self.buf.corner[t.index()] as usize, &mut other);
+            other.retain(|p| p.near);
+            let (first, _) = self.buf.border[t.index()];
+            for (k, p) in other.iter_mut().enumerate() {
+                p.vertex = first + k as u32;
+            }
+            other.reverse();
+            for p in &mut other {
+                p.num = p.den - p.num;
+            }
+            let (near_dest, near_origin) = self.buf.border[t.index()];
+            self.buf.border[h.index()] = (near_origin, near_dest);
+            self.strip(&row, &other, f as u32);
         } else {
             other.clear();
             let first = self.out.vertex_count;
@@ -481,7 +510,7 @@ impl<'a> Builder<'a> {
                 let vertex = self.push_site(f, point);
                 other.push(RowPoint { vertex, num: p.num, den: p.den, near: true });
             }
-            self.buf.border[h.index()] = (first, other.len() as u32);
+            self.buf.border[h.index()] = (first, first + (other.len() as u32).max(1) - 1);
             self.strip(&row, &other, f as u32);
         }
         (self.buf.row, self.buf.other) = (row, other);
@@ -548,8 +577,7 @@ impl<'a> Builder<'a> {
             corners.clear();
             let f0 = mesh.face(start).index();
             if !closed {
-                let (first, _) = self.buf.border[start.index()];
-                ring.push(first);
+                ring.push(self.buf.border[start.index()].0);
             }
             let mut h = start;
             loop {
@@ -559,8 +587,7 @@ impl<'a> Builder<'a> {
                 let p = mesh.prev(h);
                 if self.is_border(p) {
                     if !closed {
-                        let (first, count) = self.buf.border[p.index()];
-                        ring.push(first + count - 1);
+                        ring.push(self.buf.border[p.index()].1);
                     }
                     break;
                 }
