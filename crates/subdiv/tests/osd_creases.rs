@@ -1,0 +1,257 @@
+//! Exact evaluation on every shared mesh with sharp features (`t crease`, `t corner`) equals
+//! OpenSubdiv by two routes independent of its `Bfr`:
+//!
+//! - **Refined limit points.** `osd_refine --levels L --limit` refines uniformly and applies
+//!   Far's limit masks, which are the limit once no semi-sharp feature is left, so
+//!   `L = max(2, ⌈largest finite sharpness⌉)`. Every level-`L` vertex is a dyadic point
+//!   `(i/2^L, j/2^L)` of a base face (the children's numbering is Far's, ours too); our
+//!   evaluation there equals Far's point to 1e-12 × bbox, extraordinary vertices included.
+//!   Excepted, as OpenSubdiv documents (`peers/osd` README): darts (one sharp edge) and the
+//!   vertices next to them, where Far applies the smooth mask, which is not the limit, and
+//!   interior valence-2 vertices. Meshes whose level `L` would pass 2 M faces are left out.
+//! - **Base vertex limits.** `osd_limit --vertex-limits` (Far's masks after one level): our
+//!   evaluation at each face corner equals it to 1e-12 × bbox, darts excepted; their two
+//!   values are printed.
+//!
+//! The programs are named by `SUBDIV_OSD_REFINE` and `SUBDIV_OSD_LIMIT` (`.ci/run` builds them);
+//! unset, the test says so and does not run; set, they and the shared meshes must exist.
+
+#![allow(clippy::print_stderr)]
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use subdiv::DVec3;
+use subdiv::mesh::{FaceId, Mesh, Tags, VertexId};
+use subdiv::schemes::{Builtin, ChildDomain, RefineOptions, Split, child_faces, refine};
+use subdiv::stencil::{Dyadic, FaceDomain, LimitEvaluator};
+
+/// The largest level-`L` face count compared.
+const MAX_FACES: usize = 2_000_000;
+
+fn program(var: &str) -> Option<PathBuf> {
+    let path = std::env::var_os(var).map(PathBuf::from);
+    match &path {
+        Some(p) => assert!(p.is_file(), "{var}={} does not exist", p.display()),
+        None => eprintln!("{var} is unset: comparison with OpenSubdiv not run"),
+    }
+    path
+}
+
+/// The creased meshes of the corpus that are valid here, with their scheme.
+fn creased_meshes() -> Vec<(PathBuf, Builtin, Mesh)> {
+    let dir = subdiv_testkit::meshes_dir().expect("the shared corpus is needed for the comparison");
+    let mut out = Vec::new();
+    for path in subdiv_testkit::obj_files(&dir) {
+        let text = std::fs::read_to_string(&path).unwrap();
+        if !text.lines().any(|l| l.starts_with("t crease") || l.starts_with("t corner")) {
+            continue;
+        }
+        let Ok(mesh) = subdiv::io::load_mesh(&path, &Default::default()) else { continue };
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let builtin = if name.starts_with("loop_") { Builtin::Loop } else { Builtin::CatmullClark };
+        out.push((path, builtin, mesh));
+    }
+    out
+}
+
+fn osd_points(program: &Path, args: &[&str], mesh: &Path) -> Vec<DVec3> {
+    let out = std::env::temp_dir().join(format!("osd_creases_{}.obj", std::process::id()));
+    let status = Command::new(program).arg(mesh).args(args).arg("-o").arg(&out).status().unwrap();
+    assert!(status.success(), "{} {args:?} {}", program.display(), mesh.display());
+    let text = std::fs::read_to_string(&out).unwrap();
+    let _ = std::fs::remove_file(&out);
+    text.lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let x: Vec<f64> = l.split_whitespace().map(|s| s.parse().unwrap()).collect();
+            DVec3::new(x[0], x[1], x[2])
+        })
+        .collect()
+}
+
+/// Each vertex of `mesh` refined `levels` times as a base face's parameter, with the refined
+/// mesh (`None` for a vertex no face reaches).
+fn refined_parameters(mesh: &Mesh, split: Split, levels: usize) -> (Mesh, Vec<Option<(FaceId, Dyadic)>>) {
+    // Per face of the current level: its base face and the base parameters of its corners.
+    let mut current = mesh.clone();
+    let mut faces: Vec<(FaceId, Vec<Dyadic>)> = Vec::new();
+    let scheme = match split {
+        Split::Triangle => Builtin::Loop.scheme(),
+        _ => Builtin::CatmullClark.scheme(),
+    };
+    for level in 0..levels {
+        let child = refine(&current, scheme, &RefineOptions::DEFAULT).unwrap();
+        let mut next = vec![(FaceId::new(0), Vec::new()); child.face_count()];
+        for f in current.face_ids() {
+            let size = current.face_size(f);
+            let Some(range) = child_faces(split, &current, f) else { unreachable!("a primal split") };
+            for (j, c) in range.enumerate() {
+                let corners = corner_points(child.face_size(FaceId::new(c as u32)));
+                let base: Vec<Dyadic> = if level == 0 {
+                    let domain = FaceDomain::of(split, size).unwrap();
+                    match domain {
+                        FaceDomain::SubFaces { .. } => corners.iter().map(|&p| domain.from_sub_face(j, p)).collect(),
+                        _ => corners.iter().map(|&p| to_parent(ChildDomain::of_face(size)[j], p)).collect(),
+                    }
+                } else {
+                    let (_, parent) = &faces[f.index()];
+                    corners
+                        .iter()
+                        .map(|&p| interpolate(parent, to_parent(ChildDomain::of_face(size)[j], p), size))
+                        .collect()
+                };
+                next[c] = (if level == 0 { f } else { faces[f.index()].0 }, base);
+            }
+        }
+        faces = next;
+        current = child;
+    }
+    let mut at = vec![None; current.vertex_count()];
+    for (f, (base, corners)) in faces.iter().enumerate() {
+        for (k, &v) in current.face_vertices(FaceId::new(f as u32)).iter().enumerate() {
+            at[v.index()].get_or_insert((*base, corners[k]));
+        }
+    }
+    (current, at)
+}
+
+fn corner_points(size: usize) -> Vec<Dyadic> {
+    let d = |u, v| Dyadic::new(u, v, 1);
+    if size == 3 { vec![d(0, 0), d(1, 0), d(0, 1)] } else { vec![d(0, 0), d(1, 0), d(1, 1), d(0, 1)] }
+}
+
+fn to_parent(child: ChildDomain, p: Dyadic) -> Dyadic {
+    let sign = if child.flipped { -1 } else { 1 };
+    let (o0, o1) = (i64::from(child.offset[0]), i64::from(child.offset[1]));
+    Dyadic::new(sign * p.u + o0 * p.denominator, sign * p.v + o1 * p.denominator, 2 * p.denominator).reduced()
+}
+
+/// The base parameter of the point `p` of a face whose corners are at `corners` (an affine
+/// map: bilinear interpolation is affine on these parallelogram images).
+fn interpolate(corners: &[Dyadic], p: Dyadic, size: usize) -> Dyadic {
+    let (a, b, c) = if size == 3 { (corners[0], corners[1], corners[2]) } else { (corners[0], corners[1], corners[3]) };
+    let den = p.denominator * a.denominator * b.denominator * c.denominator;
+    let at = |q: Dyadic, x: i64| x * (den / q.denominator);
+    let (pu, pv, pd) = (p.u, p.v, p.denominator);
+    let u = at(a, a.u) * pd + (at(b, b.u) - at(a, a.u)) * pu + (at(c, c.u) - at(a, a.u)) * pv;
+    let v = at(a, a.v) * pd + (at(b, b.v) - at(a, a.v)) * pu + (at(c, c.v) - at(a, a.v)) * pv;
+    Dyadic::new(u, v, den * pd).reduced()
+}
+
+/// Darts (one sharp edge, no sharp vertex, interior) and interior valence-2 vertices of `mesh`,
+/// with their one-rings.
+fn excepted(mesh: &Mesh) -> HashSet<VertexId> {
+    let mut out = HashSet::new();
+    for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v) && !mesh.is_boundary_vertex(v)) {
+        let sharp = mesh.outgoing(v).filter(|&h| mesh.edge_sharpness(mesh.edge(h)) > 0.0).count();
+        if (sharp == 1 && mesh.vertex_sharpness(v) == 0.0) || mesh.valence(v) == 2 {
+            out.insert(v);
+            out.extend(mesh.one_ring(v));
+        }
+    }
+    out
+}
+
+fn bbox_diagonal(mesh: &Mesh) -> f64 {
+    mesh.bounding_box().map_or(1.0, |(lo, hi)| lo.distance(hi))
+}
+
+#[test]
+fn refined_limit_points_equal_opensubdiv() {
+    let Some(osd_refine) = program("SUBDIV_OSD_REFINE") else { return };
+    let (mut compared, mut skipped) = (0, Vec::new());
+    for (path, builtin, mesh) in creased_meshes() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let finite = mesh
+            .edges()
+            .map(|e| mesh.edge_sharpness(e))
+            .chain(mesh.vertices().map(|v| mesh.vertex_sharpness(v)))
+            .filter(|&s| s < Tags::INFINITELY_SHARP)
+            .fold(0.0, f64::max);
+        let levels = (finite.ceil() as usize).max(2);
+        if mesh.face_count() << (2 * levels) > MAX_FACES {
+            skipped.push(format!("{name} (level {levels})"));
+            continue;
+        }
+        let osd_name = if builtin == Builtin::Loop { "loop" } else { "catmark" };
+        let level = levels.to_string();
+        let refined = osd_points(&osd_refine, &["--levels", &level, "--scheme", osd_name], &path);
+        let limits = osd_points(&osd_refine, &["--levels", &level, "--scheme", osd_name, "--limit"], &path);
+        let (ours, parameters) = refined_parameters(&mesh, builtin.scheme().split(), levels);
+        let d = bbox_diagonal(&mesh);
+        // Our refined points are Far's (the refinement test checks it), matched by position:
+        // the harness's OBJ need not list them in Far's order.
+        assert_eq!(ours.vertex_count(), refined.len(), "{name}");
+        let mut sorted: Vec<usize> = (0..refined.len()).collect();
+        sorted.sort_by(|&a, &b| refined[a].x.total_cmp(&refined[b].x));
+        let theirs = |p: DVec3| -> usize {
+            let start = sorted.partition_point(|&i| refined[i].x < p.x - 1e-12 * d);
+            sorted[start..]
+                .iter()
+                .take_while(|&&i| refined[i].x <= p.x + 1e-12 * d)
+                .copied()
+                .find(|&i| refined[i].distance(p) < 1e-12 * d)
+                .unwrap_or_else(|| panic!("{name}: OpenSubdiv has no refined point at {p:?}"))
+        };
+        let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+        let skip = excepted(&ours);
+        let ours_positions = ours.positions();
+        let mut worst: f64 = 0.0;
+        for (v, at) in parameters.iter().enumerate() {
+            let Some((face, p)) = *at else { continue };
+            if skip.contains(&VertexId::new(v as u32)) || mesh.is_hole(face) {
+                continue;
+            }
+            let far = limits[theirs(ours_positions[v])];
+            let ours = eval.eval_exact(face, p).unwrap().position;
+            let error = (ours - far).length() / d;
+            assert!(error < 1e-12, "{name}: vertex {v} ({face} at {p:?}): ours {ours:?}, Far's {far:?}");
+            worst = worst.max(error);
+        }
+        eprintln!("{name}: level {levels}, {} points, {} excepted, worst {worst:.1e} × bbox", parameters.len(), skip.len());
+        compared += 1;
+    }
+    eprintln!("{compared} meshes compared; left out (past {MAX_FACES} faces): {}", skipped.join(", "));
+    assert!(compared >= 30, "{compared} meshes compared");
+}
+
+#[test]
+fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
+    let Some(osd_limit) = program("SUBDIV_OSD_LIMIT") else { return };
+    for (path, builtin, mesh) in creased_meshes() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let scheme = if builtin == Builtin::Loop { "loop" } else { "catmark" };
+        let output = Command::new(&osd_limit).arg(&path).args(["--scheme", scheme, "--vertex-limits"]).output().unwrap();
+        assert!(output.status.success(), "{name}: {}", String::from_utf8_lossy(&output.stderr));
+        let text = String::from_utf8(output.stdout).unwrap();
+        let limits: Vec<DVec3> = text
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let x: Vec<f64> = l.split(',').map(|s| s.parse().unwrap()).collect();
+                DVec3::new(x[1], x[2], x[3])
+            })
+            .collect();
+        let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+        let darts = excepted(&mesh);
+        let d = bbox_diagonal(&mesh);
+        for f in mesh.face_ids().filter(|&f| !mesh.is_hole(f)) {
+            let domain = eval.domain(f).unwrap();
+            for (k, &v) in mesh.face_vertices(f).iter().enumerate() {
+                let corner = match domain {
+                    FaceDomain::SubFaces { .. } => domain.from_sub_face(k, Dyadic::new(0, 0, 1)),
+                    _ => corner_points(mesh.face_size(f))[k],
+                };
+                let ours = eval.eval_exact(f, corner).unwrap().position;
+                let error = (ours - limits[v.index()]).length() / d;
+                if darts.contains(&v) && !mesh.one_ring(v).is_empty() && error >= 1e-12 {
+                    eprintln!("{name}: dart {v}: ours {ours:?}, OpenSubdiv's {:?} ({error:.1e} × bbox)", limits[v.index()]);
+                    continue;
+                }
+                assert!(error < 1e-12, "{name}: {v} ({f} corner {k}): ours {ours:?}, OpenSubdiv's {:?}", limits[v.index()]);
+            }
+        }
+    }
+}
