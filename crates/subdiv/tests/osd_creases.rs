@@ -201,7 +201,8 @@ fn refined_limit_points_equal_opensubdiv() {
         let mut worst: f64 = 0.0;
         for (v, at) in parameters.iter().enumerate() {
             let Some((face, p)) = *at else { continue };
-            if skip.contains(&VertexId::new(v as u32)) || mesh.is_hole(face) {
+            // Holes: tagged, or made by the boundary rule `none`.
+            if skip.contains(&VertexId::new(v as u32)) || !eval.has_surface(face).unwrap() {
                 continue;
             }
             let far = limits[theirs(ours_positions[v])];
@@ -237,7 +238,7 @@ fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
         let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
         let darts = excepted(&mesh);
         let d = bbox_diagonal(&mesh);
-        for f in mesh.face_ids().filter(|&f| !mesh.is_hole(f)) {
+        for f in mesh.face_ids().filter(|&f| eval.has_surface(f).unwrap()) {
             let domain = eval.domain(f).unwrap();
             for (k, &v) in mesh.face_vertices(f).iter().enumerate() {
                 let corner = match domain {
