@@ -22,7 +22,7 @@ fn stencils(c: &mut Criterion) {
     ];
     for (name, builtin, valence) in cases {
         let matrices =
-            PatchMatrices::of(builtin.scheme(), PatchType::Interior { valence }, BoundaryInterpolation::EdgeOnly)
+            PatchMatrices::of(builtin.scheme(), PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)
                 .expect("built-in patch matrices");
         let points: Vec<Dyadic> = (0..=n)
             .flat_map(|j| (0..=n).map(move |i| Dyadic::new(i, j, n)))

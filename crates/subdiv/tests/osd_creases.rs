@@ -211,7 +211,11 @@ fn refined_limit_points_equal_opensubdiv() {
             assert!(error < 1e-12, "{name}: vertex {v} ({face} at {p:?}): ours {ours:?}, Far's {far:?}");
             worst = worst.max(error);
         }
-        eprintln!("{name}: level {levels}, {} points, {} excepted, worst {worst:.1e} × bbox", parameters.len(), skip.len());
+        eprintln!(
+            "{name}: level {levels}, {} points, {} excepted, worst {worst:.1e} × bbox",
+            parameters.len(),
+            skip.len()
+        );
         compared += 1;
     }
     eprintln!("{compared} meshes compared; left out (past {MAX_FACES} faces): {}", skipped.join(", "));
@@ -224,7 +228,8 @@ fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
     for (path, builtin, mesh) in creased_meshes() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let scheme = if builtin == Builtin::Loop { "loop" } else { "catmark" };
-        let output = Command::new(&osd_limit).arg(&path).args(["--scheme", scheme, "--vertex-limits"]).output().unwrap();
+        let output =
+            Command::new(&osd_limit).arg(&path).args(["--scheme", scheme, "--vertex-limits"]).output().unwrap();
         assert!(output.status.success(), "{name}: {}", String::from_utf8_lossy(&output.stderr));
         let text = String::from_utf8(output.stdout).unwrap();
         let limits: Vec<DVec3> = text
@@ -248,10 +253,17 @@ fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
                 let ours = eval.eval_exact(f, corner).unwrap().position;
                 let error = (ours - limits[v.index()]).length() / d;
                 if darts.contains(&v) && !mesh.one_ring(v).is_empty() && error >= 1e-12 {
-                    eprintln!("{name}: dart {v}: ours {ours:?}, OpenSubdiv's {:?} ({error:.1e} × bbox)", limits[v.index()]);
+                    eprintln!(
+                        "{name}: dart {v}: ours {ours:?}, OpenSubdiv's {:?} ({error:.1e} × bbox)",
+                        limits[v.index()]
+                    );
                     continue;
                 }
-                assert!(error < 1e-12, "{name}: {v} ({f} corner {k}): ours {ours:?}, OpenSubdiv's {:?}", limits[v.index()]);
+                assert!(
+                    error < 1e-12,
+                    "{name}: {v} ({f} corner {k}): ours {ours:?}, OpenSubdiv's {:?}",
+                    limits[v.index()]
+                );
             }
         }
     }

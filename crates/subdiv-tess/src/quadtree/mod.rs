@@ -239,7 +239,10 @@ impl QuadtreeTessellator {
         let infinite = subdiv_mesh::Tags::INFINITELY_SHARP;
         if let Some(e) = mesh.edges().find(|&e| mesh.edge_sharpness(e) >= infinite) {
             let [a, b] = mesh.edge_vertices(e);
-            return Err(TessError::Unsupported { feature: "infinitely sharp creases", element: format!("edge {a}-{b}") });
+            return Err(TessError::Unsupported {
+                feature: "infinitely sharp creases",
+                element: format!("edge {a}-{b}"),
+            });
         }
         if let Some(v) = mesh.vertices().find(|&v| mesh.vertex_sharpness(v) >= infinite) {
             return Err(TessError::Unsupported { feature: "infinitely sharp corners", element: format!("{v}") });
