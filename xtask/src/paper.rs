@@ -82,7 +82,7 @@ pub(crate) fn run() -> Result<(), String> {
     system_sizes()?;
 
     let sw_quad = Builtin::SwQuad.scheme();
-    let m = PatchMatrices::of(sw_quad, PatchType::Interior { valence: 5 }, BoundaryInterpolation::EdgeOnly)
+    let m = PatchMatrices::of(sw_quad, PatchType::interior(5), BoundaryInterpolation::EdgeOnly)
         .map_err(|e| e.to_string())?;
     println!("§5.4 sw-quad, valence 5, n = 3 (Fig. 6; its numbers are not in our copy, and the rules at the");
     println!("extraordinary vertex are ours): position weights over the 18 control points of the patch,");
@@ -119,7 +119,7 @@ pub(crate) fn run() -> Result<(), String> {
 fn system_sizes() -> Result<(), String> {
     println!("§5.3 system sizes, sw-quad valence 6, n = 3 (paper: 781 unknowns naive, 51 reduced)");
     let sw_quad = Builtin::SwQuad.scheme();
-    let m = PatchMatrices::of(sw_quad, PatchType::Interior { valence: 6 }, BoundaryInterpolation::EdgeOnly)
+    let m = PatchMatrices::of(sw_quad, PatchType::interior(6), BoundaryInterpolation::EdgeOnly)
         .map_err(|e| e.to_string())?;
     let mut evaluator = StencilEvaluator::new(&*m);
     for grid in Grid::ALL {

@@ -342,8 +342,7 @@ impl PatchMatrices {
             }
             PatchType::Interior { valence, sharp } => (
                 valence,
-                (valence < 64 && sharp.edges >> valence != 0)
-                    .then_some("a sharp spoke beyond the vertex's valence"),
+                (valence < 64 && sharp.edges >> valence != 0).then_some("a sharp spoke beyond the vertex's valence"),
             ),
             PatchType::Boundary { faces, index, sharp } => (
                 faces + 1,
@@ -402,8 +401,11 @@ impl PatchMatrices {
 pub struct MeshPatches {
     tables: Vec<Arc<PatchMatrices>>,
     /// Per patch radius, every table's shapes by signature: (table, shape).
-    lookup: Vec<(usize, HashMap<Vec<u32>, (usize, usize)>)>,
+    lookup: Vec<(usize, ShapesBySignature)>,
 }
+
+/// Shapes by their patch signature: (table, shape).
+type ShapesBySignature = HashMap<Vec<u32>, (usize, usize)>;
 
 /// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
 /// points and its matrices.
@@ -460,7 +462,8 @@ impl MeshPatches {
         options: &RefineOptions,
         faces: impl IntoIterator<Item = FaceId>,
     ) -> Result<Self, SchemeError> {
-        let mut corners: Vec<VertexId> = faces.into_iter().flat_map(|f| mesh.face_vertices(f).iter().copied()).collect();
+        let mut corners: Vec<VertexId> =
+            faces.into_iter().flat_map(|f| mesh.face_vertices(f).iter().copied()).collect();
         corners.sort_unstable();
         corners.dedup();
         let mut near: Vec<VertexId> = mesh.face_rings(&corners, MAX_RADIUS).into_keys().collect();
@@ -485,7 +488,7 @@ impl MeshPatches {
             types.into_iter().map(|t| PatchMatrices::of(scheme, t, boundary)).collect::<Result<_, _>>()?;
         // One lookup over every table, per radius; the first table with a shape keeps it
         // (equal signatures have equal matrices).
-        let mut lookup: Vec<(usize, HashMap<Vec<u32>, (usize, usize)>)> = Vec::new();
+        let mut lookup: Vec<(usize, ShapesBySignature)> = Vec::new();
         for (t, table) in tables.iter().enumerate() {
             let at = match lookup.iter().position(|(r, _)| *r == table.radius) {
                 Some(at) => at,
@@ -941,11 +944,9 @@ mod tests {
 
     #[test]
     fn a_bilinear_face_is_influenced_by_its_corners_alone_and_reproduces_their_parameters() {
-        for patch_type in [
-            PatchType::interior(3),
-            PatchType::regular(Builtin::Bilinear.scheme()),
-            PatchType::boundary(4, 2),
-        ] {
+        for patch_type in
+            [PatchType::interior(3), PatchType::regular(Builtin::Bilinear.scheme()), PatchType::boundary(4, 2)]
+        {
             for shape in &matrices(Builtin::Bilinear, patch_type).shapes {
                 assert_eq!(shape.influence, [0, 1, 2, 3], "{patch_type:?}");
                 let [u, v] = shape.parameters.as_ref().expect("bilinear reproduces linear functions everywhere");

@@ -89,13 +89,10 @@ fn unsupported_splits_and_valences_are_typed_errors() {
         assert!(matches!(err, SchemeError::ValenceNotSupported { .. }));
     }
     // Butterfly has no boundary rules.
-    let err =
-        PatchMatrices::compute(Builtin::Butterfly.scheme(), PatchType::boundary(3, 0), EDGE_ONLY)
-            .unwrap_err();
+    let err = PatchMatrices::compute(Builtin::Butterfly.scheme(), PatchType::boundary(3, 0), EDGE_ONLY).unwrap_err();
     assert!(matches!(err, SchemeError::FeatureNotSupported { feature: "boundaries", .. }), "{err}");
     // Kobbelt's virtual points reach past every patch radius around a valence-5 vertex.
-    let err =
-        PatchMatrices::compute(Builtin::Kobbelt.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
+    let err = PatchMatrices::compute(Builtin::Kobbelt.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
     assert!(matches!(err, SchemeError::ValenceNotSupported { valence: 5, .. }), "{err}");
 }
 
