@@ -1153,6 +1153,158 @@ mod tests {
         }
     }
 
+    /// Catmull-Clark at `vertex` of `soup`, per quad around it: the tangents there, and the
+    /// limit points approaching it along the face's diagonal at distances `hs` (in the face's
+    /// parameters, towards its centre).
+    fn tangents_and_nearby_normals(
+        soup: subdiv_mesh::PolygonSoup,
+        vertex: usize,
+        hs: &[f64],
+    ) -> Vec<(String, LimitPoint, Vec<LimitPoint>)> {
+        let mesh = Mesh::build(soup).unwrap();
+        let eval = LimitEvaluator::new(Builtin::CatmullClark.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+        let corners = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+        mesh.face_ids()
+            .filter_map(|f| {
+                let c = mesh.face_vertices(f).iter().position(|v| v.index() == vertex)?;
+                let (u0, v0) = corners[c];
+                let at = eval.eval(f, u0, v0).unwrap();
+                let near = hs
+                    .iter()
+                    .map(|&h| {
+                        let p = eval.eval(f, u0 + h * (0.5 - u0), v0 + h * (0.5 - v0)).unwrap();
+                        assert!(p.exact_derivatives, "face {f} at {h}");
+                        p
+                    })
+                    .collect();
+                Some((format!("face {f}"), at, near))
+            })
+            .collect()
+    }
+
+    /// `pole(k)` with the spokes `sharp` (whole spokes, both edges) infinitely sharp.
+    fn creased_pole(k: usize, sharp: &[usize]) -> subdiv_mesh::PolygonSoup {
+        let mut soup = shapes::pole(k);
+        for &s in sharp {
+            let (a, b) = (subdiv_mesh::VertexId::new(1 + 6 * s as u32), subdiv_mesh::VertexId::new(2 + 6 * s as u32));
+            for vertices in [[subdiv_mesh::VertexId::new(0), a], [a, b]] {
+                soup.tags
+                    .creases
+                    .push(subdiv_mesh::CreaseTag { vertices, sharpness: subdiv_mesh::Tags::INFINITELY_SHARP });
+            }
+        }
+        soup
+    }
+
+    /// Tangents that are directions (not parallel) of about the exact derivatives' lengths
+    /// next to the vertex, `near` (not 1e7 of them).
+    fn assert_sane_tangents(what: &str, at: &LimitPoint, near: &LimitPoint) {
+        assert!(!at.exact_derivatives, "{what}");
+        let angle = at.du.angle_between(at.dv).to_degrees();
+        assert!(angle > 1.0 && angle < 179.0, "{what}: du and dv {angle}° apart");
+        let exact = near.du.length().max(near.dv.length());
+        for d in [at.du, at.dv] {
+            assert!(d.length() < 20.0 * exact && d.length() > exact / 20.0, "{what}: {} vs {exact}", d.length());
+        }
+    }
+
+    #[test]
+    fn tangents_at_infinitely_sharp_creases_and_corners_are_the_limit_of_nearby_normals() {
+        let hs: Vec<f64> = [3, 10, 20, 40].iter().map(|&k| 0.5f64.powi(k)).collect();
+        // A crease with four faces on one side, whose ½ is a 2 × 2 Jordan block beside the two
+        // faces' own ½ (below 0.61); four and four (two blocks on the crease's ½); a corner of
+        // three creases whose sector of two faces has 0.58 above the creases' ½; a dart.
+        for (k, sharp) in [(6, vec![0, 4]), (8, vec![0, 4]), (6, vec![0, 1, 3]), (5, vec![0])] {
+            let points = tangents_and_nearby_normals(creased_pole(k, &sharp), 0, &hs);
+            assert_eq!(points.len(), k);
+            for (what, at, near) in points {
+                let what = format!("k = {k}, sharp spokes {sharp:?}, {what}");
+                // The side of two faces of a crease has derivatives: the regular crease's.
+                if !at.exact_derivatives {
+                    assert_sane_tangents(&what, &at, &near[0]);
+                }
+                let normal = at.du.cross(at.dv).normalize();
+                for (p, h) in near[1..].iter().zip(&hs[1..]) {
+                    let dot = normal.dot(p.du.cross(p.dv).normalize());
+                    assert!(dot > 0.999, "{what}: the normal at h = {h} is {dot} off");
+                }
+            }
+        }
+        // Corners of three creases whose sectors of two faces have the creases' ½ as a 2 × 2
+        // block beside a simple ½: the block's top (the creases' mean tangent, growing as
+        // n 2⁻ⁿ) and the simple one (their difference) span the plane, which the normals near
+        // the vertex reach only as 1/n (at 2⁻ⁿ), the part of the block's eigenvector fading.
+        for (k, sharp, lowered) in [(4, vec![1, 2, 3], 0.6), (5, vec![0, 2, 3], 0.0), (5, vec![0, 2, 3], 0.6)] {
+            let mut soup = creased_pole(k, &sharp);
+            soup.positions_mut()[0].z -= lowered;
+            let mut seen = 0;
+            for (what, at, near) in tangents_and_nearby_normals(soup, 0, &hs) {
+                let what = format!("k = {k}, sharp spokes {sharp:?}, centre lowered by {lowered}, {what}");
+                if at.exact_derivatives {
+                    continue; // A sector of one face: a regular corner.
+                }
+                seen += 1;
+                assert_sane_tangents(&what, &at, &near[0]);
+                let normal = at.du.cross(at.dv).normalize();
+                let angles: Vec<f64> =
+                    near[1..].iter().map(|p| normal.angle_between(p.du.cross(p.dv)).to_degrees()).collect();
+                assert!(angles[0] < 20.0, "{what}: {angles:?}");
+                assert!(angles[1] < 0.7 * angles[0] && angles[2] < 0.7 * angles[1], "{what}: {angles:?}");
+            }
+            assert_eq!(seen, 2 * (k - 3), "k = {k}");
+        }
+    }
+
+    /// Two quads glued along two edges, around a vertex of valence 2 (the last) in the middle of
+    /// a 3 × 3 grid, whose middle quad they replace; domed, the vertex lowered by `lowered`.
+    fn valence_two(lowered: f64) -> subdiv_mesh::PolygonSoup {
+        let grid = shapes::quad_grid(3, 3);
+        let mut soup = subdiv_mesh::PolygonSoup::new();
+        let dome =
+            |p: DVec3| p + DVec3::Z * (0.3 - 0.1 * (p - DVec3::new(1.5, 1.5, 0.0)).length_squared() + 0.05 * p.x);
+        for &p in grid.positions() {
+            soup.push_vertex(dome(p));
+        }
+        let centre = soup.push_vertex(dome(DVec3::new(1.5, 1.5, -lowered)));
+        let id = |i: usize, j: usize| subdiv_mesh::VertexId::new((j * 4 + i) as u32);
+        for j in 0..3 {
+            for i in 0..3 {
+                let corners = [id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)];
+                if (i, j) == (1, 1) {
+                    soup.push_face([corners[0], corners[1], corners[2], centre]);
+                    soup.push_face([corners[0], centre, corners[2], corners[3]]);
+                } else {
+                    soup.push_face(corners);
+                }
+            }
+        }
+        soup
+    }
+
+    #[test]
+    fn tangents_at_a_vertex_of_valence_two_run_along_the_first_side_and_into_the_face() {
+        // Each face covers half a turn of the characteristic map, so its sides are opposite:
+        // dv points into the face instead, and both faces get one normal. The normals nearby
+        // differ from it a little, by the direction of approach and the level's parity (−¼
+        // beside the ¼ pair).
+        let hs: Vec<f64> = [3, 10, 11, 20, 21].iter().map(|&k| 0.5f64.powi(k)).collect();
+        for lowered in [0.0, 0.5] {
+            let points = tangents_and_nearby_normals(valence_two(lowered), 16, &hs);
+            assert_eq!(points.len(), 2);
+            let normals: Vec<DVec3> = points.iter().map(|(_, at, _)| at.du.cross(at.dv).normalize()).collect();
+            assert!(normals[0].dot(normals[1]) > 1.0 - 1e-9, "lowered by {lowered}: {normals:?}");
+            for ((what, at, near), normal) in points.iter().zip(normals) {
+                let what = format!("lowered by {lowered}, {what}");
+                assert_sane_tangents(&what, at, &near[0]);
+                assert!(normal.z > 0.9, "{what}: the dome's normal points up: {normal}");
+                for (p, h) in near[1..].iter().zip(&hs[1..]) {
+                    let dot = normal.dot(p.du.cross(p.dv).normalize());
+                    assert!(dot > 0.99, "{what}: the normal at h = {h} is {dot} off");
+                }
+            }
+        }
+    }
+
     #[test]
     fn bilinear_is_each_faces_interpolant_with_exact_derivatives() {
         // Valence 3 (the cube), 5 (the pole) and a boundary vertex of four faces.

@@ -31,46 +31,6 @@ use subdiv::stencil::{Dyadic, FaceDomain, LimitEvaluator};
 /// The largest level-`L` face count compared.
 const MAX_FACES: usize = 2_000_000;
 
-/// Meshes whose evaluation fails today where the tangent directions at an irregular point are
-/// not built yet (issue 25's note): infinitely sharp configurations whose cycle matrix has a
-/// Jordan structure beyond one 2 × 2 block, and interior valence-2 vertices. Each must still fail
-/// so, with that message: a fix removes it here.
-const KNOWN_TANGENT_GAPS: [(&str, &str); 5] = [
-    ("mechpart_control.obj", "defective beyond one 2 × 2 block"),
-    ("small_stell_dodecahedron_control.obj", "defective beyond one 2 × 2 block"),
-    ("catmark_inf_crease0.obj", "defective beyond one 2 × 2 block"),
-    ("catmark_inf_crease1.obj", "defective beyond one 2 × 2 block"),
-    ("catmark_val2_interior.obj", "the face's sides have one direction"),
-];
-
-/// The evaluation at `p`, or `None` for a known gap (checked to be the known failure).
-fn eval_or_known_gap(
-    eval: &LimitEvaluator,
-    name: &str,
-    face: FaceId,
-    p: Dyadic,
-    gaps: &mut HashSet<String>,
-) -> Option<DVec3> {
-    match eval.eval_exact(face, p) {
-        Ok(point) => Some(point.position),
-        Err(e) => {
-            assert!(
-                KNOWN_TANGENT_GAPS.iter().any(|&(gap, why)| gap == name && e.to_string().contains(why)),
-                "{name}: {face} at {p:?}: {e}"
-            );
-            gaps.insert(name.to_string());
-            None
-        }
-    }
-}
-
-/// Every known gap met its failure.
-fn check_gaps(gaps: &HashSet<String>) {
-    for (name, _) in KNOWN_TANGENT_GAPS {
-        assert!(gaps.contains(name), "{name} evaluates now: remove it from KNOWN_TANGENT_GAPS");
-    }
-}
-
 fn program(var: &str) -> Option<PathBuf> {
     let path = std::env::var_os(var).map(PathBuf::from);
     match &path {
@@ -202,7 +162,7 @@ fn bbox_diagonal(mesh: &Mesh) -> f64 {
 #[test]
 fn refined_limit_points_equal_opensubdiv() {
     let Some(osd_refine) = program("SUBDIV_OSD_REFINE") else { return };
-    let (mut compared, mut skipped, mut gaps) = (0, Vec::new(), HashSet::new());
+    let (mut compared, mut skipped) = (0, Vec::new());
     for (path, builtin, mesh) in creased_meshes() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let finite = mesh
@@ -247,7 +207,7 @@ fn refined_limit_points_equal_opensubdiv() {
                 continue;
             }
             let far = limits[theirs(ours_positions[v])];
-            let Some(ours) = eval_or_known_gap(&eval, &name, face, p, &mut gaps) else { break };
+            let ours = eval.eval_exact(face, p).unwrap().position;
             let error = (ours - far).length() / d;
             assert!(error < 1e-12, "{name}: vertex {v} ({face} at {p:?}): ours {ours:?}, Far's {far:?}");
             worst = worst.max(error);
@@ -266,8 +226,7 @@ fn refined_limit_points_equal_opensubdiv() {
 #[test]
 fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
     let Some(osd_limit) = program("SUBDIV_OSD_LIMIT") else { return };
-    let mut gaps = HashSet::new();
-    'meshes: for (path, builtin, mesh) in creased_meshes() {
+    for (path, builtin, mesh) in creased_meshes() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let scheme = if builtin == Builtin::Loop { "loop" } else { "catmark" };
         let output =
@@ -292,7 +251,7 @@ fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
                     FaceDomain::SubFaces { .. } => domain.from_sub_face(k, Dyadic::new(0, 0, 1)),
                     _ => corner_points(mesh.face_size(f))[k],
                 };
-                let Some(ours) = eval_or_known_gap(&eval, &name, f, corner, &mut gaps) else { continue 'meshes };
+                let ours = eval.eval_exact(f, corner).unwrap().position;
                 // Far's masks after one level are the limit only where no semi-sharp feature at
                 // the vertex outlasts that level (its README); the refined test covers the rest.
                 let lasting = |s: f64| s > 1.0 && s < Tags::INFINITELY_SHARP;
@@ -317,5 +276,4 @@ fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
             }
         }
     }
-    check_gaps(&gaps);
 }
