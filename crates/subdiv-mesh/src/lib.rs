@@ -38,6 +38,8 @@ pub use ids::{EdgeId, FaceId, HalfEdgeId, VertexId};
 pub use mesh::{BoundaryLoop, Components, Mesh, OutgoingHalfEdges, RegularValence};
 pub use patch::Patch;
 pub use region::Region;
-pub use soup::{BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, PolygonSoup, Tags, TriangleSubdivision};
+pub use soup::{
+    BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, PolygonSoup, Sharpness, Tags, TriangleSubdivision,
+};
 
 pub use glam::DVec3;

@@ -1,9 +1,9 @@
 //! Patch gathering: the control vertices around a face in a canonical, purely topological order,
 //! and a signature that tells two patches of the same shape apart from different ones.
 
-use std::collections::HashMap;
+use hashbrown::HashMap;
 
-use crate::{FaceId, HalfEdgeId, Mesh, VertexId};
+use crate::{FaceId, HalfEdgeId, Mesh, Sharpness, VertexId};
 
 /// The control vertices within `radius` rings of a face, gathered by [`Mesh::patch`].
 ///
@@ -36,14 +36,12 @@ const ACROSS_OUTSIDE: u32 = 1;
 /// reaches it), so that smooth patches keep the signature they had without the section.
 const SHARP_FEATURES: u32 = u32::MAX;
 
-/// The class of a sharpness in a signature: 0 smooth, 1 infinitely sharp, 2 semi-sharp.
-fn sharpness_class(sharpness: f64) -> u32 {
-    if sharpness >= crate::Tags::INFINITELY_SHARP {
-        1
-    } else if sharpness > 0.0 {
-        2
-    } else {
-        0
+/// The code of a sharpness class in a signature.
+fn sharpness_code(sharpness: f64) -> u32 {
+    match Sharpness::of(sharpness) {
+        Sharpness::Smooth => 0,
+        Sharpness::Infinite => 1,
+        Sharpness::SemiSharp => 2,
     }
 }
 
@@ -82,6 +80,33 @@ impl Mesh {
             current = next;
         }
         ring
+    }
+
+    /// Whether every patch of `face` of radius at least 1 holds a semi-sharp feature: a
+    /// semi-sharp vertex or interior edge on a face that touches one of `face`'s corners. Such
+    /// a patch matches no stationary shape, and this answers it without walking the patch.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, CreaseTag, FaceId, Mesh, VertexId};
+    ///
+    /// let mut soup = shapes::quad_grid(4, 4);
+    /// // A semi-sharp edge inside the grid, from vertex (1, 1) to (2, 1).
+    /// soup.tags.creases.push(CreaseTag { vertices: [VertexId::new(6), VertexId::new(7)], sharpness: 2.0 });
+    /// let grid = Mesh::build(soup)?;
+    /// assert!(grid.near_semi_sharp(FaceId::new(0)));
+    /// assert!(!grid.near_semi_sharp(FaceId::new(15)));
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
+    pub fn near_semi_sharp(&self, face: FaceId) -> bool {
+        let semi = |s: f64| Sharpness::of(s) == Sharpness::SemiSharp;
+        self.face_vertices(face).iter().any(|&corner| {
+            self.vertex_faces(corner).any(|f| {
+                self.face_half_edges(f).any(|h| {
+                    semi(self.vertex_sharpness(self.origin(h)))
+                        || (self.twin(h).is_some() && semi(self.edge_sharpness(self.edge(h))))
+                })
+            })
+        })
     }
 
     /// The patch of `start`'s face: every vertex within `radius` rings of faces of it (radius
@@ -161,7 +186,7 @@ impl Mesh {
                     count
                 });
                 signature.push(p);
-                let class = sharpness_class(self.edge_sharpness(self.edge(h)));
+                let class = sharpness_code(self.edge_sharpness(self.edge(h)));
                 if class != 0 && self.twin(h).is_some() {
                     sharp.extend([side, class]);
                 }
@@ -185,7 +210,7 @@ impl Mesh {
             signature.push(u32::from(self.is_boundary_vertex(v)));
         }
         let corners = vertices.iter().enumerate().filter_map(|(p, &v)| {
-            let class = sharpness_class(self.vertex_sharpness(v));
+            let class = sharpness_code(self.vertex_sharpness(v));
             (class != 0).then_some([p as u32, class])
         });
         let corners: Vec<[u32; 2]> = corners.collect();

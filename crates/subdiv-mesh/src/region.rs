@@ -1,6 +1,6 @@
 //! A part of a mesh as a mesh of its own: what local refinement works on.
 
-use std::collections::HashMap;
+use hashbrown::HashMap;
 
 use crate::{CornerTag, CreaseTag, FaceId, Mesh, MeshError, PolygonSoup, Tags, VertexId};
 

@@ -177,6 +177,39 @@ impl Tags {
     }
 }
 
+/// The class of an edge's or vertex's sharpness: what decides whether its subdivision rules
+/// are stationary (the same at every level).
+///
+/// ```
+/// use subdiv_mesh::{Sharpness, Tags};
+///
+/// assert_eq!(Sharpness::of(0.0), Sharpness::Smooth);
+/// assert_eq!(Sharpness::of(2.5), Sharpness::SemiSharp);
+/// assert_eq!(Sharpness::of(Tags::INFINITELY_SHARP), Sharpness::Infinite);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Sharpness {
+    /// Sharpness 0 (or below).
+    Smooth,
+    /// Infinitely sharp: at least [`Tags::INFINITELY_SHARP`]. Stationary, like smooth.
+    Infinite,
+    /// Strictly between: sharp for the first levels, then smooth. Not stationary.
+    SemiSharp,
+}
+
+impl Sharpness {
+    /// The class of the sharpness value `s`.
+    pub fn of(s: f64) -> Self {
+        if s >= Tags::INFINITELY_SHARP {
+            Self::Infinite
+        } else if s > 0.0 {
+            Self::SemiSharp
+        } else {
+            Self::Smooth
+        }
+    }
+}
+
 /// A sharp edge between two vertices.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CreaseTag {

@@ -26,7 +26,7 @@ use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, VertexId};
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
 
 use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
@@ -405,7 +405,7 @@ pub struct MeshPatches {
 }
 
 /// Shapes by signature: (table, shape).
-type ShapeLookup = HashMap<Vec<u32>, (usize, usize)>;
+type ShapeLookup = hashbrown::HashMap<Vec<u32>, (usize, usize)>;
 
 /// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
 /// points and its matrices.
@@ -493,7 +493,7 @@ impl MeshPatches {
             let at = match lookup.iter().position(|(r, _)| *r == table.radius) {
                 Some(at) => at,
                 None => {
-                    lookup.push((table.radius, HashMap::new()));
+                    lookup.push((table.radius, ShapeLookup::new()));
                     lookup.len() - 1
                 }
             };
@@ -504,10 +504,20 @@ impl MeshPatches {
         Ok(Self { tables, lookup })
     }
 
+    /// The largest patch radius of the types found, `None` when there are none.
+    pub fn max_radius(&self) -> Option<usize> {
+        self.lookup.iter().map(|(r, _)| *r).max()
+    }
+
     /// The patch of `face` in the first rotation whose shape is known, or `None` (a face whose
     /// patch holds two irregular vertices, which a further refinement separates, or a
     /// semi-sharp feature, which refinement spends).
     pub fn find(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
+        // Every radius is at least 1, so no patch of such a face has a shape: answered without
+        // walking its rotations (most faces near a semi-sharp crease descend).
+        if mesh.near_semi_sharp(face) {
+            return None;
+        }
         mesh.face_half_edges(face).find_map(|start| self.at(mesh, start))
     }
 
@@ -526,18 +536,9 @@ impl MeshPatches {
 /// vertex; none where a feature at `v` is semi-sharp (not stationary: its faces are refined
 /// until it is spent).
 fn vertex_types(scheme: &Scheme, mesh: &Mesh, v: VertexId, types: &mut Vec<PatchType>) -> Result<(), SchemeError> {
-    const SEMI_SHARP: u8 = 2;
-    let class = |s: f64| -> u8 {
-        if s >= subdiv_mesh::Tags::INFINITELY_SHARP {
-            1
-        } else if s > 0.0 {
-            SEMI_SHARP
-        } else {
-            0
-        }
-    };
+    let class = Sharpness::of;
     let corner = class(mesh.vertex_sharpness(v));
-    if corner == SEMI_SHARP {
+    if corner == Sharpness::SemiSharp {
         return Ok(());
     }
     // The spokes counter-clockwise: spoke s is the first side of the fan's face s, and the
@@ -558,11 +559,11 @@ fn vertex_types(scheme: &Scheme, mesh: &Mesh, v: VertexId, types: &mut Vec<Patch
             spokes.push(class(mesh.edge_sharpness(mesh.edge(incoming))));
         }
     }
-    if spokes.contains(&SEMI_SHARP) {
+    if spokes.contains(&Sharpness::SemiSharp) {
         return Ok(());
     }
     let faces = if boundary { spokes.len() - 1 } else { spokes.len() };
-    let sharp_spoke = |s: usize| spokes[s] == 1 && !(boundary && (s == 0 || s == faces));
+    let sharp_spoke = |s: usize| spokes[s] == Sharpness::Infinite && !(boundary && (s == 0 || s == faces));
     if (0..spokes.len()).any(|s| s >= 64 && sharp_spoke(s)) {
         return Err(SchemeError::ValenceNotSupported {
             scheme: scheme.name.clone(),
@@ -573,7 +574,7 @@ fn vertex_types(scheme: &Scheme, mesh: &Mesh, v: VertexId, types: &mut Vec<Patch
     let mask = |rotation: usize| -> u64 {
         (0..faces.min(64)).filter(|&s| sharp_spoke((s + rotation) % spokes.len())).fold(0, |m, s| m | 1 << s)
     };
-    let corner = corner == 1;
+    let corner = corner == Sharpness::Infinite;
     if boundary {
         let sharp = SharpFeatures { edges: mask(0), corner };
         types.extend((0..faces).map(|index| PatchType::Boundary { faces, index, sharp }));

@@ -31,10 +31,9 @@ use crate::{Dyadic, Grid, StencilError, StencilEvaluator, SurfaceStencil};
 /// vertices, N-gons and features in one patch are apart within 3 more.
 const MAX_LEVELS: usize = 16;
 
-/// Rings of faces around the faces to refine that a level refines with them (the rest of the
-/// mesh is left out): their children's patches reach at most 3 rings (the largest patch
-/// radius), and each vertex's rule reads one more ring.
-const REGION_RINGS: usize = 4;
+/// The largest patch radius of any scheme: a level whose patch types are not known yet
+/// refines this many rings (plus one) around its faces.
+const MAX_PATCH_RADIUS: usize = 3;
 
 /// The largest denominator exponent of an f64 parameter used exactly: `2^60` stays below the
 /// bound of [`Address::of`](crate::Address::of) (`i64::MAX / 4`) after the doublings of a descent.
@@ -411,9 +410,16 @@ struct Next {
 }
 
 impl Next {
-    fn of(scheme: &Scheme, current: &Mesh, refine: &[FaceId], options: &RefineOptions) -> Result<Self, StencilError> {
+    /// Refines the faces `refine` of `current` and `rings` rings of faces around them.
+    fn of(
+        scheme: &Scheme,
+        current: &Mesh,
+        refine: &[FaceId],
+        rings: usize,
+        options: &RefineOptions,
+    ) -> Result<Self, StencilError> {
         let region = if scheme.has_crease_rules() {
-            let region = current.region(refine, REGION_RINGS).map_err(|e| StencilError::Internal(e.to_string()))?;
+            let region = current.region(refine, rings).map_err(|e| StencilError::Internal(e.to_string()))?;
             (region.faces.len() < current.face_count()).then_some(region)
         } else {
             None
@@ -444,7 +450,7 @@ impl PatchLevels {
     /// as faces without a patch shape need (an N-gon once; the cube's faces twice; a face next
     /// to a semi-sharp edge of sharpness `s` until `s` is spent, ⌈s⌉ times, then as its
     /// stationary features need). Each level refines only the faces that need it and
-    /// [`REGION_RINGS`] rings around them, so a level costs as much as those faces, not the
+    /// as many rings of faces around them as their children's patches and rules reach, so a level costs as much as those faces, not the
     /// mesh (a semi-sharp crease of sharpness 6 on a car would otherwise be 4^6 times the
     /// car). Schemes without crease rules refine the whole mesh (a part of it has a boundary
     /// they cannot refine).
@@ -496,7 +502,11 @@ impl PatchLevels {
             if levels.len() + 1 == MAX_LEVELS {
                 return Err(StencilError::NoPatch { face: refine[0].index(), levels: MAX_LEVELS });
             }
-            let next = Next::of(scheme, &current, &refine, options)?;
+            // The children's patches reach `radius` rings of the next level, inside as many rings
+            // of this one, and the rules of those rings' points read one ring more. (A scheme's
+            // patch types share one radius: Catmull-Clark's and Loop's are 1.)
+            let rings = patches.max_radius().unwrap_or(MAX_PATCH_RADIUS) + 1;
+            let next = Next::of(scheme, &current, &refine, rings, options)?;
             let mut next_wanted = Vec::new();
             for (&f, children) in refine.iter().zip(next.children) {
                 next_wanted.extend(children.clone().map(|c| FaceId::new(c as u32)));
