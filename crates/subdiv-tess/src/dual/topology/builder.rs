@@ -388,7 +388,13 @@ impl<'a> Builder<'a> {
                 let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
                 // Sub-face c's side 0 covers the first half, sub-face c + 1's side 3 the second.
                 for k in 0..m {
-                    row.push(RowPoint { vertex: cell(c, k, 0), num: u64::from(2 * k + 1), den: 4 * m64, near: true, extra: None });
+                    row.push(RowPoint {
+                        vertex: cell(c, k, 0),
+                        num: u64::from(2 * k + 1),
+                        den: 4 * m64,
+                        near: true,
+                        extra: None,
+                    });
                 }
                 let next = (c + 1) % size;
                 for k in 0..m {
@@ -413,7 +419,13 @@ impl<'a> Builder<'a> {
                     };
                     row.push(RowPoint { vertex: u, num: u64::from(2 * k + 1), den: 2 * m64, near: true, extra: None });
                     if let Some(d) = d {
-                        row.push(RowPoint { vertex: d, num: u64::from(2 * k + 2), den: 2 * m64, near: false, extra: None });
+                        row.push(RowPoint {
+                            vertex: d,
+                            num: u64::from(2 * k + 2),
+                            den: 2 * m64,
+                            near: false,
+                            extra: None,
+                        });
                     }
                 }
             }
