@@ -385,10 +385,22 @@ mod tests {
         soups.into_iter().map(|(name, soup)| (name, Mesh::build(soup).expect("a shape builds"))).collect()
     }
 
-    /// The flat buffers of `mesh`, as [`DualTessellator::write_flat`] makes them.
+    /// The cube with every edge infinitely sharp (split normals; the quadtree refuses it).
+    fn sharp_cube() -> Mesh {
+        let mut mesh = Mesh::build(shapes::cube()).expect("a shape builds");
+        for e in mesh.edges().collect::<Vec<_>>() {
+            mesh.set_edge_sharpness(e, subdiv_mesh::Tags::INFINITELY_SHARP);
+        }
+        mesh
+    }
+
+    /// The flat buffers of `mesh`, as [`DualTessellator::write_flat`] makes them: the vertices,
+    /// then one per extra normal at its vertex's position, indexed by the triangles' normals.
     fn flat_of(mesh: &TessMesh) -> FlatMesh {
-        let vertices = mesh.positions.iter().zip(&mesh.normals).flat_map(|(p, n)| flat_vertex(*p, *n)).collect();
-        FlatMesh { vertices, indices: mesh.triangles.as_flattened().to_vec() }
+        let extra = mesh.normal_vertices.iter().map(|&v| mesh.positions[v as usize]);
+        let positions = mesh.positions.iter().copied().chain(extra);
+        let vertices = positions.zip(&mesh.normals).flat_map(|(p, n)| flat_vertex(p, *n)).collect();
+        FlatMesh { vertices, indices: mesh.triangle_normals.as_flattened().to_vec() }
     }
 
     /// A sink that checks the call order and counts against `begin`'s.
@@ -412,10 +424,21 @@ mod tests {
             self.seen.vertices += 1;
         }
 
+        fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex) {
+            assert_eq!(self.seen.vertices, self.counts.vertices, "vertices before extra normals");
+            assert_eq!(index as usize, self.counts.vertices + self.seen.extra_normals);
+            assert!((vertex as usize) < self.counts.vertices);
+            assert!((split.normal.length() - 1.0).abs() < 1e-12);
+            self.seen.extra_normals += 1;
+        }
+
         fn triangle(&mut self, index: u32, triangle: &TessTriangle) {
             assert_eq!(self.seen.vertices, self.counts.vertices, "vertices before triangles");
+            assert_eq!(self.seen.extra_normals, self.counts.extra_normals, "extra normals before triangles");
             assert_eq!(index as usize, self.seen.triangles);
             assert!(triangle.vertices.iter().all(|&v| (v as usize) < self.counts.vertices));
+            let normals = self.counts.vertices + self.counts.extra_normals;
+            assert!(triangle.normals.iter().all(|&n| (n as usize) < normals));
             self.seen.triangles += 1;
         }
 
@@ -440,10 +463,12 @@ mod tests {
     #[test]
     fn dual_sinks_give_the_tessellators_output() {
         let cc = Builtin::CatmullClark.scheme();
-        for (name, mesh) in meshes() {
+        for (name, mesh) in meshes().into_iter().chain([("all-sharp cube", sharp_cube())]) {
             let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
             let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 1 + f % 5).collect();
             let expected = tess.tessellate(&rates).unwrap().clone();
+            // Split exactly at the crease points.
+            assert_eq!(expected.normal_vertices.is_empty(), name != "all-sharp cube", "{name}");
             let mut written = FlatMesh::default();
             tess.write_flat(&mut written);
             assert_eq!(written, flat_of(&expected), "{name}");
@@ -462,6 +487,7 @@ mod tests {
                 assert!(checker.ended);
                 let listed = if polygons { expected.polygon_count() } else { 0 };
                 assert_eq!(checker.seen.polygons, listed, "{name}");
+                assert_eq!(checker.seen.extra_normals, expected.normal_vertices.len(), "{name}");
             }
         }
     }
@@ -491,6 +517,8 @@ mod tests {
             for tolerance in [1e-2, 3e-3, 1e-2] {
                 let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(tolerance));
                 let (expected, stats) = tess.tessellate_with_stats(&options).unwrap();
+                // Creases are refused: one normal per vertex.
+                assert!(expected.normal_vertices.is_empty() && expected.triangle_normals == expected.triangles);
                 let (mut mesh_sink, mut flat) = (TessMesh::default(), FlatMesh::default());
                 assert_eq!(tess.tessellate_into(&options, &mut mesh_sink).unwrap(), stats);
                 assert_eq!(tess.tessellate_into(&options, &mut flat).unwrap(), stats);
@@ -522,7 +550,7 @@ mod tests {
         let cc = Builtin::CatmullClark.scheme();
         let make = |v: &TessVertex| Vertex { position: v.position.as_vec3().into(), normal: v.normal.as_vec3().into() };
         let mut buffers = VertexBuffers::new();
-        for (name, mesh) in meshes() {
+        for (name, mesh) in meshes().into_iter().chain([("all-sharp cube", sharp_cube())]) {
             let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
             let rates = vec![3; mesh.face_count()];
             tess.tessellate_into(&rates, &mut BuffersBuilder::new(&mut buffers, make)).unwrap();
