@@ -648,7 +648,7 @@ fn split_normal_checks(builtin: Builtin, mesh: &Mesh, out: &TessMesh, name: &str
 fn crease_points_have_each_sides_normal() {
     let cube = all_sharp_cube();
     for rate in [1, 3, 6] {
-        let out = tessellate(Builtin::CatmullClark, &cube, &vec![rate; 6]);
+        let out = tessellate(Builtin::CatmullClark, &cube, &[rate; 6]);
         let angles = split_normal_checks(Builtin::CatmullClark, &cube, &out, "all-sharp cube", false);
         // Every edge's `rate` points once more, every corner twice more.
         assert_eq!(out.normal_vertices.len(), 12 * rate as usize + 8 * 2);
