@@ -206,22 +206,26 @@ fn gpu_tessellate(
     bar.say("evaluating on the GPU");
     let (vertices, adapter) = gpu_evaluate(&tess, surface.mesh())?;
     let mut mesh = tess.into_mesh();
-    // The GPU's f32 values replace the CPU's f64 ones.
+    // The GPU's f32 values replace the CPU's f64 ones: per flat vertex its normal (a crease
+    // vertex's extra normals past the vertices) and, for the vertices, the position.
     for (k, v) in vertices.chunks_exact(6).enumerate() {
         let wide = |a: usize| DVec3::new(f64::from(v[a]), f64::from(v[a + 1]), f64::from(v[a + 2]));
-        (mesh.positions[k], mesh.normals[k]) = (wide(0), wide(3));
+        mesh.normals[k] = wide(3);
+        if let Some(p) = mesh.positions.get_mut(k) {
+            *p = wide(0);
+        }
     }
     let info = TessInfo { method: subdiv::Method::Dual, rates: faces, epsilon, quadtree: None };
     Ok((Tessellation { mesh, info }, format!(", evaluated on {adapter}")))
 }
 
-/// Evaluates `tess`'s last tessellation on the GPU: per vertex `px py pz nx ny nz` (f32), and
-/// the adapter's name.
+/// Evaluates `tess`'s last tessellation on the GPU: per flat vertex (the vertices, then one
+/// per extra normal) `px py pz nx ny nz` (f32), and the adapter's name.
 fn gpu_evaluate(tess: &DualTessellator, mesh: &Mesh) -> Result<(Vec<f32>, String), UserError> {
     use subdiv_gpu::{Gpu, GpuEvalOptions, GpuOptions, GpuTessellation};
     let gpu_error = |e: subdiv_gpu::GpuError| UserError(format!("--gpu: {e}"));
     let gpu = Gpu::new(&GpuOptions::default()).map_err(gpu_error)?;
-    let indices = tess.mesh().triangle_indices();
+    let indices = tess.mesh().flat_indices();
     let on_gpu =
         GpuTessellation::new(&gpu, &tess.evaluation_plan(), &indices, mesh.positions(), &GpuEvalOptions::default())
             .map_err(gpu_error)?;

@@ -50,3 +50,47 @@ fn gpu_needs_the_dual_method() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("--gpu"));
 }
+
+/// The numbers after `tag` on each of its lines.
+fn rows(obj: &str, tag: &str) -> Vec<Vec<f64>> {
+    obj.lines()
+        .filter_map(|l| l.strip_prefix(tag))
+        .map(|l| l.split_whitespace().map(|x| x.parse::<f64>().unwrap()).collect())
+        .collect()
+}
+
+/// A cube with infinitely sharp edges: `--gpu` writes the CPU's OBJ (the same `f v//vn`
+/// corners, a crease vertex's extra normals as further `vn` lines), normals to f32 precision;
+/// `subdiv render` draws it.
+#[test]
+fn creased_meshes_evaluate_and_render_with_split_normals() {
+    let Some(_gpu) = subdiv_testkit::gpu() else { return };
+    let Some(cube) = subdiv_testkit::shared_mesh("opensubdiv/catmark_cube_creases2.obj") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let run = |args: &[&str]| {
+        let out = Command::new(env!("CARGO_BIN_EXE_subdiv")).args(args).output().unwrap();
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    };
+    let obj = |gpu: bool| {
+        let path = dir.path().join(if gpu { "gpu.obj" } else { "cpu.obj" });
+        let mut args = vec!["tessellate", cube.to_str().unwrap(), "--rate", "4", "-o", path.to_str().unwrap()];
+        if gpu {
+            args.push("--gpu");
+        }
+        run(&args);
+        std::fs::read_to_string(path).unwrap()
+    };
+    let (gpu, cpu) = (obj(true), obj(false));
+    let faces = |s: &str| s.lines().filter(|l| l.starts_with("f ")).map(str::to_owned).collect::<Vec<_>>();
+    assert_eq!(faces(&gpu), faces(&cpu));
+    let (normals, cpu_normals) = (rows(&gpu, "vn "), rows(&cpu, "vn "));
+    assert!(normals.len() > vertices(&cpu).len(), "the creases split normals");
+    assert_eq!(normals.len(), cpu_normals.len());
+    let worst = normals.iter().zip(&cpu_normals).flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()));
+    let worst = worst.fold(0.0, f64::max);
+    assert!(worst <= 1e-5, "worst normal difference {worst}");
+    let png = dir.path().join("creases.png");
+    run(&["render", cube.to_str().unwrap(), "-o", png.to_str().unwrap(), "--size", "64,48"]);
+    let image = image::open(&png).unwrap().to_rgb8();
+    assert_eq!(image.dimensions(), (64, 48));
+}

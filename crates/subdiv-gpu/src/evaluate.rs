@@ -186,7 +186,9 @@ pub struct GpuTessellation {
 
 impl GpuTessellation {
     /// Uploads `plan` (from [`DualTessellator::evaluation_plan`](subdiv_tess::DualTessellator::evaluation_plan))
-    /// and `indices` (its triangles, three per triangle), and evaluates every vertex on `cage`.
+    /// and `indices` (its flat triangles, three per triangle: [`FlatMesh::indices`](subdiv_tess::FlatMesh::indices)
+    /// or [`TessMesh::flat_indices`](subdiv_tess::TessMesh::flat_indices), which index a crease
+    /// vertex's copy per normal), and evaluates every flat vertex on `cage`.
     ///
     /// # Errors
     /// [`GpuError::Tessellation`] for a cage that does not fit the plan, or for a plan that

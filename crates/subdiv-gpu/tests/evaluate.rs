@@ -18,14 +18,17 @@ fn diagonal(mesh: &Mesh) -> f64 {
     (hi - lo).length()
 }
 
-/// The worst position distance / bbox diagonal and the worst normal distance.
+/// The worst position distance / bbox diagonal and the worst normal distance, over the flat
+/// vertices (the vertices, then one per extra normal at its vertex's position).
 fn compare(gpu_vertices: &[f32], cpu: &TessMesh, diag: f64) -> (f64, f64) {
-    assert_eq!(gpu_vertices.len(), 6 * cpu.positions.len());
+    assert_eq!(gpu_vertices.len(), 6 * cpu.flat_vertex_count());
+    let vertices = cpu.positions.len();
     let (mut dp, mut dn) = (0.0f64, 0.0f64);
     for (k, v) in gpu_vertices.chunks_exact(6).enumerate() {
         let p = DVec3::new(f64::from(v[0]), f64::from(v[1]), f64::from(v[2]));
         let n = DVec3::new(f64::from(v[3]), f64::from(v[4]), f64::from(v[5]));
-        dp = dp.max(p.distance(cpu.positions[k]) / diag);
+        let vertex = k.checked_sub(vertices).map_or(k, |e| cpu.normal_vertices[e] as usize);
+        dp = dp.max(p.distance(cpu.positions[vertex]) / diag);
         dn = dn.max(n.distance(cpu.normals[k]));
     }
     (dp, dn)
@@ -51,13 +54,14 @@ fn case(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> Case {
     Case { tess, plan, flat }
 }
 
-/// GPU against CPU on `mesh` at `rates`, then over three animation frames.
-fn check(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
-    check_to(gpu, name, builtin, mesh, rates, 1e-5);
+/// GPU against CPU on `mesh` at `rates`, then over three animation frames; returns the worst
+/// position (× bbox) and normal distances.
+fn check(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> (f64, f64) {
+    check_to(gpu, name, builtin, mesh, rates, 1e-5)
 }
 
 /// [`check`] with normals to `normal_bound`.
-fn check_to(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32], normal_bound: f64) {
+fn check_to(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32], normal_bound: f64) -> (f64, f64) {
     let Case { mut tess, plan, flat } = case(builtin, mesh, rates);
     let diag = diagonal(mesh);
     let on_gpu = GpuTessellation::new(gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
@@ -66,6 +70,7 @@ fn check_to(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32],
     let (dp, dn) = compare(&on_gpu.read_vertices(gpu).unwrap(), tess.mesh(), diag);
     eprintln!("{name} at {:?}..: position {dp:.1e} × bbox, normal {dn:.1e}", &rates[..rates.len().min(3)]);
     assert!(dp <= 1e-6 && dn <= normal_bound, "{name}: position {dp:e}, normal {dn:e}");
+    let mut worst = (dp, dn);
     for frame in 1..=3 {
         let cage = twisted(mesh.positions(), frame);
         let cpu = tess.update_cage(&cage).unwrap();
@@ -81,6 +86,32 @@ fn check_to(gpu: &Gpu, name: &str, builtin: Builtin, mesh: &Mesh, rates: &[u32],
         }
         let (dp, dn) = compare(&on_gpu.read_vertices(gpu).unwrap(), cpu, diag);
         assert!(dp <= 1e-6 && dn <= normal_bound, "{name}, frame {frame}: position {dp:e}, normal {dn:e}");
+        worst = (worst.0.max(dp), worst.1.max(dn));
+    }
+    worst
+}
+
+/// Creased meshes: the GPU's flat vertices (the crease vertices split, one per normal) are the
+/// CPU's, extra normals included, over the animation frames too.
+#[test]
+fn split_normals_match_the_cpu() {
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
+    let mut all_sharp = Mesh::build(shapes::cube()).unwrap();
+    for e in all_sharp.edges().collect::<Vec<_>>() {
+        all_sharp.set_edge_sharpness(e, subdiv_mesh::Tags::INFINITELY_SHARP);
+    }
+    let mut meshes = vec![("all-sharp cube".to_string(), all_sharp)];
+    for file in ["opensubdiv/catmark_cube_creases2.obj", "opensubdiv/catmark_inf_crease1.obj"] {
+        let Some(path) = subdiv_testkit::shared_mesh(file) else { break };
+        meshes.push((file.to_string(), subdiv_io::load_mesh(&path, &Default::default()).unwrap()));
+    }
+    for (name, mesh) in meshes {
+        for rates in [vec![4; mesh.face_count()], (0..mesh.face_count() as u32).map(|f| 1 + (f * 5) % 9).collect()] {
+            let Case { tess, .. } = case(Builtin::CatmullClark, &mesh, &rates);
+            assert!(!tess.mesh().normal_vertices.is_empty(), "{name}: no extra normals");
+            let (dp, dn) = check(&gpu, &name, Builtin::CatmullClark, &mesh, &rates);
+            assert!(dp <= 1e-6 && dn <= 1e-5, "{name}: position {dp:e} × bbox, normal {dn:e}");
+        }
     }
 }
 

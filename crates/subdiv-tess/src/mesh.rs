@@ -16,17 +16,34 @@ pub struct SurfaceParameter {
 
 /// A tessellation of a limit surface: every vertex is a point of the surface, evaluated once;
 /// vertices are shared wherever their parameter points are (watertight by construction).
+///
+/// **Split normals.** The topology is welded (one vertex per position), but a vertex on an
+/// infinitely sharp crease has one normal per smooth *sector* around it (the faces between two
+/// consecutive sharp edges): `normals[v]` (`v < positions.len()`) is its first sector's, and each
+/// further sector's is an *extra normal* `normals[positions.len() + k]`, whose vertex is
+/// [`normal_vertices[k]`](Self::normal_vertices). Each triangle corner names its normal in
+/// [`triangle_normals`](Self::triangle_normals). Outputs with one normal per vertex (GLB, GPU
+/// buffers, [`FlatMesh`](crate::FlatMesh)) split exactly those vertices: the flat vertices are the
+/// vertices, then one copy per extra normal, and the flat triangles are `triangle_normals`.
+/// Without sharp creases there are no extra normals and `triangle_normals == triangles`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TessMesh {
     /// Vertex positions.
     pub positions: Vec<DVec3>,
     /// Unit normals from the exact tangents (at an extraordinary vertex from its limit tangent
-    /// directions).
+    /// directions): one per vertex, then the extra normals (see the type's docs), each from the
+    /// one-sided derivatives of a face of its sector.
     pub normals: Vec<DVec3>,
+    /// Per extra normal `normals[positions.len() + k]`, the vertex it belongs to.
+    pub normal_vertices: Vec<u32>,
     /// Per vertex, its parameter point.
     pub parameters: Vec<SurfaceParameter>,
     /// Triangles, counter-clockwise as the input faces.
     pub triangles: Vec<[u32; 3]>,
+    /// Per triangle, its corners' normals: indices into [`normals`](Self::normals), equal to
+    /// the corners' vertices but where a corner lies on a crease in a further sector (then an
+    /// extra normal of that vertex). The triangles of the flat outputs.
+    pub triangle_normals: Vec<[u32; 3]>,
     /// Per triangle, its input face.
     pub triangle_faces: Vec<FaceId>,
     /// Per triangle, its corners' `Bfr` parameters `[u, v]` in its own face (a vertex shared
@@ -59,8 +76,10 @@ impl TessMesh {
         let Self {
             positions,
             normals,
+            normal_vertices,
             parameters,
             triangles,
+            triangle_normals,
             triangle_faces,
             triangle_parameters,
             polygon_offsets,
@@ -69,8 +88,10 @@ impl TessMesh {
         } = self;
         positions.clear();
         normals.clear();
+        normal_vertices.clear();
         parameters.clear();
         triangles.clear();
+        triangle_normals.clear();
         triangle_faces.clear();
         triangle_parameters.clear();
         polygon_offsets.clear();
@@ -78,8 +99,15 @@ impl TessMesh {
         polygon_faces.clear();
     }
 
-    /// The triangles as a flat index list (for GPU buffers and GLB).
-    pub fn triangle_indices(&self) -> Vec<u32> {
-        self.triangles.iter().flatten().copied().collect()
+    /// The triangles as a flat index list into the flat vertices (the vertices, then one per
+    /// extra normal: see the type's docs), for GPU buffers and GLB: [`triangle_normals`](Self::triangle_normals),
+    /// flattened.
+    pub fn flat_indices(&self) -> Vec<u32> {
+        self.triangle_normals.as_flattened().to_vec()
+    }
+
+    /// The number of flat vertices: the vertices and the extra normals (`normals.len()`).
+    pub fn flat_vertex_count(&self) -> usize {
+        self.positions.len() + self.normal_vertices.len()
     }
 }

@@ -3,7 +3,8 @@
 //! A tessellator does not choose the caller's vertex type. It hands its output to a
 //! [`TessSink`]: first [`begin`](TessSink::begin) with the counts (so that the sink reserves or
 //! resizes once, and no call after it allocates), then every vertex in index order, every
-//! triangle in output order, the polygons in output order if the sink
+//! extra normal in index order (the further normals of crease vertices, see [`TessMesh`]'s
+//! split normals), every triangle in output order, the polygons in output order if the sink
 //! [wants them](TessSink::wants_polygons), and [`end`](TessSink::end). Three sinks come with
 //! the crate:
 //!
@@ -14,6 +15,10 @@
 //! - [`BuffersBuilder`]: a caller's own [`bytemuck::Pod`] vertex type, made by a closure from
 //!   each [`TessVertex`], into [`VertexBuffers`] that a renderer uploads as they are
 //!   (`bytemuck::cast_slice(&buffers.vertices)`).
+//!
+//! The last two are **flat**: one normal per vertex, so a vertex with extra normals is split,
+//! the vertices followed by one copy per extra normal (its vertex's position and parameter,
+//! that normal), and each triangle indexes them by [`TessTriangle::normals`].
 //!
 //! Both tessellators write into a sink ([`DualTessellator::tessellate_into`],
 //! [`QuadtreeTessellator::tessellate_into`]), and any [`TessMesh`] can be replayed into one
@@ -64,6 +69,9 @@ use crate::{FlatMesh, SurfaceParameter, TessMesh};
 pub struct TessCounts {
     /// The number of vertices.
     pub vertices: usize,
+    /// The number of extra normals (further normals of crease vertices, see [`TessMesh`]):
+    /// [`TessSink::normal`] is called for indices `vertices..vertices + extra_normals`.
+    pub extra_normals: usize,
     /// The number of triangles.
     pub triangles: usize,
     /// The number of polygons the sink will get (0 unless it
@@ -90,6 +98,9 @@ pub struct TessVertex {
 pub struct TessTriangle {
     /// Its vertices, counter-clockwise as the input faces.
     pub vertices: [u32; 3],
+    /// Its corners' normals: the vertex's own (the same index), or an extra normal's index
+    /// (at least the vertex count), as [`TessMesh::triangle_normals`]. A flat sink's indices.
+    pub normals: [u32; 3],
     /// Its input face.
     pub face: FaceId,
     /// Its corners' `Bfr` parameters `[u, v]` in its own face (see
@@ -98,7 +109,8 @@ pub struct TessTriangle {
 }
 
 /// Receives a tessellation: [`begin`](Self::begin), then every vertex (indices `0..`
-/// in order), every triangle in output order, the polygons in output order if
+/// in order), every extra normal (indices from the vertex count on, in order), every triangle
+/// in output order, the polygons in output order if
 /// [`wants_polygons`](Self::wants_polygons), and [`end`](Self::end).
 ///
 /// Implement it to put the output straight into one's own buffers (see the [module
@@ -109,6 +121,14 @@ pub trait TessSink {
 
     /// Vertex `index` (called for `0, 1, 2, …` in order).
     fn vertex(&mut self, index: u32, vertex: &TessVertex);
+
+    /// Extra normal `index` (called for `V, V + 1, …` in order after the `V` vertices): a
+    /// further normal of vertex `vertex`, on an infinitely sharp crease, in another smooth
+    /// sector around it. `split` is the vertex with that normal (its position and parameter),
+    /// the split copy a flat sink appends. The default ignores it (one normal per vertex).
+    fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex) {
+        let _ = (index, vertex, split);
+    }
 
     /// Triangle `index` (called for `0, 1, 2, …` in order).
     fn triangle(&mut self, index: u32, triangle: &TessTriangle);
@@ -138,6 +158,10 @@ impl<S: TessSink + ?Sized> TessSink for &mut S {
         (**self).vertex(index, vertex);
     }
 
+    fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex) {
+        (**self).normal(index, vertex, split);
+    }
+
     fn triangle(&mut self, index: u32, triangle: &TessTriangle) {
         (**self).triangle(index, triangle);
     }
@@ -161,9 +185,11 @@ impl TessSink for TessMesh {
     fn begin(&mut self, counts: &TessCounts) {
         self.clear();
         self.positions.reserve(counts.vertices);
-        self.normals.reserve(counts.vertices);
+        self.normals.reserve(counts.vertices + counts.extra_normals);
+        self.normal_vertices.reserve(counts.extra_normals);
         self.parameters.reserve(counts.vertices);
         self.triangles.reserve(counts.triangles);
+        self.triangle_normals.reserve(counts.triangles);
         self.triangle_faces.reserve(counts.triangles);
         self.triangle_parameters.reserve(counts.triangles);
         self.polygon_offsets.reserve(counts.polygons + 1);
@@ -179,9 +205,15 @@ impl TessSink for TessMesh {
         self.parameters.push(vertex.parameter);
     }
 
+    fn normal(&mut self, _: u32, vertex: u32, split: &TessVertex) {
+        self.normals.push(split.normal);
+        self.normal_vertices.push(vertex);
+    }
+
     #[inline]
     fn triangle(&mut self, _: u32, triangle: &TessTriangle) {
         self.triangles.push(triangle.vertices);
+        self.triangle_normals.push(triangle.normals);
         self.triangle_faces.push(triangle.face);
         self.triangle_parameters.push(triangle.parameters);
     }
@@ -197,13 +229,14 @@ impl TessSink for TessMesh {
     }
 }
 
-/// `px py pz nx ny nz` in f32 per vertex and three `u32` indices per triangle, the buffers
+/// `px py pz nx ny nz` in f32 per flat vertex (the vertices, then one split copy per extra
+/// normal) and three `u32` indices per triangle ([`TessTriangle::normals`]), the buffers
 /// cleared (keeping their allocations) and refilled: the bytes of
 /// [`DualTessellator::write_flat`](crate::DualTessellator::write_flat).
 impl TessSink for FlatMesh {
     fn begin(&mut self, counts: &TessCounts) {
         self.vertices.clear();
-        self.vertices.reserve(6 * counts.vertices);
+        self.vertices.reserve(6 * (counts.vertices + counts.extra_normals));
         self.indices.clear();
         self.indices.reserve(3 * counts.triangles);
     }
@@ -213,9 +246,13 @@ impl TessSink for FlatMesh {
         self.vertices.extend_from_slice(&flat_vertex(vertex.position, vertex.normal));
     }
 
+    fn normal(&mut self, _: u32, _: u32, split: &TessVertex) {
+        self.vertices.extend_from_slice(&flat_vertex(split.position, split.normal));
+    }
+
     #[inline]
     fn triangle(&mut self, _: u32, triangle: &TessTriangle) {
-        self.indices.extend_from_slice(&triangle.vertices);
+        self.indices.extend_from_slice(&triangle.normals);
     }
 }
 
@@ -223,7 +260,7 @@ impl TessSink for FlatMesh {
 /// a [`BuffersBuilder`]: lyon's `VertexBuffers`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct VertexBuffers<V> {
-    /// The vertices, in output order.
+    /// The flat vertices, in output order: the vertices, then one split copy per extra normal.
     pub vertices: Vec<V>,
     /// Three indices per triangle, counter-clockwise.
     pub indices: Vec<u32>,
@@ -237,7 +274,9 @@ impl<V> VertexBuffers<V> {
 }
 
 /// A [`TessSink`] that fills [`VertexBuffers`] with vertices made by `constructor` from each
-/// [`TessVertex`] (lyon's `BuffersBuilder`). The buffers are cleared first, keeping their
+/// [`TessVertex`] (lyon's `BuffersBuilder`), flat: a vertex with extra normals is split (one
+/// more vertex per extra normal, made from its `split` vertex), the indices are
+/// [`TessTriangle::normals`]. The buffers are cleared first, keeping their
 /// allocations; with a [`bytemuck::Pod`] vertex type, `bytemuck::cast_slice(&buffers.vertices)`
 /// is what a GPU vertex buffer takes. See the [module docs](self) for an example.
 #[derive(Debug)]
@@ -256,7 +295,7 @@ impl<'a, V: bytemuck::Pod, F: Fn(&TessVertex) -> V> BuffersBuilder<'a, V, F> {
 impl<V: bytemuck::Pod, F: Fn(&TessVertex) -> V> TessSink for BuffersBuilder<'_, V, F> {
     fn begin(&mut self, counts: &TessCounts) {
         self.buffers.vertices.clear();
-        self.buffers.vertices.reserve(counts.vertices);
+        self.buffers.vertices.reserve(counts.vertices + counts.extra_normals);
         self.buffers.indices.clear();
         self.buffers.indices.reserve(3 * counts.triangles);
     }
@@ -266,9 +305,13 @@ impl<V: bytemuck::Pod, F: Fn(&TessVertex) -> V> TessSink for BuffersBuilder<'_, 
         self.buffers.vertices.push((self.constructor)(vertex));
     }
 
+    fn normal(&mut self, _: u32, _: u32, split: &TessVertex) {
+        self.buffers.vertices.push((self.constructor)(split));
+    }
+
     #[inline]
     fn triangle(&mut self, _: u32, triangle: &TessTriangle) {
-        self.buffers.indices.extend_from_slice(&triangle.vertices);
+        self.buffers.indices.extend_from_slice(&triangle.normals);
     }
 }
 
@@ -295,6 +338,7 @@ impl TessMesh {
         let polygons = sink.wants_polygons();
         sink.begin(&TessCounts {
             vertices: self.positions.len(),
+            extra_normals: self.normal_vertices.len(),
             triangles: self.triangles.len(),
             polygons: if polygons { self.polygon_count() } else { 0 },
             polygon_vertices: if polygons { self.polygon_vertices.len() } else { 0 },
@@ -303,9 +347,15 @@ impl TessMesh {
         for (k, ((&position, &normal), &parameter)) in vertices.enumerate() {
             sink.vertex(k as u32, &TessVertex { position, normal, parameter });
         }
-        let triangles = self.triangles.iter().zip(&self.triangle_faces).zip(&self.triangle_parameters);
-        for (k, ((&vertices, &face), &parameters)) in triangles.enumerate() {
-            sink.triangle(k as u32, &TessTriangle { vertices, face, parameters });
+        let extra = self.normal_vertices.iter().zip(&self.normals[self.positions.len()..]);
+        for (k, (&vertex, &normal)) in extra.enumerate() {
+            let (position, parameter) = (self.positions[vertex as usize], self.parameters[vertex as usize]);
+            sink.normal((self.positions.len() + k) as u32, vertex, &TessVertex { position, normal, parameter });
+        }
+        let triangles = self.triangles.iter().zip(&self.triangle_normals);
+        let triangles = triangles.zip(&self.triangle_faces).zip(&self.triangle_parameters);
+        for (k, (((&vertices, &normals), &face), &parameters)) in triangles.enumerate() {
+            sink.triangle(k as u32, &TessTriangle { vertices, normals, face, parameters });
         }
         if polygons {
             for (k, &face) in self.polygon_faces.iter().enumerate() {
@@ -335,10 +385,22 @@ mod tests {
         soups.into_iter().map(|(name, soup)| (name, Mesh::build(soup).expect("a shape builds"))).collect()
     }
 
-    /// The flat buffers of `mesh`, as [`DualTessellator::write_flat`] makes them.
+    /// The cube with every edge infinitely sharp (split normals; the quadtree refuses it).
+    fn sharp_cube() -> Mesh {
+        let mut mesh = Mesh::build(shapes::cube()).expect("a shape builds");
+        for e in mesh.edges().collect::<Vec<_>>() {
+            mesh.set_edge_sharpness(e, subdiv_mesh::Tags::INFINITELY_SHARP);
+        }
+        mesh
+    }
+
+    /// The flat buffers of `mesh`, as [`DualTessellator::write_flat`] makes them: the vertices,
+    /// then one per extra normal at its vertex's position, indexed by the triangles' normals.
     fn flat_of(mesh: &TessMesh) -> FlatMesh {
-        let vertices = mesh.positions.iter().zip(&mesh.normals).flat_map(|(p, n)| flat_vertex(*p, *n)).collect();
-        FlatMesh { vertices, indices: mesh.triangles.as_flattened().to_vec() }
+        let extra = mesh.normal_vertices.iter().map(|&v| mesh.positions[v as usize]);
+        let positions = mesh.positions.iter().copied().chain(extra);
+        let vertices = positions.zip(&mesh.normals).flat_map(|(p, n)| flat_vertex(p, *n)).collect();
+        FlatMesh { vertices, indices: mesh.triangle_normals.as_flattened().to_vec() }
     }
 
     /// A sink that checks the call order and counts against `begin`'s.
@@ -362,10 +424,21 @@ mod tests {
             self.seen.vertices += 1;
         }
 
+        fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex) {
+            assert_eq!(self.seen.vertices, self.counts.vertices, "vertices before extra normals");
+            assert_eq!(index as usize, self.counts.vertices + self.seen.extra_normals);
+            assert!((vertex as usize) < self.counts.vertices);
+            assert!((split.normal.length() - 1.0).abs() < 1e-12);
+            self.seen.extra_normals += 1;
+        }
+
         fn triangle(&mut self, index: u32, triangle: &TessTriangle) {
             assert_eq!(self.seen.vertices, self.counts.vertices, "vertices before triangles");
+            assert_eq!(self.seen.extra_normals, self.counts.extra_normals, "extra normals before triangles");
             assert_eq!(index as usize, self.seen.triangles);
             assert!(triangle.vertices.iter().all(|&v| (v as usize) < self.counts.vertices));
+            let normals = self.counts.vertices + self.counts.extra_normals;
+            assert!(triangle.normals.iter().all(|&n| (n as usize) < normals));
             self.seen.triangles += 1;
         }
 
@@ -390,10 +463,12 @@ mod tests {
     #[test]
     fn dual_sinks_give_the_tessellators_output() {
         let cc = Builtin::CatmullClark.scheme();
-        for (name, mesh) in meshes() {
+        for (name, mesh) in meshes().into_iter().chain([("all-sharp cube", sharp_cube())]) {
             let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
             let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 1 + f % 5).collect();
             let expected = tess.tessellate(&rates).unwrap().clone();
+            // Split exactly at the crease points.
+            assert_eq!(expected.normal_vertices.is_empty(), name != "all-sharp cube", "{name}");
             let mut written = FlatMesh::default();
             tess.write_flat(&mut written);
             assert_eq!(written, flat_of(&expected), "{name}");
@@ -412,6 +487,7 @@ mod tests {
                 assert!(checker.ended);
                 let listed = if polygons { expected.polygon_count() } else { 0 };
                 assert_eq!(checker.seen.polygons, listed, "{name}");
+                assert_eq!(checker.seen.extra_normals, expected.normal_vertices.len(), "{name}");
             }
         }
     }
@@ -441,6 +517,8 @@ mod tests {
             for tolerance in [1e-2, 3e-3, 1e-2] {
                 let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(tolerance));
                 let (expected, stats) = tess.tessellate_with_stats(&options).unwrap();
+                // Creases are refused: one normal per vertex.
+                assert!(expected.normal_vertices.is_empty() && expected.triangle_normals == expected.triangles);
                 let (mut mesh_sink, mut flat) = (TessMesh::default(), FlatMesh::default());
                 assert_eq!(tess.tessellate_into(&options, &mut mesh_sink).unwrap(), stats);
                 assert_eq!(tess.tessellate_into(&options, &mut flat).unwrap(), stats);
@@ -472,7 +550,7 @@ mod tests {
         let cc = Builtin::CatmullClark.scheme();
         let make = |v: &TessVertex| Vertex { position: v.position.as_vec3().into(), normal: v.normal.as_vec3().into() };
         let mut buffers = VertexBuffers::new();
-        for (name, mesh) in meshes() {
+        for (name, mesh) in meshes().into_iter().chain([("all-sharp cube", sharp_cube())]) {
             let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
             let rates = vec![3; mesh.face_count()];
             tess.tessellate_into(&rates, &mut BuffersBuilder::new(&mut buffers, make)).unwrap();

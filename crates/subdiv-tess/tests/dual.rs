@@ -214,7 +214,10 @@ fn update_cage_equals_a_fresh_tessellation() {
         let fresh = fresh_tess.tessellate(&rates).unwrap();
         assert_eq!(animated.triangles, fresh.triangles);
         assert_eq!(animated.positions, fresh.positions, "{builtin:?}: positions differ");
+        // The extra normals of crease points too.
         assert_eq!(animated.normals, fresh.normals);
+        assert_eq!(animated.normal_vertices, fresh.normal_vertices);
+        assert_eq!(animated.triangle_normals, fresh.triangle_normals);
         // Straight into f32: the same as the f64 output written flat.
         let (mut direct, mut written) = (FlatMesh::default(), FlatMesh::default());
         fresh_tess.write_flat(&mut written);
@@ -241,11 +244,12 @@ fn update_cage_equals_a_fresh_tessellation() {
     }
 }
 
-/// The plan's f64 evaluation against the tessellator's own, on a moved cage.
+/// The plan's f64 evaluation against the tessellator's own, on a moved cage: one entry per
+/// flat vertex (the vertices, then the extra normals at their vertices' positions).
 fn check_plan(name: &str, tess: &DualTessellator, cage: &[DVec3], out: &TessMesh) {
     let plan = tess.evaluation_plan();
-    assert_eq!(plan.vertex_count(), out.positions.len(), "{name}: one entry per vertex");
-    assert_eq!(plan.entries().len(), out.positions.len(), "{name}: one entry per vertex");
+    assert_eq!(plan.vertex_count(), out.flat_vertex_count(), "{name}: one entry per flat vertex");
+    assert_eq!(plan.entries().len(), out.flat_vertex_count(), "{name}: one entry per flat vertex");
     plan.validate().unwrap_or_else(|e| panic!("{name}: {e}"));
     let (mut positions, mut normals) = (Vec::new(), Vec::new());
     plan.evaluate(cage, &mut positions, &mut normals);
@@ -260,7 +264,8 @@ fn check_plan(name: &str, tess: &DualTessellator, cage: &[DVec3], out: &TessMesh
     });
     let scale = cage.iter().fold(0.0f64, |m, p| m.max(p.abs().max_element()));
     for (k, (p, n)) in positions.iter().zip(&normals).enumerate() {
-        assert!(p.distance(out.positions[k]) <= 1e-12 * scale, "{name}: vertex {k} {p} vs {}", out.positions[k]);
+        let v = k.checked_sub(out.positions.len()).map_or(k, |e| out.normal_vertices[e] as usize);
+        assert!(p.distance(out.positions[v]) <= 1e-12 * scale, "{name}: vertex {k} {p} vs {}", out.positions[v]);
         assert!(n.distance(out.normals[k]) <= 1e-10, "{name}: normal {k} {n} vs {}", out.normals[k]);
     }
 }
@@ -550,4 +555,137 @@ fn committed_tables_seed_the_tessellator() {
     )
     .unwrap();
     assert!(matches!(loop_tess.seed_tables(&tables), Err(TessError::Scheme { .. })));
+}
+
+/// The cube with every edge infinitely sharp: each face a flat square, each edge point two
+/// normals 90° apart, each corner three.
+fn all_sharp_cube() -> Mesh {
+    let mut mesh = Mesh::build(shapes::cube()).unwrap();
+    for e in mesh.edges().collect::<Vec<_>>() {
+        mesh.set_edge_sharpness(e, subdiv_mesh::Tags::INFINITELY_SHARP);
+    }
+    mesh
+}
+
+/// The split normals' structure (every corner's normal is its vertex's own or one of its extra
+/// normals, each extra normal used), the flat outputs (one vertex per normal, the extra ones at
+/// their vertices' positions, indexed by `triangle_normals`), and each extra normal against
+/// the exact limit normal of a face whose boundary holds its vertex (a fan around a crease
+/// vertex spans its sector's faces, so the triangles' faces do not say which one), and unless
+/// the creases are flat (`flat_creases`: the cage flat across them) the normals at one vertex pairwise apart
+/// (each sector once). Returns per extra normal the angle to its vertex's own normal.
+fn split_normal_checks(builtin: Builtin, mesh: &Mesh, out: &TessMesh, name: &str, flat_creases: bool) -> Vec<f64> {
+    let vertices = out.positions.len();
+    assert_eq!(out.normals.len(), vertices + out.normal_vertices.len(), "{name}");
+    assert_eq!(out.triangle_normals.len(), out.triangles.len(), "{name}");
+    let mut used = vec![false; out.normal_vertices.len()];
+    for (t, (tri, normals)) in out.triangles.iter().zip(&out.triangle_normals).enumerate() {
+        for c in 0..3 {
+            let n = normals[c] as usize;
+            match n.checked_sub(vertices) {
+                None => assert_eq!(n, tri[c] as usize, "{name}: triangle {t} corner {c}"),
+                Some(e) => {
+                    assert_eq!(out.normal_vertices[e], tri[c], "{name}: triangle {t} corner {c}");
+                    used[e] = true;
+                }
+            }
+        }
+    }
+    assert!(used.iter().all(|&u| u), "{name}: an extra normal no triangle uses");
+    // Flat: the vertices, then one split copy per extra normal.
+    let mut flat = FlatMesh::default();
+    out.write_to(&mut flat);
+    assert_eq!(flat.vertices.len(), 6 * out.flat_vertex_count(), "{name}");
+    assert_eq!(flat.indices, out.flat_indices(), "{name}");
+    for (e, &v) in out.normal_vertices.iter().enumerate() {
+        let (k, v) = (6 * (vertices + e), 6 * v as usize);
+        assert_eq!(flat.vertices[k..k + 3], flat.vertices[v..v + 3], "{name}: extra normal {e}'s position");
+        assert_eq!(flat.vertices[k + 3..k + 6], out.normals[vertices + e].as_vec3().to_array(), "{name}");
+    }
+    let evaluator = subdiv_stencil::LimitEvaluator::new(builtin.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
+    let d = diagonal(mesh);
+    let mut per_vertex: HashMap<u32, Vec<DVec3>> = HashMap::new();
+    let mut angles = Vec::new();
+    for (e, &v) in out.normal_vertices.iter().enumerate() {
+        let (p, n) = (out.positions[v as usize], out.normals[vertices + e]);
+        let own = out.parameters[v as usize];
+        // The points of each face's boundary at the parameters of the vertex's own point (or
+        // their complements) along a side, or at a corner: those at `p` are in the faces
+        // around it, one-sided there.
+        let ts = [own.u, own.v, 1.0 - own.u, 1.0 - own.v, 0.0, 1.0];
+        let normals: Vec<DVec3> = mesh
+            .face_ids()
+            .flat_map(|face| {
+                let sides: Vec<fn(f64) -> (f64, f64)> = match evaluator.domain(face).unwrap() {
+                    subdiv_stencil::FaceDomain::Quad => vec![|t| (t, 0.0), |t| (1.0, t), |t| (t, 1.0), |t| (0.0, t)],
+                    subdiv_stencil::FaceDomain::Triangle => vec![|t| (t, 0.0), |t| (0.0, t), |t| (t, 1.0 - t)],
+                    subdiv_stencil::FaceDomain::SubFaces { .. } => panic!("{name}: no N-gons in these meshes"),
+                };
+                let points: Vec<(f64, f64)> = sides.iter().flat_map(|side| ts.iter().map(|&t| side(t))).collect();
+                points.into_iter().map(move |(a, b)| (face, a, b))
+            })
+            // A point (t, 1 − t) may round outside a triangle: the side's other end has it.
+            .filter_map(|(face, a, b)| evaluator.eval(face, a, b).ok())
+            .filter(|want| want.position.distance(p) <= 1e-10 * d)
+            .map(|want| want.du.cross(want.dv).normalize())
+            .collect();
+        assert!(
+            normals.iter().any(|want| want.distance(n) <= 1e-9),
+            "{name}: extra normal {e} (vertex {v}) is {n}; the faces around it have {normals:?}"
+        );
+        per_vertex.entry(v).or_insert_with(|| vec![out.normals[v as usize]]).push(n);
+        angles.push(out.normals[v as usize].angle_between(n));
+    }
+    for (v, normals) in per_vertex.iter().filter(|_| !flat_creases) {
+        for (i, a) in normals.iter().enumerate() {
+            assert!(normals[..i].iter().all(|b| a.angle_between(*b) > 1e-4), "{name}: vertex {v}: {normals:?}");
+        }
+    }
+    angles
+}
+
+#[test]
+fn crease_points_have_each_sides_normal() {
+    let cube = all_sharp_cube();
+    for rate in [1, 3, 6] {
+        let out = tessellate(Builtin::CatmullClark, &cube, &[rate; 6]);
+        let angles = split_normal_checks(Builtin::CatmullClark, &cube, &out, "all-sharp cube", false);
+        // Every edge's `rate` points once more, every corner twice more.
+        assert_eq!(out.normal_vertices.len(), 12 * rate as usize + 8 * 2);
+        assert!(angles.iter().all(|&a| a >= std::f64::consts::FRAC_PI_4), "all-sharp cube at {rate}: {angles:?}");
+        assert!(check(&out).is_empty(), "all-sharp cube: cracks");
+    }
+    let mut meshes: Vec<(String, Builtin, Mesh, bool)> =
+        creased_meshes().into_iter().map(|(name, b, mesh)| (name.to_string(), b, mesh, false)).collect();
+    // A flat grid with sharp edges across it: split, with equal normals on both sides.
+    for (file, flat) in [("opensubdiv/catmark_cube_creases2.obj", false), ("opensubdiv/catmark_inf_crease0.obj", true)]
+    {
+        let Some(path) = subdiv_testkit::shared_mesh(file) else { break };
+        let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
+        meshes.push((file.to_string(), Builtin::CatmullClark, mesh, flat));
+    }
+    for (name, builtin, mesh, flat) in meshes {
+        let sharp = mesh.edges().any(|e| mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP);
+        for rates in [vec![3; mesh.face_count()], rates_for(&mesh, 23, 7)] {
+            let out = tessellate(builtin, &mesh, &rates);
+            let angles = split_normal_checks(builtin, &mesh, &out, &name, flat);
+            let smallest = angles.iter().copied().reduce(f64::min);
+            eprintln!("{name}: {} extra normals, smallest angle {smallest:?}", angles.len());
+            // Every point of a sharp edge is split; a semi-sharp feature splits nothing (the
+            // surface is smooth there).
+            assert_eq!(!angles.is_empty(), sharp, "{name}");
+            assert!(flat || angles.iter().all(|&a| a > 1e-4), "{name}: {angles:?}");
+        }
+    }
+}
+
+#[test]
+fn smooth_meshes_have_no_extra_normals() {
+    let semi = creased_meshes().swap_remove(1);
+    for (name, mesh) in quad_meshes().into_iter().chain([(semi.0, semi.2)]) {
+        let out = tessellate(Builtin::CatmullClark, &mesh, &rates_for(&mesh, 29, 6));
+        assert!(out.normal_vertices.is_empty(), "{name}");
+        assert_eq!(out.normals.len(), out.positions.len(), "{name}");
+        assert_eq!(out.triangle_normals, out.triangles, "{name}");
+    }
 }

@@ -562,4 +562,46 @@ mod tests {
         }
         std::fs::remove_dir_all(&dir).unwrap();
     }
+    /// A cube with every edge infinitely sharp: its crease points have two normals (three at
+    /// the corners). OBJ keeps one `v` per vertex and gives those corners their own `vn`; GLB
+    /// splits exactly those vertices.
+    #[test]
+    fn split_normals_in_files() {
+        let mut mesh = Mesh::build(shapes::cube()).unwrap();
+        for e in mesh.edges().collect::<Vec<_>>() {
+            mesh.set_edge_sharpness(e, subdiv_mesh::Tags::INFINITELY_SHARP);
+        }
+        let mut s = Surface::new(mesh, Builtin::CatmullClark.scheme());
+        let out = s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::Uniform(3)).with_polygons(true)).unwrap();
+        let m = &out.mesh;
+        let vertices = m.positions.len();
+        // Each edge's 3 points once more, each corner twice more.
+        assert_eq!(m.normal_vertices.len(), 12 * 3 + 8 * 2);
+        for polygons in [false, true] {
+            let mut text = Vec::new();
+            out.write_obj_to(&mut text, polygons).unwrap();
+            let text = String::from_utf8(text).unwrap();
+            let count = |tag: &str| text.lines().filter(|l| l.starts_with(tag)).count();
+            assert_eq!((count("v "), count("vn ")), (vertices, m.normals.len()), "polygons: {polygons}");
+            let mut split = 0;
+            for corner in text.lines().filter(|l| l.starts_with("f ")).flat_map(|l| l.split_whitespace().skip(1)) {
+                let (v, n) = corner.split_once("//").unwrap();
+                let (v, n): (u32, usize) = (v.parse::<u32>().unwrap() - 1, n.parse::<usize>().unwrap() - 1);
+                match n.checked_sub(vertices) {
+                    None => assert_eq!(n, v as usize, "{corner}: a vertex's own normal"),
+                    Some(e) => {
+                        assert_eq!(m.normal_vertices[e], v, "{corner}: an extra normal of its vertex");
+                        split += 1;
+                    }
+                }
+            }
+            assert!(split > 0, "polygons: {polygons}: no corner takes an extra normal");
+        }
+        let glb = std::env::temp_dir().join(format!("subdiv-split-normals-{}.glb", std::process::id()));
+        out.write_glb(&glb).unwrap();
+        let back = subdiv_io::load(&glb).unwrap();
+        std::fs::remove_file(&glb).unwrap();
+        assert_eq!(back.vertex_count(), vertices + m.normal_vertices.len());
+        assert_eq!(back.face_count(), m.triangles.len());
+    }
 }

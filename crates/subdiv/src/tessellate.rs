@@ -183,19 +183,26 @@ impl Tessellation {
         self.mesh
     }
 
-    /// Writes the triangles as GLB (f32 positions and normals, `u32` indices), atomically.
+    /// Writes the triangles as GLB (f32 positions and normals, `u32` indices), atomically:
+    /// the flat vertices ([`FlatMesh`](subdiv_tess::FlatMesh)'s), so a vertex with two normals
+    /// on an infinitely sharp crease is split into one GLB vertex per normal.
     ///
     /// # Errors
     /// [`Error::Io`] naming the file.
     pub fn write_glb(&self, path: impl AsRef<Path>) -> Result<(), Error> {
-        let positions: Vec<_> = self.mesh.positions.iter().map(|p| p.as_vec3()).collect();
-        let normals: Vec<_> = self.mesh.normals.iter().map(|n| n.as_vec3()).collect();
-        let indices = self.mesh.triangle_indices();
-        subdiv_io::write_glb(path, &GlbMesh { positions: &positions, normals: Some(&normals), indices: &indices })?;
+        let mut flat = subdiv_tess::FlatMesh::default();
+        self.mesh.write_to(&mut flat);
+        let vec3 = |v: &[f32]| glam::Vec3::new(v[0], v[1], v[2]);
+        let positions: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[..3])).collect();
+        let normals: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[3..])).collect();
+        let indices = &flat.indices;
+        subdiv_io::write_glb(path, &GlbMesh { positions: &positions, normals: Some(&normals), indices })?;
         Ok(())
     }
 
-    /// Writes OBJ (`v`, `vn` and `f v//vn` lines), atomically: the triangles, or with
+    /// Writes OBJ (`v`, `vn` and `f v//vn` lines), atomically: one `v` per (welded) vertex,
+    /// one `vn` per normal (a crease vertex's extra normals after the vertices', see
+    /// [`TessMesh`]), each corner's own normal; the triangles, or with
     /// `polygons` the polygons where there are any — the quadtree's leaves alone (they cover
     /// the surface), the dual tessellation's quads and the triangles outside them.
     ///
@@ -248,7 +255,7 @@ enum ObjFaces {
     PolygonsAndTriangles,
 }
 
-/// OBJ with `v` and `vn` lines, and faces as `f v//vn`.
+/// OBJ with `v` and `vn` lines, and faces as `f v//vn` (each corner's normal).
 fn write_obj(w: &mut dyn Write, mesh: &TessMesh, faces: ObjFaces) -> std::io::Result<()> {
     writeln!(w, "# subdiv tessellate")?;
     for p in &mesh.positions {
@@ -257,33 +264,49 @@ fn write_obj(w: &mut dyn Write, mesh: &TessMesh, faces: ObjFaces) -> std::io::Re
     for n in &mesh.normals {
         writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
     }
-    let face = |w: &mut dyn Write, vertices: &[u32]| -> std::io::Result<()> {
+    let face = |w: &mut dyn Write, vertices: &[u32], normals: &[u32]| -> std::io::Result<()> {
         write!(w, "f")?;
-        for &v in vertices {
-            write!(w, " {0}//{0}", v + 1)?;
+        for (&v, &n) in vertices.iter().zip(normals) {
+            write!(w, " {}//{}", v + 1, n + 1)?;
         }
         writeln!(w)
     };
     if faces == ObjFaces::Triangles {
-        for t in &mesh.triangles {
-            face(w, t)?;
+        for (t, n) in mesh.triangles.iter().zip(&mesh.triangle_normals) {
+            face(w, t, n)?;
         }
         return Ok(());
     }
-    for k in 0..mesh.polygon_count() {
-        face(w, mesh.polygon(k))?;
+    // A polygon's corners take the normals of the triangles it is made of (a dual quad
+    // `a b c d` is the triangles `a b c` and `a c d`; the quadtree's leaves, without creases,
+    // have their vertices' own).
+    let mut triangles = std::collections::HashMap::new();
+    for (t, n) in mesh.triangles.iter().zip(&mesh.triangle_normals) {
+        triangles.insert(sorted(*t), (*t, *n));
     }
-    if faces == ObjFaces::PolygonsAndTriangles {
-        // A dual quad `a b c d` is the triangles `a b c` and `a c d`.
-        let mut covered = std::collections::HashSet::new();
-        for k in 0..mesh.polygon_count() {
-            let p = mesh.polygon(k);
-            for i in 1..p.len().saturating_sub(1) {
-                covered.insert(sorted([p[0], p[i], p[i + 1]]));
+    let mut covered = std::collections::HashSet::new();
+    let mut normals = Vec::new();
+    for k in 0..mesh.polygon_count() {
+        let p = mesh.polygon(k);
+        normals.clear();
+        normals.extend_from_slice(p);
+        for i in 1..p.len().saturating_sub(1) {
+            let key = sorted([p[0], p[i], p[i + 1]]);
+            covered.insert(key);
+            if let Some((t, n)) = triangles.get(&key) {
+                for c in [0, i, i + 1] {
+                    if let Some(j) = t.iter().position(|&v| v == p[c]) {
+                        normals[c] = n[j];
+                    }
+                }
             }
         }
-        for t in mesh.triangles.iter().filter(|t| !covered.contains(&sorted(**t))) {
-            face(w, t)?;
+        face(w, p, &normals)?;
+    }
+    if faces == ObjFaces::PolygonsAndTriangles {
+        for (t, n) in mesh.triangles.iter().zip(&mesh.triangle_normals).filter(|(t, _)| !covered.contains(&sorted(**t)))
+        {
+            face(w, t, n)?;
         }
     }
     Ok(())

@@ -125,12 +125,14 @@ impl Default for DualOptions {
     }
 }
 
-/// Flat output buffers for GPUs, GLB files and benchmarks.
+/// Flat output buffers for GPUs, GLB files and benchmarks: one normal per vertex, so a
+/// vertex with extra normals (on an infinitely sharp crease, see [`TessMesh`]) is split.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FlatMesh {
-    /// Per vertex `px py pz nx ny nz`.
+    /// Per flat vertex `px py pz nx ny nz`: the [`TessMesh`]'s vertices, then one per extra
+    /// normal (its vertex's position, that normal).
     pub vertices: Vec<f32>,
-    /// Three indices per triangle, counter-clockwise.
+    /// Three indices per triangle, counter-clockwise: its [`triangle_normals`](TessMesh::triangle_normals).
     pub indices: Vec<u32>,
 }
 
@@ -456,11 +458,10 @@ impl DualTessellator {
         // made once (a copy runs at the memory's speed, which writing them anew does not reach
         // on large meshes).
         let indices = if self.output_current {
-            self.output.triangles.as_flattened()
+            self.output.triangle_normals.as_flattened()
         } else {
             if self.flat_indices.is_empty() && t.triangle_count() > 0 {
-                self.flat_indices.resize(3 * t.triangle_count() as usize, 0);
-                t.write_triangles(&mut self.flat_indices, parallel);
+                write_indices(t, parallel, &mut self.flat_indices);
             }
             &self.flat_indices
         };
@@ -553,16 +554,11 @@ impl DualTessellator {
         &self.rates
     }
 
-    /// The output as flat f32 buffers, reusing `out`'s allocations.
+    /// The output as flat f32 buffers (the vertices, then one split copy per extra normal;
+    /// the triangles' [normals](TessMesh::triangle_normals) as indices: see [`FlatMesh`]),
+    /// reusing `out`'s allocations.
     pub fn write_flat(&self, out: &mut FlatMesh) {
-        let m = &self.output;
-        out.vertices.clear();
-        out.vertices.reserve(6 * m.positions.len());
-        for (p, n) in m.positions.iter().zip(&m.normals) {
-            out.vertices.extend_from_slice(&flat_vertex(*p, *n));
-        }
-        out.indices.clear();
-        out.indices.extend_from_slice(m.triangles.as_flattened());
+        self.output.write_to(out);
     }
 
     /// Evaluates, writes the triangles and their faces, and moves the topology's polygons into
@@ -572,9 +568,13 @@ impl DualTessellator {
         let (t, parallel) = (&mut self.topology, self.options.parallelism.forks());
         let out = &mut self.output;
         self.evaluator.evaluate(t, parallel, &mut out.positions, &mut out.normals);
+        out.normal_vertices.clone_from(&t.extra);
         let triangles = t.triangle_count() as usize;
         out.triangles.resize(triangles, [0; 3]);
         t.write_triangles(out.triangles.as_flattened_mut(), parallel);
+        out.triangle_normals.clear();
+        out.triangle_normals.extend_from_slice(&out.triangles);
+        t.set_normal_corners(out.triangle_normals.as_flattened_mut());
         out.triangle_faces.resize(triangles, FaceId::new(0));
         t.write_triangle_faces(&mut out.triangle_faces, parallel);
         out.parameters.clear();
@@ -635,11 +635,12 @@ pub(crate) fn flat_vertex(p: DVec3, n: DVec3) -> [f32; 6] {
     [p.x as f32, p.y as f32, p.z as f32, n.x as f32, n.y as f32, n.z as f32]
 }
 
-/// `t`'s triangles into `indices` (resized), written straight from the topology's runs: no
-/// stored copy of most of them.
+/// `t`'s flat triangles (their corners' normals: the indices of the flat vertices) into
+/// `indices` (resized), written straight from the topology's runs: no stored copy of most of
+/// them.
 fn write_indices(t: &Topology, parallel: bool, indices: &mut Vec<u32>) {
     indices.resize(3 * t.triangle_count() as usize, 0);
-    t.write_triangles(indices, parallel);
+    t.write_triangle_normals(indices, parallel);
 }
 
 /// The topology's builder, kept across calls: the mesh (level 0), the split, whether quads are
@@ -681,7 +682,7 @@ fn beside<E: Send>(
     indices: impl FnOnce(&mut Vec<u32>) + Send,
 ) -> Result<(), E> {
     let FlatMesh { vertices, indices: out_indices } = out;
-    vertices.resize(6 * t.vertex_count as usize, 0.0);
+    vertices.resize(6 * t.point_count() as usize, 0.0);
     if parallel && t.triangle_count() > BESIDE {
         par::join(true, || evaluate(vertices), || indices(out_indices)).0
     } else {

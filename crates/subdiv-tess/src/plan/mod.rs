@@ -6,7 +6,11 @@
 //! refined levels that some patches live on, each level a sparse combination of the one
 //! before), the **patches** (point indices, flattened: [`EvaluationPlan::points`]) and, per
 //! output vertex, which patch and which **combination** of its points (weights of the position
-//! and both derivatives) give it. Three kinds of vertices ([`PlanEntry`]):
+//! and both derivatives) give it. The output vertices are the flat ones
+//! ([`FlatMesh`](crate::FlatMesh)'s): the tessellation's vertices, then one per extra normal of
+//! a crease vertex (see [`TessMesh`](crate::TessMesh)), evaluated at the same point in a face of
+//! its own sector, so its position is its vertex's up to rounding and its normal that
+//! sector's. Three kinds of vertices ([`PlanEntry`]):
 //! - [`PlanEntry::Block`]: a cell point `((i+½)/n, (j+½)/n)` of a regular bicubic face, found
 //!   from the vertex's offset in its face's block: the uniform bicubic B-spline there (no
 //!   weights stored).

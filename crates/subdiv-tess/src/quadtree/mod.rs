@@ -489,6 +489,8 @@ impl QuadtreeTessellator {
         let polygons = sink.wants_polygons();
         sink.begin(&TessCounts {
             vertices: evaluated.len(),
+            // Infinitely sharp creases are refused: one normal per vertex.
+            extra_normals: 0,
             triangles: corners,
             polygons: if polygons { centres.len() } else { 0 },
             polygon_vertices: if polygons { corners } else { 0 },
@@ -508,6 +510,7 @@ impl QuadtreeTessellator {
                         triangle,
                         &TessTriangle {
                             vertices: [centre, ring[k], ring[l]],
+                            normals: [centre, ring[k], ring[l]],
                             face: root.face,
                             parameters: [[c.0, c.1], [a.0, a.1], [b.0, b.1]],
                         },

@@ -96,13 +96,22 @@ impl Sink for WideSink<'_> {
 }
 
 impl Evaluator {
-    /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` vertices long):
-    /// positions and normals, without the f64 arrays.
+    /// [`evaluate`](Self::evaluate) straight into interleaved f32 (`6 ·` points long, the
+    /// flat vertices: the vertices, then one per extra normal), without the f64 arrays. An
+    /// extra normal's vertex takes its vertex's position, bit for bit, so that both sides of a
+    /// crease meet exactly.
     pub(crate) fn evaluate_flat(&self, topo: &Topology, parallel: bool, out: &mut [f32]) {
         self.evaluate_into(topo, parallel, FlatSink(out));
+        for (k, &v) in topo.extra.iter().enumerate() {
+            let (vertices, extra) = out.split_at_mut(6 * topo.vertex_count as usize);
+            let v = 6 * v as usize;
+            extra[6 * k..6 * k + 3].copy_from_slice(&vertices[v..v + 3]);
+        }
     }
 
-    /// Evaluates every vertex of `topo` (prepared) on the current cage.
+    /// Evaluates every point of `topo` (prepared) on the current cage: `positions` gets the
+    /// vertices' (an extra normal's position is its vertex's, up to rounding, and is not
+    /// kept), `normals` the vertices' then the extra normals.
     pub(crate) fn evaluate(
         &self,
         topo: &Topology,
@@ -110,10 +119,11 @@ impl Evaluator {
         positions: &mut Vec<DVec3>,
         normals: &mut Vec<DVec3>,
     ) {
-        let n = topo.vertex_count as usize;
+        let n = topo.point_count() as usize;
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
         self.evaluate_into(topo, parallel, WideSink(positions, normals));
+        positions.truncate(topo.vertex_count as usize);
     }
 
     /// Every vertex into `out`, in one pass over
@@ -154,8 +164,8 @@ impl Evaluator {
                 grids,
             }));
         }
-        push_run(&mut rest, &mut at, topo.vertex_count as usize, &mut pieces);
-        self.run_pieces(pieces, parallel && topo.vertex_count as usize >= PARALLEL_VERTICES);
+        push_run(&mut rest, &mut at, topo.point_count() as usize, &mut pieces);
+        self.run_pieces(pieces, parallel && topo.point_count() as usize >= PARALLEL_VERTICES);
     }
 
     /// Block `b` (of `face` at `rate`) as one piece if it is one (a typed face reading its

@@ -128,7 +128,7 @@ impl Evaluator {
     /// [`prepare`](Self::prepare) but the patch grids: every general-route vertex on its record,
     /// but the typed faces' cell points that read a template ([`Route::Template`]).
     pub(super) fn prepare_records(&mut self, topo: &Topology, rates: &[u32], parallel: bool) -> Result<(), TessError> {
-        let n = topo.vertex_count as usize;
+        let n = topo.point_count() as usize;
         self.routes.clear();
         self.routes.resize(n, Route::BicubicPoint.into());
         self.records.clear();
@@ -228,7 +228,7 @@ impl Evaluator {
                 at = end;
             }
         }
-        push(at, topo.vertex_count as usize);
+        push(at, topo.point_count() as usize);
         spans
     }
 

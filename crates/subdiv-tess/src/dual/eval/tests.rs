@@ -59,7 +59,7 @@ fn level_zero_patches_read_dual_tables() {
     ev.prepare(&topo, &vec![4; faces], true).unwrap();
     let tabled = ev.records.iter().filter(|r| r.table != NO_TABLE).count();
     assert_eq!(tabled, faces * 16);
-    assert_eq!(ev.records.len(), topo.vertex_count as usize);
+    assert_eq!(ev.records.len(), topo.point_count() as usize);
     // One table: one patch type, one rate.
     assert_eq!(ev.tables.tables.len(), 1);
 }

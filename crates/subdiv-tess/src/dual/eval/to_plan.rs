@@ -7,7 +7,7 @@ impl Evaluator {
     pub(crate) fn plan(&self, topo: &Topology) -> EvaluationPlan {
         let mut plan = EvaluationPlan { cage_len: self.positions[0].len() as u32, ..EvaluationPlan::default() };
         let starts = self.plan_levels(&mut plan);
-        plan.vertices = vec![UNSET; topo.vertex_count as usize];
+        plan.vertices = vec![UNSET; topo.point_count() as usize];
         self.plan_bicubic(topo, &starts, &mut plan);
         self.plan_typed(topo, &mut plan);
         self.plan_records(topo, &starts, &mut plan);
@@ -111,7 +111,7 @@ impl Evaluator {
         // The general records' patches and weights, each once.
         let mut patches: HashMap<(u32, u32), u32> = HashMap::new();
         let mut weights: HashMap<(u32, u32), u32> = HashMap::new();
-        for v in 0..topo.vertex_count as usize {
+        for v in 0..topo.point_count() as usize {
             if plan.vertices[v] != UNSET {
                 continue;
             }

@@ -74,6 +74,11 @@ pub(crate) struct BuilderBuffers {
     /// Per half-edge on a border: its border points nearest its origin and nearest its
     /// destination (an infinitely sharp edge's two half-edges share their points).
     border: Vec<(u32, u32)>,
+    /// Per half-edge on the second side of an infinitely sharp edge: the extra normals of its
+    /// border points nearest its origin and nearest its destination (that side's normals).
+    border_extra: Vec<Option<(u32, u32)>>,
+    /// The extra normals' sites, in order (appended to the topology's sites at the end).
+    extra_sites: Vec<Site>,
     row: Vec<RowPoint>,
     other: Vec<RowPoint>,
     ring: Vec<u32>,
@@ -133,6 +138,8 @@ impl<'a> Builder<'a> {
         let o = &mut self.out;
         o.vertex_count = 0;
         o.sites.clear();
+        o.extra.clear();
+        o.normal_corners.clear();
         o.blocks.clear();
         o.runs.clear();
         o.triangles.clear();
@@ -144,6 +151,9 @@ impl<'a> Builder<'a> {
         self.buf.faces.clear();
         self.buf.border.clear();
         self.buf.border.resize(self.mesh.half_edge_count(), (u32::MAX, 0));
+        self.buf.border_extra.clear();
+        self.buf.border_extra.resize(self.mesh.half_edge_count(), None);
+        self.buf.extra_sites.clear();
         for f in 0..domains.len() {
             self.face(f, domains[f], rates[f]);
         }
@@ -158,6 +168,8 @@ impl<'a> Builder<'a> {
         for v in self.mesh.vertices() {
             self.vertex(v);
         }
+        // The extra normals' sites after every vertex's: they are points `vertex_count..`.
+        self.out.sites.extend_from_slice(&self.buf.extra_sites);
         std::mem::swap(&mut self.out, out);
     }
 
@@ -168,16 +180,41 @@ impl<'a> Builder<'a> {
         id
     }
 
+    /// A further normal of `vertex` (a crease point seen from another smooth sector around
+    /// it), evaluated at `point` of `face` (a face of that sector); returns its number.
+    pub(super) fn push_extra(&mut self, vertex: u32, face: usize, point: Dyadic) -> u32 {
+        let id = self.out.extra.len() as u32;
+        self.buf.extra_sites.push(Site { face: face as u32, point });
+        self.out.extra.push(vertex);
+        id
+    }
+
     pub(super) fn triangle(&mut self, t: [u32; 3], face: u32) {
         self.out.triangles.push(t);
         self.out.triangle_faces.push(FaceId::new(face));
     }
 
+    /// A triangle whose corners may take extra normals.
+    fn triangle_at(&mut self, t: [Corner; 3], face: u32) {
+        let triangle = self.out.triangles.len() as u32;
+        for (corner, c) in t.iter().enumerate() {
+            if let Some(extra) = c.extra {
+                self.out.normal_corners.push(NormalCorner { triangle, corner: corner as u32, extra });
+            }
+        }
+        self.triangle(t.map(|c| c.vertex), face);
+    }
+
     /// A quad `a b c d` (counter-clockwise): two triangles, and a polygon if asked for.
     pub(super) fn quad(&mut self, q: [u32; 4], face: u32) {
-        self.triangle([q[0], q[1], q[2]], face);
-        self.triangle([q[0], q[2], q[3]], face);
-        self.polygon(q, face);
+        self.quad_at(q.map(Corner::from), face);
+    }
+
+    /// [`quad`](Self::quad) with corners that may take extra normals.
+    fn quad_at(&mut self, q: [Corner; 4], face: u32) {
+        self.triangle_at([q[0], q[1], q[2]], face);
+        self.triangle_at([q[0], q[2], q[3]], face);
+        self.polygon(q.map(|c| c.vertex), face);
     }
 
     /// Triangles by pattern (and their quads' polygons, if asked for).
@@ -343,6 +380,7 @@ impl<'a> Builder<'a> {
                         num: u64::from(2 * k + 1),
                         den: 2 * m64,
                         near: true,
+                        extra: None,
                     });
                 }
             }
@@ -350,7 +388,13 @@ impl<'a> Builder<'a> {
                 let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
                 // Sub-face c's side 0 covers the first half, sub-face c + 1's side 3 the second.
                 for k in 0..m {
-                    row.push(RowPoint { vertex: cell(c, k, 0), num: u64::from(2 * k + 1), den: 4 * m64, near: true });
+                    row.push(RowPoint {
+                        vertex: cell(c, k, 0),
+                        num: u64::from(2 * k + 1),
+                        den: 4 * m64,
+                        near: true,
+                        extra: None,
+                    });
                 }
                 let next = (c + 1) % size;
                 for k in 0..m {
@@ -359,6 +403,7 @@ impl<'a> Builder<'a> {
                         num: 2 * m64 + u64::from(2 * k + 1),
                         den: 4 * m64,
                         near: true,
+                        extra: None,
                     });
                 }
             }
@@ -372,9 +417,15 @@ impl<'a> Builder<'a> {
                         1 => (up(n - 1 - k, k), (k + 1 < n).then(|| up(n - 2 - k, k) + 1)),
                         _ => (up(0, n - 1 - k), (k + 1 < n).then(|| up(0, n - 2 - k) + 1)),
                     };
-                    row.push(RowPoint { vertex: u, num: u64::from(2 * k + 1), den: 2 * m64, near: true });
+                    row.push(RowPoint { vertex: u, num: u64::from(2 * k + 1), den: 2 * m64, near: true, extra: None });
                     if let Some(d) = d {
-                        row.push(RowPoint { vertex: d, num: u64::from(2 * k + 2), den: 2 * m64, near: false });
+                        row.push(RowPoint {
+                            vertex: d,
+                            num: u64::from(2 * k + 2),
+                            den: 2 * m64,
+                            near: false,
+                            extra: None,
+                        });
                     }
                 }
             }
@@ -498,9 +549,15 @@ impl<'a> Builder<'a> {
             other.reverse();
             for p in &mut other {
                 p.num = p.den - p.num;
+                // This side's normal there: evaluated in this face, at the same point of the edge.
+                let point = self.on_side(f, c, p.num, p.den);
+                p.extra = Some(self.push_extra(p.vertex, f, point));
             }
             let (near_dest, near_origin) = self.buf.border[t.index()];
             self.buf.border[h.index()] = (near_origin, near_dest);
+            if let (Some(a), Some(b)) = (other.first(), other.last()) {
+                self.buf.border_extra[h.index()] = a.extra.zip(b.extra);
+            }
             self.strip(&row, &other, f as u32);
         } else {
             other.clear();
@@ -508,7 +565,7 @@ impl<'a> Builder<'a> {
             for p in row.iter().filter(|p| p.near) {
                 let point = self.on_side(f, c, p.num, p.den);
                 let vertex = self.push_site(f, point);
-                other.push(RowPoint { vertex, num: p.num, den: p.den, near: true });
+                other.push(RowPoint { vertex, num: p.num, den: p.den, near: true, extra: None });
             }
             self.buf.border[h.index()] = (first, first + (other.len() as u32).max(1) - 1);
             self.strip(&row, &other, f as u32);
@@ -535,15 +592,15 @@ impl<'a> Builder<'a> {
             };
             match order {
                 std::cmp::Ordering::Less => {
-                    self.triangle([b[j].vertex, a[i + 1].vertex, a[i].vertex], face);
+                    self.triangle_at([b[j], a[i + 1], a[i]].map(Corner::from), face);
                     i += 1;
                 }
                 std::cmp::Ordering::Greater => {
-                    self.triangle([b[j].vertex, b[j + 1].vertex, a[i].vertex], face);
+                    self.triangle_at([b[j], b[j + 1], a[i]].map(Corner::from), face);
                     j += 1;
                 }
                 std::cmp::Ordering::Equal => {
-                    self.quad([b[j].vertex, b[j + 1].vertex, a[i + 1].vertex, a[i].vertex], face);
+                    self.quad_at([b[j], b[j + 1], a[i + 1], a[i]].map(Corner::from), face);
                     i += 1;
                     j += 1;
                 }
@@ -580,6 +637,8 @@ impl<'a> Builder<'a> {
                 ring.push(self.buf.border[start.index()].0);
             }
             let mut h = start;
+            // The run's last half-edge (into `v`, on its last border).
+            let mut end = start;
             loop {
                 let f = mesh.face(h).index();
                 ring.push(self.corner_vertex(f, self.buf.corner[h.index()] as usize));
@@ -589,6 +648,7 @@ impl<'a> Builder<'a> {
                     if !closed {
                         ring.push(self.buf.border[p.index()].1);
                     }
+                    end = p;
                     break;
                 }
                 h = mesh.twin(p).expect("not a border");
@@ -608,16 +668,33 @@ impl<'a> Builder<'a> {
             // Closed rings of 3 (and 4 under a quad split) are polygons of their own; rings of
             // fewer than 3 close nothing.
             let fan = !closed || (ring.len() >= 3 && (self.triangle || ring.len() >= 5));
-            if fan && centre.is_none() {
-                let point = self.corner_point(f0, self.buf.corner[start.index()] as usize);
-                centre = Some(self.push_site(f0, point));
-            }
+            let point = self.corner_point(f0, self.buf.corner[start.index()] as usize);
+            // The limit point is made by the first run; each further run (another smooth
+            // sector, between infinitely sharp edges) takes its own normal there.
+            let centre_corner = match centre {
+                None if fan => {
+                    let c = self.push_site(f0, point);
+                    centre = Some(c);
+                    Some(Corner::from(c))
+                }
+                Some(c) if !closed => Some(Corner { vertex: c, extra: Some(self.push_extra(c, f0, point)) }),
+                _ => None,
+            };
             if closed {
                 self.close_ring(&ring, if fan { centre } else { None }, f0 as u32);
-            } else if let Some(c) = centre {
-                // An open fan: from the border point on the first edge to the one on the last.
-                for k in 0..ring.len() - 1 {
-                    self.triangle([c, ring[k], ring[k + 1]], f0 as u32);
+            } else if let Some(c) = centre_corner {
+                // An open fan: from the border point on the first edge to the one on the last,
+                // with this run's normals where a border is the second side of a sharp edge.
+                let last = ring.len() - 1;
+                for k in 0..last {
+                    let mut t = [c, Corner::from(ring[k]), Corner::from(ring[k + 1])];
+                    if k == 0 {
+                        t[1].extra = self.buf.border_extra[start.index()].map(|e| e.0);
+                    }
+                    if k + 1 == last {
+                        t[2].extra = self.buf.border_extra[end.index()].map(|e| e.1);
+                    }
+                    self.triangle_at(t, f0 as u32);
                 }
             }
         }

@@ -171,6 +171,9 @@ struct RowPoint {
     /// Whether a border point goes beside it (every point of a quad row; the upward centroids
     /// of a triangle row, the ones nearest the edge).
     near: bool,
+    /// The extra normal it takes in the triangles made with this row (a point of the other
+    /// side of an infinitely sharp edge), if any.
+    extra: Option<u32>,
 }
 
 /// The output's vertices and connectivity.
@@ -179,8 +182,14 @@ pub(crate) struct Topology {
     /// The number of output vertices.
     pub vertex_count: u32,
     /// The sites of the vertices outside the blocks, in vertex order (a block's are implicit,
-    /// which spares writing most of them: [`Self::site`]).
+    /// which spares writing most of them: [`Self::site`]), then those of the extra normals.
     pub sites: Vec<Site>,
+    /// Per extra normal (numbered after the vertices: point `vertex_count + k`), its vertex: a
+    /// point of an infinitely sharp crease seen from a further smooth sector around it, whose
+    /// normal is evaluated at its own site (in a face of that sector).
+    pub extra: Vec<u32>,
+    /// The explicit triangles' corners that take an extra normal instead of their vertex's.
+    pub normal_corners: Vec<NormalCorner>,
     pub blocks: Vec<Block>,
     /// The triangles made by pattern, in output order.
     pub runs: Vec<Run>,
@@ -191,6 +200,34 @@ pub(crate) struct Topology {
     pub polygon_offsets: Vec<u32>,
     pub polygon_vertices: Vec<u32>,
     pub polygon_faces: Vec<FaceId>,
+}
+
+/// Corner `corner` of explicit triangle `triangle` takes extra normal `extra`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct NormalCorner {
+    pub triangle: u32,
+    pub corner: u32,
+    pub extra: u32,
+}
+
+/// A triangle corner as the builder makes it: its vertex and, on the second side of an
+/// infinitely sharp edge or in a further sector around a crease vertex, its extra normal.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Corner {
+    vertex: u32,
+    extra: Option<u32>,
+}
+
+impl From<u32> for Corner {
+    fn from(vertex: u32) -> Self {
+        Self { vertex, extra: None }
+    }
+}
+
+impl From<RowPoint> for Corner {
+    fn from(p: RowPoint) -> Self {
+        Self { vertex: p.vertex, extra: p.extra }
+    }
 }
 
 /// A corner at an extraordinary point, in whose frame ring points are placed: face `face`'s
@@ -205,7 +242,13 @@ enum RingCorner {
 }
 
 impl Topology {
-    /// Vertex `v`'s site.
+    /// The number of evaluated points: the vertices, then the extra normals (each evaluated at
+    /// its own site; its position is its vertex's up to rounding).
+    pub(crate) fn point_count(&self) -> u32 {
+        self.vertex_count + self.extra.len() as u32
+    }
+
+    /// Point `v`'s site (a vertex, or an extra normal past the vertices).
     pub(super) fn site(&self, v: u32) -> Site {
         // The last block starting at or before `v`.
         let k = self.blocks.partition_point(|b| b.base <= v);
@@ -216,8 +259,8 @@ impl Topology {
         }
     }
 
-    /// The explicit sites (every vertex outside the blocks) with their vertex numbers, in
-    /// vertex order.
+    /// The explicit sites (every point outside the blocks: vertices, then extra normals) with
+    /// their point numbers, in order.
     pub(super) fn explicit_sites(&self) -> impl Iterator<Item = (u32, Site)> + '_ {
         let mut blocks = self.blocks.iter().peekable();
         let mut v = 0;
@@ -245,6 +288,28 @@ impl Topology {
         self.write_in_order(out, 3, self.triangles.as_flattened(), parallel, &|r, out| r.write(out));
     }
 
+    /// Every triangle's normals (indices into the points: a vertex's own normal, or an extra
+    /// normal), in output order, into `out` (as [`write_triangles`](Self::write_triangles)):
+    /// the triangles, with the corners that take an extra normal set.
+    pub(super) fn write_triangle_normals(&self, out: &mut [u32], parallel: bool) {
+        self.write_triangles(out, parallel);
+        self.set_normal_corners(out);
+    }
+
+    /// Sets the corners that take an extra normal in `out`, the triangles' indices (three per
+    /// triangle, in output order).
+    pub(super) fn set_normal_corners(&self, out: &mut [u32]) {
+        for c in &self.normal_corners {
+            // The runs made before this explicit triangle, and their triangles.
+            let runs = self.runs.partition_point(|r| r.explicit <= c.triangle);
+            let before = runs.checked_sub(1).map_or(0, |k| {
+                let r = &self.runs[k];
+                r.first + r.triangles() - r.explicit
+            });
+            out[3 * (before + c.triangle) as usize + c.corner as usize] = self.vertex_count + c.extra;
+        }
+    }
+
     /// Every triangle's face, in output order, into `out` ([`triangle_count`](Self::triangle_count) entries).
     pub(super) fn write_triangle_faces(&self, out: &mut [FaceId], parallel: bool) {
         self.write_in_order(out, 1, &self.triangle_faces, parallel, &|r, out| out.fill(FaceId::new(r.face)));
@@ -269,9 +334,9 @@ impl Topology {
         write_runs(&self.runs, explicit.len() / width, rest, width, explicit, parallel, made);
     }
 
-    /// Every vertex's site, in vertex order.
+    /// Every vertex's site, in vertex order (not the extra normals').
     pub(super) fn for_each_site(&self, mut put: impl FnMut(Site)) {
-        let mut explicit = self.sites.iter();
+        let mut explicit = self.sites[..self.sites.len() - self.extra.len()].iter();
         let mut v = 0;
         for b in &self.blocks {
             explicit.by_ref().take((b.base - v) as usize).for_each(|&s| put(s));

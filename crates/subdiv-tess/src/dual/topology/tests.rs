@@ -6,7 +6,10 @@ use subdiv_mesh::shapes;
 use subdiv_stencil::Grid;
 
 fn row(vertices: std::ops::Range<u32>, den: u64) -> Vec<RowPoint> {
-    vertices.enumerate().map(|(k, vertex)| RowPoint { vertex, num: 2 * k as u64 + 1, den, near: true }).collect()
+    vertices
+        .enumerate()
+        .map(|(k, vertex)| RowPoint { vertex, num: 2 * k as u64 + 1, den, near: true, extra: None })
+        .collect()
 }
 
 /// Rows of equal rates merge into quads; rows of rates 2 and 3 into 3 triangles, each
