@@ -192,3 +192,20 @@ fn spot_shaded() {
     let d = mean_difference(&image, &render_cpu(&gpu, &t, view));
     assert!(d < 1e-3, "spot: GPU and CPU evaluation differ by {:.4}% of 255", 100.0 * d);
 }
+
+/// Infinitely sharp and semi-sharp creases: each side of a sharp crease shaded with its own
+/// normal (the split vertices), the GPU's evaluation as the CPU's.
+#[test]
+fn creased_cube_shaded() {
+    let Some(t) = tessellate("opensubdiv/catmark_cube_creases2.obj") else { return };
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
+    let positions: std::collections::HashSet<[u32; 3]> =
+        t.flat.vertices.chunks_exact(6).map(|v| [v[0].to_bits(), v[1].to_bits(), v[2].to_bits()]).collect();
+    assert!(positions.len() < t.flat.vertices.len() / 6, "no crease vertex is split");
+    let view = camera([-4.0, 3.2, 5.6], 2.0, 12.0);
+    let image = render(&gpu, &t, view, false);
+    check_structure("catmark_cube_creases2", &image);
+    compare("catmark_cube_creases2", &image);
+    let d = mean_difference(&image, &render_cpu(&gpu, &t, view));
+    assert!(d < 1e-3, "catmark_cube_creases2: GPU and CPU evaluation differ by {:.4}% of 255", 100.0 * d);
+}
