@@ -27,7 +27,7 @@ use glam::DVec3;
 use hashbrown::HashMap;
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh};
 use subdiv_schemes::{PatchMatrices, Scheme, Split};
-use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, surface_stencil};
+use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, StencilEvaluator};
 
 use self::pieces::*;
 pub(crate) use self::pieces::{check_bicubic, regular_grid};
@@ -213,13 +213,15 @@ pub struct QuadtreeStats {
 }
 
 impl QuadtreeTessellator {
-    /// Prepares `mesh` under `scheme`, which must be Catmull-Clark (checked on its matrices:
-    /// regular patches are bicubic B-splines, every sub-patch matrix is a convex combination).
+    /// Prepares `mesh` under `scheme`, a primal quad split whose patches the bounds hold for
+    /// (checked on its matrices: every patch away from an extraordinary corner is a bicubic,
+    /// every sub-patch matrix at one a convex combination): Catmull-Clark, with its creases,
+    /// corners and semi-sharp features, and bilinear.
     ///
     /// # Errors
     /// [`TessError::Scheme`] for a scheme other than a primal quad split or whose patches are
-    /// not as above; [`TessError::Unsupported`] for boundaries and holes;
-    /// [`TessError::Surface`] for creases and corners and as [`PatchLevels::new`].
+    /// not as above; [`TessError::Unsupported`] for boundaries and holes; as
+    /// [`PatchLevels::new`].
     pub fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
         if scheme.split() != Split::Quad {
             return Err(TessError::Scheme {
@@ -233,19 +235,6 @@ impl QuadtreeTessellator {
         }
         if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {
             return Err(TessError::Unsupported { feature: "holes", element: format!("{f}") });
-        }
-        // Semi-sharp features are refined away by the patch levels; infinitely sharp ones stay,
-        // and their patches have no bound here yet (the dual tessellator takes them).
-        let infinite = subdiv_mesh::Tags::INFINITELY_SHARP;
-        if let Some(e) = mesh.edges().find(|&e| mesh.edge_sharpness(e) >= infinite) {
-            let [a, b] = mesh.edge_vertices(e);
-            return Err(TessError::Unsupported {
-                feature: "infinitely sharp creases",
-                element: format!("edge {a}-{b}"),
-            });
-        }
-        if let Some(v) = mesh.vertices().find(|&v| mesh.vertex_sharpness(v) >= infinite) {
-            return Err(TessError::Unsupported { feature: "infinitely sharp corners", element: format!("{v}") });
         }
         let levels = PatchLevels::new(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?;
         let mut roots = Vec::new();
@@ -291,7 +280,7 @@ impl QuadtreeTessellator {
                 Some(Resolved::Patch { patch, .. }) => {
                     let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
                     if !self.shapes.contains_key(&key) {
-                        classify(&patch.matrices, patch.shape, &mut self.shapes).map_err(bad)?;
+                        classify(&patch.matrices, &mut self.shapes).map_err(bad)?;
                     }
                 }
                 Some(Resolved::Hole) => {

@@ -1,5 +1,5 @@
 //! The quadtree's pieces of surface and their subdivision: a patch shape classified once
-//! (bicubic, checked against the B-spline's quarters, or extraordinary, with its limit
+//! (bicubic, checked against its children's quarters, or extraordinary, with its limit
 //! stencils), a root's piece (a refined face without a patch, the sub-patch at an
 //! extraordinary corner, or a bicubic Bézier patch) and its quarters.
 
@@ -8,8 +8,11 @@ use super::*;
 /// How a patch shape is tessellated.
 #[derive(Clone, Debug)]
 pub(super) enum ShapeKind {
-    /// A bicubic B-spline patch: `grid[j * 4 + i]` is the control point at `(i − 1, j − 1)`.
-    Regular { grid: [usize; 16] },
+    /// A bicubic polynomial: Bézier net point `k` (`net[j][i]` at `k = 4j + i`, in the
+    /// patch's frame) is `Σ_m net[k · size + m] · points[m]` over the shape's `size` points.
+    /// Regular interior patches, and the regular patches along an infinitely sharp crease or a
+    /// boundary, whose rows across it are the crease rule's, not the B-spline's.
+    Regular { net: Vec<f64> },
     /// The extraordinary vertex at corner 0: the child kept at the corner, and the vertex's
     /// limit position and tangent-direction stencils.
     Extraordinary { position: Vec<f64>, du: Vec<f64>, dv: Vec<f64> },
@@ -29,64 +32,162 @@ pub(super) enum Piece {
     Regular(Box<Bicubic>),
 }
 
-/// The Bézier net, in the face's coordinates, of a regular patch whose B-spline control points
-/// `points` are ordered by `grid` in the patch's frame.
-pub(super) fn bezier_in_frame(grid: &[usize; 16], points: &[DVec3], frame: PatchFrame) -> Bicubic {
-    let ordered: [[DVec3; 4]; 4] = std::array::from_fn(|j| std::array::from_fn(|i| points[grid[j * 4 + i]]));
-    let patch = Bicubic::from_bspline(&ordered);
+/// The Bézier net, in the face's coordinates, of a polynomial shape with net weights `net`
+/// (see [`ShapeKind::Regular`]) over the control points `points`, in the patch's frame.
+pub(super) fn bezier_in_frame(net: &[f64], points: &[DVec3], frame: PatchFrame) -> Bicubic {
+    let size = points.len();
+    let point = |k: usize| -> DVec3 { net[k * size..(k + 1) * size].iter().zip(points).map(|(&w, &p)| w * p).sum() };
+    let patch: [[DVec3; 4]; 4] = std::array::from_fn(|j| std::array::from_fn(|i| point(4 * j + i)));
     // The frame is a turn of the unit square: face control point (i, j) is the patch's at
     // to_patch(i/3, j/3).
     let net = std::array::from_fn(|j| {
         std::array::from_fn(|i| {
             let p = frame.to_patch(Dyadic::new(i as i64, j as i64, 3));
-            patch.net[p.v as usize][p.u as usize]
+            patch[p.v as usize][p.u as usize]
         })
     });
     Bicubic { net }
 }
 
-/// Classifies `shape` of `matrices` and every shape it reaches, checking what the bounds need.
-pub(super) fn classify(
-    matrices: &Arc<PatchMatrices>,
+/// The collocation parameters of [`candidate_net`]: dyadic, so the exact stencils reach them,
+/// and symmetric.
+const NODES: [(i64, i64); 4] = [(0, 1), (1, 4), (3, 4), (1, 1)];
+
+/// The inverse of the cubic Bernstein collocation matrix at [`NODES`]: `inverse[i][a]`.
+fn bernstein_inverse() -> [[f64; 4]; 4] {
+    let mut m: [[f64; 8]; 4] = std::array::from_fn(|a| {
+        let (num, den) = NODES[a];
+        let b = crate::bezier::bernstein3(num as f64 / den as f64);
+        std::array::from_fn(|c| if c < 4 { b[c] } else { f64::from(u8::from(c - 4 == a)) })
+    });
+    // Gauss-Jordan with partial pivoting on [B | I]: rows a (nodes), columns i (degrees).
+    for col in 0..4 {
+        let pivot = (col..4).max_by(|&x, &y| m[x][col].abs().total_cmp(&m[y][col].abs())).unwrap_or(col);
+        m.swap(col, pivot);
+        let d = m[col][col];
+        m[col].iter_mut().for_each(|x| *x /= d);
+        for r in (0..4).filter(|&r| r != col) {
+            let f = m[r][col];
+            let pivot_row = m[col];
+            m[r].iter_mut().zip(pivot_row).for_each(|(x, p)| *x -= f * p);
+        }
+    }
+    std::array::from_fn(|i| std::array::from_fn(|a| m[i][4 + a]))
+}
+
+/// The Bézier net weights of the bicubic that interpolates `shape`'s limit surface at the
+/// 4 × 4 parameters [`NODES`]² (its exact stencils): the shape's net if it is a bicubic.
+fn candidate_net(
+    evaluator: &mut StencilEvaluator<&PatchMatrices>,
+    size: usize,
     shape: usize,
-    out: &mut HashMap<ShapeKey, ShapeKind>,
-) -> Result<(), String> {
-    let key = (Arc::as_ptr(matrices) as usize, shape);
-    if out.contains_key(&key) {
-        return Ok(());
+) -> Result<Vec<f64>, String> {
+    let inverse = bernstein_inverse();
+    let mut values = vec![0.0; 16 * size];
+    for (b, &(vn, vd)) in NODES.iter().enumerate() {
+        for (a, &(un, ud)) in NODES.iter().enumerate() {
+            let d = ud.max(vd);
+            let point = Dyadic::new(un * (d / ud), vn * (d / vd), d);
+            let stencil = evaluator.stencil(shape, point).map_err(|e| e.to_string())?;
+            values[(4 * b + a) * size..(4 * b + a + 1) * size].copy_from_slice(&stencil.position);
+        }
     }
+    // net[j][i] = Σ_{a,b} inverse[i][a] · inverse[j][b] · value(a, b).
+    let mut net = vec![0.0; 16 * size];
+    for j in 0..4 {
+        for i in 0..4 {
+            let row = &mut net[(4 * j + i) * size..(4 * j + i + 1) * size];
+            for b in 0..4 {
+                for a in 0..4 {
+                    let w = inverse[i][a] * inverse[j][b];
+                    let value = &values[(4 * b + a) * size..(4 * b + a + 1) * size];
+                    row.iter_mut().zip(value).for_each(|(r, &x)| *r += w * x);
+                }
+            }
+        }
+    }
+    Ok(net)
+}
+
+/// Whether each child of `shape` is the matching quarter of its net, on every basis function.
+fn quarters_agree(matrices: &PatchMatrices, shape: usize, nets: &[Vec<f64>]) -> bool {
     let s = &matrices.shapes[shape];
-    if let Some(grid) = regular_grid(s.size, s.parameters.as_ref()) {
-        check_bicubic(matrices, shape, &grid)?;
-        out.insert(key, ShapeKind::Regular { grid });
-        for child in &s.children {
-            classify(matrices, child.shape, out)?;
-        }
+    let net_of = |shape: usize, points: &[DVec3]| bezier_in_frame(&nets[shape], points, PatchFrame::new(4, 0));
+    s.children.iter().all(|child| {
+        !child.domain.flipped
+            && (0..s.size).all(|k| {
+                let basis: Vec<DVec3> = (0..s.size).map(|m| if m == k { DVec3::X } else { DVec3::ZERO }).collect();
+                let [qx, qy] = child.domain.offset.map(usize::from);
+                let expected = net_of(shape, &basis).quarter(qx, qy);
+                let mine = net_of(child.shape, &child.apply(&basis));
+                let diff =
+                    mine.net.iter().flatten().zip(expected.net.iter().flatten()).map(|(a, b)| (*a - *b).length());
+                diff.fold(0.0, f64::max) <= 1e-11
+            })
+    })
+}
+
+/// Classifies every shape of `matrices`, checking what the bounds need.
+///
+/// A shape is a bicubic when the net interpolating its exact surface at 16 points
+/// ([`candidate_net`]) splits into its children's nets (de Casteljau quarters) and so do all
+/// its descendants': then the net agrees with the surface at every dyadic point (each
+/// descendant's net interpolates it at its corners), so everywhere. The set is the largest one
+/// closed under children. Every other shape must keep an extraordinary corner whose sub-patch
+/// matrices are convex combinations (the hull bound), its other children bicubics.
+pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey, ShapeKind>) -> Result<(), String> {
+    let id = Arc::as_ptr(matrices) as usize;
+    if out.contains_key(&(id, 0)) {
         return Ok(());
     }
-    let (_, keep) = matrices
-        .keeping(shape)
-        .ok_or_else(|| format!("patch shape {shape} is neither regular nor keeps an extraordinary corner"))?;
-    if keep.domain.offset != [0, 0] {
-        return Err(format!("patch shape {shape} keeps its shape away from corner 0"));
+    let shapes = &matrices.shapes;
+    let mut evaluator = StencilEvaluator::new(&**matrices);
+    let nets: Vec<Vec<f64>> =
+        (0..shapes.len()).map(|s| candidate_net(&mut evaluator, shapes[s].size, s)).collect::<Result<_, _>>()?;
+    let mut polynomial: Vec<bool> = (0..shapes.len()).map(|s| quarters_agree(matrices, s, &nets)).collect();
+    loop {
+        let drop: Vec<usize> = (0..shapes.len())
+            .filter(|&s| polynomial[s] && shapes[s].children.iter().any(|c| !polynomial[c.shape]))
+            .collect();
+        if drop.is_empty() {
+            break;
+        }
+        drop.into_iter().for_each(|s| polynomial[s] = false);
     }
-    for child in &s.children {
-        for r in 0..child.rows() {
-            let row = child.row(r);
-            if row.iter().any(|&w| w < 0.0) || (row.iter().sum::<f64>() - 1.0).abs() > 1e-12 {
-                return Err(format!("sub-patch matrices of shape {shape} are not convex combinations"));
+    for (shape, net) in nets.into_iter().enumerate() {
+        if polynomial[shape] {
+            out.insert((id, shape), ShapeKind::Regular { net });
+            continue;
+        }
+        let s = &shapes[shape];
+        let (_, keep) = matrices
+            .keeping(shape)
+            .ok_or_else(|| format!("patch shape {shape} is neither a bicubic nor keeps an extraordinary corner"))?;
+        if keep.domain.offset != [0, 0] {
+            return Err(format!("patch shape {shape} keeps its shape away from corner 0"));
+        }
+        for child in &s.children {
+            for r in 0..child.rows() {
+                let row = child.row(r);
+                if row.iter().any(|&w| w < 0.0) || (row.iter().sum::<f64>() - 1.0).abs() > 1e-12 {
+                    return Err(format!("sub-patch matrices of shape {shape} are not convex combinations"));
+                }
+            }
+            if child.shape != shape && !polynomial[child.shape] {
+                return Err(format!(
+                    "a child of extraordinary shape {shape} is neither a bicubic nor the shape itself"
+                ));
             }
         }
-    }
-    let stencil = surface_stencil(matrices, shape, Dyadic::new(0, 0, 1)).map_err(|e| e.to_string())?;
-    out.insert(key, ShapeKind::Extraordinary { position: stencil.position, du: stencil.du, dv: stencil.dv });
-    for child in &s.children {
-        if child.shape != shape {
-            classify(matrices, child.shape, out)?;
-            if !matches!(out.get(&(key.0, child.shape)), Some(ShapeKind::Regular { .. })) {
-                return Err(format!("a child of extraordinary shape {shape} is neither regular nor the shape itself"));
-            }
-        }
+        let stencil = evaluator.stencil(shape, Dyadic::new(0, 0, 1)).map_err(|e| e.to_string())?;
+        out.insert(
+            (id, shape),
+            ShapeKind::Extraordinary {
+                position: stencil.position.clone(),
+                du: stencil.du.clone(),
+                dv: stencil.dv.clone(),
+            },
+        );
     }
     Ok(())
 }
@@ -168,8 +269,8 @@ impl QuadtreeTessellator {
                 let points: Vec<DVec3> = patch.vertices.iter().map(|&v| mesh.position(v)).collect();
                 let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
                 match self.shapes.get(&key) {
-                    Some(ShapeKind::Regular { grid }) => {
-                        Ok(Piece::Regular(Box::new(bezier_in_frame(grid, &points, frame))))
+                    Some(ShapeKind::Regular { net }) => {
+                        Ok(Piece::Regular(Box::new(bezier_in_frame(net, &points, frame))))
                     }
                     Some(ShapeKind::Extraordinary { .. }) => {
                         Ok(Piece::Extraordinary { matrices: patch.matrices.clone(), shape: patch.shape, points, frame })
@@ -203,8 +304,8 @@ impl QuadtreeTessellator {
                     .ok_or_else(|| TessError::Internal(format!("no child at {offset:?}")))?;
                 let child = sub.apply(points);
                 match self.shapes.get(&(Arc::as_ptr(matrices) as usize, sub.shape)) {
-                    Some(ShapeKind::Regular { grid }) => {
-                        Ok(Piece::Regular(Box::new(bezier_in_frame(grid, &child, *frame))))
+                    Some(ShapeKind::Regular { net }) => {
+                        Ok(Piece::Regular(Box::new(bezier_in_frame(net, &child, *frame))))
                     }
                     Some(ShapeKind::Extraordinary { .. }) => Ok(Piece::Extraordinary {
                         matrices: matrices.clone(),
