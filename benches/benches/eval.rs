@@ -2,7 +2,8 @@
 //! one thread, with first derivatives (`_d1`) and with second derivatives too (`_d2`): on one
 //! regular Catmull-Clark patch, one valence-5 Catmull-Clark patch, one valence-7 Loop patch
 //! (`PatchSurface`, the per-face object), and over whole meshes through `EigenEvaluator`
-//! (random face, random point; and the same points grouped by face, `_by_face`): a 64 × 64 quad torus and OpenSubdiv's `catmark_righthanded` from the
+//! (random face, random point; and the same points grouped by face, `_by_face`): a 64 × 64 quad torus, OpenSubdiv's `catmark_righthanded` and
+//! the creased `catmark_car` (every face: crease patches through the exact stencils) from the
 //! shared corpus (`SUBDIV_SHARED`, default `../shared`; skipped when absent). Points/s = points
 //! / median time. Run with `cargo xtask bench eval`.
 
@@ -63,19 +64,26 @@ fn patches(c: &mut Criterion) {
         });
     }
     let shared = std::env::var_os("SUBDIV_SHARED").map_or_else(|| PathBuf::from("../shared"), PathBuf::from);
-    let car = shared.join("testdata/meshes/opensubdiv/catmark_righthanded.obj");
-    let mut meshes = vec![("mesh_quad_torus_64x64", Mesh::build(shapes::quad_torus(64, 64)).expect("torus"))];
-    if let Ok(mesh) = subdiv::io::load_mesh(&car, &Default::default()) {
-        meshes.push(("mesh_catmark_righthanded", mesh));
+    let corpus = shared.join("testdata/meshes/opensubdiv");
+    // (name, mesh, whether every face is asked, not only those the eigenbasis takes).
+    let mut meshes = vec![("mesh_quad_torus_64x64", Mesh::build(shapes::quad_torus(64, 64)).expect("torus"), false)];
+    for (file, name, all) in
+        [("catmark_righthanded.obj", "mesh_catmark_righthanded", false), ("catmark_car.obj", "mesh_catmark_car", true)]
+    {
+        if let Ok(mesh) = subdiv::io::load_mesh(corpus.join(file), &Default::default()) {
+            meshes.push((name, mesh, all));
+        }
     }
-    for (name, mesh) in meshes {
+    for (name, mesh, all) in meshes {
         let eval = EigenEvaluator::new(Builtin::CatmullClark.scheme(), &mesh, &RefineOptions::DEFAULT, Method::Auto)
             .expect("evaluator");
         let mut r = uniform(11);
-        // Faces the eigenbasis takes (all of a closed mesh's), quads only so (u, v) ∈ [0, 1]².
+        // Faces the eigenbasis takes (all of a closed mesh's), or for the creased car every face
+        // (`Method::Auto` routes its crease patches to the exact stencils); quads only so
+        // (u, v) ∈ [0, 1]².
         let faces: Vec<FaceId> = mesh
             .face_ids()
-            .filter(|&f| mesh.face_size(f) == 4 && eval.uses_eigenbasis(f).is_ok_and(|r| r.is_ok()))
+            .filter(|&f| mesh.face_size(f) == 4 && (all || eval.uses_eigenbasis(f).is_ok_and(|r| r.is_ok())))
             .collect();
         let samples: Vec<(FaceId, f64, f64)> =
             (0..POINTS).map(|_| (faces[(r() * faces.len() as f64) as usize], r(), r())).collect();

@@ -3,7 +3,8 @@
 //! `key=value` line per measurement; with `SUBDIV_OSD_BENCH` pointing at the peer harness's
 //! `osd_bench`, OpenSubdiv's Bfr on the same meshes and rates, side by side.
 //!
-//! Two modes, as `osd_bench` has: `full` (topology, stencil records, evaluation and flat
+//! `first`: a new tessellator and its first flat output, what a fresh process meets. Then two
+//! modes, as `osd_bench` has: `full` (topology, stencil records, evaluation and flat
 //! buffers from the cage: `tessellate_flat`, the whole job on a fresh rate set) and `animate`
 //! (`update_cage_flat`: the same rates on a moved cage), both straight into the flat buffers;
 //! and the same through the f64 [`TessMesh`](subdiv::tess::TessMesh) (with surface parameters)
@@ -24,6 +25,10 @@ use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, Parallelism};
 
 /// The peer harness's benchmark meshes (`../shared/peers/osd/meshes`).
 const PEER_MESHES: [&str; 3] = ["torus_big.obj", "cube.obj", "valence56.obj"];
+
+/// Real meshes from the shared corpus (`../shared/testdata/meshes`) measured with them: the
+/// car's 314 creases of sharpness 6 are refined locally, 6 levels deep.
+const CORPUS_MESHES: [&str; 1] = ["opensubdiv/catmark_car.obj"];
 
 /// The peer harness's rates.
 const PEER_RATES: [u32; 3] = [8, 16, 32];
@@ -64,6 +69,8 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     if meshes.is_empty() {
         let dir = crate::shared_dir().join("peers/osd/meshes");
         meshes = PEER_MESHES.iter().map(|m| dir.join(m)).collect();
+        let corpus = crate::shared_dir().join("testdata/meshes");
+        meshes.extend(CORPUS_MESHES.iter().map(|m| corpus.join(m)));
     }
     if rates.is_empty() {
         rates = PEER_RATES.to_vec();
@@ -94,7 +101,7 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
 const USAGE: &str = "usage: cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]...";
 
 /// What is measured (see the module docs).
-const MODES: [&str; 4] = ["full", "animate", "full_mesh", "animate_mesh"];
+const MODES: [&str; 5] = ["first", "full", "animate", "full_mesh", "animate_mesh"];
 
 /// Our lines for one mesh, rate and thread count.
 fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -> Result<(), String> {
@@ -104,8 +111,28 @@ fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -
     } else {
         Parallelism::Serial
     });
+    let rates = vec![rate; mesh.face_count()];
+    if modes.contains(&"first") {
+        // What a fresh process meets: the tessellator built (patch levels, stencil records)
+        // and its first flat output; the median of 3, each on a new tessellator.
+        let mut samples: Vec<f64> = (0..3)
+            .map(|_| {
+                let start = Instant::now();
+                let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), mesh, &options)?;
+                let mut flat = FlatMesh::default();
+                pool.install(|| tess.tessellate_flat(&rates, &mut flat))?;
+                std::hint::black_box(flat.indices.len());
+                Ok(start.elapsed().as_secs_f64())
+            })
+            .collect::<Result<_, subdiv::tess::TessError>>()
+            .map_err(|e| e.to_string())?;
+        samples.sort_by(f64::total_cmp);
+        println!(
+            "bench=tess peer=subdiv mesh={name} mode=first rate={rate} threads={threads} median_s={:.6}",
+            samples[1]
+        );
+    }
     let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), mesh, &options).map_err(|e| e.to_string())?;
-    let rates = vec![rate; tess.face_count()];
     let cage = mesh.positions().to_vec();
     let mut flat = FlatMesh::default();
     pool.install(|| -> Result<(), String> {
@@ -113,7 +140,7 @@ fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -
         tess.write_flat(&mut flat);
         let (vertices, tris) = (flat.vertices.len() / 6, flat.indices.len() / 3);
         let bytes_per_tri = (24 * vertices + 12 * tris) as f64 / tris as f64;
-        for &mode in modes {
+        for &mode in modes.iter().filter(|&&m| m != "first") {
             let seconds = median_seconds(|| {
                 match mode {
                     "full" => tess.tessellate_flat(&rates, &mut flat),

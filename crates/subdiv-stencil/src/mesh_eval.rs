@@ -344,8 +344,9 @@ enum Resolution {
 #[derive(Debug)]
 struct Level {
     mesh: Mesh,
-    /// The faces whose points can reach this level (every face on level 0).
-    faces: HashMap<FaceId, Resolution>,
+    /// Per face of `mesh`, how it is evaluated if points can reach it (every face on level 0);
+    /// dense, since looking a face up is on every evaluation's path.
+    faces: Vec<Option<Resolution>>,
 }
 
 /// How a face of one level of [`PatchLevels`] reaches the limit surface.
@@ -482,15 +483,15 @@ impl PatchLevels {
             } else {
                 MeshPatches::near(scheme, &current, options, wanted.iter().copied())?
             };
-            let mut faces = HashMap::with_capacity(wanted.len());
+            let mut faces: Vec<Option<Resolution>> = vec![None; current.face_count()];
             let mut refine = Vec::new();
             for &f in &wanted {
                 if current.is_hole(f) {
-                    faces.insert(f, Resolution::Hole);
+                    faces[f.index()] = Some(Resolution::Hole);
                 } else if let Some(found) =
                     (current.face_size(f) == patch_size).then(|| patches.find(&current, f)).flatten()
                 {
-                    faces.insert(f, Resolution::Patch(found));
+                    faces[f.index()] = Some(Resolution::Patch(found));
                 } else {
                     refine.push(f);
                 }
@@ -510,7 +511,7 @@ impl PatchLevels {
             let mut next_wanted = Vec::new();
             for (&f, children) in refine.iter().zip(next.children) {
                 next_wanted.extend(children.clone().map(|c| FaceId::new(c as u32)));
-                faces.insert(f, Resolution::Children(children));
+                faces[f.index()] = Some(Resolution::Children(children));
             }
             next_wanted.sort_unstable();
             levels.push(Level { mesh: current, faces });
@@ -558,7 +559,7 @@ impl PatchLevels {
     /// reaches on that level (or a level or face out of range).
     pub fn resolve(&self, level: usize, face: FaceId) -> Option<Resolved<'_>> {
         let l = self.levels.get(level)?;
-        Some(match l.faces.get(&face)? {
+        Some(match l.faces.get(face.index())?.as_ref()? {
             Resolution::Hole => Resolved::Hole,
             Resolution::Children(children) => Resolved::Children {
                 children: children.clone(),
@@ -603,7 +604,8 @@ impl PatchLevels {
     fn resolution(&self, face: FaceId) -> Result<&Resolution, StencilError> {
         self.levels[0]
             .faces
-            .get(&face)
+            .get(face.index())
+            .and_then(Option::as_ref)
             .ok_or(StencilError::FaceOutOfRange { face: face.index(), faces: self.face_count() })
     }
 
