@@ -82,6 +82,7 @@ mod dual;
 mod eigen;
 mod error;
 mod expr;
+mod mesh_patches;
 mod patch;
 mod primal;
 mod refine;
@@ -92,9 +93,9 @@ pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, LocalSpectrum};
 pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError};
+pub use mesh_patches::{FoundPatch, MeshPatches};
 pub use patch::{
-    ChildDomain, FoundPatch, MeshPatches, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces,
-    sub_patch_starts,
+    ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces, sub_patch_starts,
 };
 pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
 pub use scheme::{

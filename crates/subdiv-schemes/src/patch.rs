@@ -26,12 +26,12 @@ use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, VertexId};
 
 use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
 /// The largest patch radius tried.
-const MAX_RADIUS: usize = 3;
+pub(crate) const MAX_RADIUS: usize = 3;
 
 /// Refinement levels after which the shapes must have closed up.
 const MAX_LEVELS: usize = 5;
@@ -271,7 +271,7 @@ pub struct PatchMatrices {
     pub face_size: usize,
     /// The shapes; the first is the patch type's.
     pub shapes: Vec<PatchShape>,
-    by_signature: HashMap<Vec<u32>, usize>,
+    pub(crate) by_signature: HashMap<Vec<u32>, usize>,
 }
 
 type CacheKey = (String, PatchType, BoundaryInterpolation);
@@ -392,200 +392,6 @@ impl PatchMatrices {
     pub fn keeping(&self, shape: usize) -> Option<(usize, &SubPatch)> {
         self.shapes[shape].children.iter().enumerate().find(|(_, c)| c.shape == shape)
     }
-}
-
-/// The sub-patch matrices a mesh's faces need — one [`PatchMatrices`] per patch type at its
-/// vertices (interior valences, and every place in every boundary fan) — and the lookup from a
-/// face to its shape.
-#[derive(Clone, Debug)]
-pub struct MeshPatches {
-    tables: Vec<Arc<PatchMatrices>>,
-    /// Per patch radius, every table's shapes by signature.
-    lookup: Vec<(usize, ShapeLookup)>,
-}
-
-/// Shapes by signature: (table, shape).
-type ShapeLookup = hashbrown::HashMap<Vec<u32>, (usize, usize)>;
-
-/// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
-/// points and its matrices.
-#[derive(Clone, Debug)]
-pub struct FoundPatch {
-    /// The half-edge the patch starts at (corner 0 of its domain).
-    pub start: HalfEdgeId,
-    /// The control points, in [`Mesh::patch`] order.
-    pub vertices: Vec<VertexId>,
-    /// The matrices holding the shape.
-    pub matrices: Arc<PatchMatrices>,
-    /// The shape, an index into the matrices' shapes.
-    pub shape: usize,
-}
-
-impl MeshPatches {
-    /// The matrices for `mesh`'s faces under `scheme`, with the boundary rule refinement would
-    /// use (`options`, else the mesh's tags).
-    ///
-    /// ```
-    /// use subdiv_mesh::{shapes, Mesh};
-    /// use subdiv_schemes::{refine_uniform, Builtin, MeshPatches, RefineOptions};
-    ///
-    /// let cc = Builtin::CatmullClark.scheme();
-    /// let cube = Mesh::build(shapes::cube())?;
-    /// // After one refinement a patch can still hold two of the cube's corners; after two,
-    /// // every face has a shape.
-    /// let once = refine_uniform(&cube, cc, 1, &RefineOptions::DEFAULT)?;
-    /// let patches = MeshPatches::new(cc, &once, &RefineOptions::DEFAULT)?;
-    /// assert!(patches.find(&once, once.face_ids().next().unwrap()).is_none());
-    /// let twice = refine_uniform(&cube, cc, 2, &RefineOptions::DEFAULT)?;
-    /// let patches = MeshPatches::new(cc, &twice, &RefineOptions::DEFAULT)?;
-    /// assert!(twice.face_ids().all(|f| patches.find(&twice, f).is_some()));
-    /// // Face 0 has a corner of the cube (valence 3): 2k + 8 control points.
-    /// assert_eq!(patches.find(&twice, twice.face_ids().next().unwrap()).unwrap().vertices.len(), 14);
-    /// # Ok::<(), Box<dyn std::error::Error>>(())
-    /// ```
-    ///
-    /// # Errors
-    /// As [`PatchMatrices::of`], for the first vertex whose patch type fails.
-    pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, SchemeError> {
-        Self::for_vertices(scheme, mesh, options, mesh.vertices())
-    }
-
-    /// The matrices for the faces `faces` of `mesh` only: the patch types at the vertices
-    /// their patches may hold (within 3 rings, the largest patch radius). Refining a part of a
-    /// mesh leaves a rim whose vertices no face asked for needs.
-    ///
-    /// # Errors
-    /// As [`new`](Self::new).
-    pub fn near(
-        scheme: &Scheme,
-        mesh: &Mesh,
-        options: &RefineOptions,
-        faces: impl IntoIterator<Item = FaceId>,
-    ) -> Result<Self, SchemeError> {
-        let mut corners: Vec<VertexId> =
-            faces.into_iter().flat_map(|f| mesh.face_vertices(f).iter().copied()).collect();
-        corners.sort_unstable();
-        corners.dedup();
-        let mut near: Vec<VertexId> = mesh.face_rings(&corners, MAX_RADIUS).into_keys().collect();
-        near.sort_unstable();
-        Self::for_vertices(scheme, mesh, options, near)
-    }
-
-    fn for_vertices(
-        scheme: &Scheme,
-        mesh: &Mesh,
-        options: &RefineOptions,
-        vertices: impl IntoIterator<Item = VertexId>,
-    ) -> Result<Self, SchemeError> {
-        let boundary = options.boundary_for(mesh);
-        let mut types = Vec::new();
-        for v in vertices.into_iter().filter(|&v| !mesh.is_isolated(v)) {
-            vertex_types(scheme, mesh, v, &mut types)?;
-        }
-        let mut seen = std::collections::HashSet::new();
-        types.retain(|t| seen.insert(*t));
-        let tables: Vec<Arc<PatchMatrices>> =
-            types.into_iter().map(|t| PatchMatrices::of(scheme, t, boundary)).collect::<Result<_, _>>()?;
-        // One lookup over every table, per radius; the first table with a shape keeps it
-        // (equal signatures have equal matrices).
-        let mut lookup: Vec<(usize, ShapeLookup)> = Vec::new();
-        for (t, table) in tables.iter().enumerate() {
-            let at = match lookup.iter().position(|(r, _)| *r == table.radius) {
-                Some(at) => at,
-                None => {
-                    lookup.push((table.radius, ShapeLookup::new()));
-                    lookup.len() - 1
-                }
-            };
-            for (signature, &shape) in &table.by_signature {
-                lookup[at].1.entry(signature.clone()).or_insert((t, shape));
-            }
-        }
-        Ok(Self { tables, lookup })
-    }
-
-    /// The largest patch radius of the types found, `None` when there are none.
-    pub fn max_radius(&self) -> Option<usize> {
-        self.lookup.iter().map(|(r, _)| *r).max()
-    }
-
-    /// The patch of `face` in the first rotation whose shape is known, or `None` (a face whose
-    /// patch holds two irregular vertices, which a further refinement separates, or a
-    /// semi-sharp feature, which refinement spends).
-    pub fn find(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
-        // Every radius is at least 1, so no patch of such a face has a shape: answered without
-        // walking its rotations (most faces near a semi-sharp crease descend).
-        if mesh.near_semi_sharp(face) {
-            return None;
-        }
-        mesh.face_half_edges(face).find_map(|start| self.at(mesh, start))
-    }
-
-    /// The patch starting at `start`, if its shape is known.
-    pub fn at(&self, mesh: &Mesh, start: HalfEdgeId) -> Option<FoundPatch> {
-        self.lookup.iter().find_map(|(radius, shapes)| {
-            let patch = mesh.patch(start, *radius);
-            let &(table, shape) = shapes.get(&patch.signature)?;
-            Some(FoundPatch { start, vertices: patch.vertices, matrices: self.tables[table].clone(), shape })
-        })
-    }
-}
-
-/// Appends the patch types of `v`'s faces to `types`: one per face for a boundary vertex or
-/// an interior one with sharp spokes (each counted from its face), one for a smooth interior
-/// vertex; none where a feature at `v` is semi-sharp (not stationary: its faces are refined
-/// until it is spent).
-fn vertex_types(scheme: &Scheme, mesh: &Mesh, v: VertexId, types: &mut Vec<PatchType>) -> Result<(), SchemeError> {
-    let class = Sharpness::of;
-    let corner = class(mesh.vertex_sharpness(v));
-    if corner == Sharpness::SemiSharp {
-        return Ok(());
-    }
-    // The spokes counter-clockwise: spoke s is the first side of the fan's face s, and the
-    // last side of face s − 1. A boundary fan starts at its boundary half-edge.
-    let boundary = mesh.is_boundary_vertex(v);
-    let first = if boundary {
-        mesh.outgoing(v).find(|&h| mesh.twin(h).is_none()).expect("a boundary vertex has a boundary half-edge")
-    } else {
-        mesh.outgoing(v).next().expect("a vertex with faces has an outgoing half-edge")
-    };
-    let mut spokes = Vec::new();
-    let mut h = Some(first);
-    while let Some(at) = h {
-        spokes.push(class(mesh.edge_sharpness(mesh.edge(at))));
-        let incoming = mesh.prev(at);
-        h = mesh.twin(incoming).filter(|&t| t != first);
-        if h.is_none() && boundary {
-            spokes.push(class(mesh.edge_sharpness(mesh.edge(incoming))));
-        }
-    }
-    if spokes.contains(&Sharpness::SemiSharp) {
-        return Ok(());
-    }
-    let faces = if boundary { spokes.len() - 1 } else { spokes.len() };
-    let sharp_spoke = |s: usize| spokes[s] == Sharpness::Infinite && !(boundary && (s == 0 || s == faces));
-    if (0..spokes.len()).any(|s| s >= 64 && sharp_spoke(s)) {
-        return Err(SchemeError::ValenceNotSupported {
-            scheme: scheme.name.clone(),
-            valence: spokes.len(),
-            reason: "infinitely sharp edges are supported at vertices of up to 64 edges",
-        });
-    }
-    let mask = |rotation: usize| -> u64 {
-        (0..faces.min(64)).filter(|&s| sharp_spoke((s + rotation) % spokes.len())).fold(0, |m, s| m | 1 << s)
-    };
-    let corner = corner == Sharpness::Infinite;
-    if boundary {
-        let sharp = SharpFeatures { edges: mask(0), corner };
-        types.extend((0..faces).map(|index| PatchType::Boundary { faces, index, sharp }));
-    } else if mask(0) == 0 {
-        types.push(PatchType::Interior { valence: faces, sharp: SharpFeatures { edges: 0, corner } });
-    } else {
-        types.extend(
-            (0..faces).map(|j| PatchType::Interior { valence: faces, sharp: SharpFeatures { edges: mask(j), corner } }),
-        );
-    }
-    Ok(())
 }
 
 /// A shape whose children are still to be found: where its patch lies.
