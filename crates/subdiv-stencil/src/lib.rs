@@ -20,11 +20,13 @@
 //!   format, or computed on demand.
 
 mod address;
+mod domain;
 mod error;
 mod exact;
 mod linalg;
 mod mesh_eval;
 mod parallel;
+mod patch_levels;
 mod surface;
 pub mod surface_basis;
 mod table;
@@ -35,12 +37,11 @@ pub use rational::Rational;
 // ---- end of curve stencils ----------------------------------------------------------------
 
 pub use address::{Address, Dyadic};
+pub use domain::{FaceDomain, GridParameter, MAX_DENOMINATOR_BITS, PatchFrame, dyadic_from_f64};
 pub use error::StencilError;
 pub use exact::{ExactSurfaceStencil, exact_surface_stencil};
-pub use mesh_eval::{
-    FaceDomain, GridParameter, LimitEvaluator, LimitPoint, MAX_DENOMINATOR_BITS, PatchFrame, PatchLevels, Resolved,
-    dyadic_from_f64,
-};
+pub use mesh_eval::{LimitEvaluator, LimitPoint};
+pub use patch_levels::{PatchLevels, Resolved};
 pub use surface::{EvaluatorStats, StencilEvaluator, SurfaceStencil, surface_stencil};
 pub use table::{
     DEFAULT_TABLES, Grid, MAX_TABLE_RATE, StencilCache, StencilTable, StencilTables, TABLE_MAGIC, TABLE_VERSION,
