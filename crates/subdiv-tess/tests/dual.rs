@@ -689,3 +689,46 @@ fn smooth_meshes_have_no_extra_normals() {
         assert_eq!(out.triangle_normals, out.triangles, "{name}");
     }
 }
+
+/// Every shared mesh with sharp features, at rates 3, 8 and screen-space: consistently
+/// oriented, watertight and welded, the Euler characteristic kept, and (at rate 3) every
+/// vertex on the limit surface with its normal.
+#[test]
+fn shared_creased_meshes_are_watertight_and_on_the_limit_surface() {
+    use subdiv_tess::rates::{Camera, ScreenSpace};
+    let Some(dir) = subdiv_testkit::meshes_dir() else { return };
+    let mut compared = 0;
+    for path in subdiv_testkit::obj_files(&dir) {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let text = std::fs::read_to_string(&path).unwrap();
+        if !text.lines().any(|l| l.starts_with("t crease") || l.starts_with("t corner")) {
+            continue;
+        }
+        let Ok(mesh) = subdiv_io::load_mesh(&path, &Default::default()) else { continue };
+        let builtin = if name.starts_with("loop_") { Builtin::Loop } else { Builtin::CatmullClark };
+        let (lo, hi) = mesh.bounding_box().unwrap();
+        let camera =
+            Camera::look_at((lo + hi) * 0.5 + (hi - lo) * DVec3::new(0.9, 0.7, 1.3), (lo + hi) * 0.5, DVec3::Y);
+        let screen = ScreenSpace::new(camera, [640, 480], 12.0).face_rates(&mesh).unwrap();
+        for rates in [vec![3; mesh.face_count()], vec![8; mesh.face_count()], screen] {
+            let out = tessellate(builtin, &mesh, &rates);
+            if mesh.edges().all(|e| !mesh.is_boundary_edge(e)) && mesh.face_ids().all(|f| !mesh.is_hole(f)) {
+                check_facing(&out, &mesh);
+            }
+            // Welded (one vertex per position), no edge used twice one way; only open meshes
+            // have a border.
+            let border = check(&out);
+            assert!(
+                border.is_empty()
+                    || mesh.edges().any(|e| mesh.is_boundary_edge(e))
+                    || mesh.face_ids().any(|f| mesh.is_hole(f)),
+                "{name}: cracks"
+            );
+            assert_eq!(euler(&out), input_euler(&mesh), "{name}");
+        }
+        eprintln!("{name}");
+        on_limit_surface(builtin, &mesh, &vec![3; mesh.face_count()]);
+        compared += 1;
+    }
+    assert!(compared >= 45, "{compared} creased meshes");
+}
