@@ -315,6 +315,35 @@ mod tests {
         }
     }
 
+    /// At a dart (one infinitely sharp edge ends at a smooth vertex) the limit is the dominant
+    /// left eigenvector of the dart's local matrix, not the smooth vertex's limit mask (which
+    /// OpenSubdiv applies there): the vertex's refined positions converge to ours, geometrically.
+    #[test]
+    fn refined_darts_converge_to_the_limit_point() {
+        let cc = Builtin::CatmullClark.scheme();
+        let mut soup = shapes::cube();
+        let [a, b] = [soup.face(FaceId::new(0))[0], soup.face(FaceId::new(0))[1]];
+        soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 10.0 });
+        let mesh = Mesh::build(soup).unwrap();
+        let limit = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap().eval(FaceId::new(0), 0.0, 0.0);
+        let limit = limit.unwrap().position;
+        // Vertex points keep their vertex's index under refinement.
+        let (refined, _) = refine_uniform_n(&mesh, cc, 9);
+        let mut current = mesh.clone();
+        let mut distances = Vec::new();
+        for _ in 0..9 {
+            current = refine(&current, cc, &RefineOptions::DEFAULT).unwrap();
+            distances.push((current.position(a) - limit).length());
+        }
+        assert_eq!(current.position(a), refined.position(a));
+        // Each level shrinks the distance (by at least the subdominant eigenvalue's ½ or so),
+        // to 2^-9-ish of the first level's.
+        for w in distances.windows(2) {
+            assert!(w[1] < 0.8 * w[0], "{distances:?}");
+        }
+        assert!(distances[8] < 1e-2 * distances[0], "{distances:?}");
+    }
+
     /// `mesh` refined `levels` times, with the mesh of every level before the last.
     fn refine_uniform_n(mesh: &Mesh, scheme: &Scheme, levels: usize) -> (Mesh, Vec<Mesh>) {
         let mut all = vec![mesh.clone()];
