@@ -109,19 +109,6 @@ pub enum StencilError {
         /// The face.
         face: usize,
     },
-    /// A mesh feature the sub-patch matrices do not model, so evaluation would be wrong.
-    #[error(
-        "limit evaluation with {scheme}: {feature} are not supported yet (the sub-patch matrices are derived for \
-         smooth meshes with boundaries), but the mesh has them ({element})"
-    )]
-    FeatureNotSupported {
-        /// The scheme's name.
-        scheme: String,
-        /// What, e.g. `creases (edge sharpness)`.
-        feature: &'static str,
-        /// The first element that has it, e.g. `edge 3-7`.
-        element: String,
-    },
     /// A face whose patch has no known shape after several refinements: a bug, please report.
     #[error("internal error, please report: face {face} finds no patch shape within {levels} levels of refinement")]
     NoPatch {

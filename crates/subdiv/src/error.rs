@@ -33,7 +33,7 @@ pub enum Error {
     Tess(#[from] TessError),
     /// [`Rates::Tolerance`](crate::Rates::Tolerance) for the dual method needs the quadtree's
     /// curvature bounds, which do not take this mesh or scheme (closed Catmull-Clark meshes
-    /// without creases only).
+    /// only).
     #[error("rates to a tolerance: {0}")]
     ToleranceBounds(#[source] TessError),
     /// [`Method::Quadtree`](crate::Method::Quadtree) was asked for with rates other than

@@ -204,8 +204,8 @@ impl Surface {
     /// # Errors
     /// [`Error::QuadtreeRates`] for [`Method::Quadtree`] without [`Rates::Tolerance`]; as
     /// [`face_rates`](Self::face_rates); [`Error::Tess`] for a mesh or scheme the tessellator
-    /// does not take (the quadtree: closed Catmull-Clark meshes without creases; the dual:
-    /// primal schemes with sub-patch matrices, no creases), rates outside `1..=128`, or a
+    /// does not take (the quadtree: closed Catmull-Clark meshes; the dual: primal schemes
+    /// with sub-patch matrices), rates outside `1..=128`, or a
     /// tolerance the quadtree cannot meet within its depth and polygon limits.
     pub fn tessellate(&mut self, options: &TessOptions) -> Result<Tessellation, Error> {
         if options.method == Method::Dual {

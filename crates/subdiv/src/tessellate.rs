@@ -19,7 +19,7 @@ pub enum Rates {
     /// One rate per face, in face order.
     PerFace(Vec<u32>),
     /// The rates (dual) or leaves (quadtree) that prove every limit point within the
-    /// tolerance of the output. Closed Catmull-Clark meshes without creases.
+    /// tolerance of the output. Closed Catmull-Clark meshes (creases included).
     Tolerance(Tolerance),
     /// Screen-space rates (paper 000 §6): each face cut so that its output edges are about
     /// `pixels_per_edge` pixels long in a `viewport` seen by `camera`.
@@ -278,8 +278,8 @@ fn write_obj(w: &mut dyn Write, mesh: &TessMesh, faces: ObjFaces) -> std::io::Re
         return Ok(());
     }
     // A polygon's corners take the normals of the triangles it is made of (a dual quad
-    // `a b c d` is the triangles `a b c` and `a c d`; the quadtree's leaves, without creases,
-    // have their vertices' own).
+    // `a b c d` is the triangles `a b c` and `a c d`; the quadtree's leaves have
+    // their vertices' own: it does not split normals at creases).
     let mut triangles = std::collections::HashMap::new();
     for (t, n) in mesh.triangles.iter().zip(&mesh.triangle_normals) {
         triangles.insert(sorted(*t), (*t, *n));
