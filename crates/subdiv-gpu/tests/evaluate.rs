@@ -137,22 +137,28 @@ fn procedural_meshes_match_the_cpu() {
     }
 }
 
+/// [`check_to`] on shared meshes, each at its three uniform rates.
+fn check_shared(gpu: &Gpu, cases: &[(&str, Builtin, [u32; 3])], normal_bound: f64) {
+    for &(file, builtin, rates) in cases {
+        let Some(path) = subdiv_testkit::shared_mesh(file) else { return };
+        let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
+        for rate in rates {
+            check_to(gpu, file, builtin, &mesh, &vec![rate; mesh.face_count()], normal_bound);
+        }
+    }
+}
+
 #[test]
 fn shared_meshes_match_the_cpu() {
     let Some(gpu) = subdiv_testkit::gpu() else { return };
-    for (file, builtin, rates) in [
+    let cases = [
         ("opensubdiv/catmark_cube.obj", Builtin::CatmullClark, [4, 8, 32]),
         ("keenan/spot_control_mesh.obj", Builtin::CatmullClark, [2, 8, 16]),
         ("opensubdiv/catmark_nonquads.obj", Builtin::CatmullClark, [3, 8, 12]),
         ("opensubdiv/catmark_hole_test1.obj", Builtin::CatmullClark, [2, 6, 9]),
         ("opensubdiv/loop_cube.obj", Builtin::Loop, [2, 7, 12]),
-    ] {
-        let Some(path) = subdiv_testkit::shared_mesh(file) else { return };
-        let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
-        for rate in rates {
-            check(&gpu, file, builtin, &mesh, &vec![rate; mesh.face_count()]);
-        }
-    }
+    ];
+    check_shared(&gpu, &cases, 1e-5);
 }
 
 /// Creases, corners, semi-sharp creases (refined locally: their plans run through levels) and
@@ -160,19 +166,14 @@ fn shared_meshes_match_the_cpu() {
 #[test]
 fn creased_meshes_match_the_cpu() {
     let Some(gpu) = subdiv_testkit::gpu() else { return };
-    for (file, builtin, rates) in [
+    let cases = [
         ("opensubdiv/catmark_car.obj", Builtin::CatmullClark, [2, 5, 8]),
         ("opensubdiv/catmark_cubes_semisharp.obj", Builtin::CatmullClark, [3, 8, 16]),
         ("opensubdiv/catmark_pyramid_creases0.obj", Builtin::CatmullClark, [3, 8, 16]),
         ("opensubdiv/catmark_chaikin1.obj", Builtin::CatmullClark, [2, 7, 12]),
         ("opensubdiv/loop_cubes_infsharp.obj", Builtin::Loop, [2, 7, 12]),
-    ] {
-        let Some(path) = subdiv_testkit::shared_mesh(file) else { return };
-        let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
-        for rate in rates {
-            check_to(&gpu, file, builtin, &mesh, &vec![rate; mesh.face_count()], 1e-4);
-        }
-    }
+    ];
+    check_shared(&gpu, &cases, 1e-4);
 }
 
 /// Tiny buffers split the stencil data over many dispatches; the output is the same, bit for

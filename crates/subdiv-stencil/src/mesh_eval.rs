@@ -291,11 +291,7 @@ mod tests {
         // surface of the cage over face f's corner square [0, 1/8]² is the surface of the
         // 3 times refined mesh over child 0 of child 0 of child 0 of f.
         let cc = Builtin::CatmullClark.scheme();
-        let mut soup = shapes::cube();
-        let [a, b] = [soup.face(FaceId::new(0))[0], soup.face(FaceId::new(0))[1]];
-        soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 2.5 });
-        soup.tags.corners.push(subdiv_mesh::CornerTag { vertex: b, sharpness: 1.5 });
-        let mesh = Mesh::build(soup).unwrap();
+        let (mesh, _) = creased_cube(2.5, Some(1.5));
         let refined = refine_uniform_n(&mesh, cc, 3);
         let coarse = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap();
         let fine = LimitEvaluator::new(cc, &refined.0, &RefineOptions::DEFAULT).unwrap();
@@ -315,16 +311,25 @@ mod tests {
         }
     }
 
+    /// The cube with its face 0's first side (corners 0 to 1) of `sharpness`, corner 1 a corner
+    /// of `corner`; and face 0's corner 0.
+    fn creased_cube(sharpness: f64, corner: Option<f64>) -> (Mesh, subdiv_mesh::VertexId) {
+        let mut soup = shapes::cube();
+        let [a, b] = [soup.face(FaceId::new(0))[0], soup.face(FaceId::new(0))[1]];
+        soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness });
+        if let Some(sharpness) = corner {
+            soup.tags.corners.push(subdiv_mesh::CornerTag { vertex: b, sharpness });
+        }
+        (Mesh::build(soup).unwrap(), a)
+    }
+
     /// At a dart (one infinitely sharp edge ends at a smooth vertex) the limit is the dominant
     /// left eigenvector of the dart's local matrix, not the smooth vertex's limit mask (which
     /// OpenSubdiv applies there): the vertex's refined positions converge to ours, geometrically.
     #[test]
     fn refined_darts_converge_to_the_limit_point() {
         let cc = Builtin::CatmullClark.scheme();
-        let mut soup = shapes::cube();
-        let [a, b] = [soup.face(FaceId::new(0))[0], soup.face(FaceId::new(0))[1]];
-        soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 10.0 });
-        let mesh = Mesh::build(soup).unwrap();
+        let (mesh, a) = creased_cube(10.0, None);
         let limit = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap().eval(FaceId::new(0), 0.0, 0.0);
         let limit = limit.unwrap().position;
         // Vertex points keep their vertex's index under refinement.

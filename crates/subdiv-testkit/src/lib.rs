@@ -97,3 +97,29 @@ pub fn obj_files(dir: &Path) -> Vec<PathBuf> {
     walk(dir, &mut files);
     files
 }
+
+/// The shared meshes with sharp features (a `t crease` or `t corner` tag) that load, with the
+/// scheme each is meant for (Loop for the all-triangle `loop_*` shapes, else Catmull-Clark), in
+/// path order; empty when the shared folder is not set.
+///
+/// # Panics
+/// When the shared folder is set but a mesh file cannot be read.
+pub fn creased_meshes() -> Vec<(PathBuf, subdiv_schemes::Builtin, subdiv_mesh::Mesh)> {
+    let Some(dir) = meshes_dir() else { return Vec::new() };
+    let mut out = Vec::new();
+    for path in obj_files(&dir) {
+        let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        if !text.lines().any(|l| l.starts_with("t crease") || l.starts_with("t corner")) {
+            continue;
+        }
+        let Ok(mesh) = subdiv_io::load_mesh(&path, &Default::default()) else { continue };
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let builtin = if name.starts_with("loop_") {
+            subdiv_schemes::Builtin::Loop
+        } else {
+            subdiv_schemes::Builtin::CatmullClark
+        };
+        out.push((path, builtin, mesh));
+    }
+    out
+}

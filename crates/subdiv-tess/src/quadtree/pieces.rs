@@ -109,20 +109,28 @@ fn candidate_net(
     Ok(net)
 }
 
-/// Whether each child of `shape` is the matching quarter of its net, on every basis function.
-fn quarters_agree(matrices: &PatchMatrices, shape: usize, nets: &[Vec<f64>]) -> bool {
+/// Whether every child of `shape` is the matching de Casteljau quarter of its net, on every
+/// basis function, to `tolerance`: `net(shape, points)` gives a shape's Bézier net over its
+/// control points (`None`: it has none, and the check fails).
+fn children_are_quarters(
+    matrices: &PatchMatrices,
+    shape: usize,
+    tolerance: f64,
+    net: impl Fn(usize, &[DVec3]) -> Option<Bicubic>,
+) -> bool {
     let s = &matrices.shapes[shape];
-    let net_of = |shape: usize, points: &[DVec3]| bezier_in_frame(&nets[shape], points, PatchFrame::new(4, 0));
     s.children.iter().all(|child| {
         !child.domain.flipped
             && (0..s.size).all(|k| {
                 let basis: Vec<DVec3> = (0..s.size).map(|m| if m == k { DVec3::X } else { DVec3::ZERO }).collect();
                 let [qx, qy] = child.domain.offset.map(usize::from);
-                let expected = net_of(shape, &basis).quarter(qx, qy);
-                let mine = net_of(child.shape, &child.apply(&basis));
+                let (Some(parent), Some(mine)) = (net(shape, &basis), net(child.shape, &child.apply(&basis))) else {
+                    return false;
+                };
+                let expected = parent.quarter(qx, qy);
                 let diff =
                     mine.net.iter().flatten().zip(expected.net.iter().flatten()).map(|(a, b)| (*a - *b).length());
-                diff.fold(0.0, f64::max) <= 1e-11
+                diff.fold(0.0, f64::max) <= tolerance
             })
     })
 }
@@ -144,7 +152,9 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
     let mut evaluator = StencilEvaluator::new(&**matrices);
     let nets: Vec<Vec<f64>> =
         (0..shapes.len()).map(|s| candidate_net(&mut evaluator, shapes[s].size, s)).collect::<Result<_, _>>()?;
-    let mut polynomial: Vec<bool> = (0..shapes.len()).map(|s| quarters_agree(matrices, s, &nets)).collect();
+    let net_of = |shape: usize, points: &[DVec3]| Some(bezier_in_frame(&nets[shape], points, PatchFrame::new(4, 0)));
+    let mut polynomial: Vec<bool> =
+        (0..shapes.len()).map(|s| children_are_quarters(matrices, s, 1e-11, net_of)).collect();
     loop {
         let drop: Vec<usize> = (0..shapes.len())
             .filter(|&s| polynomial[s] && shapes[s].children.iter().any(|c| !polynomial[c.shape]))
@@ -219,34 +229,15 @@ pub(crate) fn regular_grid(size: usize, parameters: Option<&[Vec<f64>; 2]>) -> O
     Some(grid)
 }
 
-/// Checks that the regular shape's children are the quarters of the bicubic B-spline patch,
-/// on every basis function: what makes the pieces polynomials of bidegree 3.
-pub(crate) fn check_bicubic(matrices: &PatchMatrices, shape: usize, grid: &[usize; 16]) -> Result<(), String> {
-    let s = &matrices.shapes[shape];
-    for child in &s.children {
-        let Some(child_grid) =
-            regular_grid(matrices.shapes[child.shape].size, matrices.shapes[child.shape].parameters.as_ref())
-        else {
-            return Err(format!("a child of regular shape {shape} is not regular"));
-        };
-        let [qx, qy] = child.domain.offset.map(usize::from);
-        for k in 0..16 {
-            let basis: Vec<DVec3> = (0..16).map(|m| if m == k { DVec3::X } else { DVec3::ZERO }).collect();
-            let parent =
-                Bicubic::from_bspline(&std::array::from_fn(|j| std::array::from_fn(|i| basis[grid[j * 4 + i]])));
-            let points = child.apply(&basis);
-            let mine =
-                Bicubic::from_bspline(&std::array::from_fn(|j| std::array::from_fn(|i| points[child_grid[j * 4 + i]])));
-            let expected = parent.quarter(qx, qy);
-            let diff = mine.net.iter().flatten().zip(expected.net.iter().flatten()).map(|(a, b)| (*a - *b).length());
-            if diff.fold(0.0, f64::max) > 1e-12 {
-                return Err(
-                    "its regular patches are not bicubic B-splines (the quadtree's bounds need Catmull-Clark)".into()
-                );
-            }
-        }
-    }
-    Ok(())
+/// Whether the regular shape's children (regular too) are the quarters of its bicubic B-spline
+/// patch on every basis function: what makes the pieces polynomials of bidegree 3.
+pub(crate) fn check_bicubic(matrices: &PatchMatrices, shape: usize) -> bool {
+    let net = |shape: usize, points: &[DVec3]| {
+        let s = &matrices.shapes[shape];
+        let grid = regular_grid(s.size, s.parameters.as_ref())?;
+        Some(Bicubic::from_bspline(&std::array::from_fn(|j| std::array::from_fn(|i| points[grid[j * 4 + i]]))))
+    };
+    children_are_quarters(matrices, shape, 1e-12, net)
 }
 
 impl QuadtreeTessellator {

@@ -52,7 +52,7 @@ pub(super) fn tensor_weights_match(
 pub(super) fn bicubic_grid(matrices: &PatchMatrices, shape: usize) -> Option<[usize; 16]> {
     let s = &matrices.shapes[shape];
     let grid = regular_grid(s.size, s.parameters.as_ref())?;
-    check_bicubic(matrices, shape, &grid).ok().map(|()| grid)
+    check_bicubic(matrices, shape).then_some(grid)
 }
 
 impl Evaluator {
