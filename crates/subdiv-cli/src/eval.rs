@@ -38,6 +38,9 @@ pub(crate) struct EvalArgs {
     /// interior Catmull-Clark or Loop-like ones, exact stencils elsewhere).
     #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
     method: MethodArg,
+    /// The most points `--grid` may evaluate (a larger request is refused before any work).
+    #[arg(long, value_name = "POINTS", default_value_t = subdiv::DEFAULT_MAX_POINTS)]
+    max_points: u64,
     /// Output CSV file (written atomically); standard output when omitted.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -67,7 +70,7 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
         MethodArg::Stencil => EvalMethod::Stencil,
         MethodArg::Auto => EvalMethod::Auto,
     };
-    let mut options = EvalOptions::DEFAULT.with_method(method);
+    let mut options = EvalOptions::DEFAULT.with_method(method).with_max_points(args.max_points);
     if let Some(boundary) = args.boundary {
         options = options.with_boundary(match boundary {
             Boundary::EdgeOnly => BoundaryInterpolation::EdgeOnly,

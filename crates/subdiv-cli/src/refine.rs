@@ -20,6 +20,9 @@ pub(crate) struct RefineArgs {
     /// Number of refinement levels (each multiplies the face count by about 4).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=8))]
     levels: u32,
+    /// The most faces the refinement may make (a larger request is refused before any work).
+    #[arg(long, value_name = "FACES", default_value_t = subdiv::DEFAULT_MAX_REFINED_FACES)]
+    max_faces: u64,
     /// Output OBJ file; standard output when omitted. Hole faces are left out.
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -32,7 +35,7 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
     let start = Instant::now();
     // A progress bar on stderr when the run is long (indicatif draws nothing when stderr is not
     // a terminal).
-    let surface = Surface::new(mesh, &scheme);
+    let surface = Surface::new(mesh, &scheme).with_max_refined_faces(args.max_faces);
     let bar = if surface.refined_faces_at_least(levels) > 2_000_000 {
         indicatif::ProgressBar::new(levels as u64).with_message(format!("refining with {}", scheme.name()))
     } else {

@@ -3,6 +3,7 @@
 
 use std::io::Write;
 
+use num_integer::Integer;
 use serde_json::{Value, json};
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
@@ -47,6 +48,16 @@ fn parse_fraction(text: &str) -> Result<(i64, i64), UserError> {
     if q <= 0 { Err(bad()) } else { Ok((p, q)) }
 }
 
+/// The point `(a/b, c/d)` over one denominator, `lcm(b, d)`, or an error naming `at` when
+/// that does not fit in 64 bits (it must not wrap to another point).
+fn common_point(at: &str, (a, b): (i64, i64), (c, d): (i64, i64)) -> Result<Dyadic, UserError> {
+    let q = (b / b.gcd(&d)).checked_mul(d);
+    let point = q.and_then(|q| Some(Dyadic::new(a.checked_mul(q / b)?, c.checked_mul(q / d)?, q)));
+    point.ok_or_else(|| {
+        UserError(format!("--at {at}: the common denominator of the two fractions does not fit in 64 bits"))
+    })
+}
+
 pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserError> {
     if let Some(curve) = CurveScheme::builtin(&args.scheme) {
         return run_curve(args, &curve, out);
@@ -66,7 +77,7 @@ fn run_curve(args: &StencilArgs, scheme: &CurveScheme, out: &mut impl Write) -> 
     let text = |r: &Rational| if args.exact { r.to_string() } else { format!("{:.17}", r.to_f64()) };
     if let Some(at) = &args.at {
         let (p, q) = parse_fraction(at)?;
-        let scaled = p * i64::from(n);
+        let scaled = p.checked_mul(i64::from(n)).ok_or_else(|| UserError(format!("x = {at} is too large")))?;
         if scaled % q != 0 {
             return Err(UserError(format!("x = {at} is not on the grid (1/{n})ℤ; pass --n a multiple of {q}")));
         }
@@ -115,8 +126,7 @@ fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Re
     let points: Vec<Dyadic> = match &args.at {
         Some(at) => {
             let (u, v) = at.split_once(',').ok_or_else(|| UserError(format!("--at {at}: expected U,V")))?;
-            let ((a, b), (c, d)) = (parse_fraction(u)?, parse_fraction(v)?);
-            vec![Dyadic::new(a * d, c * b, b * d)]
+            vec![common_point(at, parse_fraction(u)?, parse_fraction(v)?)?]
         }
         None => Grid::Primal.points(matrices.face_size, args.n),
     };

@@ -78,9 +78,10 @@ pub enum CurveError {
         /// Its value.
         value: f64,
     },
-    /// A TOML scheme file does not parse (syntax, missing or unknown field, bad weight).
+    /// A TOML scheme file does not parse (syntax, missing or unknown field, bad weight): where
+    /// and why, in one line.
     #[error("cannot read the curve scheme (TOML): {0}")]
-    Toml(#[from] toml::de::Error),
+    Toml(String),
     /// A RON scheme file does not parse (syntax, missing or unknown field, bad weight).
     #[error("cannot read the curve scheme (RON): {0}")]
     Ron(#[from] ron::error::SpannedError),
@@ -337,7 +338,7 @@ impl CurveScheme {
     /// [`CurveError::Toml`] when the text does not parse, has a missing or unknown field or a
     /// bad weight; otherwise the errors of [`new`](Self::new).
     pub fn from_toml_str(text: &str) -> Result<Self, CurveError> {
-        Self::from_raw(toml::from_str(text)?)
+        Self::from_raw(toml::from_str(text).map_err(|e| CurveError::Toml(crate::scheme::toml_message(text, &e)))?)
     }
 
     /// Reads a scheme from RON (fields as in the [type docs](Self); the struct name

@@ -26,11 +26,21 @@ pub struct Expr {
     root: Node,
 }
 
+/// The deepest nesting a weight formula may have: parentheses, unary minus signs, powers and
+/// function calls, each one level. The parser descends once per level, so this bounds its stack;
+/// the masks of the built-in schemes nest at most 4 levels.
+pub const MAX_FORMULA_DEPTH: usize = 256;
+
+/// The longest weight formula, in bytes. Chains such as `1 + 1 + …` make trees as deep as they
+/// are long, which evaluation walks recursively, so the length bounds that stack too.
+pub const MAX_FORMULA_LENGTH: usize = 4096;
+
 /// Why a weight formula does not parse.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("in `{formula}` at column {column}: {message}")]
 pub struct ExprError {
-    /// The formula.
+    /// The formula, or for a long one the 60 bytes or so around the column, with `…`
+    /// where it was cut (so that the message stays one short line).
     pub formula: String,
     /// 1-based column of the problem.
     pub column: usize,
@@ -121,7 +131,13 @@ impl std::str::FromStr for Expr {
     type Err = ExprError;
 
     fn from_str(source: &str) -> Result<Self, ExprError> {
-        let mut parser = Parser { source, bytes: source.as_bytes(), at: 0 };
+        let mut parser = Parser { source, bytes: source.as_bytes(), at: 0, depth: 0 };
+        if source.len() > MAX_FORMULA_LENGTH {
+            return Err(parser.error(&format!(
+                "the formula is {} bytes long, more than the limit of {MAX_FORMULA_LENGTH}",
+                source.len()
+            )));
+        }
         let root = parser.sum()?;
         parser.skip_space();
         if parser.at < parser.bytes.len() {
@@ -178,11 +194,24 @@ struct Parser<'a> {
     source: &'a str,
     bytes: &'a [u8],
     at: usize,
+    /// Levels of nesting entered (see [`MAX_FORMULA_DEPTH`]).
+    depth: usize,
 }
 
 impl Parser<'_> {
     fn error(&self, message: &str) -> ExprError {
-        ExprError { formula: self.source.to_string(), column: self.at + 1, message: message.to_string() }
+        ExprError { formula: excerpt(self.source, self.at), column: self.at + 1, message: message.to_string() }
+    }
+
+    /// `parse` one level deeper, or an error past [`MAX_FORMULA_DEPTH`].
+    fn nested(&mut self, parse: impl FnOnce(&mut Self) -> Result<Node, ExprError>) -> Result<Node, ExprError> {
+        if self.depth == MAX_FORMULA_DEPTH {
+            return Err(self.error(&format!("the formula nests deeper than the limit of {MAX_FORMULA_DEPTH} levels")));
+        }
+        self.depth += 1;
+        let node = parse(self);
+        self.depth -= 1;
+        node
     }
 
     fn skip_space(&mut self) {
@@ -222,7 +251,7 @@ impl Parser<'_> {
     fn unary(&mut self) -> Result<Node, ExprError> {
         if self.peek() == Some(b'-') {
             self.at += 1;
-            return Ok(Node::Neg(Box::new(self.unary()?)));
+            return Ok(Node::Neg(Box::new(self.nested(Self::unary)?)));
         }
         self.power()
     }
@@ -232,7 +261,7 @@ impl Parser<'_> {
         if self.peek() == Some(b'^') {
             self.at += 1;
             // Right-associative, and binds tighter than a unary minus on its left: -2^2 = -4.
-            let exponent = self.unary()?;
+            let exponent = self.nested(Self::unary)?;
             return Ok(Node::Binary(Op::Pow, Box::new(base), Box::new(exponent)));
         }
         Ok(base)
@@ -242,7 +271,7 @@ impl Parser<'_> {
         match self.peek() {
             Some(b'(') => {
                 self.at += 1;
-                let inner = self.sum()?;
+                let inner = self.nested(Self::sum)?;
                 if self.peek() != Some(b')') {
                     return Err(self.error("expected `)`"));
                 }
@@ -299,13 +328,27 @@ impl Parser<'_> {
                 if self.peek() != Some(b'(') {
                     return Err(self.error(&format!("expected `(` after `{word}`")));
                 }
-                let argument = self.atom()?;
+                let argument = self.nested(Self::atom)?;
                 Ok(Node::Call(function, Box::new(argument)))
             }
             Some(_) => Err(self.error("expected a number, a variable, a function or `(`")),
             None => Err(self.error("unexpected end of formula")),
         }
     }
+}
+
+/// `source`, or when it is long about 60 bytes of it around byte `at`, cut at character
+/// boundaries and marked with `…`.
+fn excerpt(source: &str, at: usize) -> String {
+    const WIDTH: usize = 60;
+    if source.chars().count() <= WIDTH + 20 {
+        return source.to_string();
+    }
+    let boundary = |i: usize| (0..=i.min(source.len())).rev().find(|&b| source.is_char_boundary(b)).unwrap_or(0);
+    let start = boundary(at.saturating_sub(WIDTH / 2));
+    let end = boundary(start + WIDTH);
+    let (head, tail) = (if start > 0 { "…" } else { "" }, if end < source.len() { "…" } else { "" });
+    format!("{head}{}{tail}", &source[start..end])
 }
 
 #[cfg(test)]
@@ -346,6 +389,31 @@ mod tests {
         assert!("(1 + 2".parse::<Expr>().unwrap_err().message.contains("`)`"));
         assert!("1 2".parse::<Expr>().unwrap_err().message.contains("unexpected"));
         assert!("".parse::<Expr>().unwrap_err().message.contains("end"));
+    }
+
+    #[test]
+    fn deep_formulas_are_refused() {
+        // 10,000 parentheses overflowed the parser's stack; the limit refuses them, in one short
+        // line that quotes the place, not the whole formula.
+        for (formula, rule) in [
+            (format!("{}1{}", "(".repeat(10_000), ")".repeat(10_000)), "longer"),
+            (format!("{}1{}", "(".repeat(1_000), ")".repeat(1_000)), "nests deeper"),
+            (format!("{}1", "-".repeat(1_000)), "nests deeper"),
+            (format!("2{}", "^2".repeat(1_000)), "nests deeper"),
+            (format!("{}1{}", "abs(".repeat(500), ")".repeat(500)), "nests deeper"),
+            (format!("1{}", "+1".repeat(3_000)), "longer"),
+        ] {
+            let e = formula.parse::<Expr>().unwrap_err();
+            let text = e.to_string();
+            assert!(text.contains(if rule == "longer" { "bytes long" } else { rule }), "{text}");
+            assert!(text.len() < 200 && !text.contains('\n'), "{text}");
+        }
+        let nested = format!("{}1{}", "(".repeat(MAX_FORMULA_DEPTH), ")".repeat(MAX_FORMULA_DEPTH));
+        assert_eq!(eval(&nested, 0, 0), 1.0);
+        assert_eq!(eval(&format!("1{}", "+1".repeat(2_000)), 0, 0), 2001.0);
+        assert_eq!(excerpt("ab", 1), "ab");
+        let cut = excerpt(&"é".repeat(100), 100);
+        assert!(cut.starts_with('…') && cut.ends_with('…') && cut.len() <= 66, "{cut}");
     }
 
     #[test]

@@ -92,7 +92,7 @@ mod stencil;
 pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, LocalSpectrum};
 pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};
 pub use error::SchemeError;
-pub use expr::{Expr, ExprError};
+pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};
 pub use mesh_patches::{FoundPatch, MeshPatches};
 pub use patch::{
     ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces, sub_patch_starts,

@@ -322,12 +322,21 @@ impl Scheme {
 
     /// Parses and validates a scheme written in TOML.
     ///
+    /// ```
+    /// use subdiv_schemes::Scheme;
+    ///
+    /// let e = Scheme::from_toml_str("name = \"x\"\nsplit = 3\n").unwrap_err();
+    /// // One line, with the place: `line 2, column 1: unknown field `split`, …`.
+    /// assert!(e.to_string().contains("line 2, column 1: unknown field `split`"), "{e}");
+    /// assert!(!e.to_string().contains('\n'));
+    /// ```
+    ///
     /// # Errors
     /// [`SchemeError::Parse`] for malformed TOML or a bad formula, [`SchemeError::InvalidScheme`]
     /// when a mask's weights do not sum to 1.
     pub fn from_toml_str(text: &str) -> Result<Self, SchemeError> {
         let scheme: Self =
-            toml::from_str(text).map_err(|e| SchemeError::Parse { format: "TOML", message: e.to_string() })?;
+            toml::from_str(text).map_err(|e| SchemeError::Parse { format: "TOML", message: toml_message(text, &e) })?;
         scheme.validate()?;
         Ok(scheme)
     }
@@ -542,6 +551,21 @@ pub(crate) fn extraordinary_spokes(mask: &ExtraordinaryEdgeMask, k: usize) -> Ve
     }
 }
 
+/// A TOML error in one line: `line L, column C: reason` (the toml crate's own message spans
+/// several, with a drawing of the line), the reason's lines joined.
+pub(crate) fn toml_message(text: &str, error: &toml::de::Error) -> String {
+    let reason = error.message().split_whitespace().collect::<Vec<_>>().join(" ");
+    match error.span() {
+        Some(span) => {
+            let before = &text[..span.start.min(text.len())];
+            let line = before.matches('\n').count() + 1;
+            let column = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+            format!("line {line}, column {column}: {reason}")
+        }
+        None => reason,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -583,6 +607,17 @@ mod tests {
         }
         let e = Scheme::from_toml_str("name = \"x\"\n[rules.sqrt3]\nvertex = { spoke = \"1/q\" }\n").unwrap_err();
         assert!(e.to_string().contains("unknown name `q`"), "{e}");
+        // A formula nesting 10,000 parentheses (20 KB of TOML) overflowed the parser's stack;
+        // now it is a one-line error with the place, as every TOML error is.
+        let deep = format!("{}1{}", "(".repeat(10_000), ")".repeat(10_000));
+        let e = Scheme::from_toml_str(&format!("name = \"x\"\n[rules.sqrt3]\nvertex = {{ spoke = \"{deep}\" }}\n"))
+            .unwrap_err();
+        let text = e.to_string();
+        assert!(matches!(e, SchemeError::Parse { format: "TOML", .. }), "{e}");
+        assert!(text.starts_with("cannot read the scheme (TOML): line 3, column 20:"), "{text}");
+        assert!(text.len() < 300 && !text.contains('\n'), "{text}");
+        let e = Scheme::from_toml_str("name = \"x\"\nrules = [\n").unwrap_err();
+        assert!(!e.to_string().contains('\n') && e.to_string().contains("line 2"), "{e}");
         let e = Scheme::from_ron_str("(name: \"x\", rules: Midedge, extra: 1)").unwrap_err();
         assert!(matches!(e, SchemeError::Parse { format: "RON", .. }), "{e}");
     }

@@ -177,6 +177,24 @@ impl FaceDomain {
         }
     }
 
+    /// How many points [`grid`](Self::grid) lists for `n`, without listing them (for budgets).
+    ///
+    /// ```
+    /// use subdiv_stencil::FaceDomain;
+    ///
+    /// assert_eq!(FaceDomain::Quad.grid_len(4), 25);
+    /// assert_eq!(FaceDomain::Triangle.grid_len(4), 15);
+    /// assert_eq!(FaceDomain::SubFaces { size: 5, columns: 3 }.grid_len(4), 5 * 25);
+    /// ```
+    pub fn grid_len(self, n: u32) -> u64 {
+        let side = u64::from(n) + 1;
+        match self {
+            Self::Quad => side * side,
+            Self::Triangle => side * (side + 1) / 2,
+            Self::SubFaces { size, .. } => size as u64 * side * side,
+        }
+    }
+
     /// The points of `osd_limit --grid n` on a face of this domain, in its order: quads
     /// `(i/n, j/n)`, `j` outer; triangles the same with `i + j ≤ n`; N-gons, for each sub-face,
     /// the `(n + 1)²` grid of normalized sub-face coordinates.
@@ -291,6 +309,14 @@ mod tests {
     use crate::patch_levels::children;
     use subdiv_mesh::{FaceId, Mesh, shapes};
     use subdiv_schemes::{Builtin, RefineOptions, refine};
+
+    #[test]
+    fn grid_len_counts_the_grid() {
+        let domains = [FaceDomain::Quad, FaceDomain::Triangle, FaceDomain::of(Split::Quad, 7).unwrap()];
+        for (domain, n) in domains.into_iter().flat_map(|d| [1, 2, 5, 16].map(|n| (d, n))) {
+            assert_eq!(domain.grid_len(n), domain.grid(n).len() as u64, "{domain:?} at {n}");
+        }
+    }
 
     #[test]
     fn patch_frames_round_trip_and_keep_orientation() {

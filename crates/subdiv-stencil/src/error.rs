@@ -19,6 +19,21 @@ pub enum StencilError {
         /// The domain, e.g. `[0, 1]²`.
         domain: &'static str,
     },
+    /// A rational parameter whose address (prefix and period of its binary expansion) is
+    /// longer than the walk limit, [`MAX_ADDRESS_STEPS`](crate::MAX_ADDRESS_STEPS) by default.
+    #[error(
+        "parameter ({u}, {v}): its sub-patch address is longer than {limit} levels (the binary expansion's period \
+         grows with the denominator's odd part); use a denominator with a shorter period, such as a power of two, \
+         or raise the limit (StencilEvaluator::with_max_address_steps)"
+    )]
+    AddressTooLong {
+        /// The first parameter.
+        u: String,
+        /// The second parameter.
+        v: String,
+        /// The limit on the walk's levels.
+        limit: usize,
+    },
     /// Exact stencils need rational sub-patch matrices; this scheme's are not (at this patch).
     #[error("{scheme}: no exact stencils: {detail}")]
     NotRational {

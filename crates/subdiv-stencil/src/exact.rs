@@ -4,8 +4,9 @@
 
 use subdiv_schemes::{PatchMatrices, SubPatch};
 
+use crate::address::{MAX_ADDRESS_STEPS, Walked};
 use crate::rational::{SparseRow, fraction_within, solve_sparse};
-use crate::surface::{State, WalkEnd, address_walk, check_request, periodic_derivatives};
+use crate::surface::{State, address_walk, check_request, periodic_derivatives};
 use crate::{Dyadic, Rational, StencilError};
 
 /// Matrix entries are read back as fractions with denominators up to this.
@@ -49,8 +50,8 @@ pub fn exact_surface_stencil(
     point: Dyadic,
 ) -> Result<ExactSurfaceStencil, StencilError> {
     check_request(matrices, shape, point)?;
-    let (walk, end) = address_walk(matrices, shape, point, |_| false);
-    let WalkEnd::Cycle(first) = end else { unreachable!("a walk that knows no state ends in a cycle") };
+    let (walk, end) = address_walk(matrices, shape, point, |_| false, MAX_ADDRESS_STEPS)?;
+    let Walked::Cycle(first) = end else { unreachable!("a walk that knows no state ends in a cycle") };
     let sub = |(s, c): (State, u8)| &matrices.shapes[s.shape].children[usize::from(c)];
     let exact: Vec<Vec<Vec<Rational>>> =
         walk.iter().map(|&w| exact_matrix(matrices, sub(w))).collect::<Result<_, _>>()?;

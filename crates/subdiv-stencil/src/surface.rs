@@ -9,7 +9,7 @@ use faer::c64;
 use faer::linalg::solvers::DenseSolveCore;
 use subdiv_schemes::{PatchMatrices, SubPatch};
 
-use crate::address::{check_domain, step};
+use crate::address::{MAX_ADDRESS_STEPS, Walk, Walked, check_domain, step, too_long, walk};
 use crate::linalg::{normalised_left_eigenvectors, null_space};
 use crate::{Dyadic, StencilError};
 
@@ -106,6 +106,7 @@ pub struct StencilEvaluator<M: Borrow<PatchMatrices>> {
     memo: HashMap<State, usize>,
     stencils: Vec<SurfaceStencil>,
     stats: EvaluatorStats,
+    max_address_steps: usize,
 }
 
 /// What a [`StencilEvaluator`] has solved so far: the sizes of the systems behind its stencils.
@@ -134,37 +135,26 @@ impl State {
     }
 }
 
-/// Where an address walk stopped.
-pub(crate) enum WalkEnd {
-    /// At a state the caller knows, which follows the last step.
-    Known(State),
-    /// At a state the walk had passed: the steps from this index on form a cycle.
-    Cycle(usize),
-}
-
 /// The address walk of `point` in the patch of shape `shape`: each state with the child taken
 /// from it, until a state `known` accepts or a state repeats. The point must be in the domain
 /// and the shape among the matrices'.
+///
+/// # Errors
+/// [`StencilError::AddressTooLong`] past `limit` steps.
 pub(crate) fn address_walk(
     matrices: &PatchMatrices,
     shape: usize,
     point: Dyadic,
     known: impl Fn(&State) -> bool,
-) -> (Vec<(State, u8)>, WalkEnd) {
-    let mut walk: Vec<(State, u8)> = Vec::new();
-    let mut state = State::new(shape, point);
-    loop {
-        if known(&state) {
-            return (walk, WalkEnd::Known(state));
-        }
-        if let Some(first) = walk.iter().position(|(s, _)| *s == state) {
-            return (walk, WalkEnd::Cycle(first));
-        }
+    limit: usize,
+) -> Result<Walk<State>, StencilError> {
+    let next = |state: State| {
         let Dyadic { u, v, denominator: q } = state.point;
         let (child, u, v) = step(matrices.face_size, u, v, q);
-        walk.push((state, child));
-        state = State::new(matrices.shapes[state.shape].children[usize::from(child)].shape, Dyadic::new(u, v, q));
-    }
+        let shape = matrices.shapes[state.shape].children[usize::from(child)].shape;
+        (child, State::new(shape, Dyadic::new(u, v, q)))
+    };
+    walk(State::new(shape, point), next, known, limit).map_err(|limit| too_long(point, limit))
 }
 
 /// [`StencilError::OutsideDomain`] or [`StencilError::Shape`] unless `point` and `shape` can be
@@ -181,7 +171,36 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
     /// An evaluator over `matrices` (borrowed, or shared through an `Arc`), remembering nothing
     /// yet.
     pub fn new(matrices: M) -> Self {
-        Self { matrices, memo: HashMap::new(), stencils: Vec::new(), stats: EvaluatorStats::default() }
+        Self {
+            matrices,
+            memo: HashMap::new(),
+            stencils: Vec::new(),
+            stats: EvaluatorStats::default(),
+            max_address_steps: MAX_ADDRESS_STEPS,
+        }
+    }
+
+    /// The same evaluator, refusing points whose address walk passes `steps` levels
+    /// ([`MAX_ADDRESS_STEPS`] by default) with [`StencilError::AddressTooLong`]. Each level of
+    /// a point's period costs one matrix product in its eigenproblem.
+    ///
+    /// ```
+    /// use subdiv_mesh::BoundaryInterpolation;
+    /// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
+    /// use subdiv_stencil::{Dyadic, StencilError, StencilEvaluator};
+    ///
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// let m = PatchMatrices::of(cc, PatchType::interior(4), BoundaryInterpolation::EdgeOnly)?;
+    /// // 1/11 has a binary period of 10 levels.
+    /// let mut short = StencilEvaluator::new(&*m).with_max_address_steps(8);
+    /// assert!(matches!(short.stencil(0, Dyadic::new(1, 0, 11)), Err(StencilError::AddressTooLong { .. })));
+    /// assert!(short.stencil(0, Dyadic::new(1, 0, 4)).is_ok());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    #[must_use]
+    pub fn with_max_address_steps(mut self, steps: usize) -> Self {
+        self.max_address_steps = steps;
+        self
     }
 
     /// What it has solved so far.
@@ -200,13 +219,14 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
     /// As [`surface_stencil`].
     pub fn stencil(&mut self, shape: usize, point: Dyadic) -> Result<&SurfaceStencil, StencilError> {
         check_request(self.matrices(), shape, point)?;
-        let (walk, end) = address_walk(self.matrices(), shape, point, |s| self.memo.contains_key(s));
+        let (walk, end) =
+            address_walk(self.matrices(), shape, point, |s| self.memo.contains_key(s), self.max_address_steps)?;
         // The order in which the walk's states get their stencils, each from its successor's:
         // a cycle is solved at its least state (not where this walk entered it), so that a
         // state's stencil does not depend on which points were asked before.
         let order: Vec<usize> = match end {
-            WalkEnd::Known(_) => (0..walk.len()).rev().collect(),
-            WalkEnd::Cycle(first) => {
+            Walked::Known(_) => (0..walk.len()).rev().collect(),
+            Walked::Cycle(first) => {
                 let least = (first..walk.len()).min_by_key(|&i| walk[i].0).expect("a cycle has a state");
                 let stencil = self.periodic(&[&walk[least..], &walk[first..least]].concat(), point)?;
                 self.stats.eigen_solves += 1;
@@ -217,8 +237,8 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
         };
         let successor = |i: usize| match end {
             _ if i + 1 < walk.len() => walk[i + 1].0,
-            WalkEnd::Known(state) => state,
-            WalkEnd::Cycle(first) => walk[first].0,
+            Walked::Known(state) => state,
+            Walked::Cycle(first) => walk[first].0,
         };
         for i in order {
             let (state, child) = walk[i];

@@ -51,6 +51,22 @@ pub enum Error {
         /// A lower bound of the faces they would make.
         faces: u64,
     },
+    /// A request for more work than a documented, raisable limit allows, refused before
+    /// anything is allocated: grid points ([`EvalOptions::max_points`](crate::EvalOptions::max_points)),
+    /// refined faces ([`Surface::with_max_refined_faces`](crate::Surface::with_max_refined_faces)).
+    #[error("{verb} {requested} {noun}, more than the limit of {limit}; {raise}")]
+    Budget {
+        /// What the request would do, e.g. `would evaluate`.
+        verb: &'static str,
+        /// What it would make, e.g. `grid points`.
+        noun: &'static str,
+        /// How many it would make.
+        requested: u64,
+        /// The limit in force.
+        limit: u64,
+        /// How to ask for less or raise the limit.
+        raise: &'static str,
+    },
     /// A grid size outside `1..=`[`MAX_GRID`](crate::MAX_GRID).
     #[error("grid {n}: the grid size must be from 1 to {max}")]
     Grid {

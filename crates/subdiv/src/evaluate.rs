@@ -10,6 +10,11 @@ use crate::Error;
 /// The largest grid [`Evaluator::grid`] takes: `(n + 1)²` points per quad.
 pub const MAX_GRID: u32 = 4096;
 
+/// The most points [`Evaluator::grid`] evaluates unless raised with
+/// [`EvalOptions::with_max_points`]: 10⁷, about 1 GB of [`GridPoint`]s (96 bytes each) and
+/// 2 GB of `subdiv eval` CSV.
+pub const DEFAULT_MAX_POINTS: u64 = 10_000_000;
+
 /// Options of [`Surface::evaluator`](crate::Surface::evaluator).
 ///
 /// ```
@@ -29,16 +34,26 @@ pub struct EvalOptions {
     /// The boundary rule and the other options refinement takes. Default:
     /// [`RefineOptions::DEFAULT`] (everything from the mesh's tags).
     pub refine: RefineOptions,
+    /// The most points one [`Evaluator::grid`] evaluates; a larger grid is refused with
+    /// [`Error::Budget`] before anything is allocated. Default: [`DEFAULT_MAX_POINTS`].
+    pub max_points: u64,
 }
 
 impl EvalOptions {
     /// The defaults: [`EvalMethod::Auto`], the mesh's tags.
-    pub const DEFAULT: Self = Self { method: EvalMethod::Auto, refine: RefineOptions::DEFAULT };
+    pub const DEFAULT: Self =
+        Self { method: EvalMethod::Auto, refine: RefineOptions::DEFAULT, max_points: DEFAULT_MAX_POINTS };
 
     /// These options with [`method`](Self::method).
     #[must_use]
     pub const fn with_method(self, method: EvalMethod) -> Self {
         Self { method, ..self }
+    }
+
+    /// These options with [`max_points`](Self::max_points).
+    #[must_use]
+    pub const fn with_max_points(self, max_points: u64) -> Self {
+        Self { max_points, ..self }
     }
 
     /// These options with the boundary rule `boundary` (instead of the mesh's
@@ -82,12 +97,16 @@ pub struct EvalGrid {
 #[derive(Debug)]
 pub struct Evaluator {
     inner: EigenEvaluator,
+    max_points: u64,
 }
 
 impl Evaluator {
     /// Prepares `mesh` under `scheme`.
     pub(crate) fn new(scheme: &Scheme, mesh: &Mesh, options: &EvalOptions) -> Result<Self, Error> {
-        Ok(Self { inner: EigenEvaluator::new(scheme, mesh, &options.refine, options.method)? })
+        Ok(Self {
+            inner: EigenEvaluator::new(scheme, mesh, &options.refine, options.method)?,
+            max_points: options.max_points,
+        })
     }
 
     /// The method faces were prepared with.
@@ -119,13 +138,41 @@ impl Evaluator {
     /// evaluated.
     ///
     /// # Errors
-    /// [`Error::Grid`] unless `1 ≤ n ≤` [`MAX_GRID`]; as [`evaluate`](Self::evaluate).
+    /// [`Error::Grid`] unless `1 ≤ n ≤` [`MAX_GRID`]; [`Error::Budget`] for more points than
+    /// [`EvalOptions::max_points`]; as [`evaluate`](Self::evaluate).
+    ///
+    /// ```
+    /// use subdiv::mesh::shapes;
+    /// use subdiv::schemes::Builtin;
+    /// use subdiv::{Error, EvalOptions, Surface};
+    ///
+    /// let surface = Surface::build(shapes::cube(), Builtin::CatmullClark.scheme())?;
+    /// let evaluator = surface.evaluator(&EvalOptions::DEFAULT.with_max_points(1000))?;
+    /// assert_eq!(evaluator.grid(8)?.points.len(), 6 * 81);
+    /// assert!(matches!(evaluator.grid(16), Err(Error::Budget { requested: 1734, limit: 1000, .. })));
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
     pub fn grid(&self, n: u32) -> Result<EvalGrid, Error> {
         if !(1..=MAX_GRID).contains(&n) {
             return Err(Error::Grid { n, max: MAX_GRID });
         }
-        let mut grid = EvalGrid::default();
         let exact = self.inner.stencil();
+        let mut points = 0u64;
+        for face in (0..self.inner.face_count() as u32).map(FaceId::new) {
+            if exact.has_surface(face)? {
+                points = points.saturating_add(exact.domain(face)?.grid_len(n));
+            }
+        }
+        if points > self.max_points {
+            return Err(Error::Budget {
+                verb: "the grid would evaluate",
+                noun: "points",
+                requested: points,
+                limit: self.max_points,
+                raise: "use a smaller grid, or raise the limit (EvalOptions::with_max_points, `subdiv eval --max-points`)",
+            });
+        }
+        let mut grid = EvalGrid { points: Vec::with_capacity(points as usize), holes: 0 };
         for face in (0..self.inner.face_count() as u32).map(FaceId::new) {
             if self.method() == EvalMethod::Stencil {
                 let points = exact.grid(face, n)?;

@@ -50,12 +50,48 @@ pub struct Surface {
     dual: Option<DualTessellator>,
     /// The quadtree tessellator (also the tolerance policy's bounds).
     quadtree: Option<QuadtreeTessellator>,
+    /// The most faces [`Surface::refine`] makes.
+    max_refined_faces: u64,
 }
+
+/// The most faces [`Surface::refine`] makes unless raised with
+/// [`Surface::with_max_refined_faces`]: 2²², about 4 million faces, a refined mesh of about
+/// 1 GB in memory (a face, its half-edges, vertices and the refiner's tables take about 250
+/// bytes), and an OBJ of about 300 MB.
+pub const DEFAULT_MAX_REFINED_FACES: u64 = 1 << 22;
 
 impl Surface {
     /// The surface of `mesh` under `scheme` (prepared lazily: nothing fails here).
     pub fn new(mesh: Mesh, scheme: &Scheme) -> Self {
-        Self { mesh, scheme: scheme.clone(), evaluator: OnceLock::new(), dual: None, quadtree: None }
+        Self {
+            mesh,
+            scheme: scheme.clone(),
+            evaluator: OnceLock::new(),
+            dual: None,
+            quadtree: None,
+            max_refined_faces: DEFAULT_MAX_REFINED_FACES,
+        }
+    }
+
+    /// The same surface, letting [`refine`](Self::refine) make up to `faces` faces (by the
+    /// lower bound [`refined_faces_at_least`](Self::refined_faces_at_least)) instead of
+    /// [`DEFAULT_MAX_REFINED_FACES`].
+    ///
+    /// ```
+    /// use subdiv::mesh::shapes;
+    /// use subdiv::schemes::Builtin;
+    /// use subdiv::{Error, Surface};
+    ///
+    /// // A cube's 6 faces make 24 · 4^(levels − 1) faces.
+    /// let surface = Surface::build(shapes::cube(), Builtin::CatmullClark.scheme())?.with_max_refined_faces(100);
+    /// assert_eq!(surface.refine(2)?.face_count(), 96);
+    /// assert!(matches!(surface.refine(3), Err(Error::Budget { requested: 384, limit: 100, .. })));
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
+    #[must_use]
+    pub fn with_max_refined_faces(mut self, faces: u64) -> Self {
+        self.max_refined_faces = faces;
+        self
     }
 
     /// The surface of a polygon soup, built into a mesh first.
@@ -91,8 +127,10 @@ impl Surface {
     /// count by about 4.
     ///
     /// # Errors
-    /// [`Error::Scheme`] for a mesh the scheme does not take; [`Error::RefineLevels`] for more
-    /// faces than 32-bit ids hold.
+    /// [`Error::Scheme`] for a mesh the scheme does not take; [`Error::Budget`] for more faces
+    /// than [`with_max_refined_faces`](Self::with_max_refined_faces) allows
+    /// ([`DEFAULT_MAX_REFINED_FACES`]); [`Error::RefineLevels`] for more faces than 32-bit ids
+    /// hold.
     pub fn refine(&self, levels: usize) -> Result<Mesh, Error> {
         self.refine_with_progress(levels, |_| {})
     }
@@ -122,6 +160,15 @@ impl Surface {
     /// As [`refine`](Self::refine).
     pub fn refine_with_progress(&self, levels: usize, progress: impl FnMut(usize)) -> Result<Mesh, Error> {
         let faces = self.refined_faces_at_least(levels);
+        if faces > self.max_refined_faces {
+            return Err(Error::Budget {
+                verb: "refining would make at least",
+                noun: "faces",
+                requested: faces,
+                limit: self.max_refined_faces,
+                raise: "refine fewer levels, or raise the limit (Surface::with_max_refined_faces, `subdiv refine --max-faces`)",
+            });
+        }
         if faces > u64::from(u32::MAX) {
             return Err(Error::RefineLevels { levels, faces });
         }
@@ -487,6 +534,14 @@ mod tests {
             Surface::new(Mesh::build(shapes::cube()).unwrap(), Builtin::Loop.scheme()).refine(1),
             Err(Error::Scheme(_))
         ));
+        // Levels × faces past the budget, then past 32-bit ids once the budget is raised:
+        // refused before anything is allocated (8 levels of the cube: 393,216 faces).
+        let s = Surface::build(shapes::cube(), Builtin::CatmullClark.scheme()).unwrap();
+        assert!(matches!(
+            s.refine(12),
+            Err(Error::Budget { requested: 100_663_296, limit: DEFAULT_MAX_REFINED_FACES, .. })
+        ));
+        let s = s.with_max_refined_faces(u64::MAX);
         assert!(matches!(s.refine(40), Err(Error::RefineLevels { levels: 40, .. })));
     }
 

@@ -1,0 +1,76 @@
+//! Requests for more work than the documented limits allow: refused in one line with exit
+//! status 2 before anything is allocated, and allowed once the limit is raised.
+
+use std::process::{Command, Output};
+
+fn subdiv(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_subdiv")).args(args).output().expect("the binary runs")
+}
+
+/// Checks that `args` fail with status 2 and one line on stderr containing each of `expect`.
+fn refused(args: &[&str], expect: &[&str]) {
+    let output = subdiv(args);
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "{args:?}: {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "{args:?}: one line on stderr, got {stderr:?}");
+    for e in expect {
+        assert!(stderr.contains(e), "{args:?}: expected {e:?} in {stderr:?}");
+    }
+    assert!(output.stdout.is_empty(), "{args:?}: nothing written on stdout");
+}
+
+/// An `n × n` grid of quads as OBJ, in a temporary folder.
+fn grid_obj(n: usize) -> (tempfile::TempDir, String) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            text += &format!("v {i} {j} 0\n");
+        }
+    }
+    for j in 0..n {
+        for i in 0..n {
+            let a = j * (n + 1) + i + 1;
+            text += &format!("f {} {} {} {}\n", a, a + 1, a + n + 2, a + n + 1);
+        }
+    }
+    let path = dir.path().join("grid.obj");
+    std::fs::write(&path, text).unwrap();
+    (dir, path.to_str().unwrap().to_string())
+}
+
+#[test]
+fn eval_grids_past_the_point_budget_are_refused() {
+    // A cube at the largest grid, 6 · 4097² = 100.7 million points, aborted on memory.
+    let (dir, _) = grid_obj(1);
+    let cube = dir.path().join("cube.obj");
+    subdiv::io::write_obj(&cube, &subdiv::mesh::shapes::cube()).unwrap();
+    let cube = cube.to_str().unwrap();
+    refused(&["eval", cube, "--grid", "4096"], &["cube.obj", "100712454 points", "limit of 10000000", "--max-points"]);
+    refused(&["eval", cube, "--grid", "8", "--max-points", "100"], &["486 points", "limit of 100"]);
+    let output = subdiv(&["eval", cube, "--grid", "8", "--max-points", "486"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert_eq!(String::from_utf8_lossy(&output.stdout).lines().count(), 1 + 486);
+}
+
+#[test]
+fn refinement_past_the_face_budget_is_refused() {
+    // 225 quads at 8 levels, 900 · 4⁷ = 14.7 million faces, aborted on memory.
+    let (_dir, grid) = grid_obj(15);
+    refused(&["refine", &grid, "--levels", "8"], &["grid.obj", "14745600 faces", "limit of 4194304", "--max-faces"]);
+    refused(&["refine", &grid, "--levels", "2", "--max-faces", "1000"], &["3600 faces", "limit of 1000"]);
+    let output = subdiv(&["refine", &grid, "--levels", "2", "--max-faces", "3600"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+#[test]
+fn stencil_parameters_are_exact_and_their_periods_bounded() {
+    // 1/1000003 has a binary period of 10⁶ levels: 548 s before, refused at the walk limit now.
+    refused(&["stencil", "--at", "1/1000003,0"], &["longer than 16384 levels", "power of two"]);
+    // A common denominator past 64 bits wrapped to the stencil at (0.5, 0.5).
+    refused(&["stencil", "--at", "1/4294967297,1/4294967298"], &["--at 1/4294967297,1/4294967298", "64 bits"]);
+    refused(&["stencil", "--scheme", "four-point", "--at", "9223372036854775807"], &["too large"]);
+    // The same denominator twice is its own common one.
+    let output = subdiv(&["stencil", "--at", "1/3,2/3", "--json"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
