@@ -498,7 +498,7 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
     Ok(glb)
 }
 
-/// Writes `mesh` as a GLB file at `path` (see [`encode_glb`]), through `<path>.tmp` and a
+/// Writes `mesh` as a GLB file at `path` (see [`encode_glb`]), through a fresh `<name>.<16 hex>.tmp` and a
 /// rename, so a failure leaves `path` untouched.
 ///
 /// # Errors

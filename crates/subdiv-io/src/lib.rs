@@ -12,7 +12,10 @@
 //!
 //! No input panics. Every error is an [`IoError`] naming the place (`file:line`, or a glTF JSON
 //! path such as `meshes[0].primitives[1].attributes.POSITION`) and the rule broken. Writers
-//! write `<path>.tmp` and rename it, so a failure never leaves a half-written file.
+//! write a fresh `<name>.<16 hex>.tmp` beside the output (created with `O_EXCL`, so a file or
+//! symlink planted there is never followed) and rename it over the output, so a failure never
+//! leaves a half-written file; [`remove_temporary_files`] deletes those being written, for a
+//! program's SIGINT/SIGTERM handler.
 //!
 //! ```
 //! use subdiv_io::read_obj;
@@ -47,6 +50,7 @@ use std::path::Path;
 
 use subdiv_mesh::{BuildOptions, Mesh, PolygonSoup};
 
+pub use crate::atomic::remove_temporary_files;
 pub use crate::error::IoError;
 pub use crate::gltf::{GlbMesh, encode_glb, load_gltf, parse_gltf, write_glb};
 pub use crate::obj::{ObjFile, ObjLines, load_obj, read_obj, write_obj, write_obj_to};
@@ -81,7 +85,7 @@ pub fn load(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
     }
 }
 
-/// Writes `path` atomically through `write`: to `<path>.tmp` beside it, synced, then renamed
+/// Writes `path` atomically through `write`: to a fresh `<name>.<16 hex>.tmp` beside it, synced, then renamed
 /// over `path`, so a failure (in `write` too) leaves no half-written file and `path` as it was.
 /// For outputs other than meshes, e.g. the CSV of `subdiv eval`.
 ///

@@ -449,7 +449,7 @@ impl Parser {
 /// `t` lines ([`read_obj`] of the file gives `soup` back). Unsupported tags are written by name
 /// only (`t vertexedit 0/0/0`), as that is all the reader keeps of them.
 ///
-/// The file is written to `<path>.tmp` and renamed, so a failure leaves `path` untouched.
+/// The file is written to a fresh `<name>.<16 hex>.tmp` and renamed, so a failure leaves `path` untouched.
 ///
 /// # Errors
 /// [`IoError::Unwritable`] when the soup cannot be read back (a face with fewer than 3
