@@ -405,6 +405,43 @@ pub struct GlbMesh<'a> {
     pub indices: &'a [u32],
 }
 
+/// The smallest magnitude, other than 0, of a coordinate the GLB writer accepts: 2^-102.
+///
+/// GLB stores f32s. A coordinate below f32's smallest normal number (2^-126) would be written
+/// as a subnormal or, converted from f64, as 0 — the mesh collapses to a point — and GPUs flush
+/// subnormals to zero in any case. 2^-102 = 2^-126 · 2^24 leaves room for f32's 24-bit
+/// significand: the differences between neighbouring coordinates of that size (an edge, a
+/// derivative, one ulp apart) are still normal numbers, so the shape survives the renderer
+/// too. A mesh this small is to be scaled up before it is written.
+pub const MIN_GLB_EXTENT: f64 = 1.0 / (1u128 << 102) as f64;
+
+/// Checks that every coordinate of `positions` is representable as a normal f32 that keeps the
+/// shape ([`MIN_GLB_EXTENT`]): finite, at most `f32::MAX` in magnitude, and 0 or at least
+/// `MIN_GLB_EXTENT`. [`encode_glb`] calls it on its f32 input; a caller that converts f64
+/// positions to f32 calls it on the f64s first, where a coordinate that the conversion would
+/// flush to 0 is still seen.
+///
+/// # Errors
+/// [`IoError::Unwritable`] naming the vertex, the coordinate and what to do (scale the mesh).
+pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> Result<(), IoError> {
+    for (i, p) in positions.into_iter().enumerate() {
+        for x in p.to_array() {
+            let rule = if !x.is_finite() {
+                "is not finite"
+            } else if x.abs() > f64::from(f32::MAX) {
+                "exceeds f32's range (3.4e38); scale the mesh down before writing GLB"
+            } else if x != 0.0 && x.abs() < MIN_GLB_EXTENT {
+                "is too small for f32 (it would be written as 0 or a subnormal; the smallest \
+                 accepted is 2^-102 ≈ 2.0e-31); scale the mesh up before writing GLB"
+            } else {
+                continue;
+            };
+            return Err(IoError::Unwritable { format: "GLB", rule: format!("vertex {i} coordinate {x:e} {rule}") });
+        }
+    }
+    Ok(())
+}
+
 /// Encodes `mesh` as a GLB file: one scene, one node, one mesh with one TRIANGLES primitive;
 /// POSITION (with the `min`/`max` the spec requires), NORMAL when given, `u32` indices, one
 /// tightly packed buffer view per accessor with its target, 4-byte aligned and padded chunks,
@@ -412,7 +449,8 @@ pub struct GlbMesh<'a> {
 ///
 /// # Errors
 /// [`IoError::Unwritable`] for a mesh no valid GLB can hold: no triangle, an index count not a
-/// multiple of 3, an index out of range, a non-finite position, a normal count that differs from
+/// multiple of 3, an index out of range, a coordinate that is not finite or is too small to be
+/// a normal f32 (see [`check_glb_positions`]), a normal count that differs from
 /// the position count, a zero or non-finite normal, more than 4 GiB.
 pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
     let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
@@ -421,9 +459,7 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
     if indices.is_empty() || indices.len() % 3 != 0 {
         return Err(unwritable(format!("{} indices; a mesh needs whole triangles, at least one", indices.len())));
     }
-    if let Some((i, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-        return Err(unwritable(format!("vertex {i} = {p} is not finite")));
-    }
+    check_glb_positions(positions.iter().map(|p| p.as_dvec3()))?;
     if let Some((i, v)) = indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
         return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
     }
@@ -506,4 +542,29 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
 pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoError> {
     let glb = encode_glb(mesh)?;
     atomic::write_file(path.as_ref(), |w| std::io::Write::write_all(w, &glb))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle(positions: &[Vec3]) -> Result<Vec<u8>, IoError> {
+        encode_glb(&GlbMesh { positions, normals: None, indices: &[0, 1, 2] })
+    }
+
+    #[test]
+    fn coordinates_that_are_no_normal_f32_are_refused_with_what_to_do() {
+        let tiny = 1e-40_f32; // subnormal
+        let error = triangle(&[Vec3::ZERO, Vec3::X * tiny, Vec3::Y * tiny]).unwrap_err().to_string();
+        assert!(error.contains("vertex 1") && error.contains("scale the mesh up"), "{error}");
+        // f64 coordinates that f32 flushes to 0: caught before the conversion.
+        let error = check_glb_positions([glam::DVec3::splat(1e-50)]).unwrap_err().to_string();
+        assert!(error.contains("vertex 0") && error.contains("scale the mesh up"), "{error}");
+        let error = check_glb_positions([glam::DVec3::new(0.0, 1e300, 0.0)]).unwrap_err().to_string();
+        assert!(error.contains("scale the mesh down"), "{error}");
+        // The bound itself and 0 are fine.
+        let small = MIN_GLB_EXTENT as f32;
+        assert_eq!(f64::from(small), MIN_GLB_EXTENT);
+        triangle(&[Vec3::ZERO, Vec3::X * small, Vec3::Y * small]).unwrap();
+    }
 }
