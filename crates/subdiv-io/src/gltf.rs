@@ -7,7 +7,8 @@
 //! POSITION references, so it is not used.)
 
 use std::borrow::Cow;
-use std::fs;
+use std::fs::{self, File};
+use std::io::Read as _;
 use std::path::Path;
 
 use ::gltf::json::{
@@ -29,20 +30,97 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
-/// Reads the glTF 2.0 file at `path`: a `.glb`, or a `.gltf` whose buffers are data URIs or
-/// files next to it. See [`parse_gltf`] for what is read.
+/// Limits and permissions of the glTF reader ([`load_gltf_with`], [`parse_gltf_with`]): what a
+/// hostile file may make it read or allocate.
+///
+/// ```
+/// let options = subdiv_io::GltfOptions::DEFAULT.with_max_vertices(1 << 20);
+/// assert!(!options.allow_outside_uris);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GltfOptions {
+    /// Whether buffer URIs may name files outside the glTF file's folder (`../`, absolute
+    /// paths, symlinks that lead out). Default `false`: such a URI is
+    /// [`IoError::UriOutsideFolder`].
+    pub allow_outside_uris: bool,
+    /// The most vertices all primitives together may have (the sum of their POSITION
+    /// counts), checked before anything is allocated. Default 2^26 (about 67 million).
+    pub max_vertices: u64,
+    /// The most vertex indices all primitives together may have (the sum of their index
+    /// counts, or vertex counts where they have none), checked before anything is allocated.
+    /// Default 2^28 (about 268 million, 89 million triangles).
+    pub max_indices: u64,
+}
+
+impl GltfOptions {
+    /// The defaults: buffers inside the glTF's folder only, at most 2^26 vertices and 2^28
+    /// indices.
+    pub const DEFAULT: Self = Self { allow_outside_uris: false, max_vertices: 1 << 26, max_indices: 1 << 28 };
+
+    /// With [`allow_outside_uris`](Self::allow_outside_uris) set to `allow`.
+    #[must_use]
+    pub const fn with_allow_outside_uris(self, allow: bool) -> Self {
+        Self { allow_outside_uris: allow, ..self }
+    }
+
+    /// With [`max_vertices`](Self::max_vertices) set to `max`.
+    #[must_use]
+    pub const fn with_max_vertices(self, max: u64) -> Self {
+        Self { max_vertices: max, ..self }
+    }
+
+    /// With [`max_indices`](Self::max_indices) set to `max`.
+    #[must_use]
+    pub const fn with_max_indices(self, max: u64) -> Self {
+        Self { max_indices: max, ..self }
+    }
+}
+
+impl Default for GltfOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Reads the glTF 2.0 file at `path` with [`GltfOptions::DEFAULT`]; see [`load_gltf_with`].
 ///
 /// # Errors
-/// As [`parse_gltf`]; reading the file or an external buffer fails as [`IoError::Io`].
+/// As [`load_gltf_with`].
 pub fn load_gltf(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
+    load_gltf_with(path, &GltfOptions::DEFAULT)
+}
+
+/// Reads the glTF 2.0 file at `path`: a `.glb`, or a `.gltf` whose buffers are data URIs or
+/// files in its folder. See [`parse_gltf_with`] for what is read.
+///
+/// # Errors
+/// As [`parse_gltf_with`]; reading the file or an external buffer fails as [`IoError::Io`].
+pub fn load_gltf_with(path: impl AsRef<Path>, options: &GltfOptions) -> Result<PolygonSoup, IoError> {
     let path = path.as_ref();
-    let bytes = fs::read(path).map_err(|source| IoError::Io { path: path.to_owned(), source })?;
-    parse_gltf(&bytes, &path.display().to_string(), path.parent())
+    let io = |source| IoError::Io { path: path.to_owned(), source };
+    let file = File::open(path).map_err(io)?;
+    if !file.metadata().map_err(io)?.is_file() {
+        return Err(io(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file")));
+    }
+    let mut bytes = Vec::new();
+    std::io::BufReader::new(file).read_to_end(&mut bytes).map_err(io)?;
+    let dir = path.parent().map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d });
+    parse_gltf_with(&bytes, &path.display().to_string(), dir, options)
+}
+
+/// [`parse_gltf_with`] with [`GltfOptions::DEFAULT`].
+///
+/// # Errors
+/// As [`parse_gltf_with`].
+pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<PolygonSoup, IoError> {
+    parse_gltf_with(bytes, name, base_dir, &GltfOptions::DEFAULT)
 }
 
 /// Reads glTF 2.0 from memory: GLB when `name` ends in `.glb` or the bytes start with the GLB
-/// magic, JSON otherwise. External buffer URIs are resolved against `base_dir`; without one,
-/// only GLB and data-URI buffers can be read.
+/// magic, JSON otherwise. External buffer URIs are resolved against `base_dir` and must stay
+/// inside it (after canonicalisation) unless [`GltfOptions::allow_outside_uris`]; they must
+/// name regular files, of which at most `byteLength` bytes are read. Without `base_dir`, only
+/// GLB and data-URI buffers can be read.
 ///
 /// Every primitive of every mesh, in file order, must be TRIANGLES with a `VEC3`/`FLOAT`
 /// POSITION and optional `u8`/`u16`/`u32` indices (none: consecutive vertex triples). The
@@ -52,26 +130,41 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
 /// coordinates, which is the cage as modelled. Other attributes, materials and animation are
 /// ignored.
 ///
+/// Before any buffer is read, the accessor, buffer view and buffer numbers are checked as
+/// `u64`s against the document ([`IoError::GltfIndex`]), and the vertex and index counts of all
+/// primitives are summed and checked against [`GltfOptions::max_vertices`] and
+/// [`GltfOptions::max_indices`] ([`IoError::GltfTooLarge`]).
+///
 /// # Errors
 /// [`IoError::Gltf`] naming the place and the rule: a truncated or malformed GLB container, bad
 /// JSON, a required extension, a primitive mode other than TRIANGLES, a missing or non-float
 /// POSITION, a non-finite position, an index out of range, an accessor or buffer view outside
-/// its buffer, a sparse accessor. [`IoError::NoGeometry`] when no primitive has a vertex.
-pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<PolygonSoup, IoError> {
+/// its buffer, a sparse accessor. [`IoError::GltfIndex`], [`IoError::GltfTooLarge`],
+/// [`IoError::UriOutsideFolder`], [`IoError::NotARegularFile`], [`IoError::BufferTooShort`] as
+/// above. [`IoError::NoGeometry`] when no primitive has a vertex.
+pub fn parse_gltf_with(
+    bytes: &[u8],
+    name: &str,
+    base_dir: Option<&Path>,
+    options: &GltfOptions,
+) -> Result<PolygonSoup, IoError> {
     let error =
         |location: &str, rule: String| IoError::Gltf { file: name.to_owned(), location: location.to_owned(), rule };
     let is_glb = bytes.starts_with(GLB_MAGIC) || name.to_ascii_lowercase().ends_with(".glb");
     let (json_bytes, bin) = if is_glb { split_glb(bytes, &error)? } else { (bytes, None) };
-    let root = Root::from_slice(json_bytes)
-        .map_err(|e| error(if is_glb { "GLB chunk 0 (JSON)" } else { "JSON" }, e.to_string()))?;
+    let json_at = if is_glb { "GLB chunk 0 (JSON)" } else { "JSON" };
+    let raw: Value = serde_json::from_slice(json_bytes).map_err(|e| error(json_at, e.to_string()))?;
+    check_raw_indices(&raw, name)?;
+    let root = Root::from_slice(json_bytes).map_err(|e| error(json_at, e.to_string()))?;
     if let Some(extension) = root.extensions_required.first() {
         return Err(error("extensionsRequired", format!("requires {extension}, which this reader does not support")));
     }
+    check_totals(&root, name, options)?;
     let buffers = root
         .buffers
         .iter()
         .enumerate()
-        .map(|(i, buffer)| load_buffer(i, buffer, bin, base_dir, &error))
+        .map(|(i, buffer)| load_buffer(i, buffer, bin, base_dir, name, options, &error))
         .collect::<Result<Vec<_>, _>>()?;
     let reader = Reader { root: &root, buffers, error: &error };
 
@@ -123,6 +216,63 @@ pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<P
 
 type ErrorFn<'a> = dyn Fn(&str, String) -> IoError + 'a;
 
+/// Checks every accessor, buffer view and buffer number the reader follows as a `u64` on the raw
+/// JSON: `gltf::json` 1.4 reads them as `u32`, and an index of 2^32 wraps to 0.
+fn check_raw_indices(raw: &Value, name: &str) -> Result<(), IoError> {
+    let len = |key: &str| raw.get(key).and_then(Value::as_array).map_or(0, Vec::len);
+    let check = |value: Option<&Value>, location: String, what: &'static str| {
+        let count = len(what);
+        match value.and_then(Value::as_u64) {
+            Some(index) if index >= count as u64 => {
+                Err(IoError::GltfIndex { file: name.to_owned(), location, what, index, count })
+            }
+            // In range, absent, or not an unsigned integer (which `gltf::json` reports).
+            _ => Ok(()),
+        }
+    };
+    let items = |key: &str| raw.get(key).and_then(Value::as_array).into_iter().flatten().enumerate();
+    for (m, mesh) in items("meshes") {
+        let primitives = mesh.get("primitives").and_then(Value::as_array).into_iter().flatten();
+        for (p, primitive) in primitives.enumerate() {
+            let at = format!("meshes[{m}].primitives[{p}]");
+            if let Some(attributes) = primitive.get("attributes").and_then(Value::as_object) {
+                for (semantic, value) in attributes {
+                    check(Some(value), format!("{at}.attributes.{semantic}"), "accessors")?;
+                }
+            }
+            check(primitive.get("indices"), format!("{at}.indices"), "accessors")?;
+        }
+    }
+    for (a, accessor) in items("accessors") {
+        check(accessor.get("bufferView"), format!("accessors[{a}].bufferView"), "bufferViews")?;
+    }
+    for (v, view) in items("bufferViews") {
+        check(view.get("buffer"), format!("bufferViews[{v}].buffer"), "buffers")?;
+    }
+    Ok(())
+}
+
+/// Sums the vertex and index counts of all primitives and checks them against the limits,
+/// before any buffer is read or any vertex allocated: primitives may share one accessor, so a
+/// small file can ask for a great many vertices.
+fn check_totals(root: &Root, name: &str, options: &GltfOptions) -> Result<(), IoError> {
+    let count = |index: usize| root.accessors.get(index).map_or(0, |a| a.count.0);
+    let (mut vertices, mut indices) = (0u64, 0u64);
+    for primitive in root.meshes.iter().flat_map(|mesh| &mesh.primitives) {
+        let n = primitive.attributes.get(&Checked::Valid(Semantic::Positions)).map_or(0, |a| count(a.value()));
+        vertices = vertices.saturating_add(n);
+        indices = indices.saturating_add(primitive.indices.map_or(n, |i| count(i.value())));
+    }
+    let too_large = |what, requested, limit| IoError::GltfTooLarge { file: name.to_owned(), what, requested, limit };
+    if vertices > options.max_vertices {
+        return Err(too_large("vertices", vertices, options.max_vertices));
+    }
+    if indices > options.max_indices {
+        return Err(too_large("indices", indices, options.max_indices));
+    }
+    Ok(())
+}
+
 /// Splits a GLB container into its JSON chunk and its BIN chunk (if any).
 fn split_glb<'b>(bytes: &'b [u8], error: &ErrorFn<'_>) -> Result<(&'b [u8], Option<&'b [u8]>), IoError> {
     let word = |bytes: &[u8], at: usize| bytes.get(at..at + 4).and_then(|w| w.try_into().ok()).map(u32::from_le_bytes);
@@ -168,15 +318,19 @@ fn split_glb<'b>(bytes: &'b [u8], error: &ErrorFn<'_>) -> Result<(&'b [u8], Opti
     Ok((json, bin))
 }
 
-/// The bytes of buffer `index`: the GLB BIN chunk, a base64 data URI, or a file beside the glTF.
+/// The bytes of buffer `index`: the GLB BIN chunk, a base64 data URI, or a file in the glTF's
+/// folder (see [`parse_gltf_with`]).
 fn load_buffer<'b>(
     index: usize,
     buffer: &json::Buffer,
     bin: Option<&'b [u8]>,
     base_dir: Option<&Path>,
+    name: &str,
+    options: &GltfOptions,
     error: &ErrorFn<'_>,
 ) -> Result<Cow<'b, [u8]>, IoError> {
     let location = format!("buffers[{index}]");
+    let declared = buffer.byte_length.0;
     let data = match (buffer.uri.as_deref(), bin) {
         (None, Some(bin)) if index == 0 => Cow::Borrowed(bin),
         (None, _) => {
@@ -198,7 +352,13 @@ fn load_buffer<'b>(
                 .map_err(|e| error(&location, format!("data URI is not valid base64: {e}")))?
         }
         (Some(uri), _) => {
-            if uri.contains(':') || uri.starts_with('/') {
+            let decoded = percent_decode(uri);
+            let absolute = Path::new(&decoded).is_absolute();
+            if uri.contains(':') || (absolute && !options.allow_outside_uris) {
+                if !uri.contains(':') {
+                    let file = name.to_owned();
+                    return Err(IoError::UriOutsideFolder { file, location, uri: uri.to_owned() });
+                }
                 return Err(error(
                     &location,
                     format!("uri {uri:?} is not relative; only relative file URIs and data URIs are supported"),
@@ -210,15 +370,45 @@ fn load_buffer<'b>(
                     format!("refers to the file {uri:?}, but no directory was given to find it in"),
                 ));
             };
-            let path = dir.join(percent_decode(uri));
-            Cow::Owned(fs::read(&path).map_err(|source| IoError::Io { path, source })?)
+            let path = dir.join(&decoded);
+            let io = |path: &Path| {
+                let path = path.to_owned();
+                move |source| IoError::Io { path, source }
+            };
+            let canonical = path.canonicalize().map_err(io(&path))?;
+            if !options.allow_outside_uris {
+                let dir = dir.canonicalize().map_err(io(dir))?;
+                if !canonical.starts_with(&dir) {
+                    return Err(IoError::UriOutsideFolder { file: name.to_owned(), location, uri: uri.to_owned() });
+                }
+            }
+            // Checked before opening, as opening a FIFO blocks; and again on the open file.
+            let not_regular = || IoError::NotARegularFile {
+                file: name.to_owned(),
+                location: location.clone(),
+                uri: uri.to_owned(),
+                path: path.clone(),
+            };
+            if !fs::metadata(&canonical).map_err(io(&path))?.is_file() {
+                return Err(not_regular());
+            }
+            let file = File::open(&canonical).map_err(io(&path))?;
+            let metadata = file.metadata().map_err(io(&path))?;
+            if !metadata.is_file() {
+                return Err(not_regular());
+            }
+            if metadata.len() < declared {
+                let (file, actual) = (name.to_owned(), metadata.len());
+                return Err(IoError::BufferTooShort { file, location, declared, actual });
+            }
+            let mut data = Vec::new();
+            file.take(declared).read_to_end(&mut data).map_err(io(&path))?;
+            Cow::Owned(data)
         }
     };
-    if (data.len() as u64) < buffer.byte_length.0 {
-        return Err(error(
-            &location,
-            format!("declares byteLength {} but holds {} bytes", buffer.byte_length.0, data.len()),
-        ));
+    if (data.len() as u64) < declared {
+        let actual = data.len() as u64;
+        return Err(IoError::BufferTooShort { file: name.to_owned(), location, declared, actual });
     }
     Ok(data)
 }

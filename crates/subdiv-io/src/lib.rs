@@ -52,7 +52,10 @@ use subdiv_mesh::{BuildOptions, Mesh, PolygonSoup};
 
 pub use crate::atomic::remove_temporary_files;
 pub use crate::error::IoError;
-pub use crate::gltf::{GlbMesh, MIN_GLB_EXTENT, check_glb_positions, encode_glb, load_gltf, parse_gltf, write_glb};
+pub use crate::gltf::{
+    GlbMesh, GltfOptions, MIN_GLB_EXTENT, check_glb_positions, encode_glb, load_gltf, load_gltf_with, parse_gltf,
+    parse_gltf_with, write_glb,
+};
 pub use crate::obj::{ObjFile, ObjLines, load_obj, read_obj, write_obj, write_obj_to};
 
 /// The formats [`load`] reads.
