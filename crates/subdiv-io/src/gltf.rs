@@ -738,6 +738,126 @@ pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoErr
 mod tests {
     use super::*;
 
+    /// A one-triangle glTF whose buffer is the file `uri`, of `byte_length` bytes.
+    fn gltf_with_buffer(uri: &str, byte_length: usize) -> Value {
+        json!({
+            "asset": { "version": "2.0" },
+            "buffers": [{ "uri": uri, "byteLength": byte_length }],
+            "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+            "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3" }],
+            "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        })
+    }
+
+    fn triangle_bytes() -> Vec<u8> {
+        [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    /// Writes `json` as `dir/name` and loads it with `options`.
+    fn load_json(dir: &Path, name: &str, json: &Value, options: &GltfOptions) -> Result<PolygonSoup, IoError> {
+        let path = dir.join(name);
+        fs::write(&path, json.to_string()).unwrap();
+        load_gltf_with(&path, options)
+    }
+
+    #[test]
+    fn buffer_uris_outside_the_gltf_folder_are_refused_unless_allowed() {
+        let root = tempfile::tempdir().unwrap();
+        let folder = root.path().join("model");
+        fs::create_dir(&folder).unwrap();
+        fs::write(root.path().join("secret.bin"), triangle_bytes()).unwrap();
+        let escape = gltf_with_buffer("../secret.bin", 36);
+        let error = load_json(&folder, "a.gltf", &escape, &GltfOptions::DEFAULT).unwrap_err();
+        assert!(matches!(error, IoError::UriOutsideFolder { .. }), "{error:?}");
+        let text = error.to_string();
+        assert!(
+            text.ends_with(
+                "a.gltf: buffers[0].uri '../secret.bin': outside the glTF's folder; pass --allow-outside-uris to allow"
+            ),
+            "{text}"
+        );
+        let allowed = GltfOptions::DEFAULT.with_allow_outside_uris(true);
+        assert_eq!(load_json(&folder, "a.gltf", &escape, &allowed).unwrap().vertex_count(), 3);
+        let absolute = gltf_with_buffer(root.path().join("secret.bin").to_str().unwrap(), 36);
+        let error = load_json(&folder, "b.gltf", &absolute, &GltfOptions::DEFAULT).unwrap_err();
+        assert!(matches!(error, IoError::UriOutsideFolder { .. }), "{error:?}");
+        // A file inside the folder is read as before.
+        fs::write(folder.join("inside.bin"), triangle_bytes()).unwrap();
+        let inside = gltf_with_buffer("inside.bin", 36);
+        assert_eq!(load_json(&folder, "c.gltf", &inside, &GltfOptions::DEFAULT).unwrap().vertex_count(), 3);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn only_regular_files_are_read_and_at_most_byte_length_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let allowed = GltfOptions::DEFAULT.with_allow_outside_uris(true);
+        // /dev/zero would be read until memory runs out.
+        let error = load_json(dir.path(), "zero.gltf", &gltf_with_buffer("/dev/zero", 36), &allowed).unwrap_err();
+        assert!(matches!(error, IoError::NotARegularFile { .. }), "{error:?}");
+        fs::create_dir(dir.path().join("sub")).unwrap();
+        let error = load_json(dir.path(), "dir.gltf", &gltf_with_buffer("sub", 36), &allowed).unwrap_err();
+        assert!(matches!(error, IoError::NotARegularFile { .. }), "{error:?}");
+        // Shorter than byteLength: a typed error; longer: only byteLength bytes are kept.
+        fs::write(dir.path().join("short.bin"), &triangle_bytes()[..20]).unwrap();
+        let error = load_json(dir.path(), "short.gltf", &gltf_with_buffer("short.bin", 36), &allowed).unwrap_err();
+        assert!(matches!(error, IoError::BufferTooShort { declared: 36, actual: 20, .. }), "{error:?}");
+        let mut long = triangle_bytes();
+        long.resize(4096, 7);
+        fs::write(dir.path().join("long.bin"), long).unwrap();
+        let soup = load_json(dir.path(), "long.gltf", &gltf_with_buffer("long.bin", 36), &allowed).unwrap();
+        assert_eq!(soup.vertex_count(), 3);
+    }
+
+    #[test]
+    fn indices_of_2_pow_32_are_errors_not_index_0() {
+        let bytes = triangle_bytes();
+        let data = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bytes)
+        );
+        let valid = gltf_with_buffer(&data, 36);
+        assert!(parse_gltf(valid.to_string().as_bytes(), "t.gltf", None).is_ok());
+        let edits: [(&str, fn(&mut Value)); 3] = [
+            ("meshes[0].primitives[0].attributes.POSITION", |j| {
+                j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(1u64 << 32)
+            }),
+            ("accessors[0].bufferView", |j| j["accessors"][0]["bufferView"] = json!(1u64 << 32)),
+            ("bufferViews[0].buffer", |j| j["bufferViews"][0]["buffer"] = json!(1u64 << 32)),
+        ];
+        for (location, edit) in edits {
+            let mut json = valid.clone();
+            edit(&mut json);
+            let error = parse_gltf(json.to_string().as_bytes(), "t.gltf", None).unwrap_err();
+            assert!(
+                matches!(&error, IoError::GltfIndex { location: at, index, .. } if at == location && *index == 1 << 32),
+                "{error:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn primitives_sharing_one_big_accessor_are_counted_before_anything_is_read() {
+        // 1,000 primitives × 100,000 vertices: 10^8 > 2^26, refused before the (absent) buffer
+        // file is even opened.
+        let primitive = json!({ "attributes": { "POSITION": 0 } });
+        let json = json!({
+            "asset": { "version": "2.0" },
+            "buffers": [{ "uri": "missing.bin", "byteLength": 1_200_000 }],
+            "bufferViews": [{ "buffer": 0, "byteLength": 1_200_000 }],
+            "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 100_000, "type": "VEC3" }],
+            "meshes": [{ "primitives": vec![primitive; 1000] }],
+        });
+        let error = parse_gltf(json.to_string().as_bytes(), "big.gltf", Some(Path::new("."))).unwrap_err();
+        assert!(
+            matches!(error, IoError::GltfTooLarge { what: "vertices", requested: 100_000_000, limit: 67_108_864, .. }),
+            "{error:?}"
+        );
+        let options = GltfOptions::DEFAULT.with_max_vertices(u64::MAX).with_max_indices(1000);
+        let error = parse_gltf_with(json.to_string().as_bytes(), "big.gltf", None, &options).unwrap_err();
+        assert!(matches!(error, IoError::GltfTooLarge { what: "indices", .. }), "{error:?}");
+    }
+
     fn triangle(positions: &[Vec3]) -> Result<Vec<u8>, IoError> {
         encode_glb(&GlbMesh { positions, normals: None, indices: &[0, 1, 2] })
     }
