@@ -16,7 +16,7 @@ use subdiv_gpu::{
 
 use crate::UserError;
 use crate::args::parse_size;
-use crate::input::LoadedMesh;
+use crate::input::{InputArgs, LoadedMesh};
 use crate::scheme_arg::SchemeArgs;
 use crate::tessellate::DEFAULT_RATE;
 
@@ -36,6 +36,8 @@ const TWIST_DEGREES: f64 = 90.0;
 pub(crate) struct RenderArgs {
     /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     #[command(flatten)]
     scheme: SchemeArgs,
     /// Output PNG; written atomically. With --frames, numbered next to it: OUT_0000.png, …
@@ -90,7 +92,7 @@ fn check(args: &RenderArgs) -> Result<([u32; 2], Option<u32>), UserError> {
 pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserError> {
     let ([width, height], frames) = check(args)?;
     let options = RenderOptions { wireframe: args.wireframe, ..RenderOptions::default().with_size(width, height) };
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", loaded.name));
     let start = Instant::now();
