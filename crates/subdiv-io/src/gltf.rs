@@ -818,16 +818,14 @@ mod tests {
         );
         let valid = gltf_with_buffer(&data, 36);
         assert!(parse_gltf(valid.to_string().as_bytes(), "t.gltf", None).is_ok());
-        let edits: [(&str, fn(&mut Value)); 3] = [
-            ("meshes[0].primitives[0].attributes.POSITION", |j| {
-                j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(1u64 << 32)
-            }),
-            ("accessors[0].bufferView", |j| j["accessors"][0]["bufferView"] = json!(1u64 << 32)),
-            ("bufferViews[0].buffer", |j| j["bufferViews"][0]["buffer"] = json!(1u64 << 32)),
+        let edits = [
+            ("meshes[0].primitives[0].attributes.POSITION", "/meshes/0/primitives/0/attributes/POSITION"),
+            ("accessors[0].bufferView", "/accessors/0/bufferView"),
+            ("bufferViews[0].buffer", "/bufferViews/0/buffer"),
         ];
-        for (location, edit) in edits {
+        for (location, pointer) in edits {
             let mut json = valid.clone();
-            edit(&mut json);
+            *json.pointer_mut(pointer).unwrap() = json!(1u64 << 32);
             let error = parse_gltf(json.to_string().as_bytes(), "t.gltf", None).unwrap_err();
             assert!(
                 matches!(&error, IoError::GltfIndex { location: at, index, .. } if at == location && *index == 1 << 32),
