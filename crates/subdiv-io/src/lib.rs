@@ -4,8 +4,13 @@
 //!   face index form, and OpenSubdiv's tag lines (`t crease`, `t corner`, `t hole`,
 //!   `t interpolateboundary`, …) into [`Tags`](subdiv_mesh::Tags). [`write_obj`] writes a soup
 //!   back, tags included, with exact coordinates: reading the file gives the same soup.
-//! - **glTF 2.0 / GLB** ([`load_gltf`], [`parse_gltf`]) reads every TRIANGLES primitive into one
-//!   soup. [`write_glb`] writes a triangle mesh (positions, normals, indices) as GLB.
+//! - **glTF 2.0 / GLB** ([`load_gltf`], [`parse_gltf`]; [`load_gltf_with`], [`parse_gltf_with`]
+//!   with [`GltfOptions`]) reads every TRIANGLES primitive into one soup. A hostile file cannot
+//!   make it read outside the glTF's folder (unless [`GltfOptions::allow_outside_uris`]), read a
+//!   device or FIFO, read past a buffer's `byteLength`, mistake an index of 2^32 for 0, or
+//!   allocate more than [`GltfOptions::max_vertices`] / [`GltfOptions::max_indices`] allow (all
+//!   checked before anything is read). [`write_glb`] writes a triangle mesh (positions, normals,
+//!   indices) as GLB, refusing coordinates that are no normal f32 ([`MIN_GLB_EXTENT`]).
 //! - [`load`] and [`load_mesh`] pick the format from the file extension; [`load_mesh`] also builds
 //!   the half-edge [`Mesh`] and reports a [`MeshError`](subdiv_mesh::MeshError) at the OBJ line
 //!   of the face, vertex or tag it is about.
