@@ -16,7 +16,7 @@ use subdiv_gpu::{
 
 use crate::UserError;
 use crate::args::parse_size;
-use crate::input::{InputArgs, LoadedMesh};
+use crate::input::{InputArgs, LoadedMesh, write_error};
 use crate::scheme_arg::SchemeArgs;
 use crate::tessellate::DEFAULT_RATE;
 
@@ -129,7 +129,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
     let written = match frames {
         None => {
             let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-            write_png(&args.output, &renderer.render(&gpu, &scene)?)?;
+            write_png(&loaded.name, &args.output, &renderer.render(&gpu, &scene)?)?;
             args.output.display().to_string()
         }
         Some(frames) => {
@@ -142,7 +142,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
                     cage.write_positions(&gpu, &moved)?;
                 }
                 let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-                write_png(path, &renderer.render(&gpu, &scene)?)?;
+                write_png(&loaded.name, path, &renderer.render(&gpu, &scene)?)?;
             }
             format!("{} … {}", paths[0].display(), paths[paths.len() - 1].display())
         }
@@ -172,10 +172,10 @@ fn numbered(output: &Path, frame: u32) -> PathBuf {
 }
 
 /// The image as an RGB PNG, written atomically ([`subdiv::io::write_atomic`]).
-fn write_png(path: &Path, image: &subdiv_gpu::Image) -> Result<(), UserError> {
-    let png = image.encode_png().map_err(|e| UserError(format!("{}: {e}", path.display())))?;
-    subdiv::io::write_atomic(path, |writer| writer.write_all(&png))?;
-    Ok(())
+/// An error names `input` (the mesh) and `path`.
+fn write_png(input: &str, path: &Path, image: &subdiv_gpu::Image) -> Result<(), UserError> {
+    let png = image.encode_png().map_err(|e| write_error(input, path, e))?;
+    subdiv::io::write_atomic(path, |writer| writer.write_all(&png)).map_err(|e| write_error(input, path, e))
 }
 
 #[cfg(test)]
