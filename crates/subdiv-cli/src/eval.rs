@@ -9,7 +9,7 @@ use subdiv::mesh::{BoundaryInterpolation, FaceId};
 use subdiv::{EvalMethod, EvalOptions, GridPoint, MAX_GRID, Surface};
 
 use crate::UserError;
-use crate::input::LoadedMesh;
+use crate::input::{InputArgs, LoadedMesh, check_output, write_error};
 use crate::scheme_arg::SchemeArgs;
 
 /// Arguments of `subdiv eval`.
@@ -18,6 +18,8 @@ use crate::scheme_arg::SchemeArgs;
 pub(crate) struct EvalArgs {
     /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     #[command(flatten)]
     scheme: SchemeArgs,
     /// Every face at the grid (i/N, j/N): quads (N+1)² points, j outer, i inner; triangles of
@@ -63,7 +65,11 @@ enum MethodArg {
 }
 
 pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError> {
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
+    if let Some(output) = &args.output {
+        let inputs: Vec<&std::path::Path> = args.mesh.iter().chain(&args.samples).map(PathBuf::as_path).collect();
+        check_output(&inputs, output)?;
+    }
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let method = match args.method {
         MethodArg::Eigen => EvalMethod::Eigen,
@@ -107,8 +113,8 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
     // Everything is evaluated before anything is written, so a failure writes nothing.
     let write = |w: &mut dyn Write| write_csv(w, &rows);
     match &args.output {
-        Some(path) => subdiv::io::write_atomic(path, write)?,
-        None => write(out)?,
+        Some(path) => subdiv::io::write_atomic(path, write).map_err(|e| write_error(&loaded.name, path, e))?,
+        None => write(out).map_err(|e| UserError(format!("{}: writing standard output: {e}", loaded.name)))?,
     }
     let mut stderr = std::io::stderr();
     let at_vertices = rows.iter().filter(|r| !r.point.exact_derivatives).count();

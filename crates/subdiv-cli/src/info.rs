@@ -8,13 +8,15 @@ use serde_json::{Value, json};
 use subdiv::mesh::{BuildOptions, Mesh, MeshError, PolygonSoup, RegularValence, Tags, shapes, validate};
 
 use crate::UserError;
-use crate::input::LoadedMesh;
+use crate::input::{InputArgs, LoadedMesh};
 
 /// Arguments of `subdiv info`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct InfoArgs {
     /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     /// Print one JSON object instead of text.
     #[arg(long)]
     json: bool,
@@ -26,7 +28,7 @@ pub(crate) struct InfoArgs {
 
 pub(crate) fn run(args: &InfoArgs, out: &mut impl Write) -> Result<(), UserError> {
     let loaded = match &args.mesh {
-        Some(path) => LoadedMesh::read(path)?,
+        Some(path) => LoadedMesh::read(path, &args.input)?,
         None => LoadedMesh::built_in(shapes::default_model()),
     };
     let options = BuildOptions::default().with_orient(args.orient);

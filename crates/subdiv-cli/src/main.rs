@@ -1,8 +1,10 @@
 //! `subdiv`: inspect subdivision-surface control meshes (and, as the workspace grows, refine,
 //! evaluate, tessellate and render them).
 //!
-//! Exit status: 0 on success, 2 on bad input (unreadable or invalid mesh, bad arguments) with
-//! one line on stderr naming the file, the place and the rule.
+//! Exit status: 0 on success (and when standard output is a pipe closed early, as by `head`),
+//! 2 on bad input (unreadable or invalid mesh, bad arguments, an output that is an input) with
+//! one line on stderr naming the file, the place and the rule; 130 / 143 on SIGINT / SIGTERM,
+//! after removing the temporary file of any write in progress.
 
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
@@ -20,6 +22,7 @@ mod tessellate;
 
 use std::io::Write;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand};
 
@@ -72,10 +75,50 @@ impl<E: std::fmt::Display> From<E> for UserError {
     }
 }
 
+/// Set when standard output reports a closed pipe (`subdiv refine | head`): the reader wanted no
+/// more, so the run ends quietly with exit status 0.
+static PIPE_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// Standard output, noting a closed pipe in [`PIPE_CLOSED`].
+struct Stdout<W>(W);
+
+impl<W: Write> Write for Stdout<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.write(buf).inspect_err(note_closed_pipe)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.0.flush().inspect_err(note_closed_pipe)
+    }
+}
+
+fn note_closed_pipe(error: &std::io::Error) {
+    if error.kind() == std::io::ErrorKind::BrokenPipe {
+        PIPE_CLOSED.store(true, Ordering::Relaxed);
+    }
+}
+
+/// On SIGINT or SIGTERM: delete the temporary file of any write in progress (the output keeps
+/// its previous contents), then exit with 128 + the signal (130, 143), as shells expect.
+fn remove_temporary_files_on_signals() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) else {
+        // Without the handler the default action applies; the run itself is unaffected.
+        return;
+    };
+    std::thread::spawn(move || {
+        if let Some(signal) = signals.forever().next() {
+            subdiv::io::remove_temporary_files();
+            std::process::exit(128 + signal);
+        }
+    });
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    remove_temporary_files_on_signals();
     let stdout = std::io::stdout();
-    let mut out = stdout.lock();
+    let mut out = Stdout(stdout.lock());
     let result = match &cli.command {
         Command::Info(args) => info::run(args, &mut out),
         Command::Refine(args) => refine::run(args, &mut out),
@@ -89,6 +132,9 @@ fn main() -> ExitCode {
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();
+    if PIPE_CLOSED.load(Ordering::Relaxed) {
+        return ExitCode::SUCCESS;
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(UserError(message)) => {

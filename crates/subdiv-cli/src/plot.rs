@@ -166,7 +166,7 @@ fn plot(samples: &[(f64, f64)], width: u32, height: u32) -> RgbImage {
     canvas.image
 }
 
-/// Encodes the PNG and writes it atomically ([`subdiv::io::write_atomic`]: `<path>.tmp`, synced,
+/// Encodes the PNG and writes it atomically ([`subdiv::io::write_atomic`]: `<name>.<hex>.tmp`, synced,
 /// renamed), so a failure leaves `path` as it was.
 pub(crate) fn write_png(path: &Path, image: &RgbImage) -> Result<(), UserError> {
     let mut bytes = std::io::Cursor::new(Vec::new());

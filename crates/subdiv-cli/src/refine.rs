@@ -7,7 +7,7 @@ use std::time::Instant;
 use subdiv::Surface;
 
 use crate::UserError;
-use crate::input::LoadedMesh;
+use crate::input::{InputArgs, LoadedMesh, check_output, write_error};
 use crate::scheme_arg::SchemeArgs;
 
 /// Arguments of `subdiv refine`.
@@ -15,6 +15,8 @@ use crate::scheme_arg::SchemeArgs;
 pub(crate) struct RefineArgs {
     /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     #[command(flatten)]
     scheme: SchemeArgs,
     /// Number of refinement levels (each multiplies the face count by about 4).
@@ -29,7 +31,10 @@ pub(crate) struct RefineArgs {
 }
 
 pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserError> {
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
+    if let Some(output) = &args.output {
+        check_output(&args.mesh.as_deref().into_iter().collect::<Vec<_>>(), output)?;
+    }
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let levels = args.levels as usize;
     let start = Instant::now();
@@ -52,8 +57,9 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
     let seconds = start.elapsed().as_secs_f64();
     let soup = subdiv::without_holes(&refined);
     match &args.output {
-        Some(path) => subdiv::io::write_obj(path, &soup)?,
-        None => subdiv::io::write_obj_to(&mut *out, &soup)?,
+        Some(path) => subdiv::io::write_obj(path, &soup).map_err(|e| write_error(&loaded.name, path, e))?,
+        None => subdiv::io::write_obj_to(&mut *out, &soup)
+            .map_err(|e| UserError(format!("{}: writing standard output: {e}", loaded.name)))?,
     }
     let faces = soup.face_count();
     let _ = writeln!(

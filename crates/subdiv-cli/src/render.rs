@@ -16,7 +16,7 @@ use subdiv_gpu::{
 
 use crate::UserError;
 use crate::args::parse_size;
-use crate::input::LoadedMesh;
+use crate::input::{InputArgs, LoadedMesh, write_error};
 use crate::scheme_arg::SchemeArgs;
 use crate::tessellate::DEFAULT_RATE;
 
@@ -36,6 +36,8 @@ const TWIST_DEGREES: f64 = 90.0;
 pub(crate) struct RenderArgs {
     /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     #[command(flatten)]
     scheme: SchemeArgs,
     /// Output PNG; written atomically. With --frames, numbered next to it: OUT_0000.png, …
@@ -90,7 +92,7 @@ fn check(args: &RenderArgs) -> Result<([u32; 2], Option<u32>), UserError> {
 pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserError> {
     let ([width, height], frames) = check(args)?;
     let options = RenderOptions { wireframe: args.wireframe, ..RenderOptions::default().with_size(width, height) };
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", loaded.name));
     let start = Instant::now();
@@ -127,7 +129,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
     let written = match frames {
         None => {
             let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-            write_png(&args.output, &renderer.render(&gpu, &scene)?)?;
+            write_png(&loaded.name, &args.output, &renderer.render(&gpu, &scene)?)?;
             args.output.display().to_string()
         }
         Some(frames) => {
@@ -140,7 +142,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
                     cage.write_positions(&gpu, &moved)?;
                 }
                 let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-                write_png(path, &renderer.render(&gpu, &scene)?)?;
+                write_png(&loaded.name, path, &renderer.render(&gpu, &scene)?)?;
             }
             format!("{} … {}", paths[0].display(), paths[paths.len() - 1].display())
         }
@@ -170,10 +172,10 @@ fn numbered(output: &Path, frame: u32) -> PathBuf {
 }
 
 /// The image as an RGB PNG, written atomically ([`subdiv::io::write_atomic`]).
-fn write_png(path: &Path, image: &subdiv_gpu::Image) -> Result<(), UserError> {
-    let png = image.encode_png().map_err(|e| UserError(format!("{}: {e}", path.display())))?;
-    subdiv::io::write_atomic(path, |writer| writer.write_all(&png))?;
-    Ok(())
+/// An error names `input` (the mesh) and `path`.
+fn write_png(input: &str, path: &Path, image: &subdiv_gpu::Image) -> Result<(), UserError> {
+    let png = image.encode_png().map_err(|e| write_error(input, path, e))?;
+    subdiv::io::write_atomic(path, |writer| writer.write_all(&png)).map_err(|e| write_error(input, path, e))
 }
 
 #[cfg(test)]

@@ -13,7 +13,7 @@ use subdiv::{FaceRates, Rates, Surface, TessInfo, TessOptions, Tessellation, Tol
 
 use crate::UserError;
 use crate::args::{parse_list, parse_size};
-use crate::input::LoadedMesh;
+use crate::input::{InputArgs, LoadedMesh, check_output, write_error};
 use crate::scheme_arg::SchemeArgs;
 
 /// The output file when `-o` is not given.
@@ -27,6 +27,8 @@ pub(crate) const DEFAULT_RATE: u32 = 8;
 pub(crate) struct TessellateArgs {
     /// Mesh file (.obj, .gltf, .glb); the built-in model when omitted.
     mesh: Option<PathBuf>,
+    #[command(flatten)]
+    input: InputArgs,
     #[command(flatten)]
     scheme: SchemeArgs,
     /// How the surface is cut: dual-grid stitching at per-face rates (any primal scheme with
@@ -112,7 +114,12 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     if args.method == Method::Quadtree && (args.rate.is_some() || args.pixels.is_some()) {
         return Err(UserError("--method quadtree takes --tolerance, not --rate or --pixels".to_string()));
     }
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref())?;
+    let inputs: Vec<&std::path::Path> = args.mesh.as_deref().into_iter().collect();
+    check_output(&inputs, &args.output)?;
+    if let Some(params) = &args.params {
+        check_output(&inputs, params)?;
+    }
+    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", loaded.name));
     let options = options(args)?;
@@ -141,12 +148,13 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     };
     let seconds = start.elapsed().as_secs_f64();
     bar.say("writing");
-    match format {
-        Format::Glb => result.write_glb(&args.output)?,
-        Format::Obj => result.write_obj(&args.output, args.polygons)?,
-    }
+    let written = match format {
+        Format::Glb => result.write_glb(&args.output),
+        Format::Obj => result.write_obj(&args.output, args.polygons),
+    };
+    written.map_err(|e| write_error(&loaded.name, &args.output, e))?;
     if let Some(path) = &args.params {
-        result.write_params(path)?;
+        result.write_params(path).map_err(|e| write_error(&loaded.name, path, e))?;
     }
     bar.finish();
     let triangles = result.mesh.triangles.len();

@@ -418,3 +418,132 @@ fn render_writes_numbered_frames_and_rejects_bad_arguments() {
     names.sort();
     assert_eq!(names, ["plain.png", "spin_0000.png", "spin_0001.png"]);
 }
+
+/// A unit cube as OBJ, its coordinates multiplied by `scale`.
+fn cube_obj(scale: f64) -> String {
+    let mut text = String::new();
+    for i in 0..8 {
+        let [x, y, z] = [i & 1, (i >> 1) & 1, (i >> 2) & 1].map(|c| f64::from(c) * scale);
+        text += &format!("v {x:e} {y:e} {z:e}\n");
+    }
+    text + "f 1 3 4 2\nf 5 6 8 7\nf 1 2 6 5\nf 3 7 8 4\nf 1 5 7 3\nf 2 4 8 6\n"
+}
+
+/// Status 2 and one line on stderr containing every one of `expect`.
+fn fails_with_one_line(output: &Output, expect: &[&str]) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "stderr {stderr}");
+    assert_eq!(stderr.lines().count(), 1, "one line on stderr, got {stderr:?}");
+    for word in expect {
+        assert!(stderr.contains(word), "expected {word:?} in {stderr:?}");
+    }
+}
+
+#[test]
+fn an_obj_may_start_with_a_byte_order_mark() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("bom.obj");
+    std::fs::write(&path, format!("\u{feff}{}", cube_obj(1.0))).unwrap();
+    let output = subdiv(&["info", path.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+#[test]
+fn an_output_equal_to_an_input_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("cube.obj");
+    std::fs::write(&input, cube_obj(1.0)).unwrap();
+    let linked = dir.path().join("linked.obj");
+    std::fs::hard_link(&input, &linked).unwrap();
+    let input_name = input.to_str().unwrap();
+    for output in [input_name.to_owned(), format!("{}/./cube.obj", dir.path().display()), linked.display().to_string()]
+    {
+        let run = subdiv(&["refine", input_name, "-o", &output]);
+        fails_with_one_line(&run, &["cube.obj", "is this input file"]);
+    }
+    assert_eq!(std::fs::read_to_string(&input).unwrap(), cube_obj(1.0));
+}
+
+#[test]
+fn a_closed_pipe_ends_quietly_with_exit_0() {
+    use std::io::Read;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_subdiv"))
+        .args(["refine", "--levels", "4"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut head = [0u8; 10];
+    child.stdout.take().unwrap().read_exact(&mut head).unwrap();
+    // The pipe's read end is dropped here, as `head -c 10` exits.
+    let output = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(0), "{stderr}");
+    assert!(!stderr.contains("pipe"), "{stderr}");
+}
+
+#[cfg(unix)]
+#[test]
+fn sigterm_during_a_write_removes_the_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("big.obj");
+    let child = Command::new(env!("CARGO_BIN_EXE_subdiv"))
+        .args(["refine", "--levels", "7", "-o", out.to_str().unwrap()])
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let temporary = || {
+        std::fs::read_dir(dir.path())
+            .unwrap()
+            .filter_map(Result::ok)
+            .any(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+    };
+    // Wait for the write to begin (refining comes first), then interrupt it.
+    let start = std::time::Instant::now();
+    while !temporary() && start.elapsed().as_secs() < 120 {
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    assert!(temporary(), "the write began");
+    Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    let output = child.wait_with_output().unwrap();
+    assert_eq!(output.status.code(), Some(143));
+    assert!(!temporary(), "the temporary file is removed");
+    assert!(!out.exists(), "no output was written");
+}
+
+#[test]
+fn gltf_buffers_outside_the_folder_need_allow_outside_uris() {
+    let dir = tempfile::tempdir().unwrap();
+    let folder = dir.path().join("model");
+    std::fs::create_dir(&folder).unwrap();
+    let bytes: Vec<u8> =
+        [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+    std::fs::write(dir.path().join("outside.bin"), bytes).unwrap();
+    let gltf = serde_json::json!({
+        "asset": { "version": "2.0" },
+        "buffers": [{ "uri": "../outside.bin", "byteLength": 36 }],
+        "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+        "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3" }],
+        "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+    });
+    let path = folder.join("a.gltf");
+    std::fs::write(&path, gltf.to_string()).unwrap();
+    let path = path.to_str().unwrap();
+    fails_with_one_line(
+        &subdiv(&["info", path]),
+        &["a.gltf", "buffers[0].uri '../outside.bin'", "--allow-outside-uris"],
+    );
+    let allowed = subdiv(&["info", "--allow-outside-uris", path]);
+    assert!(allowed.status.success(), "{}", String::from_utf8_lossy(&allowed.stderr));
+}
+
+#[test]
+fn a_glb_of_a_mesh_too_small_for_f32_is_refused_naming_input_and_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("tiny.obj");
+    std::fs::write(&input, cube_obj(1e-50)).unwrap();
+    let output = dir.path().join("tiny.glb");
+    let run = subdiv(&["tessellate", input.to_str().unwrap(), "-o", output.to_str().unwrap()]);
+    fails_with_one_line(&run, &["tiny.obj", "tiny.glb", "scale the mesh up"]);
+    assert!(!output.exists());
+}

@@ -129,6 +129,69 @@ pub enum IoError {
         /// The rule broken.
         rule: String,
     },
+    /// A glTF index (an accessor, buffer view or buffer number) is not one of the document's.
+    /// Checked as a `u64` on the raw JSON, so that an index of 2^32 is not read as 0.
+    #[error("{file}: {location}: refers to {what}[{index}], but the file has {count}")]
+    GltfIndex {
+        /// The file.
+        file: String,
+        /// The JSON path of the reference, e.g. `meshes[0].primitives[0].indices`.
+        location: String,
+        /// `"accessors"`, `"bufferViews"` or `"buffers"`.
+        what: &'static str,
+        /// The index as written.
+        index: u64,
+        /// How many the file has.
+        count: usize,
+    },
+    /// A glTF buffer URI leads out of the glTF file's folder (a `../` escape, an absolute path,
+    /// a symlink), and [`GltfOptions::allow_outside_uris`](crate::GltfOptions) is off.
+    #[error("{file}: {location}.uri '{uri}': outside the glTF's folder; pass --allow-outside-uris to allow")]
+    UriOutsideFolder {
+        /// The glTF file.
+        file: String,
+        /// `buffers[N]`.
+        location: String,
+        /// The URI as written.
+        uri: String,
+    },
+    /// A glTF buffer URI names something that is not a regular file (a device, FIFO, directory).
+    #[error("{file}: {location}.uri '{uri}': {} is not a regular file", path.display())]
+    NotARegularFile {
+        /// The glTF file.
+        file: String,
+        /// `buffers[N]`.
+        location: String,
+        /// The URI as written.
+        uri: String,
+        /// The path it resolves to.
+        path: PathBuf,
+    },
+    /// A glTF buffer holds fewer bytes than its `byteLength`.
+    #[error("{file}: {location}: declares byteLength {declared} but holds {actual} bytes")]
+    BufferTooShort {
+        /// The glTF file.
+        file: String,
+        /// `buffers[N]`.
+        location: String,
+        /// Its `byteLength`.
+        declared: u64,
+        /// The bytes there are.
+        actual: u64,
+    },
+    /// The primitives of a glTF file ask for more vertices or indices, in all, than the
+    /// reader's limit ([`GltfOptions`](crate::GltfOptions)); checked before anything is read.
+    #[error("{file}: its primitives have {requested} {what} in all; the limit is {limit} (GltfOptions::max_{what})")]
+    GltfTooLarge {
+        /// The file.
+        file: String,
+        /// `"vertices"` or `"indices"`.
+        what: &'static str,
+        /// The sum over all primitives.
+        requested: u64,
+        /// The limit.
+        limit: u64,
+    },
     /// The file was read but its polygons do not make a valid mesh.
     #[error("{}: {source}", at(file, *line))]
     Mesh {
@@ -182,6 +245,11 @@ impl IoError {
             Self::FaceTooSmall { .. } => "face-too-small",
             Self::TagOutOfRange { .. } => "tag-out-of-range",
             Self::Gltf { .. } => "gltf",
+            Self::GltfIndex { .. } => "gltf-index",
+            Self::UriOutsideFolder { .. } => "uri-outside-folder",
+            Self::NotARegularFile { .. } => "not-a-regular-file",
+            Self::BufferTooShort { .. } => "buffer-too-short",
+            Self::GltfTooLarge { .. } => "gltf-too-large",
             Self::Mesh { source, .. } => source.rule(),
             Self::Unwritable { .. } => "unwritable",
         }

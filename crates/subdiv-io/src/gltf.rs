@@ -7,7 +7,8 @@
 //! POSITION references, so it is not used.)
 
 use std::borrow::Cow;
-use std::fs;
+use std::fs::{self, File};
+use std::io::Read as _;
 use std::path::Path;
 
 use ::gltf::json::{
@@ -29,20 +30,97 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
-/// Reads the glTF 2.0 file at `path`: a `.glb`, or a `.gltf` whose buffers are data URIs or
-/// files next to it. See [`parse_gltf`] for what is read.
+/// Limits and permissions of the glTF reader ([`load_gltf_with`], [`parse_gltf_with`]): what a
+/// hostile file may make it read or allocate.
+///
+/// ```
+/// let options = subdiv_io::GltfOptions::DEFAULT.with_max_vertices(1 << 20);
+/// assert!(!options.allow_outside_uris);
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GltfOptions {
+    /// Whether buffer URIs may name files outside the glTF file's folder (`../`, absolute
+    /// paths, symlinks that lead out). Default `false`: such a URI is
+    /// [`IoError::UriOutsideFolder`].
+    pub allow_outside_uris: bool,
+    /// The most vertices all primitives together may have (the sum of their POSITION
+    /// counts), checked before anything is allocated. Default 2^26 (about 67 million).
+    pub max_vertices: u64,
+    /// The most vertex indices all primitives together may have (the sum of their index
+    /// counts, or vertex counts where they have none), checked before anything is allocated.
+    /// Default 2^28 (about 268 million, 89 million triangles).
+    pub max_indices: u64,
+}
+
+impl GltfOptions {
+    /// The defaults: buffers inside the glTF's folder only, at most 2^26 vertices and 2^28
+    /// indices.
+    pub const DEFAULT: Self = Self { allow_outside_uris: false, max_vertices: 1 << 26, max_indices: 1 << 28 };
+
+    /// With [`allow_outside_uris`](Self::allow_outside_uris) set to `allow`.
+    #[must_use]
+    pub const fn with_allow_outside_uris(self, allow: bool) -> Self {
+        Self { allow_outside_uris: allow, ..self }
+    }
+
+    /// With [`max_vertices`](Self::max_vertices) set to `max`.
+    #[must_use]
+    pub const fn with_max_vertices(self, max: u64) -> Self {
+        Self { max_vertices: max, ..self }
+    }
+
+    /// With [`max_indices`](Self::max_indices) set to `max`.
+    #[must_use]
+    pub const fn with_max_indices(self, max: u64) -> Self {
+        Self { max_indices: max, ..self }
+    }
+}
+
+impl Default for GltfOptions {
+    fn default() -> Self {
+        Self::DEFAULT
+    }
+}
+
+/// Reads the glTF 2.0 file at `path` with [`GltfOptions::DEFAULT`]; see [`load_gltf_with`].
 ///
 /// # Errors
-/// As [`parse_gltf`]; reading the file or an external buffer fails as [`IoError::Io`].
+/// As [`load_gltf_with`].
 pub fn load_gltf(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
+    load_gltf_with(path, &GltfOptions::DEFAULT)
+}
+
+/// Reads the glTF 2.0 file at `path`: a `.glb`, or a `.gltf` whose buffers are data URIs or
+/// files in its folder. See [`parse_gltf_with`] for what is read.
+///
+/// # Errors
+/// As [`parse_gltf_with`]; reading the file or an external buffer fails as [`IoError::Io`].
+pub fn load_gltf_with(path: impl AsRef<Path>, options: &GltfOptions) -> Result<PolygonSoup, IoError> {
     let path = path.as_ref();
-    let bytes = fs::read(path).map_err(|source| IoError::Io { path: path.to_owned(), source })?;
-    parse_gltf(&bytes, &path.display().to_string(), path.parent())
+    let io = |source| IoError::Io { path: path.to_owned(), source };
+    let file = File::open(path).map_err(io)?;
+    if !file.metadata().map_err(io)?.is_file() {
+        return Err(io(std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a regular file")));
+    }
+    let mut bytes = Vec::new();
+    std::io::BufReader::new(file).read_to_end(&mut bytes).map_err(io)?;
+    let dir = path.parent().map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d });
+    parse_gltf_with(&bytes, &path.display().to_string(), dir, options)
+}
+
+/// [`parse_gltf_with`] with [`GltfOptions::DEFAULT`].
+///
+/// # Errors
+/// As [`parse_gltf_with`].
+pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<PolygonSoup, IoError> {
+    parse_gltf_with(bytes, name, base_dir, &GltfOptions::DEFAULT)
 }
 
 /// Reads glTF 2.0 from memory: GLB when `name` ends in `.glb` or the bytes start with the GLB
-/// magic, JSON otherwise. External buffer URIs are resolved against `base_dir`; without one,
-/// only GLB and data-URI buffers can be read.
+/// magic, JSON otherwise. External buffer URIs are resolved against `base_dir` and must stay
+/// inside it (after canonicalisation) unless [`GltfOptions::allow_outside_uris`]; they must
+/// name regular files, of which at most `byteLength` bytes are read. Without `base_dir`, only
+/// GLB and data-URI buffers can be read.
 ///
 /// Every primitive of every mesh, in file order, must be TRIANGLES with a `VEC3`/`FLOAT`
 /// POSITION and optional `u8`/`u16`/`u32` indices (none: consecutive vertex triples). The
@@ -52,26 +130,41 @@ pub fn load_gltf(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
 /// coordinates, which is the cage as modelled. Other attributes, materials and animation are
 /// ignored.
 ///
+/// Before any buffer is read, the accessor, buffer view and buffer numbers are checked as
+/// `u64`s against the document ([`IoError::GltfIndex`]), and the vertex and index counts of all
+/// primitives are summed and checked against [`GltfOptions::max_vertices`] and
+/// [`GltfOptions::max_indices`] ([`IoError::GltfTooLarge`]).
+///
 /// # Errors
 /// [`IoError::Gltf`] naming the place and the rule: a truncated or malformed GLB container, bad
 /// JSON, a required extension, a primitive mode other than TRIANGLES, a missing or non-float
 /// POSITION, a non-finite position, an index out of range, an accessor or buffer view outside
-/// its buffer, a sparse accessor. [`IoError::NoGeometry`] when no primitive has a vertex.
-pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<PolygonSoup, IoError> {
+/// its buffer, a sparse accessor. [`IoError::GltfIndex`], [`IoError::GltfTooLarge`],
+/// [`IoError::UriOutsideFolder`], [`IoError::NotARegularFile`], [`IoError::BufferTooShort`] as
+/// above. [`IoError::NoGeometry`] when no primitive has a vertex.
+pub fn parse_gltf_with(
+    bytes: &[u8],
+    name: &str,
+    base_dir: Option<&Path>,
+    options: &GltfOptions,
+) -> Result<PolygonSoup, IoError> {
     let error =
         |location: &str, rule: String| IoError::Gltf { file: name.to_owned(), location: location.to_owned(), rule };
     let is_glb = bytes.starts_with(GLB_MAGIC) || name.to_ascii_lowercase().ends_with(".glb");
     let (json_bytes, bin) = if is_glb { split_glb(bytes, &error)? } else { (bytes, None) };
-    let root = Root::from_slice(json_bytes)
-        .map_err(|e| error(if is_glb { "GLB chunk 0 (JSON)" } else { "JSON" }, e.to_string()))?;
+    let json_at = if is_glb { "GLB chunk 0 (JSON)" } else { "JSON" };
+    let raw: Value = serde_json::from_slice(json_bytes).map_err(|e| error(json_at, e.to_string()))?;
+    check_raw_indices(&raw, name)?;
+    let root = Root::from_slice(json_bytes).map_err(|e| error(json_at, e.to_string()))?;
     if let Some(extension) = root.extensions_required.first() {
         return Err(error("extensionsRequired", format!("requires {extension}, which this reader does not support")));
     }
+    check_totals(&root, name, options)?;
     let buffers = root
         .buffers
         .iter()
         .enumerate()
-        .map(|(i, buffer)| load_buffer(i, buffer, bin, base_dir, &error))
+        .map(|(i, buffer)| load_buffer(i, buffer, bin, base_dir, name, options, &error))
         .collect::<Result<Vec<_>, _>>()?;
     let reader = Reader { root: &root, buffers, error: &error };
 
@@ -123,6 +216,63 @@ pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<P
 
 type ErrorFn<'a> = dyn Fn(&str, String) -> IoError + 'a;
 
+/// Checks every accessor, buffer view and buffer number the reader follows as a `u64` on the raw
+/// JSON: `gltf::json` 1.4 reads them as `u32`, and an index of 2^32 wraps to 0.
+fn check_raw_indices(raw: &Value, name: &str) -> Result<(), IoError> {
+    let len = |key: &str| raw.get(key).and_then(Value::as_array).map_or(0, Vec::len);
+    let check = |value: Option<&Value>, location: String, what: &'static str| {
+        let count = len(what);
+        match value.and_then(Value::as_u64) {
+            Some(index) if index >= count as u64 => {
+                Err(IoError::GltfIndex { file: name.to_owned(), location, what, index, count })
+            }
+            // In range, absent, or not an unsigned integer (which `gltf::json` reports).
+            _ => Ok(()),
+        }
+    };
+    let items = |key: &str| raw.get(key).and_then(Value::as_array).into_iter().flatten().enumerate();
+    for (m, mesh) in items("meshes") {
+        let primitives = mesh.get("primitives").and_then(Value::as_array).into_iter().flatten();
+        for (p, primitive) in primitives.enumerate() {
+            let at = format!("meshes[{m}].primitives[{p}]");
+            if let Some(attributes) = primitive.get("attributes").and_then(Value::as_object) {
+                for (semantic, value) in attributes {
+                    check(Some(value), format!("{at}.attributes.{semantic}"), "accessors")?;
+                }
+            }
+            check(primitive.get("indices"), format!("{at}.indices"), "accessors")?;
+        }
+    }
+    for (a, accessor) in items("accessors") {
+        check(accessor.get("bufferView"), format!("accessors[{a}].bufferView"), "bufferViews")?;
+    }
+    for (v, view) in items("bufferViews") {
+        check(view.get("buffer"), format!("bufferViews[{v}].buffer"), "buffers")?;
+    }
+    Ok(())
+}
+
+/// Sums the vertex and index counts of all primitives and checks them against the limits,
+/// before any buffer is read or any vertex allocated: primitives may share one accessor, so a
+/// small file can ask for a great many vertices.
+fn check_totals(root: &Root, name: &str, options: &GltfOptions) -> Result<(), IoError> {
+    let count = |index: usize| root.accessors.get(index).map_or(0, |a| a.count.0);
+    let (mut vertices, mut indices) = (0u64, 0u64);
+    for primitive in root.meshes.iter().flat_map(|mesh| &mesh.primitives) {
+        let n = primitive.attributes.get(&Checked::Valid(Semantic::Positions)).map_or(0, |a| count(a.value()));
+        vertices = vertices.saturating_add(n);
+        indices = indices.saturating_add(primitive.indices.map_or(n, |i| count(i.value())));
+    }
+    let too_large = |what, requested, limit| IoError::GltfTooLarge { file: name.to_owned(), what, requested, limit };
+    if vertices > options.max_vertices {
+        return Err(too_large("vertices", vertices, options.max_vertices));
+    }
+    if indices > options.max_indices {
+        return Err(too_large("indices", indices, options.max_indices));
+    }
+    Ok(())
+}
+
 /// Splits a GLB container into its JSON chunk and its BIN chunk (if any).
 fn split_glb<'b>(bytes: &'b [u8], error: &ErrorFn<'_>) -> Result<(&'b [u8], Option<&'b [u8]>), IoError> {
     let word = |bytes: &[u8], at: usize| bytes.get(at..at + 4).and_then(|w| w.try_into().ok()).map(u32::from_le_bytes);
@@ -168,15 +318,19 @@ fn split_glb<'b>(bytes: &'b [u8], error: &ErrorFn<'_>) -> Result<(&'b [u8], Opti
     Ok((json, bin))
 }
 
-/// The bytes of buffer `index`: the GLB BIN chunk, a base64 data URI, or a file beside the glTF.
+/// The bytes of buffer `index`: the GLB BIN chunk, a base64 data URI, or a file in the glTF's
+/// folder (see [`parse_gltf_with`]).
 fn load_buffer<'b>(
     index: usize,
     buffer: &json::Buffer,
     bin: Option<&'b [u8]>,
     base_dir: Option<&Path>,
+    name: &str,
+    options: &GltfOptions,
     error: &ErrorFn<'_>,
 ) -> Result<Cow<'b, [u8]>, IoError> {
     let location = format!("buffers[{index}]");
+    let declared = buffer.byte_length.0;
     let data = match (buffer.uri.as_deref(), bin) {
         (None, Some(bin)) if index == 0 => Cow::Borrowed(bin),
         (None, _) => {
@@ -198,7 +352,13 @@ fn load_buffer<'b>(
                 .map_err(|e| error(&location, format!("data URI is not valid base64: {e}")))?
         }
         (Some(uri), _) => {
-            if uri.contains(':') || uri.starts_with('/') {
+            let decoded = percent_decode(uri);
+            let absolute = Path::new(&decoded).is_absolute();
+            if uri.contains(':') || (absolute && !options.allow_outside_uris) {
+                if !uri.contains(':') {
+                    let file = name.to_owned();
+                    return Err(IoError::UriOutsideFolder { file, location, uri: uri.to_owned() });
+                }
                 return Err(error(
                     &location,
                     format!("uri {uri:?} is not relative; only relative file URIs and data URIs are supported"),
@@ -210,15 +370,45 @@ fn load_buffer<'b>(
                     format!("refers to the file {uri:?}, but no directory was given to find it in"),
                 ));
             };
-            let path = dir.join(percent_decode(uri));
-            Cow::Owned(fs::read(&path).map_err(|source| IoError::Io { path, source })?)
+            let path = dir.join(&decoded);
+            let io = |path: &Path| {
+                let path = path.to_owned();
+                move |source| IoError::Io { path, source }
+            };
+            let canonical = path.canonicalize().map_err(io(&path))?;
+            if !options.allow_outside_uris {
+                let dir = dir.canonicalize().map_err(io(dir))?;
+                if !canonical.starts_with(&dir) {
+                    return Err(IoError::UriOutsideFolder { file: name.to_owned(), location, uri: uri.to_owned() });
+                }
+            }
+            // Checked before opening, as opening a FIFO blocks; and again on the open file.
+            let not_regular = || IoError::NotARegularFile {
+                file: name.to_owned(),
+                location: location.clone(),
+                uri: uri.to_owned(),
+                path: path.clone(),
+            };
+            if !fs::metadata(&canonical).map_err(io(&path))?.is_file() {
+                return Err(not_regular());
+            }
+            let file = File::open(&canonical).map_err(io(&path))?;
+            let metadata = file.metadata().map_err(io(&path))?;
+            if !metadata.is_file() {
+                return Err(not_regular());
+            }
+            if metadata.len() < declared {
+                let (file, actual) = (name.to_owned(), metadata.len());
+                return Err(IoError::BufferTooShort { file, location, declared, actual });
+            }
+            let mut data = Vec::new();
+            file.take(declared).read_to_end(&mut data).map_err(io(&path))?;
+            Cow::Owned(data)
         }
     };
-    if (data.len() as u64) < buffer.byte_length.0 {
-        return Err(error(
-            &location,
-            format!("declares byteLength {} but holds {} bytes", buffer.byte_length.0, data.len()),
-        ));
+    if (data.len() as u64) < declared {
+        let actual = data.len() as u64;
+        return Err(IoError::BufferTooShort { file: name.to_owned(), location, declared, actual });
     }
     Ok(data)
 }
@@ -405,6 +595,43 @@ pub struct GlbMesh<'a> {
     pub indices: &'a [u32],
 }
 
+/// The smallest magnitude, other than 0, of a coordinate the GLB writer accepts: 2^-102.
+///
+/// GLB stores f32s. A coordinate below f32's smallest normal number (2^-126) would be written
+/// as a subnormal or, converted from f64, as 0 — the mesh collapses to a point — and GPUs flush
+/// subnormals to zero in any case. 2^-102 = 2^-126 · 2^24 leaves room for f32's 24-bit
+/// significand: the differences between neighbouring coordinates of that size (an edge, a
+/// derivative, one ulp apart) are still normal numbers, so the shape survives the renderer
+/// too. A mesh this small is to be scaled up before it is written.
+pub const MIN_GLB_EXTENT: f64 = 1.0 / (1u128 << 102) as f64;
+
+/// Checks that every coordinate of `positions` is representable as a normal f32 that keeps the
+/// shape ([`MIN_GLB_EXTENT`]): finite, at most `f32::MAX` in magnitude, and 0 or at least
+/// `MIN_GLB_EXTENT`. [`encode_glb`] calls it on its f32 input; a caller that converts f64
+/// positions to f32 calls it on the f64s first, where a coordinate that the conversion would
+/// flush to 0 is still seen.
+///
+/// # Errors
+/// [`IoError::Unwritable`] naming the vertex, the coordinate and what to do (scale the mesh).
+pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> Result<(), IoError> {
+    for (i, p) in positions.into_iter().enumerate() {
+        for x in p.to_array() {
+            let rule = if !x.is_finite() {
+                "is not finite"
+            } else if x.abs() > f64::from(f32::MAX) {
+                "exceeds f32's range (3.4e38); scale the mesh down before writing GLB"
+            } else if x != 0.0 && x.abs() < MIN_GLB_EXTENT {
+                "is too small for f32 (it would be written as 0 or a subnormal; the smallest \
+                 accepted is 2^-102 ≈ 2.0e-31); scale the mesh up before writing GLB"
+            } else {
+                continue;
+            };
+            return Err(IoError::Unwritable { format: "GLB", rule: format!("vertex {i} coordinate {x:e} {rule}") });
+        }
+    }
+    Ok(())
+}
+
 /// Encodes `mesh` as a GLB file: one scene, one node, one mesh with one TRIANGLES primitive;
 /// POSITION (with the `min`/`max` the spec requires), NORMAL when given, `u32` indices, one
 /// tightly packed buffer view per accessor with its target, 4-byte aligned and padded chunks,
@@ -412,7 +639,8 @@ pub struct GlbMesh<'a> {
 ///
 /// # Errors
 /// [`IoError::Unwritable`] for a mesh no valid GLB can hold: no triangle, an index count not a
-/// multiple of 3, an index out of range, a non-finite position, a normal count that differs from
+/// multiple of 3, an index out of range, a coordinate that is not finite or is too small to be
+/// a normal f32 (see [`check_glb_positions`]), a normal count that differs from
 /// the position count, a zero or non-finite normal, more than 4 GiB.
 pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
     let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
@@ -421,9 +649,7 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
     if indices.is_empty() || indices.len() % 3 != 0 {
         return Err(unwritable(format!("{} indices; a mesh needs whole triangles, at least one", indices.len())));
     }
-    if let Some((i, p)) = positions.iter().enumerate().find(|(_, p)| !p.is_finite()) {
-        return Err(unwritable(format!("vertex {i} = {p} is not finite")));
-    }
+    check_glb_positions(positions.iter().map(|p| p.as_dvec3()))?;
     if let Some((i, v)) = indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
         return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
     }
@@ -498,7 +724,7 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
     Ok(glb)
 }
 
-/// Writes `mesh` as a GLB file at `path` (see [`encode_glb`]), through `<path>.tmp` and a
+/// Writes `mesh` as a GLB file at `path` (see [`encode_glb`]), through a fresh `<name>.<16 hex>.tmp` and a
 /// rename, so a failure leaves `path` untouched.
 ///
 /// # Errors
@@ -506,4 +732,147 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
 pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoError> {
     let glb = encode_glb(mesh)?;
     atomic::write_file(path.as_ref(), |w| std::io::Write::write_all(w, &glb))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle glTF whose buffer is the file `uri`, of `byte_length` bytes.
+    fn gltf_with_buffer(uri: &str, byte_length: usize) -> Value {
+        json!({
+            "asset": { "version": "2.0" },
+            "buffers": [{ "uri": uri, "byteLength": byte_length }],
+            "bufferViews": [{ "buffer": 0, "byteLength": 36 }],
+            "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3" }],
+            "meshes": [{ "primitives": [{ "attributes": { "POSITION": 0 } }] }],
+        })
+    }
+
+    fn triangle_bytes() -> Vec<u8> {
+        [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    /// Writes `json` as `dir/name` and loads it with `options`.
+    fn load_json(dir: &Path, name: &str, json: &Value, options: &GltfOptions) -> Result<PolygonSoup, IoError> {
+        let path = dir.join(name);
+        fs::write(&path, json.to_string()).unwrap();
+        load_gltf_with(&path, options)
+    }
+
+    #[test]
+    fn buffer_uris_outside_the_gltf_folder_are_refused_unless_allowed() {
+        let root = tempfile::tempdir().unwrap();
+        let folder = root.path().join("model");
+        fs::create_dir(&folder).unwrap();
+        fs::write(root.path().join("secret.bin"), triangle_bytes()).unwrap();
+        let escape = gltf_with_buffer("../secret.bin", 36);
+        let error = load_json(&folder, "a.gltf", &escape, &GltfOptions::DEFAULT).unwrap_err();
+        assert!(matches!(error, IoError::UriOutsideFolder { .. }), "{error:?}");
+        let text = error.to_string();
+        assert!(
+            text.ends_with(
+                "a.gltf: buffers[0].uri '../secret.bin': outside the glTF's folder; pass --allow-outside-uris to allow"
+            ),
+            "{text}"
+        );
+        let allowed = GltfOptions::DEFAULT.with_allow_outside_uris(true);
+        assert_eq!(load_json(&folder, "a.gltf", &escape, &allowed).unwrap().vertex_count(), 3);
+        let absolute = gltf_with_buffer(root.path().join("secret.bin").to_str().unwrap(), 36);
+        let error = load_json(&folder, "b.gltf", &absolute, &GltfOptions::DEFAULT).unwrap_err();
+        assert!(matches!(error, IoError::UriOutsideFolder { .. }), "{error:?}");
+        // A file inside the folder is read as before.
+        fs::write(folder.join("inside.bin"), triangle_bytes()).unwrap();
+        let inside = gltf_with_buffer("inside.bin", 36);
+        assert_eq!(load_json(&folder, "c.gltf", &inside, &GltfOptions::DEFAULT).unwrap().vertex_count(), 3);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn only_regular_files_are_read_and_at_most_byte_length_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let allowed = GltfOptions::DEFAULT.with_allow_outside_uris(true);
+        // /dev/zero would be read until memory runs out.
+        let error = load_json(dir.path(), "zero.gltf", &gltf_with_buffer("/dev/zero", 36), &allowed).unwrap_err();
+        assert!(matches!(error, IoError::NotARegularFile { .. }), "{error:?}");
+        fs::create_dir(dir.path().join("sub")).unwrap();
+        let error = load_json(dir.path(), "dir.gltf", &gltf_with_buffer("sub", 36), &allowed).unwrap_err();
+        assert!(matches!(error, IoError::NotARegularFile { .. }), "{error:?}");
+        // Shorter than byteLength: a typed error; longer: only byteLength bytes are kept.
+        fs::write(dir.path().join("short.bin"), &triangle_bytes()[..20]).unwrap();
+        let error = load_json(dir.path(), "short.gltf", &gltf_with_buffer("short.bin", 36), &allowed).unwrap_err();
+        assert!(matches!(error, IoError::BufferTooShort { declared: 36, actual: 20, .. }), "{error:?}");
+        let mut long = triangle_bytes();
+        long.resize(4096, 7);
+        fs::write(dir.path().join("long.bin"), long).unwrap();
+        let soup = load_json(dir.path(), "long.gltf", &gltf_with_buffer("long.bin", 36), &allowed).unwrap();
+        assert_eq!(soup.vertex_count(), 3);
+    }
+
+    #[test]
+    fn indices_of_2_pow_32_are_errors_not_index_0() {
+        let bytes = triangle_bytes();
+        let data = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bytes)
+        );
+        let valid = gltf_with_buffer(&data, 36);
+        assert!(parse_gltf(valid.to_string().as_bytes(), "t.gltf", None).is_ok());
+        let edits = [
+            ("meshes[0].primitives[0].attributes.POSITION", "/meshes/0/primitives/0/attributes/POSITION"),
+            ("accessors[0].bufferView", "/accessors/0/bufferView"),
+            ("bufferViews[0].buffer", "/bufferViews/0/buffer"),
+        ];
+        for (location, pointer) in edits {
+            let mut json = valid.clone();
+            *json.pointer_mut(pointer).unwrap() = json!(1u64 << 32);
+            let error = parse_gltf(json.to_string().as_bytes(), "t.gltf", None).unwrap_err();
+            assert!(
+                matches!(&error, IoError::GltfIndex { location: at, index, .. } if at == location && *index == 1 << 32),
+                "{error:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn primitives_sharing_one_big_accessor_are_counted_before_anything_is_read() {
+        // 1,000 primitives × 100,000 vertices: 10^8 > 2^26, refused before the (absent) buffer
+        // file is even opened.
+        let primitive = json!({ "attributes": { "POSITION": 0 } });
+        let json = json!({
+            "asset": { "version": "2.0" },
+            "buffers": [{ "uri": "missing.bin", "byteLength": 1_200_000 }],
+            "bufferViews": [{ "buffer": 0, "byteLength": 1_200_000 }],
+            "accessors": [{ "bufferView": 0, "componentType": 5126, "count": 100_000, "type": "VEC3" }],
+            "meshes": [{ "primitives": vec![primitive; 1000] }],
+        });
+        let error = parse_gltf(json.to_string().as_bytes(), "big.gltf", Some(Path::new("."))).unwrap_err();
+        assert!(
+            matches!(error, IoError::GltfTooLarge { what: "vertices", requested: 100_000_000, limit: 67_108_864, .. }),
+            "{error:?}"
+        );
+        let options = GltfOptions::DEFAULT.with_max_vertices(u64::MAX).with_max_indices(1000);
+        let error = parse_gltf_with(json.to_string().as_bytes(), "big.gltf", None, &options).unwrap_err();
+        assert!(matches!(error, IoError::GltfTooLarge { what: "indices", .. }), "{error:?}");
+    }
+
+    fn triangle(positions: &[Vec3]) -> Result<Vec<u8>, IoError> {
+        encode_glb(&GlbMesh { positions, normals: None, indices: &[0, 1, 2] })
+    }
+
+    #[test]
+    fn coordinates_that_are_no_normal_f32_are_refused_with_what_to_do() {
+        let tiny = 1e-40_f32; // subnormal
+        let error = triangle(&[Vec3::ZERO, Vec3::X * tiny, Vec3::Y * tiny]).unwrap_err().to_string();
+        assert!(error.contains("vertex 1") && error.contains("scale the mesh up"), "{error}");
+        // f64 coordinates that f32 flushes to 0: caught before the conversion.
+        let error = check_glb_positions([glam::DVec3::splat(1e-50)]).unwrap_err().to_string();
+        assert!(error.contains("vertex 0") && error.contains("scale the mesh up"), "{error}");
+        let error = check_glb_positions([glam::DVec3::new(0.0, 1e300, 0.0)]).unwrap_err().to_string();
+        assert!(error.contains("scale the mesh down"), "{error}");
+        // The bound itself and 0 are fine.
+        let small = MIN_GLB_EXTENT as f32;
+        assert_eq!(f64::from(small), MIN_GLB_EXTENT);
+        triangle(&[Vec3::ZERO, Vec3::X * small, Vec3::Y * small]).unwrap();
+    }
 }

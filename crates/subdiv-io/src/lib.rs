@@ -4,15 +4,23 @@
 //!   face index form, and OpenSubdiv's tag lines (`t crease`, `t corner`, `t hole`,
 //!   `t interpolateboundary`, …) into [`Tags`](subdiv_mesh::Tags). [`write_obj`] writes a soup
 //!   back, tags included, with exact coordinates: reading the file gives the same soup.
-//! - **glTF 2.0 / GLB** ([`load_gltf`], [`parse_gltf`]) reads every TRIANGLES primitive into one
-//!   soup. [`write_glb`] writes a triangle mesh (positions, normals, indices) as GLB.
+//! - **glTF 2.0 / GLB** ([`load_gltf`], [`parse_gltf`]; [`load_gltf_with`], [`parse_gltf_with`]
+//!   with [`GltfOptions`]) reads every TRIANGLES primitive into one soup. A hostile file cannot
+//!   make it read outside the glTF's folder (unless [`GltfOptions::allow_outside_uris`]), read a
+//!   device or FIFO, read past a buffer's `byteLength`, mistake an index of 2^32 for 0, or
+//!   allocate more than [`GltfOptions::max_vertices`] / [`GltfOptions::max_indices`] allow (all
+//!   checked before anything is read). [`write_glb`] writes a triangle mesh (positions, normals,
+//!   indices) as GLB, refusing coordinates that are no normal f32 ([`MIN_GLB_EXTENT`]).
 //! - [`load`] and [`load_mesh`] pick the format from the file extension; [`load_mesh`] also builds
 //!   the half-edge [`Mesh`] and reports a [`MeshError`](subdiv_mesh::MeshError) at the OBJ line
 //!   of the face, vertex or tag it is about.
 //!
 //! No input panics. Every error is an [`IoError`] naming the place (`file:line`, or a glTF JSON
 //! path such as `meshes[0].primitives[1].attributes.POSITION`) and the rule broken. Writers
-//! write `<path>.tmp` and rename it, so a failure never leaves a half-written file.
+//! write a fresh `<name>.<16 hex>.tmp` beside the output (created with `O_EXCL`, so a file or
+//! symlink planted there is never followed) and rename it over the output, so a failure never
+//! leaves a half-written file; [`remove_temporary_files`] deletes those being written, for a
+//! program's SIGINT/SIGTERM handler.
 //!
 //! ```
 //! use subdiv_io::read_obj;
@@ -47,8 +55,12 @@ use std::path::Path;
 
 use subdiv_mesh::{BuildOptions, Mesh, PolygonSoup};
 
+pub use crate::atomic::remove_temporary_files;
 pub use crate::error::IoError;
-pub use crate::gltf::{GlbMesh, encode_glb, load_gltf, parse_gltf, write_glb};
+pub use crate::gltf::{
+    GlbMesh, GltfOptions, MIN_GLB_EXTENT, check_glb_positions, encode_glb, load_gltf, load_gltf_with, parse_gltf,
+    parse_gltf_with, write_glb,
+};
 pub use crate::obj::{ObjFile, ObjLines, load_obj, read_obj, write_obj, write_obj_to};
 
 /// The formats [`load`] reads.
@@ -81,7 +93,7 @@ pub fn load(path: impl AsRef<Path>) -> Result<PolygonSoup, IoError> {
     }
 }
 
-/// Writes `path` atomically through `write`: to `<path>.tmp` beside it, synced, then renamed
+/// Writes `path` atomically through `write`: to a fresh `<name>.<16 hex>.tmp` beside it, synced, then renamed
 /// over `path`, so a failure (in `write` too) leaves no half-written file and `path` as it was.
 /// For outputs other than meshes, e.g. the CSV of `subdiv eval`.
 ///

@@ -32,6 +32,9 @@ use subdiv_mesh::{
 
 use crate::{IoError, atomic};
 
+/// The UTF-8 byte-order mark, accepted (and skipped) at the start of a file.
+const UTF8_BOM: &[u8] = b"\xEF\xBB\xBF";
+
 /// Tag names this reader interprets; any other is recorded in [`Tags::unsupported`].
 const KNOWN_TAGS: [&str; 7] = [
     "crease",
@@ -121,7 +124,9 @@ impl ObjFile {
         while let Some(first_line) = next_record(&mut reader, &mut record, &mut line)
             .map_err(|source| IoError::Io { path: name.into(), source })?
         {
-            parser.record(&record, first_line)?;
+            // A UTF-8 byte-order mark, as Windows editors write, is no part of the first record.
+            let text = if first_line == 1 { record.strip_prefix(UTF8_BOM).unwrap_or(&record) } else { &record };
+            parser.record(text, first_line)?;
         }
         parser.finish()
     }
@@ -444,7 +449,7 @@ impl Parser {
 /// `t` lines ([`read_obj`] of the file gives `soup` back). Unsupported tags are written by name
 /// only (`t vertexedit 0/0/0`), as that is all the reader keeps of them.
 ///
-/// The file is written to `<path>.tmp` and renamed, so a failure leaves `path` untouched.
+/// The file is written to a fresh `<name>.<16 hex>.tmp` and renamed, so a failure leaves `path` untouched.
 ///
 /// # Errors
 /// [`IoError::Unwritable`] when the soup cannot be read back (a face with fewer than 3
@@ -596,6 +601,13 @@ mod tests {
             records.push((first, String::from_utf8(record.clone()).unwrap()));
         }
         assert_eq!(records, [(1, "v 1   2 3".into()), (3, String::new()), (4, "f 1 2 3".into())]);
+    }
+
+    #[test]
+    fn a_utf8_byte_order_mark_at_the_start_is_skipped() {
+        let text = "\u{feff}v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let soup = read_obj(text.as_bytes(), "bom.obj").expect("a BOM is accepted");
+        assert_eq!((soup.vertex_count(), soup.face_count()), (3, 1));
     }
 
     #[test]

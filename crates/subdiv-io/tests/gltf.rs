@@ -4,7 +4,7 @@
 use base64::Engine as _;
 use glam::Vec3;
 use serde_json::{Value, json};
-use subdiv_io::{GlbMesh, IoError, encode_glb, load_gltf, parse_gltf, write_glb};
+use subdiv_io::{GlbMesh, GltfOptions, IoError, encode_glb, load_gltf, parse_gltf, parse_gltf_with, write_glb};
 use subdiv_mesh::{BuildOptions, PolygonSoup};
 
 /// A tetrahedron with faces counter-clockwise from outside.
@@ -59,10 +59,16 @@ fn edited(edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> Vec<u8> {
 /// Asserts that `bytes` fail as a glTF error at `location` whose rule contains `rule`.
 #[track_caller]
 fn fails_at(bytes: &[u8], location: &str, rule: &str) {
-    match parse(bytes) {
-        Err(IoError::Gltf { file, location: at, rule: text }) => {
-            assert_eq!((file.as_str(), at.as_str()), ("test.glb", location), "{text}");
-            assert!(text.contains(rule), "{location}: {text:?} does not say {rule:?}");
+    fails_with(bytes, &GltfOptions::DEFAULT, location, rule);
+}
+
+/// `IoError::Gltf` or one of the typed glTF variants: each displays as `FILE: LOCATION: RULE`.
+fn fails_with(bytes: &[u8], options: &GltfOptions, location: &str, rule: &str) {
+    match parse_gltf_with(bytes, "test.glb", None, options) {
+        Err(error) => {
+            let text = error.to_string();
+            let prefix = format!("test.glb: {location}: ");
+            assert!(text.starts_with(&prefix) && text.contains(rule), "{text:?} is not at {location} saying {rule:?}");
         }
         other => panic!("expected a glTF error at {location}, got {other:?}"),
     }
@@ -248,7 +254,8 @@ fn accessors_and_views_outside_their_buffer_are_errors() {
     let glb = edited(|json, _| json["accessors"][0]["count"] = json!(5));
     fails_at(&glb, "accessors[0]", "overrun bufferViews[0]");
     let glb = edited(|json, _| json["accessors"][0]["count"] = json!(u64::MAX));
-    fails_at(&glb, "accessors[0]", "overrun");
+    let unlimited = GltfOptions::DEFAULT.with_max_vertices(u64::MAX).with_max_indices(u64::MAX);
+    fails_with(&glb, &unlimited, "accessors[0]", "overrun");
     let glb = edited(|json, _| json["accessors"][0]["byteOffset"] = json!(u64::MAX - 3));
     fails_at(&glb, "accessors[0]", "overrun");
     let glb = edited(|json, _| json["bufferViews"][1]["byteLength"] = json!(4000));

@@ -188,8 +188,12 @@ impl Tessellation {
     /// on an infinitely sharp crease is split into one GLB vertex per normal.
     ///
     /// # Errors
-    /// [`Error::Io`] naming the file.
+    /// [`Error::Io`] naming the file; [`IoError::Unwritable`](subdiv_io::IoError::Unwritable)
+    /// (in [`Error::Io`]) for a coordinate f32 cannot hold without flushing it to 0
+    /// ([`subdiv_io::MIN_GLB_EXTENT`]): scale such a mesh first.
     pub fn write_glb(&self, path: impl AsRef<Path>) -> Result<(), Error> {
+        // Before the f32 conversion below, which would turn a 1e-50 coordinate into 0.
+        subdiv_io::check_glb_positions(self.mesh.positions.iter().copied())?;
         let mut flat = subdiv_tess::FlatMesh::default();
         self.mesh.write_to(&mut flat);
         let vec3 = |v: &[f32]| glam::Vec3::new(v[0], v[1], v[2]);
