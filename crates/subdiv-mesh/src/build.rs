@@ -10,6 +10,14 @@ use glam::DVec3;
 use crate::mesh::{Mesh, NONE};
 use crate::{EdgeId, FaceId, HalfEdgeId, MeshError, PolygonSoup, Tags, VertexId};
 
+/// The largest coordinate magnitude a control mesh may have, 2⁵⁰⁰ ≈ 3.3e150.
+///
+/// Refinement and evaluation form weighted sums of coordinates, and normals, areas and curvature
+/// bounds multiply two of them: with coordinates up to 2⁵⁰⁰ such a product is at most 2¹⁰⁰⁰,
+/// leaving 2²⁴ of f64's range (2¹⁰²⁴) for the weights and the grid rates. A cage past it (a
+/// vertex at 1e308) would refine to infinities and evaluate to NaN; scale it down instead.
+pub const MAX_COORDINATE: f64 = 3.273_390_607_896_142e150;
+
 /// Options of [`Mesh::build_with`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct BuildOptions {
@@ -145,11 +153,16 @@ fn connect(positions: &[DVec3], offsets: &[u32], fv: &[VertexId], sink: &mut Sin
         }
     }
     for (v, p) in positions.iter().enumerate() {
-        if !p.is_finite() {
-            let vertex = VertexId::new(v as u32);
-            if sink.push(MeshError::NonFiniteCoordinate { vertex, x: p.x, y: p.y, z: p.z }) {
-                return None;
-            }
+        let vertex = VertexId::new(v as u32);
+        let error = if !p.is_finite() {
+            MeshError::NonFiniteCoordinate { vertex, x: p.x, y: p.y, z: p.z }
+        } else if p.abs().max_element() > MAX_COORDINATE {
+            MeshError::CoordinateTooLarge { vertex, x: p.x, y: p.y, z: p.z }
+        } else {
+            continue;
+        };
+        if sink.push(error) {
+            return None;
         }
     }
 
@@ -563,5 +576,30 @@ fn orient(soup: &mut PolygonSoup, sink: &mut Sink) {
     }
     for f in to_flip {
         soup.flip_face(FaceId::new(f as u32));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shapes;
+
+    #[test]
+    fn coordinates_past_the_headroom_are_refused_and_named() {
+        assert_eq!(MAX_COORDINATE, 2f64.powi(500));
+        // A vertex at 1e308 refined to infinities ("internal error") and evaluated to NaN.
+        for (x, rule) in [
+            (1e308, "coordinate-too-large"),
+            (-4e150, "coordinate-too-large"),
+            (f64::INFINITY, "non-finite-coordinate"),
+        ] {
+            let mut soup = shapes::cube();
+            soup.positions_mut()[3].y = x;
+            let e = Mesh::build(soup).unwrap_err();
+            assert_eq!((e.rule(), e.vertex()), (rule, Some(VertexId::new(3))), "{e}");
+        }
+        let mut soup = shapes::cube();
+        soup.positions_mut()[3].y = MAX_COORDINATE;
+        assert!(Mesh::build(soup).is_ok());
     }
 }

@@ -47,6 +47,22 @@ pub enum MeshError {
         /// Its z coordinate.
         z: f64,
     },
+    /// A vertex coordinate larger in magnitude than [`MAX_COORDINATE`](crate::MAX_COORDINATE),
+    /// whose refinement and normals would overflow f64.
+    #[error(
+        "{vertex} has a coordinate too large for subdivision ({x}, {y}, {z}): magnitudes above 2^500 (3.3e150) \
+         overflow f64 in refinement and normals; scale the mesh down"
+    )]
+    CoordinateTooLarge {
+        /// The vertex.
+        vertex: VertexId,
+        /// Its x coordinate.
+        x: f64,
+        /// Its y coordinate.
+        y: f64,
+        /// Its z coordinate.
+        z: f64,
+    },
     /// Three or more faces share one edge.
     #[error("non-manifold edge {a}-{b}: {face_count} faces share it (first {face}); an edge may have at most 2")]
     NonManifoldEdge {
@@ -161,7 +177,9 @@ impl MeshError {
     /// The vertex the error is about, when it is about one vertex.
     pub fn vertex(&self) -> Option<VertexId> {
         match *self {
-            Self::NonFiniteCoordinate { vertex, .. } | Self::NonManifoldVertex { vertex, .. } => Some(vertex),
+            Self::NonFiniteCoordinate { vertex, .. }
+            | Self::CoordinateTooLarge { vertex, .. }
+            | Self::NonManifoldVertex { vertex, .. } => Some(vertex),
             _ => None,
         }
     }
@@ -173,6 +191,7 @@ impl MeshError {
             Self::RepeatedVertex { .. } => "repeated-vertex",
             Self::IndexOutOfRange { .. } => "index-out-of-range",
             Self::NonFiniteCoordinate { .. } => "non-finite-coordinate",
+            Self::CoordinateTooLarge { .. } => "coordinate-too-large",
             Self::NonManifoldEdge { .. } => "non-manifold-edge",
             Self::NonManifoldVertex { .. } => "non-manifold-vertex",
             Self::InconsistentOrientation { .. } => "inconsistent-orientation",

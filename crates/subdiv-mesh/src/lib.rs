@@ -32,7 +32,7 @@ mod region;
 pub mod shapes;
 mod soup;
 
-pub use build::{BuildOptions, validate};
+pub use build::{BuildOptions, MAX_COORDINATE, validate};
 pub use error::MeshError;
 pub use ids::{EdgeId, FaceId, HalfEdgeId, VertexId};
 pub use mesh::{BoundaryLoop, Components, Mesh, OutgoingHalfEdges, RegularValence};

@@ -6,11 +6,14 @@ use subdiv_stencil::StencilError;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum TessError {
-    /// The tolerance is not a positive finite number.
-    #[error("tolerance {value} is not a positive finite number")]
+    /// The tolerance is not a positive finite number, or a relative one of a mesh whose
+    /// bounding box has no diagonal to be relative to.
+    #[error("tolerance {value} {reason}")]
     Tolerance {
         /// The value as given.
         value: String,
+        /// Why it cannot be used.
+        reason: String,
     },
     /// The scheme is not one the quadtree's bounds hold for.
     #[error("scheme {scheme}: {reason}")]

@@ -78,14 +78,36 @@ impl Tolerance {
     /// The absolute `ε` for a model whose bounding-box diagonal is `diagonal`.
     ///
     /// # Errors
-    /// [`TessError::Tolerance`] for a value that is not a positive finite number.
+    /// [`TessError::Tolerance`] for a value that is not a positive finite number, or a
+    /// relative one when `diagonal` is 0 or not finite (every vertex at one point).
+    ///
+    /// ```
+    /// use subdiv_tess::Tolerance;
+    ///
+    /// assert_eq!(Tolerance::Relative(0.01).absolute(2.0)?, 0.02);
+    /// let e = Tolerance::Relative(0.01).absolute(0.0).unwrap_err();
+    /// assert!(e.to_string().contains("bounding-box diagonal is 0"), "{e}");
+    /// # Ok::<(), subdiv_tess::TessError>(())
+    /// ```
     pub fn absolute(self, diagonal: f64) -> Result<f64, TessError> {
         let (value, epsilon) = match self {
             Self::Absolute(e) => (e, e),
             Self::Relative(r) => (r, r * diagonal),
         };
-        if !(value.is_finite() && value > 0.0 && epsilon.is_finite() && epsilon > 0.0) {
-            return Err(TessError::Tolerance { value: format!("{value:?}") });
+        if !(value.is_finite() && value > 0.0) {
+            return Err(TessError::Tolerance {
+                value: format!("{value:?}"),
+                reason: "is not a positive finite number".into(),
+            });
+        }
+        if !(epsilon.is_finite() && epsilon > 0.0) {
+            return Err(TessError::Tolerance {
+                value: format!("{value:?}"),
+                reason: format!(
+                    "is relative, but the mesh's bounding-box diagonal is {diagonal:?}, so it gives no distance; \
+                     give an absolute tolerance"
+                ),
+            });
         }
         Ok(epsilon)
     }

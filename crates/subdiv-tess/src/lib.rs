@@ -60,6 +60,7 @@ pub mod dual;
 mod error;
 pub mod flatness;
 mod mesh;
+mod normal;
 mod par;
 pub mod plan;
 pub mod quadtree;
@@ -70,6 +71,7 @@ pub use dual::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, MAX_DUAL_
 pub use error::TessError;
 pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessMesh};
+pub use normal::unit_normal;
 pub use par::Parallelism;
 pub use quadtree::{FaceCurvature, QuadtreeOptions, QuadtreeStats, QuadtreeTessellator};
 pub use sink::{BuffersBuilder, TessCounts, TessSink, TessTriangle, TessVertex, VertexBuffers};

@@ -435,7 +435,7 @@ impl EvaluationPlan {
                 }
             };
             positions.push(p);
-            normals.push(du.cross(dv).normalize_or_zero());
+            normals.push(crate::unit_normal(du.cross(dv)));
         }
     }
 

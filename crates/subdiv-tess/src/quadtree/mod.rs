@@ -585,7 +585,7 @@ impl QuadtreeTessellator {
             let (qx, qy) = match &piece {
                 Piece::Regular(b) => {
                     let (p, du, dv) = b.eval_with_derivatives(x as f64 / FULL as f64, y as f64 / FULL as f64);
-                    return Ok((p, du.cross(dv).normalize_or_zero()));
+                    return Ok((p, crate::unit_normal(du.cross(dv))));
                 }
                 Piece::Face { .. } => (usize::from(2 * x >= FULL), usize::from(2 * y >= FULL)),
                 Piece::Extraordinary { matrices, shape, points, frame } => {
@@ -598,7 +598,7 @@ impl QuadtreeTessellator {
                         };
                         let apply = |w: &[f64]| -> DVec3 { w.iter().zip(points).map(|(&w, &p)| w * p).sum() };
                         // The patch frame keeps the face's orientation (determinant 1).
-                        return Ok((apply(position), apply(du).cross(apply(dv)).normalize_or_zero()));
+                        return Ok((apply(position), crate::unit_normal(apply(du).cross(apply(dv)))));
                     }
                     // On a border between quarters, take the one away from the corner: the point
                     // then reaches a polynomial piece.

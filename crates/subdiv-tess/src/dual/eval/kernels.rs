@@ -125,7 +125,7 @@ pub(super) fn combine(w: [f64; 4], col: &[DVec3; 4]) -> DVec3 {
 /// A unit normal from two tangents (zero where they are parallel).
 #[cfg(test)]
 pub(super) fn normal(du: DVec3, dv: DVec3) -> DVec3 {
-    du.cross(dv).normalize_or_zero()
+    crate::unit_normal(du.cross(dv))
 }
 
 /// The dual grid of a bicubic face, row by row, into `out` (point `k = j · n + i` at `k`).
@@ -225,8 +225,12 @@ impl Pending {
         for [x, y, z] in self.c.iter_mut().take(self.len) {
             for ((x, y), z) in x.iter_mut().zip(y.iter_mut()).zip(z.iter_mut()) {
                 let rcp = 1.0 / ((*x * *x) + (*y * *y) + (*z * *z)).sqrt();
-                let unit = rcp.is_finite() && rcp > 0.0;
-                (*x, *y, *z) = if unit { (*x * rcp, *y * rcp, *z * rcp) } else { (0.0, 0.0, 0.0) };
+                (*x, *y, *z) = if rcp.is_finite() && rcp > 0.0 {
+                    (*x * rcp, *y * rcp, *z * rcp)
+                } else {
+                    // |c|² out of range (a tiny or huge model), or zero: the scaled path.
+                    crate::unit_normal(DVec3::new(*x, *y, *z)).into()
+                };
             }
         }
         for ((p, n), &(first, count)) in self.p.iter().zip(&self.c).zip(&self.at).take(self.len) {

@@ -248,14 +248,14 @@ impl Evaluator {
                 m += 1;
                 if m == BATCH {
                     for ((x, c), &k) in xs.iter().zip(cs.iter()).zip(ks.iter()) {
-                        put(k, *x, c.normalize_or_zero());
+                        put(k, *x, crate::unit_normal(*c));
                     }
                     m = 0;
                 }
             }
         }
         for ((x, c), &k) in xs.iter().zip(cs.iter()).zip(ks.iter()).take(m) {
-            put(k, *x, c.normalize_or_zero());
+            put(k, *x, crate::unit_normal(*c));
         }
     }
 }

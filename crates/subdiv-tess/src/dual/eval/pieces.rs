@@ -260,7 +260,7 @@ impl Evaluator {
                         m += 1;
                     }
                     for ((x, c), &k) in xs.iter().zip(&cs).zip(&ks).take(m) {
-                        out.put(k, *x, c.normalize_or_zero());
+                        out.put(k, *x, crate::unit_normal(*c));
                     }
                 }
             }

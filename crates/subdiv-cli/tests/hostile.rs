@@ -1,5 +1,6 @@
-//! Requests for more work than the documented limits allow: refused in one line with exit
-//! status 2 before anything is allocated, and allowed once the limit is raised.
+//! Hostile requests: more work than the documented limits allow (refused in one line with
+//! exit status 2 before anything is allocated, allowed once the limit is raised), and
+//! coordinates at the ends of f64's range.
 
 use std::process::{Command, Output};
 
@@ -73,4 +74,66 @@ fn stencil_parameters_are_exact_and_their_periods_bounded() {
     // The same denominator twice is its own common one.
     let output = subdiv(&["stencil", "--at", "1/3,2/3", "--json"]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+/// The cube scaled by `scale`, as OBJ in `dir`.
+fn scaled_cube(dir: &std::path::Path, scale: f64) -> String {
+    let mut cube = subdiv::mesh::shapes::cube();
+    cube.positions_mut().iter_mut().for_each(|p| *p *= scale);
+    let path = dir.join("cube.obj");
+    subdiv::io::write_obj(&path, &cube).unwrap();
+    path.to_str().unwrap().to_string()
+}
+
+#[test]
+fn coordinates_past_f64s_headroom_are_refused_naming_the_vertex() {
+    // One coordinate of 1e308: an "internal error" (a single quad) or NaN and inf with exit 0.
+    let dir = tempfile::tempdir().unwrap();
+    let quad = dir.path().join("quad.obj");
+    std::fs::write(&quad, "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 1e308\nf 1 2 3 4\n").unwrap();
+    let quad = quad.to_str().unwrap();
+    for command in ["eval", "tessellate", "refine"] {
+        let mut args = vec![command, quad];
+        if command == "eval" {
+            args.extend(["--grid", "2"]);
+        }
+        refused(&args, &["quad.obj", "vertex 3", "too large", "scale the mesh down"]);
+    }
+}
+
+#[test]
+fn a_tiny_model_keeps_unit_normals() {
+    // A cube scaled to 1e-90: |du × dv|² underflowed to 0 and every OBJ normal was 0.
+    let dir = tempfile::tempdir().unwrap();
+    let cube = scaled_cube(dir.path(), 1e-90);
+    let out = dir.path().join("tiny.obj");
+    let output = subdiv(&["tessellate", &cube, "--rate", "2", "-o", out.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let text = std::fs::read_to_string(&out).unwrap();
+    let normals: Vec<[f64; 3]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("vn "))
+        .map(|l| {
+            let v: Vec<f64> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect();
+    assert!(!normals.is_empty());
+    for n in normals {
+        let length = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        assert!((length - 1.0).abs() < 1e-6, "normal {n:?}");
+    }
+}
+
+#[test]
+fn a_relative_tolerance_of_a_mesh_at_one_point_says_why() {
+    // Every vertex at the origin: "tolerance 0.01 is not a positive finite number" before.
+    let dir = tempfile::tempdir().unwrap();
+    let cube = scaled_cube(dir.path(), 0.0);
+    let out = dir.path().join("point.glb");
+    refused(
+        &["tessellate", &cube, "--tolerance", "0.01", "--relative", "-o", out.to_str().unwrap()],
+        &["cube.obj", "tolerance 0.01 is relative", "diagonal is 0.0", "absolute tolerance"],
+    );
+    assert!(!out.exists());
 }
