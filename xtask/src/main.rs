@@ -32,6 +32,7 @@
 mod adaptive;
 mod bench_gpu;
 mod bench_tess;
+mod fuzz;
 mod osd;
 mod paper;
 mod rates_table;
@@ -40,7 +41,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -51,6 +52,7 @@ fn main() -> ExitCode {
         Some("bench") if args.get(1).is_some_and(|a| a == "gpu") => bench_gpu::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("same-output") => same_output::run(&args[1..]),
+        Some("fuzz") => fuzz::run(&args[1..]),
         Some("paper") => paper::run(),
         Some("rates") => rates_table::run(),
         Some("adaptive") => {

@@ -3,7 +3,6 @@
 
 use std::io::Write;
 
-use num_integer::Integer;
 use serde_json::{Value, json};
 use subdiv::mesh::BoundaryInterpolation;
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
@@ -46,16 +45,6 @@ fn parse_fraction(text: &str) -> Result<(i64, i64), UserError> {
         None => (text.trim().parse().map_err(|_| bad())?, 1),
     };
     if q <= 0 { Err(bad()) } else { Ok((p, q)) }
-}
-
-/// The point `(a/b, c/d)` over one denominator, `lcm(b, d)`, or an error naming `at` when
-/// that does not fit in 64 bits (it must not wrap to another point).
-fn common_point(at: &str, (a, b): (i64, i64), (c, d): (i64, i64)) -> Result<Dyadic, UserError> {
-    let q = (b / b.gcd(&d)).checked_mul(d);
-    let point = q.and_then(|q| Some(Dyadic::new(a.checked_mul(q / b)?, c.checked_mul(q / d)?, q)));
-    point.ok_or_else(|| {
-        UserError(format!("--at {at}: the common denominator of the two fractions does not fit in 64 bits"))
-    })
 }
 
 pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserError> {
@@ -125,8 +114,7 @@ fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Re
     let matrices = PatchMatrices::of(scheme, PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)?;
     let points: Vec<Dyadic> = match &args.at {
         Some(at) => {
-            let (u, v) = at.split_once(',').ok_or_else(|| UserError(format!("--at {at}: expected U,V")))?;
-            vec![common_point(at, parse_fraction(u)?, parse_fraction(v)?)?]
+            vec![at.parse::<Dyadic>().map_err(|e| UserError(format!("--at: {e}")))?]
         }
         None => Grid::Primal.points(matrices.face_size, args.n),
     };

@@ -15,6 +15,13 @@ use serde::{Deserialize, Deserializer, Serialize};
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum CurveError {
+    /// A scheme name with a control character (a line break, say), or longer than
+    /// [`MAX_NAME_LENGTH`](crate::MAX_NAME_LENGTH): names are quoted in one-line messages.
+    #[error("curve scheme name {name}: a name is one line of at most 64 characters without control characters")]
+    Name {
+        /// The name, quoted with its escapes.
+        name: String,
+    },
     /// The arity (children per span) is below 2 or above [`CurveScheme::MAX_ARITY`].
     #[error("curve scheme `{scheme}`: arity {arity} is not supported (2 to {max})", max = CurveScheme::MAX_ARITY)]
     Arity {
@@ -298,6 +305,9 @@ impl CurveScheme {
     }
 
     fn validate(&self) -> Result<(), CurveError> {
+        if !crate::scheme::is_one_line_name(&self.name) {
+            return Err(CurveError::Name { name: format!("{:?}", self.name) });
+        }
         let scheme = || self.name.clone();
         if !(2..=Self::MAX_ARITY).contains(&self.arity) {
             return Err(CurveError::Arity { scheme: scheme(), arity: self.arity });

@@ -99,8 +99,8 @@ pub use patch::{
 };
 pub use refine::{RefineOptions, Refiner, refine, refine_uniform};
 pub use scheme::{
-    Builtin, CreaseMask, ExtraordinaryEdgeMask, FaceMask, QuadEdgeMask, Rules, Scheme, Split, TriangleEdgeMask,
-    VertexMask,
+    Builtin, CreaseMask, ExtraordinaryEdgeMask, FaceMask, MAX_NAME_LENGTH, QuadEdgeMask, Rules, Scheme, Split,
+    TriangleEdgeMask, VertexMask,
 };
 pub use stencil::Stencils;
 

@@ -429,6 +429,15 @@ impl Scheme {
     /// # Errors
     /// [`SchemeError::InvalidScheme`] naming the first rule and valence that fail.
     pub fn validate(&self) -> Result<(), SchemeError> {
+        if !is_one_line_name(&self.name) {
+            return Err(SchemeError::InvalidScheme {
+                scheme: format!("{:?}", self.name),
+                rule: "name".into(),
+                detail: format!(
+                    "a name is one line of at most {MAX_NAME_LENGTH} characters without control characters"
+                ),
+            });
+        }
         let invalid = |rule: &str, size: usize, detail: String| SchemeError::InvalidScheme {
             scheme: self.name.clone(),
             rule: rule.to_string(),
@@ -549,6 +558,15 @@ pub(crate) fn extraordinary_spokes(mask: &ExtraordinaryEdgeMask, k: usize) -> Ve
         Some(table) => table.iter().map(|w| w.eval(k, 0)).collect(),
         None => (0..k).map(|j| mask.spoke.eval(k, j)).collect(),
     }
+}
+
+/// The longest scheme name (curve or surface), in characters.
+pub const MAX_NAME_LENGTH: usize = 64;
+
+/// Whether `name` can be quoted in a one-line message: no control character, at most
+/// [`MAX_NAME_LENGTH`] characters.
+pub(crate) fn is_one_line_name(name: &str) -> bool {
+    name.chars().count() <= MAX_NAME_LENGTH && !name.chars().any(char::is_control)
 }
 
 /// A TOML error in one line: `line L, column C: reason` (the toml crate's own message spans

@@ -55,6 +55,39 @@ impl Dyadic {
     }
 }
 
+impl std::str::FromStr for Dyadic {
+    type Err = StencilError;
+
+    /// `U,V` with each a fraction `p/q` (q > 0) or an integer, over their least common
+    /// denominator, computed with checked arithmetic: a denominator past 64 bits is an error,
+    /// never a wrap to another point.
+    ///
+    /// ```
+    /// use subdiv_stencil::Dyadic;
+    ///
+    /// assert_eq!("1/3, 1/2".parse::<Dyadic>()?, Dyadic::new(2, 3, 6));
+    /// assert_eq!("1,0".parse::<Dyadic>()?, Dyadic::new(1, 0, 1));
+    /// assert!("1/4294967297,1/4294967298".parse::<Dyadic>().is_err());
+    /// # Ok::<(), subdiv_stencil::StencilError>(())
+    /// ```
+    fn from_str(text: &str) -> Result<Self, StencilError> {
+        let bad = |reason: &'static str| StencilError::ParameterSyntax { text: text.to_string(), reason };
+        let fraction = |part: &str| -> Result<(i64, i64), StencilError> {
+            let number = |t: &str| t.trim().parse::<i64>().map_err(|_| bad("expected integers p and q in p/q"));
+            let (p, q) = match part.split_once('/') {
+                Some((p, q)) => (number(p)?, number(q)?),
+                None => (number(part)?, 1),
+            };
+            if q <= 0 { Err(bad("a denominator must be positive")) } else { Ok((p, q)) }
+        };
+        let (u, v) = text.split_once(',').ok_or_else(|| bad("expected U,V"))?;
+        let ((a, b), (c, d)) = (fraction(u)?, fraction(v)?);
+        let q = (b / b.gcd(&d)).checked_mul(d);
+        let point = q.and_then(|q| Some(Self::new(a.checked_mul(q / b)?, c.checked_mul(q / d)?, q)));
+        point.ok_or_else(|| bad("the common denominator of the two fractions does not fit in 64 bits"))
+    }
+}
+
 impl Address {
     /// The address of `point` in the domain of a face of `face_size` sides: the unit square
     /// (4) or the triangle `u, v ≥ 0, u + v ≤ 1` (3). Where a point lies on the border of two

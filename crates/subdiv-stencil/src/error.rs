@@ -19,6 +19,14 @@ pub enum StencilError {
         /// The domain, e.g. `[0, 1]²`.
         domain: &'static str,
     },
+    /// A parameter text that is not `U,V` of two fractions in 64-bit integers.
+    #[error("parameter {text:?}: {reason}")]
+    ParameterSyntax {
+        /// The text given.
+        text: String,
+        /// What is wrong.
+        reason: &'static str,
+    },
     /// A rational parameter whose address (prefix and period of its binary expansion) is
     /// longer than the walk limit, [`MAX_ADDRESS_STEPS`](crate::MAX_ADDRESS_STEPS) by default.
     #[error(
