@@ -102,6 +102,8 @@ pub struct MeshParams {
     pub jitter: f64,
     /// At most this many random face splits, merges or edge bisections. Default 4.
     pub max_operations: usize,
+    /// At least this many faces. Default 1.
+    pub min_faces: usize,
 }
 
 impl MeshParams {
@@ -115,6 +117,7 @@ impl MeshParams {
         corner_probability: 0.05,
         jitter: 0.05,
         max_operations: 4,
+        min_faces: 1,
     };
 
     /// With `closure`.
@@ -155,6 +158,12 @@ impl MeshParams {
     /// With `jitter`.
     pub fn with_jitter(mut self, jitter: f64) -> Self {
         self.jitter = jitter;
+        self
+    }
+
+    /// With at least `min_faces` faces.
+    pub fn with_min_faces(mut self, min_faces: usize) -> Self {
+        self.min_faces = min_faces;
         self
     }
 
@@ -259,14 +268,17 @@ fn catalog(params: &MeshParams) -> Vec<Base> {
     open.extend([shapes::quad_grid(2, 2), shapes::pole(3), shapes::pole(5)].iter().map(triangulate));
 
     let mut bases = Vec::new();
-    let fits = |soup: &PolygonSoup| {
-        soup.faces().all(|f| params.faces.allows(f.len()))
+    // A closed shape may lose a face to open it.
+    let opened = usize::from(params.closure != Closure::Closed);
+    let fits = |soup: &PolygonSoup, extra: usize| {
+        soup.face_count() >= params.min_faces + extra
+            && soup.faces().all(|f| params.faces.allows(f.len()))
             && Mesh::build(soup.clone()).is_ok_and(|mesh| valences_fit(&mesh, &params.valences))
     };
     // Closed shapes also give open ones, with a face removed.
-    bases.extend(closed.into_iter().filter(|s| fits(s)).map(|soup| Base { soup, closed: true }));
+    bases.extend(closed.into_iter().filter(|s| fits(s, opened)).map(|soup| Base { soup, closed: true }));
     if params.closure != Closure::Closed {
-        bases.extend(open.into_iter().filter(|s| fits(s)).map(|soup| Base { soup, closed: false }));
+        bases.extend(open.into_iter().filter(|s| fits(s, 0)).map(|soup| Base { soup, closed: false }));
     }
     // Smallest first, so that shrinking moves towards small meshes.
     bases.sort_by_key(|b| b.soup.face_count());
@@ -280,6 +292,12 @@ fn valences_fit(mesh: &Mesh, valences: &RangeInclusive<usize>) -> bool {
 fn generate(base: &Base, params: &MeshParams, operations: &[(usize, usize)], opening: usize, seed: u64) -> PolygonSoup {
     let mut soup = base.soup.clone();
     let mut rng = Rng(seed);
+    let open = match params.closure {
+        Closure::Closed => false,
+        Closure::Open => true,
+        Closure::Any => rng.below(2) == 1,
+    };
+    let min_faces = params.min_faces + usize::from(base.closed && open);
     for &(which, how) in operations {
         let candidate = match params.faces {
             Faces::Quads => None,
@@ -291,17 +309,13 @@ fn generate(base: &Base, params: &MeshParams, operations: &[(usize, usize)], ope
             },
         };
         if let Some(candidate) = candidate
+            && candidate.face_count() >= min_faces
             && candidate.faces().all(|f| params.faces.allows(f.len()))
             && Mesh::build(candidate.clone()).is_ok_and(|mesh| valences_fit(&mesh, &params.valences))
         {
             soup = candidate;
         }
     }
-    let open = match params.closure {
-        Closure::Closed => false,
-        Closure::Open => true,
-        Closure::Any => rng.below(2) == 1,
-    };
     if base.closed && open {
         soup = remove_face(&soup, opening % soup.face_count());
     }
@@ -552,6 +566,7 @@ mod tests {
             Closure::Any => {}
         }
         prop_assert!(mesh.vertices().all(|v| !mesh.is_isolated(v)));
+        prop_assert!(mesh.face_count() >= params.min_faces);
         Ok(mesh)
     }
 
@@ -563,16 +578,20 @@ mod tests {
             (4usize..9).prop_map(|max| Faces::Polygons { max })
         ];
         let valences = prop_oneof![Just(3..=8), Just(3..=16), Just(4..=4), Just(6..=6), Just(3..=5), Just(4..=6)];
-        (closure, faces, valences, 0.0..0.5f64).prop_filter_map("no shape fits", |(closure, faces, valences, p)| {
-            let params = MeshParams::DEFAULT
-                .with_closure(closure)
-                .with_faces(faces)
-                .with_valences(valences)
-                .with_crease_probability(p)
-                .with_corner_probability(p / 2.0)
-                .with_max_operations(8);
-            (!catalog(&params).is_empty()).then_some(params)
-        })
+        (closure, faces, valences, 0.0..0.5f64, 1usize..12).prop_filter_map(
+            "no shape fits",
+            |(closure, faces, valences, p, min_faces)| {
+                let params = MeshParams::DEFAULT
+                    .with_closure(closure)
+                    .with_faces(faces)
+                    .with_valences(valences)
+                    .with_crease_probability(p)
+                    .with_corner_probability(p / 2.0)
+                    .with_max_operations(8)
+                    .with_min_faces(min_faces);
+                (!catalog(&params).is_empty()).then_some(params)
+            },
+        )
     }
 
     proptest! {
