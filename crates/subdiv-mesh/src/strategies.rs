@@ -1,13 +1,13 @@
-//! [`proptest`] strategies for valid meshes (feature `proptest`): closed or open, quads,
-//! triangles or N-gons, interior valences in a given range, creases, corners and jittered
-//! positions. Every soup they generate passes [`Mesh::build`].
+//! [`proptest`](mod@proptest) strategies for valid meshes (feature `proptest`): closed or
+//! open, quads, triangles or N-gons, interior valences in a given range, creases, corners and
+//! jittered positions. Every soup they generate passes [`Mesh::build`].
 //!
-//! Each mesh starts from a procedural shape ([`shapes`](crate::shapes), some of them
-//! quadrangulated or triangulated through face centres), then takes a few random operations
-//! that keep it a manifold of the requested kind: face splits and merges (N-gons), edge
-//! bisections (triangles), removing a face to open a closed mesh; then its positions are
-//! jittered and its edges and vertices tagged. Shrinking removes operations and moves towards the
-//! first shapes, the simplest.
+//! Each mesh starts from a procedural shape ([`shapes`], some of them quadrangulated or
+//! triangulated through face centres), then takes a few random operations that keep it a
+//! manifold of the requested kind: face splits and merges (N-gons), edge bisections
+//! (triangles), removing a face to open a closed mesh; then its positions are jittered and its
+//! edges and vertices tagged. Shrinking removes operations and moves towards the first shapes,
+//! the smallest.
 //!
 //! ```
 //! use proptest::prelude::*;

@@ -1,6 +1,6 @@
-//! [`proptest`] strategies for schemes (feature `proptest`): the built-ins, all or by split,
-//! perturbed variants with a free parameter, and schemes paired with meshes they take (from
-//! [`subdiv_mesh::strategies`], which this feature enables).
+//! [`proptest`](mod@proptest) strategies for schemes (feature `proptest`): the built-ins, all or
+//! by split, perturbed variants with a free parameter, and schemes paired with meshes they take
+//! (from [`subdiv_mesh::strategies`], which this feature enables).
 //!
 //! ```
 //! use proptest::prelude::*;
