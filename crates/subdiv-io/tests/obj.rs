@@ -3,6 +3,7 @@
 
 use proptest::prelude::*;
 use subdiv_io::{IoError, ObjFile, load_mesh, read_obj, write_obj, write_obj_to};
+use subdiv_mesh::strategies::{MeshParams, meshes};
 use subdiv_mesh::{
     BoundaryInterpolation, BuildOptions, CornerTag, CreaseMethod, CreaseTag, DVec3, FaceId, MeshError, PolygonSoup,
     TriangleSubdivision, VertexId,
@@ -374,8 +375,10 @@ fn arbitrary_soup() -> impl Strategy<Value = PolygonSoup> {
 }
 
 proptest! {
+    /// Arbitrary soups (invalid ones too), and valid meshes with creases and corners from
+    /// `subdiv_mesh::strategies`.
     #[test]
-    fn obj_round_trip_is_exact(soup in arbitrary_soup()) {
+    fn obj_round_trip_is_exact(soup in prop_oneof![arbitrary_soup(), meshes(MeshParams::DEFAULT.with_crease_probability(0.3))]) {
         let mut text = Vec::new();
         write_obj_to(&mut text, &soup).unwrap();
         prop_assert_eq!(read(&text).unwrap(), soup);

@@ -9,6 +9,8 @@
 //! boundary fan starts at its boundary edge), k-rings, components, Euler characteristic, genus
 //! and extraordinary vertices.
 //!
+//! With the `proptest` feature, [`strategies`] generates valid meshes for property tests.
+//!
 //! **Architecture invariant:** this crate knows no subdivision scheme and no file format. Tags
 //! are stored as authored; the schemes give them meaning, the readers produce them.
 //!
@@ -31,6 +33,8 @@ mod patch;
 mod region;
 pub mod shapes;
 mod soup;
+#[cfg(feature = "proptest")]
+pub mod strategies;
 
 pub use build::{BuildOptions, MAX_COORDINATE, validate};
 pub use error::MeshError;

@@ -1,62 +1,29 @@
-//! Half-edge invariants over the procedural shapes, under random relabelling of vertices, random
-//! face order and random starting corners; orientation errors and their repair.
+//! Half-edge invariants over the generated meshes (`subdiv_mesh::strategies`: every procedural
+//! shape, closed and open, N-gons, creases), under random relabelling of vertices, random face
+//! order and random starting corners; orientation errors and their repair.
+
+use std::collections::HashSet;
 
 use proptest::prelude::*;
+use subdiv_mesh::strategies::{MeshParams, meshes, relabelled};
 use subdiv_mesh::{BuildOptions, FaceId, Mesh, MeshError, PolygonSoup, VertexId, shapes};
 
-/// Every procedural shape, with the Euler characteristic it must have.
-fn shape(index: usize, size: usize) -> (PolygonSoup, i64) {
-    match index % 11 {
-        0 => (shapes::cube(), 2),
-        1 => (shapes::tetrahedron(), 2),
-        2 => (shapes::octahedron(), 2),
-        3 => (shapes::icosahedron(), 2),
-        4 => (shapes::dodecahedron(), 2),
-        5 => (shapes::quad_torus(size + 3, size + 4), 0),
-        6 => (shapes::triangle_torus(size + 4, size + 3), 0),
-        7 => (shapes::quad_grid(size + 1, size + 2), 1),
-        8 => (shapes::pole(size + 3), 1),
-        9 => (shapes::ngon_prism(size + 3), 2),
-        _ => (shapes::default_model(), 2),
-    }
+/// Valid meshes of every kind the strategies make (every procedural shape among them), each
+/// with at least two faces (a lone face flipped is still consistent), with a copy whose vertices are renamed, faces reordered and corners rotated.
+fn relabelled_pairs() -> impl Strategy<Value = (PolygonSoup, PolygonSoup)> {
+    meshes(MeshParams::DEFAULT.with_valences(3..=16).with_min_faces(2))
+        .prop_flat_map(|soup| (Just(soup.clone()), relabelled(soup)))
 }
 
-/// The soup with vertices renamed by `permutation`, faces reordered by `face_order` and each
-/// face's corners rotated by `rotations`.
-fn shuffle(soup: &PolygonSoup, seed: u64) -> PolygonSoup {
-    let mut rng = Lcg(seed);
-    let n = soup.vertex_count();
-    let mut permutation: Vec<u32> = (0..n as u32).collect();
-    rng.shuffle(&mut permutation);
-    let mut positions = vec![Default::default(); n];
-    for (old, &new) in permutation.iter().enumerate() {
-        positions[new as usize] = soup.positions()[old];
-    }
-    let mut faces: Vec<Vec<u32>> =
-        soup.faces().map(|f| f.iter().map(|v| permutation[v.index()]).collect::<Vec<_>>()).collect();
-    rng.shuffle(&mut faces);
-    for face in &mut faces {
-        let k = rng.below(face.len());
-        face.rotate_left(k);
-    }
-    PolygonSoup::from_indices(positions, faces)
-}
-
-/// A small deterministic generator, so a failing seed reproduces.
-struct Lcg(u64);
-
-impl Lcg {
-    fn below(&mut self, n: usize) -> usize {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((self.0 >> 33) % n as u64) as usize
-    }
-
-    fn shuffle<T>(&mut self, items: &mut [T]) {
-        for i in (1..items.len()).rev() {
-            let j = self.below(i + 1);
-            items.swap(i, j);
-        }
-    }
+/// V − E + F counted on the soup itself (used vertices, distinct undirected edges), without the
+/// half-edge structure.
+fn euler_of(soup: &PolygonSoup) -> i64 {
+    let vertices: HashSet<VertexId> = soup.faces().flatten().copied().collect();
+    let edges: HashSet<(VertexId, VertexId)> = soup
+        .faces()
+        .flat_map(|f| (0..f.len()).map(move |i| (f[i].min(f[(i + 1) % f.len()]), f[i].max(f[(i + 1) % f.len()]))))
+        .collect();
+    vertices.len() as i64 - edges.len() as i64 + soup.face_count() as i64
 }
 
 fn check_invariants(mesh: &Mesh, euler: i64) {
@@ -113,9 +80,9 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(128))]
 
     #[test]
-    fn half_edge_invariants_hold_under_relabelling(index in 0usize..11, size in 0usize..5, seed: u64) {
-        let (soup, euler) = shape(index, size);
-        let mesh = Mesh::build(shuffle(&soup, seed)).unwrap();
+    fn half_edge_invariants_hold_under_relabelling((soup, relabelled) in relabelled_pairs()) {
+        let euler = euler_of(&soup);
+        let mesh = Mesh::build(relabelled).unwrap();
         check_invariants(&mesh, euler);
         let original = Mesh::build(soup).unwrap();
         prop_assert_eq!(mesh.edge_count(), original.edge_count());
@@ -124,9 +91,9 @@ proptest! {
     }
 
     #[test]
-    fn one_flipped_face_is_reported_and_repaired(index in 0usize..11, size in 0usize..5, seed: u64, which: usize) {
-        let (soup, euler) = shape(index, size);
-        let mut soup = shuffle(&soup, seed);
+    fn one_flipped_face_is_reported_and_repaired((soup, relabelled) in relabelled_pairs(), which: usize) {
+        let euler = euler_of(&soup);
+        let mut soup = relabelled;
         let flipped = FaceId::new((which % soup.face_count()) as u32);
         soup.flip_face(flipped);
         let error = Mesh::build(soup.clone()).unwrap_err();

@@ -62,6 +62,9 @@
 //! reconstruction reproduces the regular scheme exactly (tested) and passes the C1 test at
 //! valences 3 to 16, but it may differ from the original next to extraordinary vertices.
 //!
+//! With the `proptest` feature, [`strategies`] generates schemes and meshes they take, for
+//! property tests.
+//!
 //! **Architecture invariant:** this crate does no I/O; scheme files arrive as text.
 //!
 //! ```
@@ -88,6 +91,8 @@ mod primal;
 mod refine;
 mod scheme;
 mod stencil;
+#[cfg(feature = "proptest")]
+pub mod strategies;
 
 pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, LocalSpectrum};
 pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};

@@ -1,26 +1,16 @@
-//! Properties every refinement must have, for every built-in scheme: affine invariance,
+//! Properties every refinement must have, for every built-in scheme (and the perturbed ones of
+//! `subdiv_schemes::strategies`), on the meshes of `subdiv_mesh::strategies`: affine invariance,
 //! interpolation where the scheme interpolates, and on regular grids the refinement the scheme
 //! generalises (Catmull-Clark: bicubic B-spline knot insertion; sw-quad: the tensor product of
 //! its curve rules; Kobbelt: the tensor-product four-point rule; Loop: the quartic box spline).
 
 use proptest::prelude::*;
-use subdiv_mesh::{CornerTag, CreaseTag, DVec3, Mesh, PolygonSoup, VertexId, shapes};
-use subdiv_schemes::{Builtin, RefineOptions, Scheme, refine_uniform};
-
-/// Meshes the scheme takes: triangles for triangle schemes, closed meshes for schemes without
-/// crease rules, quads only for Kobbelt's.
-fn shape(scheme: &Scheme, index: usize) -> PolygonSoup {
-    let shapes: [fn() -> PolygonSoup; 4] = if scheme.face_size() == Some(3) {
-        [shapes::icosahedron, || shapes::triangle_torus(5, 4), shapes::octahedron, shapes::tetrahedron]
-    } else if scheme.has_crease_rules() {
-        [shapes::default_model, || shapes::pole(5), || shapes::ngon_prism(6), || shapes::quad_grid(3, 2)]
-    } else if scheme.face_size() == Some(4) {
-        [shapes::default_model, shapes::cube, || shapes::quad_torus(5, 4), || shapes::quad_torus(3, 5)]
-    } else {
-        [shapes::default_model, shapes::cube, || shapes::ngon_prism(6), shapes::dodecahedron]
-    };
-    shapes[index % 4]()
-}
+use proptest::strategy::ValueTree;
+use proptest::test_runner::TestRunner;
+use subdiv_mesh::strategies::MeshParams;
+use subdiv_mesh::{CornerTag, DVec3, Mesh, PolygonSoup, VertexId, shapes};
+use subdiv_schemes::strategies::{builtin_schemes, meshes_for, perturbed_schemes, with_meshes};
+use subdiv_schemes::{Builtin, RefineOptions, Rules, Scheme, refine_uniform};
 
 /// A small deterministic generator, so that a failing seed reproduces.
 struct Lcg(u64);
@@ -36,33 +26,37 @@ impl Lcg {
     }
 }
 
-/// `soup` with jittered positions and, where the scheme has crease rules, a few semi-sharp and
-/// infinitely sharp tags.
-fn tagged(scheme: &Scheme, mut soup: PolygonSoup, rng: &mut Lcg) -> Mesh {
-    for p in soup.positions_mut() {
-        *p += rng.vector() * 0.1;
-    }
-    let mesh = Mesh::build(soup.clone()).unwrap();
-    if !scheme.has_crease_rules() {
-        return mesh;
-    }
-    for (k, e) in mesh.edges().enumerate().filter(|(k, _)| k % 5 == 0) {
-        let [a, b] = mesh.edge_vertices(e);
-        let sharpness = [0.4, 1.7, 10.0][k % 3];
-        soup.tags.creases.push(CreaseTag { vertices: [a, b], sharpness });
-    }
-    soup.tags.corners.push(CornerTag { vertex: VertexId::new(0), sharpness: 2.5 });
+/// The meshes of these tests (within what each scheme takes, `mesh_params`): jittered, and
+/// where the scheme has crease rules, open ones among them and about a fifth of the edges and a
+/// tenth of the vertices tagged, semi-sharp or infinitely sharp.
+const PARAMS: MeshParams =
+    MeshParams { jitter: 0.1, crease_probability: 0.2, corner_probability: 0.1, ..MeshParams::DEFAULT };
+
+fn built(soup: PolygonSoup) -> Mesh {
     Mesh::build(soup).unwrap()
+}
+
+/// The interpolating built-ins, and Kobbelt's scheme at other tensions.
+fn interpolating() -> impl Strategy<Value = Scheme> {
+    let builtins = prop::sample::select(vec![Builtin::Bilinear, Builtin::Butterfly, Builtin::Kobbelt]);
+    prop_oneof![
+        builtins.prop_map(|b| b.scheme().clone()),
+        perturbed_schemes().prop_filter("Kobbelt's", |s| matches!(s.rules, Rules::FourPointQuad { .. })),
+    ]
 }
 
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(48))]
 
     #[test]
-    fn refinement_commutes_with_affine_maps(scheme_index in 0usize..Builtin::ALL.len(), index in 0usize..4, levels in 1usize..3, seed: u64) {
-        let scheme = Builtin::ALL[scheme_index].scheme();
+    fn refinement_commutes_with_affine_maps(
+        (scheme, soup) in with_meshes(prop_oneof![builtin_schemes(), perturbed_schemes()], PARAMS),
+        levels in 1usize..3,
+        seed: u64,
+    ) {
+        let scheme = &scheme;
         let mut rng = Lcg(seed);
-        let mesh = tagged(scheme, shape(scheme, index), &mut rng);
+        let mesh = built(soup);
         let (x, y, z, t) = (rng.vector(), rng.vector(), rng.vector(), rng.vector());
         let map = |p: DVec3| x * p.x + y * p.y + z * p.z + t + p * 1.5;
         let mut mapped = mesh.clone();
@@ -79,10 +73,10 @@ proptest! {
     }
 
     #[test]
-    fn interpolating_schemes_keep_every_old_vertex(which in 0usize..3, index in 0usize..4, seed: u64) {
-        let scheme = [Builtin::Bilinear, Builtin::Butterfly, Builtin::Kobbelt][which].scheme();
+    fn interpolating_schemes_keep_every_old_vertex((scheme, soup) in with_meshes(interpolating(), PARAMS)) {
+        let scheme = &scheme;
         prop_assert!(scheme.is_interpolating());
-        let mesh = tagged(scheme, shape(scheme, index), &mut Lcg(seed));
+        let mesh = built(soup);
         let refined = refine_uniform(&mesh, scheme, 2, &RefineOptions::DEFAULT).unwrap();
         prop_assert_eq!(&refined.positions()[..mesh.vertex_count()], mesh.positions());
     }
@@ -199,10 +193,12 @@ fn regular_loop_is_the_quartic_box_spline() {
 
 #[test]
 fn stencil_rows_sum_to_one_and_reproduce_the_refined_positions() {
-    let mut rng = Lcg(3);
+    // Four meshes per scheme, drawn from the strategies with a fixed seed.
+    let mut runner = TestRunner::deterministic();
     for scheme in Builtin::ALL.map(Builtin::scheme) {
-        for index in 0..4 {
-            let mesh = tagged(scheme, shape(scheme, index), &mut rng);
+        let soups = meshes_for(scheme, PARAMS);
+        for _ in 0..4 {
+            let mesh = built(soups.new_tree(&mut runner).unwrap().current());
             let refiner = subdiv_schemes::Refiner::new(&mesh, scheme, 2, &RefineOptions::DEFAULT).unwrap();
             for level in refiner.levels() {
                 for child in 0..level.child_count() {
