@@ -8,6 +8,9 @@
 //! running it, so that the parent knows which input a crash or time-out was; status 3 on a
 //! panic, 4 on a time-out.
 
+// A command-line child process: its report goes to stdout, its reasons to stderr.
+#![allow(clippy::print_stdout, clippy::print_stderr)]
+
 use std::process::ExitCode;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
