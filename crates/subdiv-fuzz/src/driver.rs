@@ -29,6 +29,7 @@ pub struct Report {
 pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMut(&[u8])) -> Report {
     let mut random = Random(seed ^ 0x9e37_79b9_7f4a_7c15);
     let mut corpus = target.seeds();
+    let seeds = corpus.len();
     // Outcomes by hash: a fuzz run reaches hundreds of thousands.
     let mut outcomes: HashSet<u64> = HashSet::new();
     let mut report = Report::default();
@@ -55,7 +56,6 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
                         corpus.push(input);
                     } else {
                         // Full: the new input takes a random place after the seeds.
-                        let seeds = target.seeds().len();
                         let at = seeds + random.below(MAX_CORPUS - seeds);
                         corpus[at] = input;
                     }

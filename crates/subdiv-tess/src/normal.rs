@@ -18,8 +18,12 @@ use glam::DVec3;
 /// ```
 pub fn unit_normal(c: DVec3) -> DVec3 {
     let n = c.normalize_or_zero();
+    if n != DVec3::ZERO {
+        return n;
+    }
+    // Only the cold path looks at the magnitude: this runs once per output vertex.
     let m = c.abs().max_element();
-    if n != DVec3::ZERO || m == 0.0 || !m.is_finite() {
+    if m == 0.0 || !m.is_finite() {
         return n;
     }
     // 2^-e with m = f · 2^e, f in [1, 2): the largest coordinate lands in [1, 2).
