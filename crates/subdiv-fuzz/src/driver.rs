@@ -15,7 +15,8 @@ pub struct Report {
     pub executions: u64,
     /// Inputs kept: the seeds and those that reached a new outcome.
     pub corpus: usize,
-    /// Distinct outcomes reached.
+    /// Distinct outcomes reached (counted again after the set is forgotten at
+    /// [`MAX_OUTCOMES`]).
     pub outcomes: usize,
     /// The slowest input's time.
     pub slowest: Duration,
@@ -30,8 +31,9 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
     let mut random = Random(seed ^ 0x9e37_79b9_7f4a_7c15);
     let mut corpus = target.seeds();
     let seeds = corpus.len();
-    // Outcomes by hash: a fuzz run reaches hundreds of thousands.
+    // Outcomes by hash: a fuzz run reaches millions.
     let mut outcomes: HashSet<u64> = HashSet::new();
+    let mut outcomes_seen = 0usize;
     let mut report = Report::default();
     let start = Instant::now();
     let mut next = 0usize;
@@ -51,6 +53,11 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
         report.executions += 1;
         match outcome {
             Ok(label) => {
+                if outcomes.len() == MAX_OUTCOMES {
+                    // Forget them all: the corpus stays, and its inputs are new again.
+                    outcomes_seen += outcomes.len();
+                    outcomes.clear();
+                }
                 if outcomes.insert(hash(label.as_bytes())) && next >= corpus.len() {
                     if corpus.len() < MAX_CORPUS {
                         corpus.push(input);
@@ -74,13 +81,18 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
         }
     }
     report.corpus = corpus.len();
-    report.outcomes = outcomes.len();
+    report.outcomes = outcomes_seen + outcomes.len();
     report
 }
 
 /// The most inputs a corpus keeps (at most [`MAX_INPUT`] bytes each, so 16 MiB in all: the
 /// fuzzer's own memory must stay far below the limit it watches for).
 pub const MAX_CORPUS: usize = 1024;
+
+/// The most outcomes remembered at once (8 bytes each, with the table's overhead about 32
+/// MiB): past it the set starts again, so that a long run's memory stays flat (a 600 s run of
+/// the parameter target reached 250 MiB before this bound).
+pub const MAX_OUTCOMES: usize = 1 << 20;
 
 /// The longest input a mutation makes.
 pub const MAX_INPUT: usize = 1 << 14;

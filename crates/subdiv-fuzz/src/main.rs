@@ -1,7 +1,6 @@
 //! `subdiv-fuzz`: the child process `cargo xtask fuzz` runs, which bounds what the library
 //! cannot catch itself: time per input (a watchdog thread). Memory is bounded by the parent,
-//! which starts it under an address-space limit (`ulimit -v`), so that an allocation past it
-//! fails and aborts the child.
+//! which polls the child's resident memory and kills it past its limit.
 //!
 //! `subdiv-fuzz run TARGET SECONDS SEED CURRENT` fuzzes and prints a one-line JSON report;
 //! `subdiv-fuzz exec TARGET FILE` runs one input. `run` writes each input to `CURRENT` before
@@ -18,23 +17,53 @@ use std::time::{Duration, Instant};
 
 use subdiv_fuzz::{Target, driver};
 
-/// The longest one input may run.
+/// The most processor time one input may take. Processor time, not wall time, so that a
+/// fuzz run sharing the machine with a build does not report the build's time as a hang.
 const TIME_LIMIT: Duration = Duration::from_secs(10);
 
-/// When the current input started, in milliseconds since the watchdog's epoch (0: none).
+/// The most wall time one input may take (one that blocks instead of computing).
+const WALL_LIMIT: Duration = Duration::from_secs(120);
+
+/// When the current input started, in milliseconds of wall time since the watchdog's epoch
+/// (0: none), and the process's processor time then.
 static STARTED: AtomicU64 = AtomicU64::new(0);
+static STARTED_CPU: AtomicU64 = AtomicU64::new(0);
+
+/// This process's processor time (user and system) in milliseconds, from Linux's
+/// `/proc/self/stat` (its fields 14 and 15, in the fixed 100 Hz ticks of the kernel ABI);
+/// `None` elsewhere.
+fn cpu_millis() -> Option<u64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces: count after it.
+    let mut fields = stat.get(stat.rfind(')')? + 2..)?.split_whitespace().skip(11);
+    let user: u64 = fields.next()?.parse().ok()?;
+    let system: u64 = fields.next()?.parse().ok()?;
+    Some((user + system) * 10)
+}
 
 fn watchdog(epoch: Instant) {
     std::thread::spawn(move || {
         loop {
             std::thread::sleep(Duration::from_millis(100));
             let started = STARTED.load(Ordering::Relaxed);
-            if started != 0 && epoch.elapsed().as_millis() as u64 - started > TIME_LIMIT.as_millis() as u64 {
-                eprintln!("subdiv-fuzz: an input ran past {} s", TIME_LIMIT.as_secs());
+            if started == 0 {
+                continue;
+            }
+            let wall = epoch.elapsed().as_millis() as u64 - started;
+            // Without a processor clock, the wall clock is the measure.
+            let cpu = cpu_millis().map_or(wall, |now| now.saturating_sub(STARTED_CPU.load(Ordering::Relaxed)));
+            if cpu > TIME_LIMIT.as_millis() as u64 || wall > WALL_LIMIT.as_millis() as u64 {
+                eprintln!("subdiv-fuzz: an input ran past {} s ({cpu} ms of processor time)", TIME_LIMIT.as_secs());
                 std::process::exit(4);
             }
         }
     });
+}
+
+/// Marks the start of an input for the watchdog.
+fn start(epoch: Instant) {
+    STARTED_CPU.store(cpu_millis().unwrap_or(0), Ordering::Relaxed);
+    STARTED.store((epoch.elapsed().as_millis() as u64).max(1), Ordering::Relaxed);
 }
 
 fn main() -> ExitCode {
@@ -48,7 +77,6 @@ fn main() -> ExitCode {
     std::panic::set_hook(Box::new(|_| {}));
     let epoch = Instant::now();
     watchdog(epoch);
-    let now = move || (epoch.elapsed().as_millis() as u64).max(1);
     match (command.as_str(), &args[2..]) {
         ("run", [seconds, seed, current]) => {
             let (Ok(seconds), Ok(seed)) = (seconds.parse::<u64>(), seed.parse::<u64>()) else {
@@ -62,7 +90,7 @@ fn main() -> ExitCode {
                 let _ = file.set_len(0);
                 let _ = file.rewind();
                 let _ = file.write_all(input);
-                STARTED.store(now(), Ordering::Relaxed);
+                start(epoch);
             });
             STARTED.store(0, Ordering::Relaxed);
             println!(
@@ -78,7 +106,7 @@ fn main() -> ExitCode {
         }
         ("exec", [file]) => {
             let input = std::fs::read(file).expect("the input file can be read");
-            STARTED.store(now(), Ordering::Relaxed);
+            start(epoch);
             if driver::panics(target, &input) { ExitCode::from(3) } else { ExitCode::SUCCESS }
         }
         _ => {
