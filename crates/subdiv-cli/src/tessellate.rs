@@ -65,6 +65,10 @@ pub(crate) struct TessellateArgs {
     /// The largest rate --tolerance and --pixels may give a face.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_RATE)]
     max_rate: u32,
+    /// The most vertices the output may have (the dual method's count is known from the rates
+    /// before any work; the quadtree stops at this many polygons).
+    #[arg(long, value_name = "N", default_value_t = subdiv::DEFAULT_MAX_TESS_VERTICES)]
+    max_vertices: usize,
     /// OBJ only: write polygons — the dual tessellation's quads (triangles where there are
     /// none), or the quadtree's leaves with their hanging vertices — instead of triangles.
     #[arg(long)]
@@ -190,7 +194,14 @@ fn options(args: &TessellateArgs) -> Result<TessOptions, UserError> {
         Method::Dual => subdiv::Method::Dual,
         Method::Quadtree => subdiv::Method::Quadtree,
     };
-    Ok(TessOptions { rates, method, max_rate: args.max_rate, polygons: args.polygons, ..TessOptions::DEFAULT })
+    Ok(TessOptions {
+        rates,
+        method,
+        max_rate: args.max_rate,
+        polygons: args.polygons,
+        max_vertices: args.max_vertices,
+        ..TessOptions::DEFAULT
+    })
 }
 
 /// `--gpu`: the dual tessellation at the facade's rates, its vertices evaluated on the GPU

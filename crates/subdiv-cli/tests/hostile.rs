@@ -55,6 +55,35 @@ fn eval_grids_past_the_point_budget_are_refused() {
 }
 
 #[test]
+fn tessellations_past_the_vertex_budget_are_refused() {
+    // 900 quads at rate 128 (an allowed rate): 14.9 million vertices, aborted on memory
+    // (a 300 × 300 grid at that rate used 6 GB before the abort).
+    let (dir, grid) = grid_obj(30);
+    let out = dir.path().join("out.glb");
+    let out = out.to_str().unwrap();
+    refused(
+        &["tessellate", &grid, "--rate", "128", "-o", out],
+        &["grid.obj", "vertices", "limit of 8388608", "--max-vertices"],
+    );
+    refused(
+        &["tessellate", &grid, "--rate", "2", "--max-vertices", "100", "-o", out],
+        &["3960 vertices", "limit of 100"],
+    );
+    assert!(!std::path::Path::new(out).exists(), "nothing written");
+    let output = subdiv(&["tessellate", &grid, "--rate", "2", "--max-vertices", "3960", "-o", out]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    // The quadtree counts its polygons as it goes: a tolerance of 1e-6 on a cube made 12.6
+    // million of them (7 GB) before the limit.
+    let cube = dir.path().join("cube.obj");
+    subdiv::io::write_obj(&cube, &subdiv::mesh::shapes::cube()).unwrap();
+    let cube = cube.to_str().unwrap();
+    refused(
+        &["tessellate", cube, "--method", "quadtree", "--tolerance", "1e-6", "--max-vertices", "20000", "-o", out],
+        &["cube.obj", "more than 20000 polygons", "--max-vertices"],
+    );
+}
+
+#[test]
 fn refinement_past_the_face_budget_is_refused() {
     // 225 quads at 8 levels, 900 · 4⁷ = 14.7 million faces, aborted on memory.
     let (_dir, grid) = grid_obj(15);

@@ -45,7 +45,10 @@ pub enum TessError {
         epsilon: f64,
     },
     /// The output would exceed [`QuadtreeOptions::max_polygons`](crate::QuadtreeOptions).
-    #[error("more than {limit} polygons needed for ε = {epsilon:e}; raise the tolerance")]
+    #[error(
+        "more than {limit} polygons needed for ε = {epsilon:e}; raise the tolerance or the limit \
+         (QuadtreeOptions::max_polygons, TessOptions::max_vertices, `subdiv tessellate --max-vertices`)"
+    )]
     TooManyPolygons {
         /// The limit.
         limit: usize,

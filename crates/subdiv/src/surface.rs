@@ -8,8 +8,8 @@ use subdiv_schemes::{RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::LimitPoint;
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv_tess::{
-    DualOptions, DualTessellator, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink, TessTriangle,
-    TessVertex,
+    DualOptions, DualTessellator, MAX_DUAL_RATE, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink,
+    TessTriangle, TessVertex,
 };
 
 use crate::Error;
@@ -218,8 +218,17 @@ impl Surface {
     /// # Errors
     /// [`Error::ToleranceBounds`] for a tolerance policy on a mesh the quadtree's bounds do not
     /// take (boundaries, holes, creases, schemes other than Catmull-Clark); [`Error::Tess`] for
-    /// a face needing more than `max_rate`, a bad tolerance, camera or viewport.
+    /// a face needing more than `max_rate`, a bad tolerance, camera or viewport;
+    /// [`Error::Budget`] for rates that would make more than [`TessOptions::max_vertices`]
+    /// vertices.
     pub fn face_rates(&mut self, options: &TessOptions) -> Result<FaceRates, Error> {
+        let rates = self.policy_rates(options)?;
+        self.check_vertex_budget(&rates, options)?;
+        Ok(rates)
+    }
+
+    /// [`face_rates`](Self::face_rates) before the budget's check.
+    fn policy_rates(&mut self, options: &TessOptions) -> Result<FaceRates, Error> {
         let faces = self.mesh.face_count();
         Ok(match &options.rates {
             Rates::Uniform(rate) => FaceRates { faces: vec![*rate; faces], rings: None, epsilon: None },
@@ -310,8 +319,10 @@ impl Surface {
                 };
                 let tess = self.quadtree_mut()?;
                 let epsilon = tolerance.absolute(tess.diagonal())?;
-                let quadtree_options =
-                    QuadtreeOptions::DEFAULT.with_tolerance(tolerance).with_parallelism(options.parallelism);
+                let quadtree_options = QuadtreeOptions::DEFAULT
+                    .with_tolerance(tolerance)
+                    .with_parallelism(options.parallelism)
+                    .with_max_polygons(options.max_vertices);
                 let stats = if options.polygons {
                     tess.tessellate_into(&quadtree_options, sink)?
                 } else {
@@ -331,6 +342,31 @@ impl Surface {
     fn dual_rates(&mut self, options: &TessOptions) -> Result<(TessInfo, Option<RingDepths>), Error> {
         let FaceRates { faces, rings, epsilon } = self.face_rates(options)?;
         Ok((TessInfo { method: Method::Dual, rates: faces, epsilon, quadtree: None }, rings))
+    }
+
+    /// Refuses `rates` if they would make more than [`TessOptions::max_vertices`] vertices,
+    /// before the tessellator allocates anything. Rates the tessellator refuses (a wrong count,
+    /// a rate outside `1..=128`) are left to its own error.
+    fn check_vertex_budget(&self, rates: &FaceRates, options: &TessOptions) -> Result<(), Error> {
+        let FaceRates { faces, rings, .. } = rates;
+        if faces.len() != self.mesh.face_count() || !faces.iter().all(|r| (1..=MAX_DUAL_RATE).contains(r)) {
+            return Ok(());
+        }
+        let triangle = self.scheme.split() == Split::Triangle;
+        let vertices = match rings {
+            Some(rings) => subdiv_tess::dual::predicted_vertex_count_with_rings(&self.mesh, triangle, faces, rings),
+            None => subdiv_tess::dual::predicted_vertex_count(&self.mesh, triangle, faces),
+        };
+        if vertices > options.max_vertices {
+            return Err(Error::Budget {
+                verb: "tessellating would make",
+                noun: "vertices",
+                requested: vertices as u64,
+                limit: options.max_vertices as u64,
+                raise: "lower the rates or raise the limit (TessOptions::max_vertices, `subdiv tessellate --max-vertices`)",
+            });
+        }
+        Ok(())
     }
 
     /// The dual tessellator with `options`' quads and parallelism, made on first use (later
@@ -408,7 +444,7 @@ mod tests {
     use subdiv_mesh::shapes;
     use subdiv_schemes::Builtin;
     use subdiv_tess::rates::Camera;
-    use subdiv_tess::{FlatMesh, Parallelism, Tolerance};
+    use subdiv_tess::{FlatMesh, Parallelism, TessError, Tolerance};
 
     use super::*;
     use crate::EvalMethod;
@@ -486,6 +522,31 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn tessellations_past_the_vertex_budget_are_refused_before_the_work() {
+        let mut s = surface(shapes::cube());
+        // 6 faces at rate 128: the count is predicted, not made.
+        let count = subdiv_tess::dual::predicted_vertex_count(s.mesh(), false, &[128; 6]);
+        let options = TessOptions::DEFAULT.with_rates(Rates::Uniform(128)).with_max_vertices(count - 1);
+        let Err(error) = s.tessellate(&options) else { panic!("over the budget") };
+        let (requested, limit) = (count as u64, count as u64 - 1);
+        assert!(
+            matches!(error, Error::Budget { requested: r, limit: l, noun: "vertices", .. } if r == requested && l == limit),
+            "{error}"
+        );
+        assert!(error.to_string().contains("--max-vertices"), "{error}");
+        assert!(s.face_rates(&options).is_err(), "the GPU path's rates are checked too");
+        let out = s.tessellate(&options.with_max_vertices(count)).map_err(|e| e.to_string()).unwrap();
+        assert_eq!(out.mesh.positions.len(), count);
+        // The quadtree counts its polygons as it goes.
+        let quadtree = TessOptions::DEFAULT
+            .with_method(Method::Quadtree)
+            .with_rates(Rates::Tolerance(Tolerance::Relative(1e-6)))
+            .with_max_vertices(10_000);
+        let Err(error) = s.tessellate(&quadtree) else { panic!("over the budget") };
+        assert!(matches!(error, Error::Tess(TessError::TooManyPolygons { limit: 10_000, .. })), "{error}");
     }
 
     #[test]

@@ -90,7 +90,20 @@ pub struct TessOptions {
     /// Whether the work may use rayon's threads (the output is the same, bit for bit, either
     /// way). Default: [`Parallelism::Rayon`].
     pub parallelism: Parallelism,
+    /// The most output vertices a tessellation may make: the dual method's count is predicted
+    /// from the rates before anything is allocated ([`Error::Budget`]); the quadtree, whose
+    /// count shows only as it refines, stops at this many polygons (about one vertex each:
+    /// [`TessError::TooManyPolygons`](subdiv_tess::TessError::TooManyPolygons)). Default:
+    /// [`DEFAULT_MAX_TESS_VERTICES`].
+    pub max_vertices: usize,
 }
+
+/// [`TessOptions::max_vertices`]' default: 2^23 ≈ 8.4 million vertices, about 17 million
+/// triangles (a 1400 × 1400 quad grid at rate 2): 0.4 GB of flat f32 output (48 bytes per
+/// vertex with its two triangles), and a few GB of work on the way, so that a request of a
+/// size nobody means (a rate of 128 on a large mesh, a tolerance of 1e-6 for the quadtree) is
+/// refused instead of exhausting memory. Raise it for larger outputs.
+pub const DEFAULT_MAX_TESS_VERTICES: usize = 1 << 23;
 
 impl TessOptions {
     /// The defaults: every face at rate 8 by the dual method, triangles only, on rayon's
@@ -101,6 +114,7 @@ impl TessOptions {
         max_rate: DEFAULT_MAX_RATE,
         polygons: false,
         parallelism: Parallelism::DEFAULT,
+        max_vertices: DEFAULT_MAX_TESS_VERTICES,
     };
 
     /// These options with [`rates`](Self::rates).
@@ -131,6 +145,12 @@ impl TessOptions {
     #[must_use]
     pub fn with_parallelism(self, parallelism: Parallelism) -> Self {
         Self { parallelism, ..self }
+    }
+
+    /// These options with [`max_vertices`](Self::max_vertices).
+    #[must_use]
+    pub fn with_max_vertices(self, max_vertices: usize) -> Self {
+        Self { max_vertices, ..self }
     }
 }
 
