@@ -9,7 +9,7 @@ use std::time::Instant;
 use subdiv::mesh::{DVec3, Mesh};
 use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE};
 use subdiv::tess::{DualOptions, DualTessellator};
-use subdiv::{FaceRates, Rates, Surface, TessInfo, TessOptions, Tessellation, Tolerance};
+use subdiv::{FaceRates, FlatMesh, Rates, Surface, TessInfo, TessOptions, Tessellation, Tolerance};
 
 use crate::UserError;
 use crate::args::{parse_list, parse_size};
@@ -130,50 +130,90 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     let mut surface = Surface::new(mesh, &scheme);
     let start = Instant::now();
     let bar = Spinner::new(surface.mesh().face_count());
+    // GLB without --params needs neither the f64 output nor the parameters: the flat f32
+    // buffers go to the file as they are (a fifth of the memory on large outputs).
+    let lean = format == Format::Glb && args.params.is_none() && !args.gpu;
     let (result, gpu_detail) = if args.gpu {
-        gpu_tessellate(&mut surface, &options, &bar, located)?
+        let (result, detail) = gpu_tessellate(&mut surface, &options, &bar, located)?;
+        (Output::Mesh(Box::new(result)), detail)
     } else {
         bar.say(if args.method == Method::Quadtree { "quadtree" } else { "dual-grid stitching" });
-        (surface.tessellate(&options).map_err(|e| located(&e))?, String::new())
+        if lean {
+            // The check the f64 writer makes on the output, made on the cage: f32 buffers can no
+            // longer tell a coordinate flushed to 0 from a 0.
+            subdiv::io::check_glb_positions(surface.mesh().positions().iter().copied())
+                .map_err(|e| write_error(&loaded.name, &args.output, e))?;
+            let mut flat = FlatMesh::default();
+            let info = surface.tessellate_flat(&options, &mut flat).map_err(|e| located(&e))?;
+            (Output::Flat(flat, info), String::new())
+        } else {
+            (Output::Mesh(Box::new(surface.tessellate(&options).map_err(|e| located(&e))?)), String::new())
+        }
     };
-    let detail = match (&result.info.quadtree, result.info.epsilon) {
+    let info = result.info();
+    let detail = match (&info.quadtree, info.epsilon) {
         (Some(stats), Some(epsilon)) => format!("ε = {epsilon:.3e}, depth ≤ {}", stats.max_depth),
         _ => {
-            let policy = match (result.info.epsilon, &options.rates) {
+            let policy = match (info.epsilon, &options.rates) {
                 (Some(epsilon), _) => format!("ε = {epsilon:.3e}"),
                 (None, Rates::Screen { pixels_per_edge, .. }) => format!("{pixels_per_edge} pixels per edge"),
                 (None, Rates::Uniform(rate)) => format!("uniform rate {rate}"),
                 (None, _) => "per-face rates".to_string(),
             };
-            let rates = &result.info.rates;
+            let rates = &info.rates;
             let (lo, hi) = rates.iter().fold((u32::MAX, 0), |(lo, hi), &r| (lo.min(r), hi.max(r)));
             format!("{policy}, rates {lo}..={hi}{gpu_detail}")
         }
     };
     let seconds = start.elapsed().as_secs_f64();
     bar.say("writing");
-    let written = match format {
-        Format::Glb => result.write_glb(&args.output),
-        Format::Obj => result.write_obj(&args.output, args.polygons),
+    let written = match (&result, format) {
+        (Output::Flat(flat, _), _) => subdiv::write_flat_glb(&args.output, flat),
+        (Output::Mesh(result), Format::Glb) => result.write_glb(&args.output),
+        (Output::Mesh(result), Format::Obj) => result.write_obj(&args.output, args.polygons),
     };
     written.map_err(|e| write_error(&loaded.name, &args.output, e))?;
-    if let Some(path) = &args.params {
+    if let (Some(path), Output::Mesh(result)) = (&args.params, &result) {
         result.write_params(path).map_err(|e| write_error(&loaded.name, path, e))?;
     }
     bar.finish();
-    let triangles = result.mesh.triangles.len();
+    let (vertices, triangles) = result.counts();
     let _ = writeln!(
         std::io::stderr(),
-        "subdiv tessellate: {} with {scheme} ({:?}, {detail}): {} faces, {} vertices, {triangles} triangles in \
+        "subdiv tessellate: {} with {scheme} ({:?}, {detail}): {} faces, {vertices} vertices, {triangles} triangles in \
          {seconds:.3} s ({:.2} M triangles/s) -> {}",
         loaded.name,
         args.method,
         surface.mesh().face_count(),
-        result.mesh.positions.len(),
         triangles as f64 / seconds.max(1e-9) / 1e6,
         args.output.display(),
     );
     Ok(())
+}
+
+/// A tessellation as the output needs it.
+enum Output {
+    /// The whole f64 output with parameters (OBJ, --params, --gpu).
+    Mesh(Box<Tessellation>),
+    /// Flat f32 buffers (GLB).
+    Flat(FlatMesh, TessInfo),
+}
+
+impl Output {
+    fn info(&self) -> &TessInfo {
+        match self {
+            Self::Mesh(t) => &t.info,
+            Self::Flat(_, info) => info,
+        }
+    }
+
+    /// The vertices (welded; flat buffers count a crease vertex once per normal) and triangles.
+    fn counts(&self) -> (usize, usize) {
+        match self {
+            Self::Mesh(t) => (t.mesh.positions.len(), t.mesh.triangles.len()),
+            Self::Flat(flat, _) => (flat.vertices.len() / 6, flat.indices.len() / 3),
+        }
+    }
 }
 
 /// The facade's options from the arguments: the rate policy (uniform at [`DEFAULT_RATE`]

@@ -643,95 +643,127 @@ pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> 
 /// a normal f32 (see [`check_glb_positions`]), a normal count that differs from
 /// the position count, a zero or non-finite normal, more than 4 GiB.
 pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
-    let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
-    let GlbMesh { positions, normals, indices } = *mesh;
-    let n = positions.len();
-    if indices.is_empty() || indices.len() % 3 != 0 {
-        return Err(unwritable(format!("{} indices; a mesh needs whole triangles, at least one", indices.len())));
-    }
-    check_glb_positions(positions.iter().map(|p| p.as_dvec3()))?;
-    if let Some((i, v)) = indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
-        return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
-    }
-    let normals = normals
-        .map(|normals| {
-            if normals.len() != n {
-                return Err(unwritable(format!("{} normals for {n} vertices", normals.len())));
-            }
-            normals
-                .iter()
-                .enumerate()
-                .map(|(i, v)| v.try_normalize().ok_or_else(|| unwritable(format!("normal {i} = {v} has no direction"))))
-                .collect::<Result<Vec<_>, _>>()
-        })
-        .transpose()?;
-
-    let mut bin = Vec::new();
-    let mut views = Vec::new();
-    let mut accessors = Vec::new();
-    let mut attributes = serde_json::Map::new();
-    let mut push_view = |bin: &mut Vec<u8>, bytes: &[u8], target: u32| {
-        views.push(json!({ "buffer": 0, "byteOffset": bin.len(), "byteLength": bytes.len(), "target": target }));
-        bin.extend_from_slice(bytes);
-        views.len() - 1
-    };
-    let vec3_bytes = |v: &[Vec3]| v.iter().flat_map(|p| p.to_array()).flat_map(f32::to_le_bytes).collect::<Vec<u8>>();
-    // min/max as the exact f64 of each f32, so that they compare equal to the data in any reader.
-    let exact = |v: Vec3| v.to_array().map(f64::from);
-    let (min, max) = positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
-
-    let view = push_view(&mut bin, &vec3_bytes(positions), ARRAY_BUFFER);
-    attributes.insert("POSITION".into(), accessors.len().into());
-    accessors.push(json!({
-        "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": exact(min), "max": exact(max)
-    }));
-    if let Some(normals) = &normals {
-        let view = push_view(&mut bin, &vec3_bytes(normals), ARRAY_BUFFER);
-        attributes.insert("NORMAL".into(), accessors.len().into());
-        accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3" }));
-    }
-    let index_bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
-    let view = push_view(&mut bin, &index_bytes, ELEMENT_ARRAY_BUFFER);
-    let index_accessor = accessors.len();
-    accessors.push(json!({ "bufferView": view, "componentType": 5125, "count": indices.len(), "type": "SCALAR" }));
-
-    let root = json!({
-        "asset": { "version": "2.0", "generator": "subdiv" },
-        "scene": 0,
-        "scenes": [{ "nodes": [0] }],
-        "nodes": [{ "mesh": 0 }],
-        "meshes": [{ "primitives": [{ "attributes": Value::Object(attributes), "indices": index_accessor, "mode": 4 }] }],
-        "accessors": accessors,
-        "bufferViews": views,
-        "buffers": [{ "byteLength": bin.len() }],
-    });
-    let mut json = root.to_string().into_bytes();
-    json.resize(json.len().next_multiple_of(4), b' ');
-    // Every part of the BIN chunk is a whole number of 4-byte values, so it needs no padding.
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let total =
-        u32::try_from(total).map_err(|_| unwritable(format!("{total} bytes exceed the 4 GiB a GLB can hold")))?;
-
-    let mut glb = Vec::with_capacity(total as usize);
-    glb.extend_from_slice(GLB_MAGIC);
-    glb.extend_from_slice(&2u32.to_le_bytes());
-    glb.extend_from_slice(&total.to_le_bytes());
-    for (kind, data) in [(CHUNK_JSON, &json), (CHUNK_BIN, &bin)] {
-        glb.extend_from_slice(&(data.len() as u32).to_le_bytes());
-        glb.extend_from_slice(&kind.to_le_bytes());
-        glb.extend_from_slice(data);
-    }
+    let header = GlbHeader::of(mesh)?;
+    let mut glb = Vec::with_capacity(header.total as usize);
+    header.write(mesh, &mut glb).map_err(|e| IoError::Unwritable { format: "GLB", rule: e.to_string() })?;
     Ok(glb)
 }
 
 /// Writes `mesh` as a GLB file at `path` (see [`encode_glb`]), through a fresh `<name>.<16 hex>.tmp` and a
-/// rename, so a failure leaves `path` untouched.
+/// rename, so a failure leaves `path` untouched. The mesh is checked whole first, then
+/// streamed to the file: nothing the size of the output is allocated.
 ///
 /// # Errors
 /// As [`encode_glb`]; [`IoError::Io`] when writing fails.
 pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoError> {
-    let glb = encode_glb(mesh)?;
-    atomic::write_file(path.as_ref(), |w| std::io::Write::write_all(w, &glb))
+    let header = GlbHeader::of(mesh)?;
+    atomic::write_file(path.as_ref(), |w| header.write(mesh, w))
+}
+
+/// A checked [`GlbMesh`]'s JSON chunk and sizes: everything but the binary data, which
+/// [`write`](Self::write) streams from the mesh.
+struct GlbHeader {
+    json: Vec<u8>,
+    bin_len: usize,
+    total: u32,
+}
+
+impl GlbHeader {
+    /// Checks `mesh` (see [`encode_glb`]) and lays out its file.
+    fn of(mesh: &GlbMesh<'_>) -> Result<Self, IoError> {
+        let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
+        let GlbMesh { positions, normals, indices } = *mesh;
+        let n = positions.len();
+        if indices.is_empty() || indices.len() % 3 != 0 {
+            return Err(unwritable(format!("{} indices; a mesh needs whole triangles, at least one", indices.len())));
+        }
+        check_glb_positions(positions.iter().map(|p| p.as_dvec3()))?;
+        if let Some((i, v)) = indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
+            return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
+        }
+        if let Some(normals) = normals {
+            if normals.len() != n {
+                return Err(unwritable(format!("{} normals for {n} vertices", normals.len())));
+            }
+            if let Some((i, v)) = normals.iter().enumerate().find(|(_, v)| v.try_normalize().is_none()) {
+                return Err(unwritable(format!("normal {i} = {v} has no direction")));
+            }
+        }
+        let mut views = Vec::new();
+        let mut accessors = Vec::new();
+        let mut attributes = serde_json::Map::new();
+        let mut bin_len = 0usize;
+        let mut push_view = |bytes: usize, target: u32| {
+            views.push(json!({ "buffer": 0, "byteOffset": bin_len, "byteLength": bytes, "target": target }));
+            bin_len += bytes;
+            views.len() - 1
+        };
+        // min/max as the exact f64 of each f32, so that they compare equal to the data in any reader.
+        let exact = |v: Vec3| v.to_array().map(f64::from);
+        let (min, max) =
+            positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+        let view = push_view(12 * n, ARRAY_BUFFER);
+        attributes.insert("POSITION".into(), accessors.len().into());
+        accessors.push(json!({
+            "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": exact(min), "max": exact(max)
+        }));
+        if normals.is_some() {
+            let view = push_view(12 * n, ARRAY_BUFFER);
+            attributes.insert("NORMAL".into(), accessors.len().into());
+            accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3" }));
+        }
+        let view = push_view(4 * indices.len(), ELEMENT_ARRAY_BUFFER);
+        let index_accessor = accessors.len();
+        accessors.push(json!({ "bufferView": view, "componentType": 5125, "count": indices.len(), "type": "SCALAR" }));
+        let root = json!({
+            "asset": { "version": "2.0", "generator": "subdiv" },
+            "scene": 0,
+            "scenes": [{ "nodes": [0] }],
+            "nodes": [{ "mesh": 0 }],
+            "meshes": [{ "primitives": [{ "attributes": Value::Object(attributes), "indices": index_accessor, "mode": 4 }] }],
+            "accessors": accessors,
+            "bufferViews": views,
+            "buffers": [{ "byteLength": bin_len }],
+        });
+        let mut json = root.to_string().into_bytes();
+        json.resize(json.len().next_multiple_of(4), b' ');
+        // Every part of the BIN chunk is a whole number of 4-byte values, so it needs no padding.
+        let total = 12 + 8 + json.len() + 8 + bin_len;
+        let total =
+            u32::try_from(total).map_err(|_| unwritable(format!("{total} bytes exceed the 4 GiB a GLB can hold")))?;
+        Ok(Self { json, bin_len, total })
+    }
+
+    /// Writes the file: the header, the JSON chunk, then the binary chunk from `mesh` (the one
+    /// [`of`](Self::of) checked), normals normalised on the way.
+    fn write(&self, mesh: &GlbMesh<'_>, w: &mut impl std::io::Write) -> std::io::Result<()> {
+        let vec3 = |w: &mut dyn std::io::Write, v: Vec3| {
+            let mut bytes = [0u8; 12];
+            for (chunk, x) in bytes.chunks_exact_mut(4).zip(v.to_array()) {
+                chunk.copy_from_slice(&x.to_le_bytes());
+            }
+            w.write_all(&bytes)
+        };
+        w.write_all(GLB_MAGIC)?;
+        w.write_all(&2u32.to_le_bytes())?;
+        w.write_all(&self.total.to_le_bytes())?;
+        w.write_all(&(self.json.len() as u32).to_le_bytes())?;
+        w.write_all(&CHUNK_JSON.to_le_bytes())?;
+        w.write_all(&self.json)?;
+        w.write_all(&(self.bin_len as u32).to_le_bytes())?;
+        w.write_all(&CHUNK_BIN.to_le_bytes())?;
+        for &p in mesh.positions {
+            vec3(w, p)?;
+        }
+        for &n in mesh.normals.unwrap_or_default() {
+            // Checked by `of`: every normal has a direction.
+            vec3(w, n.normalize())?;
+        }
+        for &i in mesh.indices {
+            w.write_all(&i.to_le_bytes())?;
+        }
+        Ok(())
+    }
 }
 
 #[cfg(test)]

@@ -8,8 +8,8 @@ use subdiv_schemes::{RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::LimitPoint;
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv_tess::{
-    DualOptions, DualTessellator, MAX_DUAL_RATE, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink,
-    TessTriangle, TessVertex,
+    DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh,
+    TessSink, TessTriangle, TessVertex,
 };
 
 use crate::Error;
@@ -277,6 +277,39 @@ impl Surface {
         let mut mesh = TessMesh::default();
         let info = self.tessellate_into(options, &mut mesh)?;
         Ok(Tessellation { mesh, info })
+    }
+
+    /// [`tessellate_into`](Self::tessellate_into) a [`FlatMesh`], by the dual tessellator's own
+    /// flat path where it has one (uniform, per-face and screen-space rates): straight into f32
+    /// buffers, without the f64 output and its parameters in between — the lean way to a GLB
+    /// file ([`write_flat_glb`](crate::write_flat_glb)). The same buffers either way.
+    ///
+    /// ```
+    /// use subdiv::mesh::shapes;
+    /// use subdiv::schemes::Builtin;
+    /// use subdiv::{FlatMesh, Surface, TessOptions};
+    ///
+    /// let mut surface = Surface::build(shapes::ngon_prism(5), Builtin::CatmullClark.scheme())?;
+    /// let (mut lean, mut replayed) = (FlatMesh::default(), FlatMesh::default());
+    /// surface.tessellate_flat(&TessOptions::DEFAULT, &mut lean)?;
+    /// surface.tessellate_into(&TessOptions::DEFAULT, &mut replayed)?;
+    /// assert_eq!(lean, replayed);
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate).
+    pub fn tessellate_flat(&mut self, options: &TessOptions, out: &mut FlatMesh) -> Result<TessInfo, Error> {
+        if options.method == Method::Dual {
+            let (info, rings) = self.dual_rates(options)?;
+            let tess = self.dual(options)?;
+            match &rings {
+                Some(rings) => tess.tessellate_with_rings_into(&info.rates, rings, out)?,
+                None => tess.tessellate_flat(&info.rates, out)?,
+            }
+            return Ok(info);
+        }
+        self.tessellate_into(options, out)
     }
 
     /// [`tessellate`](Self::tessellate) into `sink` (the caller's buffers and vertex type, see

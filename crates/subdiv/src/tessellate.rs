@@ -6,7 +6,7 @@ use std::path::Path;
 
 use subdiv_io::{GlbMesh, write_atomic};
 use subdiv_tess::rates::{Camera, DEFAULT_MAX_RATE, RingDepths};
-use subdiv_tess::{Parallelism, QuadtreeStats, TessMesh, Tolerance};
+use subdiv_tess::{FlatMesh, Parallelism, QuadtreeStats, TessMesh, Tolerance};
 
 use crate::Error;
 
@@ -214,14 +214,9 @@ impl Tessellation {
     pub fn write_glb(&self, path: impl AsRef<Path>) -> Result<(), Error> {
         // Before the f32 conversion below, which would turn a 1e-50 coordinate into 0.
         subdiv_io::check_glb_positions(self.mesh.positions.iter().copied())?;
-        let mut flat = subdiv_tess::FlatMesh::default();
+        let mut flat = FlatMesh::default();
         self.mesh.write_to(&mut flat);
-        let vec3 = |v: &[f32]| glam::Vec3::new(v[0], v[1], v[2]);
-        let positions: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[..3])).collect();
-        let normals: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[3..])).collect();
-        let indices = &flat.indices;
-        subdiv_io::write_glb(path, &GlbMesh { positions: &positions, normals: Some(&normals), indices })?;
-        Ok(())
+        write_flat_glb(path, &flat)
     }
 
     /// Writes OBJ (`v`, `vn` and `f v//vn` lines), atomically: one `v` per (welded) vertex,
@@ -265,6 +260,38 @@ impl Tessellation {
         })?;
         Ok(())
     }
+}
+
+/// Writes a flat tessellation ([`FlatMesh`], e.g. from
+/// [`Surface::tessellate_flat`](crate::Surface::tessellate_flat)) as GLB, atomically, streamed
+/// from its buffers: the lean way to a file, without the f64 [`TessMesh`].
+///
+/// Its positions are f32 already, so a coordinate that the conversion flushed to 0 can no
+/// longer be told from a 0: check the cage first with
+/// [`subdiv_io::check_glb_positions`] (the limit surface lies at the cage's scale).
+///
+/// ```
+/// use subdiv::mesh::shapes;
+/// use subdiv::schemes::Builtin;
+/// use subdiv::{FlatMesh, Surface, TessOptions};
+///
+/// let mut surface = Surface::build(shapes::cube(), Builtin::CatmullClark.scheme())?;
+/// subdiv::io::check_glb_positions(surface.mesh().positions().iter().copied())?;
+/// let mut flat = FlatMesh::default();
+/// surface.tessellate_flat(&TessOptions::DEFAULT, &mut flat)?;
+/// let dir = tempfile::tempdir().unwrap();
+/// subdiv::write_flat_glb(dir.path().join("cube.glb"), &flat)?;
+/// # Ok::<(), subdiv::Error>(())
+/// ```
+///
+/// # Errors
+/// [`Error::Io`] naming the file, as [`subdiv_io::write_glb`].
+pub fn write_flat_glb(path: impl AsRef<Path>, flat: &FlatMesh) -> Result<(), Error> {
+    let vec3 = |v: &[f32]| glam::Vec3::new(v[0], v[1], v[2]);
+    let positions: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[..3])).collect();
+    let normals: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[3..])).collect();
+    subdiv_io::write_glb(path, &GlbMesh { positions: &positions, normals: Some(&normals), indices: &flat.indices })?;
+    Ok(())
 }
 
 /// Which faces an OBJ output lists.
