@@ -73,13 +73,13 @@ fn tessellations_past_the_vertex_budget_are_refused() {
     let output = subdiv(&["tessellate", &grid, "--rate", "2", "--max-vertices", "3960", "-o", out]);
     assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
     // The quadtree counts its polygons as it goes: a tolerance of 1e-6 on a cube made 12.6
-    // million of them (7 GB) before the limit.
+    // million vertices (7 GB) before the limit.
     let cube = dir.path().join("cube.obj");
     subdiv::io::write_obj(&cube, &subdiv::mesh::shapes::cube()).unwrap();
     let cube = cube.to_str().unwrap();
     refused(
         &["tessellate", cube, "--method", "quadtree", "--tolerance", "1e-6", "--max-vertices", "20000", "-o", out],
-        &["cube.obj", "more than 20000 polygons", "--max-vertices"],
+        &["cube.obj", "more than 10000 polygons", "--max-vertices"],
     );
 }
 

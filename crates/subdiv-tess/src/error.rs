@@ -46,8 +46,9 @@ pub enum TessError {
     },
     /// The output would exceed [`QuadtreeOptions::max_polygons`](crate::QuadtreeOptions).
     #[error(
-        "more than {limit} polygons needed for ε = {epsilon:e}; raise the tolerance or the limit \
-         (QuadtreeOptions::max_polygons, TessOptions::max_vertices, `subdiv tessellate --max-vertices`)"
+        "more than {limit} polygons (about twice as many vertices) needed for ε = {epsilon:e}; raise the tolerance \
+         or the limit (QuadtreeOptions::max_polygons; TessOptions::max_vertices, `subdiv tessellate --max-vertices`, \
+         allow half as many polygons as vertices)"
     )]
     TooManyPolygons {
         /// The limit.

@@ -92,7 +92,8 @@ pub struct TessOptions {
     pub parallelism: Parallelism,
     /// The most output vertices a tessellation may make: the dual method's count is predicted
     /// from the rates before anything is allocated ([`Error::Budget`]); the quadtree, whose
-    /// count shows only as it refines, stops at this many polygons (about one vertex each:
+    /// count shows only as it refines, stops at half this many polygons (a leaf brings about
+    /// two vertices with the hanging ones:
     /// [`TessError::TooManyPolygons`](subdiv_tess::TessError::TooManyPolygons)). Default:
     /// [`DEFAULT_MAX_TESS_VERTICES`].
     pub max_vertices: usize,
