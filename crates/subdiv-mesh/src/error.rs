@@ -17,8 +17,16 @@ pub enum MeshError {
         /// How many vertices it lists.
         count: usize,
     },
-    /// A face lists the same vertex twice (a degenerate face).
-    #[error("{face} lists {vertex} twice; a face's vertices must be distinct")]
+    /// A face lists the same vertex twice (a degenerate face: OpenSubdiv's `quadpole` shapes,
+    /// quads with a collapsed edge). Kept as our rule, not refined as OpenSubdiv does: a
+    /// repeated vertex makes a zero-length edge (listed one after the other) or a face that
+    /// touches itself, which OpenSubdiv tags non-manifold and sharpens; the limit is then not a
+    /// 2-manifold there.
+    #[error(
+        "{face} lists {vertex} twice; a face's vertices must be distinct: a repeated vertex makes a zero-length edge \
+         or a face touching itself, which OpenSubdiv tags non-manifold and sharpens, so the limit is not a surface \
+         there; list the corner once (a quad with a collapsed edge is a triangle)"
+    )]
     RepeatedVertex {
         /// The face.
         face: FaceId,
@@ -63,8 +71,16 @@ pub enum MeshError {
         /// Its z coordinate.
         z: f64,
     },
-    /// Three or more faces share one edge.
-    #[error("non-manifold edge {a}-{b}: {face_count} faces share it (first {face}); an edge may have at most 2")]
+    /// Three or more faces share one edge. Kept as our rule, not refined as OpenSubdiv does:
+    /// OpenSubdiv makes such an edge infinitely sharp, so that the faces' sheets all end on
+    /// one crease curve — a limit that is not a 2-manifold (no point of the curve has a disc or
+    /// half-disc around it, nor one normal), which no patch, chart or tessellation of ours
+    /// describes.
+    #[error(
+        "non-manifold edge {a}-{b}: {face_count} faces share it (first {face}); an edge may have at most 2: the \
+         limit would not be a surface there (OpenSubdiv makes the edge infinitely sharp, so {face_count} sheets end \
+         on one crease curve, with no single normal); split the edge or the mesh into pieces"
+    )]
     NonManifoldEdge {
         /// One end of the edge.
         a: VertexId,
@@ -76,8 +92,14 @@ pub enum MeshError {
         face_count: usize,
     },
     /// The faces around a vertex form more than one fan (for example two cones touching at
-    /// their tips, a "bow-tie").
-    #[error("non-manifold {vertex}: its faces form {fans} separate fans; they must form one")]
+    /// their tips, a "bow-tie"). Kept as our rule, not refined as OpenSubdiv does: OpenSubdiv
+    /// makes such a vertex a corner that every fan interpolates, so the limit surfaces touch
+    /// at one point, which is not a 2-manifold there.
+    #[error(
+        "non-manifold {vertex}: its faces form {fans} separate fans; they must form one: the limit would not be a \
+         surface there (OpenSubdiv makes the vertex a corner of every fan, {fans} surfaces touching at one point); \
+         give each fan its own copy of the vertex"
+    )]
     NonManifoldVertex {
         /// The vertex.
         vertex: VertexId,
