@@ -69,7 +69,7 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
         let inputs: Vec<&std::path::Path> = args.mesh.iter().chain(&args.samples).map(PathBuf::as_path).collect();
         check_output(&inputs, output)?;
     }
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
+    let (input_name, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let method = match args.method {
         MethodArg::Eigen => EvalMethod::Eigen,
@@ -85,7 +85,7 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
         });
     }
     let start = Instant::now();
-    let named = |error: subdiv::Error| UserError(format!("{}: {error}", loaded.name));
+    let named = |error: subdiv::Error| UserError(format!("{}: {error}", input_name));
     let evaluator = Surface::new(mesh, &scheme).evaluator(&options).map_err(named)?;
     let mut skipped = 0;
     let rows = match (args.grid, &args.samples) {
@@ -113,15 +113,15 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
     // Everything is evaluated before anything is written, so a failure writes nothing.
     let write = |w: &mut dyn Write| write_csv(w, &rows);
     match &args.output {
-        Some(path) => subdiv::io::write_atomic(path, write).map_err(|e| write_error(&loaded.name, path, e))?,
-        None => write(out).map_err(|e| UserError(format!("{}: writing standard output: {e}", loaded.name)))?,
+        Some(path) => subdiv::io::write_atomic(path, write).map_err(|e| write_error(&input_name, path, e))?,
+        None => write(out).map_err(|e| UserError(format!("{}: writing standard output: {e}", input_name)))?,
     }
     let mut stderr = std::io::stderr();
     let at_vertices = rows.iter().filter(|r| !r.point.exact_derivatives).count();
     let _ = writeln!(
         stderr,
         "subdiv eval: {} with {}: {} points in {seconds:.3} s ({:.0} points/s)",
-        loaded.name,
+        input_name,
         scheme,
         rows.len(),
         rows.len() as f64 / seconds.max(1e-9),

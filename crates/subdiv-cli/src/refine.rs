@@ -34,7 +34,7 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
     if let Some(output) = &args.output {
         check_output(&args.mesh.as_deref().into_iter().collect::<Vec<_>>(), output)?;
     }
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
+    let (input_name, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let levels = args.levels as usize;
     let start = Instant::now();
@@ -52,20 +52,20 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
     );
     let refined = surface
         .refine_with_progress(levels, |level| bar.set_position(level as u64))
-        .map_err(|error| UserError(format!("{}: {error}", loaded.name)))?;
+        .map_err(|error| UserError(format!("{}: {error}", input_name)))?;
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
     let soup = subdiv::without_holes(&refined);
     match &args.output {
-        Some(path) => subdiv::io::write_obj(path, &soup).map_err(|e| write_error(&loaded.name, path, e))?,
+        Some(path) => subdiv::io::write_obj(path, &soup).map_err(|e| write_error(&input_name, path, e))?,
         None => subdiv::io::write_obj_to(&mut *out, &soup)
-            .map_err(|e| UserError(format!("{}: writing standard output: {e}", loaded.name)))?,
+            .map_err(|e| UserError(format!("{}: writing standard output: {e}", input_name)))?,
     }
     let faces = soup.face_count();
     let _ = writeln!(
         std::io::stderr(),
         "subdiv refine: {} with {} x{}: {} vertices, {faces} faces in {seconds:.3} s ({:.1} M faces/s)",
-        loaded.name,
+        input_name,
         scheme,
         args.levels,
         soup.vertex_count(),

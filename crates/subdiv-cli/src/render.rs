@@ -92,9 +92,9 @@ fn check(args: &RenderArgs) -> Result<([u32; 2], Option<u32>), UserError> {
 pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserError> {
     let ([width, height], frames) = check(args)?;
     let options = RenderOptions { wireframe: args.wireframe, ..RenderOptions::default().with_size(width, height) };
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
+    let (input_name, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
-    let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", loaded.name));
+    let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", input_name));
     let start = Instant::now();
     let mut tess = DualTessellator::new(&scheme, &mesh, &DualOptions { quads: false, ..DualOptions::default() })
         .map_err(|e| located(&e))?;
@@ -129,7 +129,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
     let written = match frames {
         None => {
             let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-            write_png(&loaded.name, &args.output, &renderer.render(&gpu, &scene)?)?;
+            write_png(&input_name, &args.output, &renderer.render(&gpu, &scene)?)?;
             args.output.display().to_string()
         }
         Some(frames) => {
@@ -142,7 +142,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
                     cage.write_positions(&gpu, &moved)?;
                 }
                 let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-                write_png(&loaded.name, path, &renderer.render(&gpu, &scene)?)?;
+                write_png(&input_name, path, &renderer.render(&gpu, &scene)?)?;
             }
             format!("{} … {}", paths[0].display(), paths[paths.len() - 1].display())
         }
@@ -154,7 +154,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
         std::io::stderr(),
         "subdiv render: {} with {scheme} ({policy}, rates {rate_lo}..={rate_hi}): {} faces, {} vertices, {} triangles \
          tessellated in {:.1} ms; {width}×{height} on {}{frames_note}, {per_image:.1} ms per image -> {written}",
-        loaded.name,
+        input_name,
         mesh.face_count(),
         surface.vertex_count(),
         surface.index_count() / 3,

@@ -123,9 +123,9 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     if let Some(params) = &args.params {
         check_output(&inputs, params)?;
     }
-    let (loaded, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
+    let (input_name, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
-    let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", loaded.name));
+    let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", input_name));
     let options = options(args)?;
     let mut surface = Surface::new(mesh, &scheme);
     let start = Instant::now();
@@ -142,7 +142,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
             // The check the f64 writer makes on the output, made on the cage: f32 buffers can no
             // longer tell a coordinate flushed to 0 from a 0.
             subdiv::io::check_glb_positions(surface.mesh().positions().iter().copied())
-                .map_err(|e| write_error(&loaded.name, &args.output, e))?;
+                .map_err(|e| write_error(&input_name, &args.output, e))?;
             let mut flat = FlatMesh::default();
             let info = surface.tessellate_flat(&options, &mut flat).map_err(|e| located(&e))?;
             (Output::Flat(flat, info), String::new())
@@ -172,9 +172,9 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         (Output::Mesh(result), Format::Glb) => result.write_glb(&args.output),
         (Output::Mesh(result), Format::Obj) => result.write_obj(&args.output, args.polygons),
     };
-    written.map_err(|e| write_error(&loaded.name, &args.output, e))?;
+    written.map_err(|e| write_error(&input_name, &args.output, e))?;
     if let (Some(path), Output::Mesh(result)) = (&args.params, &result) {
-        result.write_params(path).map_err(|e| write_error(&loaded.name, path, e))?;
+        result.write_params(path).map_err(|e| write_error(&input_name, path, e))?;
     }
     bar.finish();
     let (vertices, triangles) = result.counts();
@@ -182,7 +182,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         std::io::stderr(),
         "subdiv tessellate: {} with {scheme} ({:?}, {detail}): {} faces, {vertices} vertices, {triangles} triangles in \
          {seconds:.3} s ({:.2} M triangles/s) -> {}",
-        loaded.name,
+        input_name,
         args.method,
         surface.mesh().face_count(),
         triangles as f64 / seconds.max(1e-9) / 1e6,

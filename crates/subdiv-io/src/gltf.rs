@@ -643,9 +643,12 @@ pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> 
 /// a normal f32 (see [`check_glb_positions`]), a normal count that differs from
 /// the position count, a zero or non-finite normal, more than 4 GiB.
 pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
-    let header = GlbHeader::of(mesh)?;
+    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals };
+    let header = GlbHeader::of(vertices, mesh.indices)?;
     let mut glb = Vec::with_capacity(header.total as usize);
-    header.write(mesh, &mut glb).map_err(|e| IoError::Unwritable { format: "GLB", rule: e.to_string() })?;
+    header
+        .write(vertices, mesh.indices, &mut glb)
+        .map_err(|e| IoError::Unwritable { format: "GLB", rule: e.to_string() })?;
     Ok(glb)
 }
 
@@ -656,8 +659,55 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
 /// # Errors
 /// As [`encode_glb`]; [`IoError::Io`] when writing fails.
 pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoError> {
-    let header = GlbHeader::of(mesh)?;
-    atomic::write_file(path.as_ref(), |w| header.write(mesh, w))
+    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals };
+    let header = GlbHeader::of(vertices, mesh.indices)?;
+    atomic::write_file(path.as_ref(), |w| header.write(vertices, mesh.indices, w))
+}
+
+/// [`write_glb`] of interleaved vertices, `px py pz nx ny nz` each (a tessellator's flat
+/// buffers, `subdiv-tess`'s `FlatMesh`), without splitting them into arrays first: the same
+/// file as [`write_glb`] of their positions and normals.
+///
+/// # Errors
+/// As [`write_glb`].
+pub fn write_glb_interleaved(path: impl AsRef<Path>, vertices: &[[f32; 6]], indices: &[u32]) -> Result<(), IoError> {
+    let vertices = Vertices::Interleaved(vertices);
+    let header = GlbHeader::of(vertices, indices)?;
+    atomic::write_file(path.as_ref(), |w| header.write(vertices, indices, w))
+}
+
+/// The vertices the GLB writer takes.
+#[derive(Clone, Copy)]
+enum Vertices<'a> {
+    Split { positions: &'a [Vec3], normals: Option<&'a [Vec3]> },
+    Interleaved(&'a [[f32; 6]]),
+}
+
+impl Vertices<'_> {
+    fn len(self) -> usize {
+        match self {
+            Self::Split { positions, .. } => positions.len(),
+            Self::Interleaved(v) => v.len(),
+        }
+    }
+
+    fn positions(self) -> impl Iterator<Item = Vec3> {
+        let (split, interleaved) = match self {
+            Self::Split { positions, .. } => (positions, &[][..]),
+            Self::Interleaved(v) => (&[][..], v),
+        };
+        split.iter().copied().chain(interleaved.iter().map(|v| Vec3::new(v[0], v[1], v[2])))
+    }
+
+    /// The normals, if there are any: the same number as the positions for interleaved ones.
+    fn normals(self) -> Option<impl Iterator<Item = Vec3>> {
+        let (split, interleaved) = match self {
+            Self::Split { normals: None, .. } => return None,
+            Self::Split { normals: Some(normals), .. } => (normals, &[][..]),
+            Self::Interleaved(v) => (&[][..], v),
+        };
+        Some(split.iter().copied().chain(interleaved.iter().map(|v| Vec3::new(v[3], v[4], v[5]))))
+    }
 }
 
 /// A checked [`GlbMesh`]'s JSON chunk and sizes: everything but the binary data, which
@@ -669,25 +719,25 @@ struct GlbHeader {
 }
 
 impl GlbHeader {
-    /// Checks `mesh` (see [`encode_glb`]) and lays out its file.
-    fn of(mesh: &GlbMesh<'_>) -> Result<Self, IoError> {
+    /// Checks a mesh (see [`encode_glb`]) and lays out its file.
+    fn of(vertices: Vertices<'_>, indices: &[u32]) -> Result<Self, IoError> {
         let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
-        let GlbMesh { positions, normals, indices } = *mesh;
-        let n = positions.len();
-        if indices.is_empty() || indices.len() % 3 != 0 {
+        let n = vertices.len();
+        if indices.is_empty() || !indices.len().is_multiple_of(3) {
             return Err(unwritable(format!("{} indices; a mesh needs whole triangles, at least one", indices.len())));
         }
-        check_glb_positions(positions.iter().map(|p| p.as_dvec3()))?;
+        check_glb_positions(vertices.positions().map(|p| p.as_dvec3()))?;
         if let Some((i, v)) = indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
             return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
         }
-        if let Some(normals) = normals {
-            if normals.len() != n {
-                return Err(unwritable(format!("{} normals for {n} vertices", normals.len())));
-            }
-            if let Some((i, v)) = normals.iter().enumerate().find(|(_, v)| v.try_normalize().is_none()) {
-                return Err(unwritable(format!("normal {i} = {v} has no direction")));
-            }
+        if let Vertices::Split { normals: Some(normals), .. } = vertices
+            && normals.len() != n
+        {
+            return Err(unwritable(format!("{} normals for {n} vertices", normals.len())));
+        }
+        if let Some((i, v)) = vertices.normals().and_then(|n| n.enumerate().find(|(_, v)| v.try_normalize().is_none()))
+        {
+            return Err(unwritable(format!("normal {i} = {v} has no direction")));
         }
         let mut views = Vec::new();
         let mut accessors = Vec::new();
@@ -701,13 +751,13 @@ impl GlbHeader {
         // min/max as the exact f64 of each f32, so that they compare equal to the data in any reader.
         let exact = |v: Vec3| v.to_array().map(f64::from);
         let (min, max) =
-            positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)));
+            vertices.positions().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
         let view = push_view(12 * n, ARRAY_BUFFER);
         attributes.insert("POSITION".into(), accessors.len().into());
         accessors.push(json!({
             "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": exact(min), "max": exact(max)
         }));
-        if normals.is_some() {
+        if vertices.normals().is_some() {
             let view = push_view(12 * n, ARRAY_BUFFER);
             attributes.insert("NORMAL".into(), accessors.len().into());
             accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3" }));
@@ -734,9 +784,9 @@ impl GlbHeader {
         Ok(Self { json, bin_len, total })
     }
 
-    /// Writes the file: the header, the JSON chunk, then the binary chunk from `mesh` (the one
-    /// [`of`](Self::of) checked), normals normalised on the way.
-    fn write(&self, mesh: &GlbMesh<'_>, w: &mut impl std::io::Write) -> std::io::Result<()> {
+    /// Writes the file: the header, the JSON chunk, then the binary chunk from `vertices` and
+    /// `indices` (those [`of`](Self::of) checked), normals normalised on the way.
+    fn write(&self, vertices: Vertices<'_>, indices: &[u32], w: &mut impl std::io::Write) -> std::io::Result<()> {
         let vec3 = |w: &mut dyn std::io::Write, v: Vec3| {
             let mut bytes = [0u8; 12];
             for (chunk, x) in bytes.chunks_exact_mut(4).zip(v.to_array()) {
@@ -752,14 +802,14 @@ impl GlbHeader {
         w.write_all(&self.json)?;
         w.write_all(&(self.bin_len as u32).to_le_bytes())?;
         w.write_all(&CHUNK_BIN.to_le_bytes())?;
-        for &p in mesh.positions {
+        for p in vertices.positions() {
             vec3(w, p)?;
         }
-        for &n in mesh.normals.unwrap_or_default() {
+        for n in vertices.normals().into_iter().flatten() {
             // Checked by `of`: every normal has a direction.
             vec3(w, n.normalize())?;
         }
-        for &i in mesh.indices {
+        for &i in indices {
             w.write_all(&i.to_le_bytes())?;
         }
         Ok(())

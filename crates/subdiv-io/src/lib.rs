@@ -59,7 +59,7 @@ pub use crate::atomic::remove_temporary_files;
 pub use crate::error::IoError;
 pub use crate::gltf::{
     GlbMesh, GltfOptions, MIN_GLB_EXTENT, check_glb_positions, encode_glb, load_gltf, load_gltf_with, parse_gltf,
-    parse_gltf_with, write_glb,
+    parse_gltf_with, write_glb, write_glb_interleaved,
 };
 pub use crate::obj::{ObjFile, ObjLines, load_obj, read_obj, write_obj, write_obj_to};
 

@@ -115,6 +115,18 @@ fn written_glb_follows_the_container_and_accessor_rules() {
     assert_eq!(first_normal, [0.0, 0.0, 1.0]);
     // The same mesh gives the same bytes.
     assert_eq!(glb, encode_glb(&GlbMesh { normals: Some(&normals), ..tetrahedron() }).unwrap());
+    // Interleaved vertices (a tessellator's flat buffers) give them too, and the same checks.
+    let interleaved: Vec<[f32; 6]> =
+        POSITIONS.iter().zip(&normals).map(|(p, n)| [p.x, p.y, p.z, n.x, n.y, n.z]).collect();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("tet.glb");
+    subdiv_io::write_glb_interleaved(&path, &interleaved, &INDICES).unwrap();
+    assert_eq!(std::fs::read(&path).unwrap(), glb);
+    let mut zero = interleaved.clone();
+    zero[2][3..].fill(0.0);
+    let error = subdiv_io::write_glb_interleaved(&path, &zero, &INDICES).unwrap_err();
+    assert!(error.to_string().contains("normal 2"), "{error}");
+    assert_eq!(std::fs::read(&path).unwrap(), glb, "a refused mesh leaves the file alone");
 }
 
 #[test]

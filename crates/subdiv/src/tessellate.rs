@@ -4,7 +4,7 @@
 use std::io::Write;
 use std::path::Path;
 
-use subdiv_io::{GlbMesh, write_atomic};
+use subdiv_io::write_atomic;
 use subdiv_tess::rates::{Camera, DEFAULT_MAX_RATE, RingDepths};
 use subdiv_tess::{FlatMesh, Parallelism, QuadtreeStats, TessMesh, Tolerance};
 
@@ -288,10 +288,9 @@ impl Tessellation {
 /// # Errors
 /// [`Error::Io`] naming the file, as [`subdiv_io::write_glb`].
 pub fn write_flat_glb(path: impl AsRef<Path>, flat: &FlatMesh) -> Result<(), Error> {
-    let vec3 = |v: &[f32]| glam::Vec3::new(v[0], v[1], v[2]);
-    let positions: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[..3])).collect();
-    let normals: Vec<_> = flat.vertices.chunks_exact(6).map(|v| vec3(&v[3..])).collect();
-    subdiv_io::write_glb(path, &GlbMesh { positions: &positions, normals: Some(&normals), indices: &flat.indices })?;
+    let (vertices, rest) = flat.vertices.as_chunks::<6>();
+    debug_assert!(rest.is_empty(), "six floats per flat vertex");
+    subdiv_io::write_glb_interleaved(path, vertices, &flat.indices)?;
     Ok(())
 }
 

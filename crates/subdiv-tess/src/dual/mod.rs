@@ -201,18 +201,12 @@ impl DualTessellator {
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &DualOptions) -> Result<Self, TessError> {
         let evaluator = Evaluator::new(scheme, mesh)?;
         let triangle = evaluator.levels().split() == Split::Triangle;
-        let level0 = evaluator.levels().mesh(0).clone();
         Ok(Self {
             options: *options,
             scheme: scheme.name().to_string(),
             vertex_count: mesh.vertex_count(),
             evaluator,
-            builder: TopologyBuilder {
-                mesh: level0,
-                triangle,
-                quads: options.quads,
-                buffers: BuilderBuffers::default(),
-            },
+            builder: TopologyBuilder { triangle, quads: options.quads, buffers: BuilderBuffers::default() },
             topology: Topology::default(),
             rates: Vec::new(),
             output: TessMesh::default(),
@@ -255,7 +249,7 @@ impl DualTessellator {
 
     /// The number of input faces (the length [`tessellate`](Self::tessellate)'s rates must have).
     pub fn face_count(&self) -> usize {
-        self.builder.mesh.face_count()
+        self.evaluator.levels().mesh(0).face_count()
     }
 
     /// Tessellates with `rates[f]` steps per side of input face `f` (holes: ignored, but still
@@ -380,7 +374,7 @@ impl DualTessellator {
     /// Checks `rates`, rebuilds the topology (with `rings`, if any) and prepares the evaluation.
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
         self.check_rates(rates)?;
-        self.builder.build(self.evaluator.domains(), rates, rings, &mut self.topology);
+        self.builder.build(self.evaluator.levels().mesh(0), self.evaluator.domains(), rates, rings, &mut self.topology);
         let prepared = self.evaluator.prepare(&self.topology, rates, self.options.parallelism.forks());
         self.settle(rates, prepared)
     }
@@ -508,7 +502,7 @@ impl DualTessellator {
     /// its indices beside (on a second thread, for large calls) the preparation and evaluation.
     fn build_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         let Self { evaluator, builder, topology, options, .. } = self;
-        builder.build(evaluator.domains(), rates, None, topology);
+        builder.build(evaluator.levels().mesh(0), evaluator.domains(), rates, None, topology);
         let (t, parallel) = (&*topology, options.parallelism.forks());
         // The indices go beside the preparation too (they need the topology alone): the second
         // thread is then awake when the evaluation shares its pieces, where after the
@@ -643,21 +637,29 @@ fn write_indices(t: &Topology, parallel: bool, indices: &mut Vec<u32>) {
     t.write_triangle_normals(indices, parallel);
 }
 
-/// The topology's builder, kept across calls: the mesh (level 0), the split, whether quads are
-/// listed, and the builder's buffers.
+/// The topology's builder, kept across calls: the split, whether quads are listed, and the
+/// builder's buffers (the mesh is the evaluator's level 0, not a copy: a copy of a large input
+/// was a tenth of the peak memory).
 #[derive(Debug)]
 struct TopologyBuilder {
-    mesh: Mesh,
     triangle: bool,
     quads: bool,
     buffers: BuilderBuffers,
 }
 
 impl TopologyBuilder {
-    /// The topology at `rates` (checked) with `rings` into `out` (its allocations reused).
-    fn build(&mut self, domains: &[Option<FaceDomain>], rates: &[u32], rings: Option<&RingDepths>, out: &mut Topology) {
+    /// The topology of `mesh` (level 0) at `rates` (checked) with `rings` into `out` (its
+    /// allocations reused).
+    fn build(
+        &mut self,
+        mesh: &Mesh,
+        domains: &[Option<FaceDomain>],
+        rates: &[u32],
+        rings: Option<&RingDepths>,
+        out: &mut Topology,
+    ) {
         let buffers = std::mem::take(&mut self.buffers);
-        let mut builder = Builder::with_buffers(&self.mesh, self.triangle, self.quads, buffers);
+        let mut builder = Builder::with_buffers(mesh, self.triangle, self.quads, buffers);
         builder.build(domains, rates, rings, out);
         self.buffers = builder.into_buffers();
     }
