@@ -37,16 +37,6 @@ pub(crate) struct StencilArgs {
     json: bool,
 }
 
-/// `p/q` or an integer, as (p, q) with q > 0.
-fn parse_fraction(text: &str) -> Result<(i64, i64), UserError> {
-    let bad = || UserError(format!("`{text}` is not a fraction p/q with q > 0"));
-    let (p, q) = match text.trim().split_once('/') {
-        Some((p, q)) => (p.trim().parse().map_err(|_| bad())?, q.trim().parse().map_err(|_| bad())?),
-        None => (text.trim().parse().map_err(|_| bad())?, 1),
-    };
-    if q <= 0 { Err(bad()) } else { Ok((p, q)) }
-}
-
 pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserError> {
     if let Some(curve) = CurveScheme::builtin(&args.scheme) {
         return run_curve(args, &curve, out);
@@ -65,7 +55,7 @@ fn run_curve(args: &StencilArgs, scheme: &CurveScheme, out: &mut impl Write) -> 
     let number = |r: &Rational| if args.exact { json!(r.to_string()) } else { json!(r.to_f64()) };
     let text = |r: &Rational| if args.exact { r.to_string() } else { format!("{:.17}", r.to_f64()) };
     if let Some(at) = &args.at {
-        let (p, q) = parse_fraction(at)?;
+        let (p, q) = subdiv::stencil::parse_fraction(at).map_err(|e| UserError(e.to_string()))?;
         let scaled = p.checked_mul(i64::from(n)).ok_or_else(|| UserError(format!("x = {at} is too large")))?;
         if scaled % q != 0 {
             return Err(UserError(format!("x = {at} is not on the grid (1/{n})ℤ; pass --n a multiple of {q}")));

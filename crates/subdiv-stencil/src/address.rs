@@ -72,20 +72,41 @@ impl std::str::FromStr for Dyadic {
     /// ```
     fn from_str(text: &str) -> Result<Self, StencilError> {
         let bad = |reason: &'static str| StencilError::ParameterSyntax { text: text.to_string(), reason };
-        let fraction = |part: &str| -> Result<(i64, i64), StencilError> {
-            let number = |t: &str| t.trim().parse::<i64>().map_err(|_| bad("expected integers p and q in p/q"));
-            let (p, q) = match part.split_once('/') {
-                Some((p, q)) => (number(p)?, number(q)?),
-                None => (number(part)?, 1),
-            };
-            if q <= 0 { Err(bad("a denominator must be positive")) } else { Ok((p, q)) }
-        };
         let (u, v) = text.split_once(',').ok_or_else(|| bad("expected U,V"))?;
-        let ((a, b), (c, d)) = (fraction(u)?, fraction(v)?);
+        let whole = |e: StencilError| match e {
+            StencilError::ParameterSyntax { reason, .. } => bad(reason),
+            e => e,
+        };
+        let ((a, b), (c, d)) = (parse_fraction(u).map_err(whole)?, parse_fraction(v).map_err(whole)?);
         let q = (b / b.gcd(&d)).checked_mul(d);
         let point = q.and_then(|q| Some(Self::new(a.checked_mul(q / b)?, c.checked_mul(q / d)?, q)));
         point.ok_or_else(|| bad("the common denominator of the two fractions does not fit in 64 bits"))
     }
+}
+
+/// One rational number `p/q` (q > 0) or an integer, in 64-bit integers, not reduced: the
+/// parser of [`Dyadic`]'s `U,V` and of a curve parameter.
+///
+/// ```
+/// use subdiv_stencil::parse_fraction;
+///
+/// assert_eq!(parse_fraction(" 3/8 ")?, (3, 8));
+/// assert_eq!(parse_fraction("-2")?, (-2, 1));
+/// assert!(parse_fraction("1/0").is_err());
+/// assert!(parse_fraction("1/99999999999999999999").is_err());
+/// # Ok::<(), subdiv_stencil::StencilError>(())
+/// ```
+///
+/// # Errors
+/// [`StencilError::ParameterSyntax`] naming the text and the rule.
+pub fn parse_fraction(text: &str) -> Result<(i64, i64), StencilError> {
+    let bad = |reason: &'static str| StencilError::ParameterSyntax { text: text.to_string(), reason };
+    let number = |t: &str| t.trim().parse::<i64>().map_err(|_| bad("expected integers p and q in p/q"));
+    let (p, q) = match text.split_once('/') {
+        Some((p, q)) => (number(p)?, number(q)?),
+        None => (number(text)?, 1),
+    };
+    if q <= 0 { Err(bad("a denominator must be positive")) } else { Ok((p, q)) }
 }
 
 impl Address {

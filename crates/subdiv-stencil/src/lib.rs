@@ -36,7 +36,7 @@ mod rational;
 pub use rational::Rational;
 // ---- end of curve stencils ----------------------------------------------------------------
 
-pub use address::{Address, Dyadic, MAX_ADDRESS_STEPS};
+pub use address::{Address, Dyadic, MAX_ADDRESS_STEPS, parse_fraction};
 pub use domain::{FaceDomain, GridParameter, MAX_DENOMINATOR_BITS, PatchFrame, dyadic_from_f64};
 pub use error::StencilError;
 pub use exact::{ExactSurfaceStencil, exact_surface_stencil};
