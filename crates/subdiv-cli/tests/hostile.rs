@@ -84,6 +84,36 @@ fn tessellations_past_the_vertex_budget_are_refused() {
 }
 
 #[test]
+fn valences_past_the_patch_limit_are_refused_at_once() {
+    // A 5000-gon aborted on an 845 MB allocation (its refined centre has valence 5000, whose
+    // dense sub-patch matrices take time cubic in it); a fan of 5000 triangles the same.
+    let dir = tempfile::tempdir().unwrap();
+    let n = 5000;
+    let ring = |i: usize| {
+        let a = std::f64::consts::TAU * i as f64 / n as f64;
+        format!("v {} {} 0\n", a.cos(), a.sin())
+    };
+    let ngon = dir.path().join("ngon.obj");
+    let face: Vec<String> = (1..=n).map(|i| i.to_string()).collect();
+    std::fs::write(&ngon, (0..n).map(ring).collect::<String>() + &format!("f {}\n", face.join(" "))).unwrap();
+    let fan = dir.path().join("fan.obj");
+    let triangles: String = (0..n).map(|i| format!("f 1 {} {}\n", i + 2, (i + 1) % n + 2)).collect();
+    std::fs::write(&fan, "v 0 0 1\n".to_string() + &(0..n).map(ring).collect::<String>() + &triangles).unwrap();
+    let out = dir.path().join("out.glb");
+    let out = out.to_str().unwrap();
+    for mesh in [&ngon, &fan] {
+        let mesh = mesh.to_str().unwrap();
+        let expect = ["valence 5000", "limit of 1024", "max_patch_valence"];
+        refused(&["eval", mesh, "--grid", "2"], &expect);
+        refused(&["tessellate", mesh, "--rate", "2", "-o", out], &expect);
+    }
+    // Refinement takes any valence.
+    let refined = dir.path().join("refined.obj");
+    let output = subdiv(&["refine", ngon.to_str().unwrap(), "--levels", "1", "-o", refined.to_str().unwrap()]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+}
+
+#[test]
 fn refinement_past_the_face_budget_is_refused() {
     // 225 quads at 8 levels, 900 · 4⁷ = 14.7 million faces, aborted on memory.
     let (_dir, grid) = grid_obj(15);

@@ -68,6 +68,23 @@ pub enum SchemeError {
         /// What is wrong, with the valence.
         detail: String,
     },
+    /// A vertex whose valence is past [`RefineOptions::max_patch_valence`](crate::RefineOptions),
+    /// refused before its sub-patch matrices are derived (their size grows with the valence and
+    /// their derivation with its cube).
+    #[error(
+        "{vertex} has valence {valence} (an N-gon of as many sides has such a centre once refined), more than \
+         the limit of {limit} for sub-patch matrices: their derivation grows with the cube of the valence \
+         (valence 1000 takes about 20 s and 1.3 GB); split the face or vertex, or raise the limit \
+         (RefineOptions::max_patch_valence)"
+    )]
+    ValenceTooLarge {
+        /// The vertex.
+        vertex: subdiv_mesh::VertexId,
+        /// Its valence.
+        valence: usize,
+        /// The limit in force.
+        limit: usize,
+    },
     /// The eigen solver did not converge.
     #[error("the eigen solver did not converge: {0}")]
     Eigen(String),

@@ -94,6 +94,10 @@ impl MeshPatches {
         let boundary = options.boundary_for(mesh);
         let mut types = Vec::new();
         for v in vertices.into_iter().filter(|&v| !mesh.is_isolated(v)) {
+            let valence = mesh.valence(v);
+            if valence > options.max_patch_valence {
+                return Err(SchemeError::ValenceTooLarge { vertex: v, valence, limit: options.max_patch_valence });
+            }
             vertex_types(scheme, mesh, v, &mut types)?;
         }
         let mut seen = std::collections::HashSet::new();
@@ -200,4 +204,25 @@ fn vertex_types(scheme: &Scheme, mesh: &Mesh, v: VertexId, types: &mut Vec<Patch
         );
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use subdiv_mesh::{Mesh, shapes};
+
+    use super::*;
+    use crate::Builtin;
+
+    #[test]
+    fn valences_past_the_limit_are_refused_before_any_matrix() {
+        // pole(k): a vertex of valence k.
+        let mesh = Mesh::build(shapes::pole(7)).unwrap();
+        let cc = Builtin::CatmullClark.scheme();
+        let options = RefineOptions { max_patch_valence: 6, ..RefineOptions::DEFAULT };
+        let Err(error) = MeshPatches::new(cc, &mesh, &options) else { panic!("valence 7 is past 6") };
+        assert!(matches!(error, SchemeError::ValenceTooLarge { valence: 7, limit: 6, .. }), "{error}");
+        assert!(error.to_string().contains("max_patch_valence"), "{error}");
+        let options = RefineOptions { max_patch_valence: 7, ..options };
+        assert!(MeshPatches::new(cc, &mesh, &options).is_ok());
+    }
 }

@@ -26,11 +26,23 @@ pub struct RefineOptions {
     /// ([`QuadEdgeMask::triangle_face`](crate::QuadEdgeMask::triangle_face); of the built-ins
     /// only Catmull-Clark has one) ignore it.
     pub triangle_subdivision: Option<TriangleSubdivision>,
+    /// The largest valence whose sub-patch matrices the exact pipeline derives (refinement
+    /// itself takes any valence): past it [`MeshPatches`](crate::MeshPatches) refuses the mesh
+    /// with [`SchemeError::ValenceTooLarge`](crate::SchemeError::ValenceTooLarge) before any
+    /// matrix is made. Default: [`MAX_PATCH_VALENCE`].
+    pub max_patch_valence: usize,
 }
 
+/// [`RefineOptions::max_patch_valence`]' default: 1024. The sub-patch matrices of valence `n`
+/// are dense, of size about `2n`, and their derivation and eigen analysis take time cubic in
+/// `n` (measured, `subdiv eval --grid 2` of one vertex of valence `n`: 300 takes 1.7 s and 0.38
+/// GB, 1000 takes 21 s and 1.3 GB), so a 5000-gon would take most of an hour and 30 GB.
+pub const MAX_PATCH_VALENCE: usize = 1024;
+
 impl RefineOptions {
-    /// The defaults: everything from the mesh's tags.
-    pub const DEFAULT: Self = Self { boundary: None, crease_method: None, triangle_subdivision: None };
+    /// The defaults: everything from the mesh's tags, valences up to [`MAX_PATCH_VALENCE`].
+    pub const DEFAULT: Self =
+        Self { boundary: None, crease_method: None, triangle_subdivision: None, max_patch_valence: MAX_PATCH_VALENCE };
 
     pub(crate) fn boundary_for(&self, mesh: &Mesh) -> BoundaryInterpolation {
         self.boundary.or(mesh.tags().boundary_interpolation).unwrap_or(BoundaryInterpolation::EdgeOnly)
