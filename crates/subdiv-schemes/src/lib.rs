@@ -86,6 +86,7 @@ mod eigen;
 mod error;
 mod expr;
 mod mesh_patches;
+mod nonuniform;
 mod patch;
 mod primal;
 mod refine;
@@ -95,10 +96,11 @@ mod stencil;
 pub mod strategies;
 
 pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, LocalSpectrum};
-pub use curve::{CurveError, CurveMatrix, CurveScheme, NonUniformCubicBSpline, PolygonKind};
+pub use curve::{CurveError, CurveMatrix, CurveScheme, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};
 pub use mesh_patches::{FoundPatch, MeshPatches};
+pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
     ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces, sub_patch_starts,
 };
