@@ -30,6 +30,7 @@ mod patch_levels;
 mod surface;
 pub mod surface_basis;
 mod table;
+mod tangents;
 // ---- curve stencils (curve.rs, rational.rs) ----------------------------------------------
 pub mod curve;
 mod rational;
