@@ -18,8 +18,11 @@ pub struct Report {
     /// Distinct outcomes reached (counted again after the set is forgotten at
     /// [`MAX_OUTCOMES`]).
     pub outcomes: usize,
-    /// The slowest input's time.
+    /// The slowest input's wall time (on a busy machine more than its processor time).
     pub slowest: Duration,
+    /// The most processor time one input took (Linux; zero elsewhere): what the fuzz binary's
+    /// watchdog limits.
+    pub slowest_cpu: Duration,
     /// The first input that panicked, with the panic's message.
     pub finding: Option<(Vec<u8>, String)>,
 }
@@ -47,9 +50,12 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
             mutate(&mut random, base, &corpus)
         };
         before(&input);
-        let run = Instant::now();
+        let (run, cpu) = (Instant::now(), processor_time());
         let outcome = catch_unwind(AssertUnwindSafe(|| target.run(&input)));
         report.slowest = report.slowest.max(run.elapsed());
+        if let (Some(before), Some(after)) = (cpu, processor_time()) {
+            report.slowest_cpu = report.slowest_cpu.max(after.saturating_sub(before));
+        }
         report.executions += 1;
         match outcome {
             Ok(label) => {
@@ -100,6 +106,17 @@ pub const MAX_INPUT: usize = 1 << 14;
 /// FNV-1a of `bytes`: a stable 64-bit name (outcomes, reproducer files).
 pub fn hash(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
+/// This process's processor time (user and system), from Linux's `/proc/self/stat` (fields
+/// 14 and 15, in the kernel ABI's fixed 100 Hz ticks); `None` elsewhere.
+pub fn processor_time() -> Option<Duration> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // The command name (field 2) is in parentheses and may hold spaces: count after it.
+    let mut fields = stat.get(stat.rfind(')')? + 2..)?.split_whitespace().skip(11);
+    let user: u64 = fields.next()?.parse().ok()?;
+    let system: u64 = fields.next()?.parse().ok()?;
+    Some(Duration::from_millis((user + system) * 10))
 }
 
 /// Whether `target` panics on `input` (for the reducer).

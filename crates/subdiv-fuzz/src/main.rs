@@ -29,16 +29,9 @@ const WALL_LIMIT: Duration = Duration::from_secs(120);
 static STARTED: AtomicU64 = AtomicU64::new(0);
 static STARTED_CPU: AtomicU64 = AtomicU64::new(0);
 
-/// This process's processor time (user and system) in milliseconds, from Linux's
-/// `/proc/self/stat` (its fields 14 and 15, in the fixed 100 Hz ticks of the kernel ABI);
-/// `None` elsewhere.
+/// This process's processor time in milliseconds ([`driver::processor_time`]).
 fn cpu_millis() -> Option<u64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // The command name (field 2) is in parentheses and may hold spaces: count after it.
-    let mut fields = stat.get(stat.rfind(')')? + 2..)?.split_whitespace().skip(11);
-    let user: u64 = fields.next()?.parse().ok()?;
-    let system: u64 = fields.next()?.parse().ok()?;
-    Some((user + system) * 10)
+    driver::processor_time().map(|t| t.as_millis() as u64)
 }
 
 fn watchdog(epoch: Instant) {
@@ -94,12 +87,13 @@ fn main() -> ExitCode {
             });
             STARTED.store(0, Ordering::Relaxed);
             println!(
-                "{{\"target\":\"{}\",\"executions\":{},\"corpus\":{},\"outcomes\":{},\"slowest_ms\":{},\"finding\":{}}}",
+                "{{\"target\":\"{}\",\"executions\":{},\"corpus\":{},\"outcomes\":{},\"slowest_ms\":{},\"slowest_cpu_ms\":{},\"finding\":{}}}",
                 target.name(),
                 report.executions,
                 report.corpus,
                 report.outcomes,
                 report.slowest.as_millis(),
+                report.slowest_cpu.as_millis(),
                 report.finding.as_ref().map_or("null".to_string(), |(_, m)| format!("{m:?}")),
             );
             if report.finding.is_some() { ExitCode::from(3) } else { ExitCode::SUCCESS }
