@@ -53,6 +53,9 @@ pub(crate) struct RenderArgs {
     /// framing's camera.
     #[arg(long, value_name = "P", allow_negative_numbers = true)]
     pixels: Option<f64>,
+    /// The most vertices the tessellation may have (counted from the rates before any work).
+    #[arg(long, value_name = "N", default_value_t = subdiv::DEFAULT_MAX_TESS_VERTICES)]
+    max_vertices: usize,
     /// Draw the tessellation's edges over the surface.
     #[arg(long)]
     wireframe: bool,
@@ -96,12 +99,17 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", input_name));
     let start = Instant::now();
+    let budget = |rates: &[u32]| {
+        subdiv::check_vertex_budget(&mesh, &scheme, rates, None, args.max_vertices).map_err(|e| located(&e))
+    };
+    let framing = vec![FRAMING_RATE; mesh.face_count()];
+    budget(&framing)?;
     let mut tess = DualTessellator::new(&scheme, &mesh, &DualOptions { quads: false, ..DualOptions::default() })
         .map_err(|e| located(&e))?;
     let mut flat = FlatMesh::default();
 
     // The camera, from the undeformed surface (so that frames do not jump).
-    tess.tessellate_flat(&vec![FRAMING_RATE; mesh.face_count()], &mut flat).map_err(|e| located(&e))?;
+    tess.tessellate_flat(&framing, &mut flat).map_err(|e| located(&e))?;
     let [lo, hi] =
         subdiv_gpu::bounds(&flat.vertices).ok_or_else(|| located(&"the surface is empty (every face a hole)"))?;
     let view = View::framing(lo, hi, options.aspect());
@@ -116,6 +124,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
             (vec![rate; mesh.face_count()], format!("uniform rate {rate}"))
         }
     };
+    budget(&rates)?;
     tess.tessellate_flat(&rates, &mut flat).map_err(|e| located(&e))?;
     let tessellated = start.elapsed();
 

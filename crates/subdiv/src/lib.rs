@@ -70,7 +70,8 @@ pub use crate::error::Error;
 pub use crate::evaluate::{DEFAULT_MAX_POINTS, EvalGrid, EvalOptions, Evaluator, GridPoint, MAX_GRID};
 pub use crate::surface::{DEFAULT_MAX_REFINED_FACES, Surface, without_holes};
 pub use crate::tessellate::{
-    DEFAULT_MAX_TESS_VERTICES, FaceRates, Method, Rates, TessInfo, TessOptions, Tessellation, write_flat_glb,
+    DEFAULT_MAX_TESS_VERTICES, FaceRates, Method, Rates, TessInfo, TessOptions, Tessellation, check_vertex_budget,
+    write_flat_glb,
 };
 pub use subdiv_eval::Method as EvalMethod;
 pub use subdiv_mesh::{DVec3, FaceId, Mesh, MeshError, PolygonSoup};

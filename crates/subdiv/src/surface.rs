@@ -8,8 +8,8 @@ use subdiv_schemes::{RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::LimitPoint;
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv_tess::{
-    DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh,
-    TessSink, TessTriangle, TessVertex,
+    DualOptions, DualTessellator, FlatMesh, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink,
+    TessTriangle, TessVertex,
 };
 
 use crate::Error;
@@ -377,29 +377,10 @@ impl Surface {
         Ok((TessInfo { method: Method::Dual, rates: faces, epsilon, quadtree: None }, rings))
     }
 
-    /// Refuses `rates` if they would make more than [`TessOptions::max_vertices`] vertices,
-    /// before the tessellator allocates anything. Rates the tessellator refuses (a wrong count,
-    /// a rate outside `1..=128`) are left to its own error.
+    /// [`check_vertex_budget`](crate::check_vertex_budget) of `rates` with
+    /// [`TessOptions::max_vertices`].
     fn check_vertex_budget(&self, rates: &FaceRates, options: &TessOptions) -> Result<(), Error> {
-        let FaceRates { faces, rings, .. } = rates;
-        if faces.len() != self.mesh.face_count() || !faces.iter().all(|r| (1..=MAX_DUAL_RATE).contains(r)) {
-            return Ok(());
-        }
-        let triangle = self.scheme.split() == Split::Triangle;
-        let vertices = match rings {
-            Some(rings) => subdiv_tess::dual::predicted_vertex_count_with_rings(&self.mesh, triangle, faces, rings),
-            None => subdiv_tess::dual::predicted_vertex_count(&self.mesh, triangle, faces),
-        };
-        if vertices > options.max_vertices {
-            return Err(Error::Budget {
-                verb: "tessellating would make",
-                noun: "vertices",
-                requested: vertices as u64,
-                limit: options.max_vertices as u64,
-                raise: "lower the rates or raise the limit (TessOptions::max_vertices, `subdiv tessellate --max-vertices`)",
-            });
-        }
-        Ok(())
+        crate::check_vertex_budget(&self.mesh, &self.scheme, &rates.faces, rates.rings.as_ref(), options.max_vertices)
     }
 
     /// The dual tessellator with `options`' quads and parallelism, made on first use (later

@@ -5,8 +5,10 @@ use std::io::Write;
 use std::path::Path;
 
 use subdiv_io::write_atomic;
+use subdiv_mesh::Mesh;
+use subdiv_schemes::{Scheme, Split};
 use subdiv_tess::rates::{Camera, DEFAULT_MAX_RATE, RingDepths};
-use subdiv_tess::{FlatMesh, Parallelism, QuadtreeStats, TessMesh, Tolerance};
+use subdiv_tess::{FlatMesh, MAX_DUAL_RATE, Parallelism, QuadtreeStats, TessMesh, Tolerance};
 
 use crate::Error;
 
@@ -261,6 +263,55 @@ impl Tessellation {
         })?;
         Ok(())
     }
+}
+
+/// Refuses per-face `rates` (with `rings`, if any) for the dual tessellator of `mesh` under
+/// `scheme` if they would make more than `max_vertices` output vertices: the count is
+/// predicted from the topology, before anything is allocated. What
+/// [`Surface::face_rates`](crate::Surface::face_rates) checks against
+/// [`TessOptions::max_vertices`]; for callers that drive a
+/// [`DualTessellator`](subdiv_tess::DualTessellator) themselves. Rates the tessellator refuses
+/// anyway (a wrong count, a rate outside `1..=128`) are left to its own error.
+///
+/// ```
+/// use subdiv::mesh::{shapes, Mesh};
+/// use subdiv::schemes::Builtin;
+/// use subdiv::Error;
+///
+/// let cube = Mesh::build(shapes::cube())?;
+/// let cc = Builtin::CatmullClark.scheme();
+/// assert!(subdiv::check_vertex_budget(&cube, cc, &[8; 6], None, 1000).is_ok());
+/// assert!(matches!(subdiv::check_vertex_budget(&cube, cc, &[128; 6], None, 1000), Err(Error::Budget { .. })));
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// [`Error::Budget`] naming the count and the limit.
+pub fn check_vertex_budget(
+    mesh: &Mesh,
+    scheme: &Scheme,
+    rates: &[u32],
+    rings: Option<&RingDepths>,
+    max_vertices: usize,
+) -> Result<(), Error> {
+    if rates.len() != mesh.face_count() || !rates.iter().all(|r| (1..=MAX_DUAL_RATE).contains(r)) {
+        return Ok(());
+    }
+    let triangle = scheme.split() == Split::Triangle;
+    let vertices = match rings {
+        Some(rings) => subdiv_tess::dual::predicted_vertex_count_with_rings(mesh, triangle, rates, rings),
+        None => subdiv_tess::dual::predicted_vertex_count(mesh, triangle, rates),
+    };
+    if vertices > max_vertices {
+        return Err(Error::Budget {
+            verb: "tessellating would make",
+            noun: "vertices",
+            requested: vertices as u64,
+            limit: max_vertices as u64,
+            raise: "lower the rates or raise the limit (TessOptions::max_vertices, `--max-vertices`)",
+        });
+    }
+    Ok(())
 }
 
 /// Writes a flat tessellation ([`FlatMesh`], e.g. from
