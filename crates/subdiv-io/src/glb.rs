@@ -1,0 +1,272 @@
+//! GLB writing: [`encode_glb`], [`write_glb`] and [`write_glb_interleaved`] write one triangle
+//! mesh, checked whole first and then streamed, and [`check_glb_positions`] the f32 rule its
+//! coordinates meet.
+
+use std::path::Path;
+
+use glam::Vec3;
+use serde_json::{Value, json};
+
+use crate::gltf::{CHUNK_BIN, CHUNK_JSON, GLB_MAGIC};
+use crate::{IoError, atomic};
+
+const ARRAY_BUFFER: u32 = 34962;
+const ELEMENT_ARRAY_BUFFER: u32 = 34963;
+
+/// A triangle mesh to write as GLB: positions, optional normals (one per position), and three
+/// indices per triangle, counter-clockwise seen from outside.
+#[derive(Clone, Copy, Debug)]
+pub struct GlbMesh<'a> {
+    /// Vertex positions.
+    pub positions: &'a [Vec3],
+    /// Vertex normals, one per position; written normalised.
+    pub normals: Option<&'a [Vec3]>,
+    /// Triangle vertex indices, three per triangle.
+    pub indices: &'a [u32],
+}
+
+/// The smallest magnitude, other than 0, of a coordinate the GLB writer accepts: 2^-102.
+///
+/// GLB stores f32s. A coordinate below f32's smallest normal number (2^-126) would be written
+/// as a subnormal or, converted from f64, as 0 — the mesh collapses to a point — and GPUs flush
+/// subnormals to zero in any case. 2^-102 = 2^-126 · 2^24 leaves room for f32's 24-bit
+/// significand: the differences between neighbouring coordinates of that size (an edge, a
+/// derivative, one ulp apart) are still normal numbers, so the shape survives the renderer
+/// too. A mesh this small is to be scaled up before it is written.
+pub const MIN_GLB_EXTENT: f64 = 1.0 / (1u128 << 102) as f64;
+
+/// Checks that every coordinate of `positions` is representable as a normal f32 that keeps the
+/// shape ([`MIN_GLB_EXTENT`]): finite, at most `f32::MAX` in magnitude, and 0 or at least
+/// `MIN_GLB_EXTENT`. [`encode_glb`] calls it on its f32 input; a caller that converts f64
+/// positions to f32 calls it on the f64s first, where a coordinate that the conversion would
+/// flush to 0 is still seen.
+///
+/// # Errors
+/// [`IoError::Unwritable`] naming the vertex, the coordinate and what to do (scale the mesh).
+pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> Result<(), IoError> {
+    for (i, p) in positions.into_iter().enumerate() {
+        for x in p.to_array() {
+            let rule = if !x.is_finite() {
+                "is not finite"
+            } else if x.abs() > f64::from(f32::MAX) {
+                "exceeds f32's range (3.4e38); scale the mesh down before writing GLB"
+            } else if x != 0.0 && x.abs() < MIN_GLB_EXTENT {
+                "is too small for f32 (it would be written as 0 or a subnormal; the smallest \
+                 accepted is 2^-102 ≈ 2.0e-31); scale the mesh up before writing GLB"
+            } else {
+                continue;
+            };
+            return Err(IoError::Unwritable { format: "GLB", rule: format!("vertex {i} coordinate {x:e} {rule}") });
+        }
+    }
+    Ok(())
+}
+
+/// Encodes `mesh` as a GLB file: one scene, one node, one mesh with one TRIANGLES primitive;
+/// POSITION (with the `min`/`max` the spec requires), NORMAL when given, `u32` indices, one
+/// tightly packed buffer view per accessor with its target, 4-byte aligned and padded chunks,
+/// `asset.generator = "subdiv"`. The same mesh always gives the same bytes.
+///
+/// # Errors
+/// [`IoError::Unwritable`] for a mesh no valid GLB can hold: no triangle, an index count not a
+/// multiple of 3, an index out of range, a coordinate that is not finite or is too small to be
+/// a normal f32 (see [`check_glb_positions`]), a normal count that differs from
+/// the position count, a zero or non-finite normal, more than 4 GiB.
+pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
+    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals };
+    let header = GlbHeader::of(vertices, mesh.indices)?;
+    let mut glb = Vec::with_capacity(header.total as usize);
+    header
+        .write(vertices, mesh.indices, &mut glb)
+        .map_err(|e| IoError::Unwritable { format: "GLB", rule: e.to_string() })?;
+    Ok(glb)
+}
+
+/// Writes `mesh` as a GLB file at `path` (see [`encode_glb`]), through a fresh `<name>.<16 hex>.tmp` and a
+/// rename, so a failure leaves `path` untouched. The mesh is checked whole first, then
+/// streamed to the file: nothing the size of the output is allocated.
+///
+/// # Errors
+/// As [`encode_glb`]; [`IoError::Io`] when writing fails.
+pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoError> {
+    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals };
+    let header = GlbHeader::of(vertices, mesh.indices)?;
+    atomic::write_file(path.as_ref(), |w| header.write(vertices, mesh.indices, w))
+}
+
+/// [`write_glb`] of interleaved vertices, `px py pz nx ny nz` each (a tessellator's flat
+/// buffers, `subdiv-tess`'s `FlatMesh`), without splitting them into arrays first: the same
+/// file as [`write_glb`] of their positions and normals.
+///
+/// # Errors
+/// As [`write_glb`].
+pub fn write_glb_interleaved(path: impl AsRef<Path>, vertices: &[[f32; 6]], indices: &[u32]) -> Result<(), IoError> {
+    let vertices = Vertices::Interleaved(vertices);
+    let header = GlbHeader::of(vertices, indices)?;
+    atomic::write_file(path.as_ref(), |w| header.write(vertices, indices, w))
+}
+
+/// The vertices the GLB writer takes.
+#[derive(Clone, Copy)]
+enum Vertices<'a> {
+    Split { positions: &'a [Vec3], normals: Option<&'a [Vec3]> },
+    Interleaved(&'a [[f32; 6]]),
+}
+
+impl Vertices<'_> {
+    fn len(self) -> usize {
+        match self {
+            Self::Split { positions, .. } => positions.len(),
+            Self::Interleaved(v) => v.len(),
+        }
+    }
+
+    fn positions(self) -> impl Iterator<Item = Vec3> {
+        let (split, interleaved) = match self {
+            Self::Split { positions, .. } => (positions, &[][..]),
+            Self::Interleaved(v) => (&[][..], v),
+        };
+        split.iter().copied().chain(interleaved.iter().map(|v| Vec3::new(v[0], v[1], v[2])))
+    }
+
+    /// The normals, if there are any: the same number as the positions for interleaved ones.
+    fn normals(self) -> Option<impl Iterator<Item = Vec3>> {
+        let (split, interleaved) = match self {
+            Self::Split { normals: None, .. } => return None,
+            Self::Split { normals: Some(normals), .. } => (normals, &[][..]),
+            Self::Interleaved(v) => (&[][..], v),
+        };
+        Some(split.iter().copied().chain(interleaved.iter().map(|v| Vec3::new(v[3], v[4], v[5]))))
+    }
+}
+
+/// A checked [`GlbMesh`]'s JSON chunk and sizes: everything but the binary data, which
+/// [`write`](Self::write) streams from the mesh.
+struct GlbHeader {
+    json: Vec<u8>,
+    bin_len: usize,
+    total: u32,
+}
+
+impl GlbHeader {
+    /// Checks a mesh (see [`encode_glb`]) and lays out its file.
+    fn of(vertices: Vertices<'_>, indices: &[u32]) -> Result<Self, IoError> {
+        let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
+        let n = vertices.len();
+        if indices.is_empty() || !indices.len().is_multiple_of(3) {
+            return Err(unwritable(format!("{} indices; a mesh needs whole triangles, at least one", indices.len())));
+        }
+        check_glb_positions(vertices.positions().map(|p| p.as_dvec3()))?;
+        if let Some((i, v)) = indices.iter().enumerate().find(|&(_, &v)| v as usize >= n) {
+            return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
+        }
+        if let Vertices::Split { normals: Some(normals), .. } = vertices
+            && normals.len() != n
+        {
+            return Err(unwritable(format!("{} normals for {n} vertices", normals.len())));
+        }
+        if let Some((i, v)) = vertices.normals().and_then(|n| n.enumerate().find(|(_, v)| v.try_normalize().is_none()))
+        {
+            return Err(unwritable(format!("normal {i} = {v} has no direction")));
+        }
+        let mut views = Vec::new();
+        let mut accessors = Vec::new();
+        let mut attributes = serde_json::Map::new();
+        let mut bin_len = 0usize;
+        let mut push_view = |bytes: usize, target: u32| {
+            views.push(json!({ "buffer": 0, "byteOffset": bin_len, "byteLength": bytes, "target": target }));
+            bin_len += bytes;
+            views.len() - 1
+        };
+        // min/max as the exact f64 of each f32, so that they compare equal to the data in any reader.
+        let exact = |v: Vec3| v.to_array().map(f64::from);
+        let (min, max) =
+            vertices.positions().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let view = push_view(12 * n, ARRAY_BUFFER);
+        attributes.insert("POSITION".into(), accessors.len().into());
+        accessors.push(json!({
+            "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": exact(min), "max": exact(max)
+        }));
+        if vertices.normals().is_some() {
+            let view = push_view(12 * n, ARRAY_BUFFER);
+            attributes.insert("NORMAL".into(), accessors.len().into());
+            accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3" }));
+        }
+        let view = push_view(4 * indices.len(), ELEMENT_ARRAY_BUFFER);
+        let index_accessor = accessors.len();
+        accessors.push(json!({ "bufferView": view, "componentType": 5125, "count": indices.len(), "type": "SCALAR" }));
+        let root = json!({
+            "asset": { "version": "2.0", "generator": "subdiv" },
+            "scene": 0,
+            "scenes": [{ "nodes": [0] }],
+            "nodes": [{ "mesh": 0 }],
+            "meshes": [{ "primitives": [{ "attributes": Value::Object(attributes), "indices": index_accessor, "mode": 4 }] }],
+            "accessors": accessors,
+            "bufferViews": views,
+            "buffers": [{ "byteLength": bin_len }],
+        });
+        let mut json = root.to_string().into_bytes();
+        json.resize(json.len().next_multiple_of(4), b' ');
+        // Every part of the BIN chunk is a whole number of 4-byte values, so it needs no padding.
+        let total = 12 + 8 + json.len() + 8 + bin_len;
+        let total =
+            u32::try_from(total).map_err(|_| unwritable(format!("{total} bytes exceed the 4 GiB a GLB can hold")))?;
+        Ok(Self { json, bin_len, total })
+    }
+
+    /// Writes the file: the header, the JSON chunk, then the binary chunk from `vertices` and
+    /// `indices` (those [`of`](Self::of) checked), normals normalised on the way.
+    fn write(&self, vertices: Vertices<'_>, indices: &[u32], w: &mut impl std::io::Write) -> std::io::Result<()> {
+        let vec3 = |w: &mut dyn std::io::Write, v: Vec3| {
+            let mut bytes = [0u8; 12];
+            for (chunk, x) in bytes.chunks_exact_mut(4).zip(v.to_array()) {
+                chunk.copy_from_slice(&x.to_le_bytes());
+            }
+            w.write_all(&bytes)
+        };
+        w.write_all(GLB_MAGIC)?;
+        w.write_all(&2u32.to_le_bytes())?;
+        w.write_all(&self.total.to_le_bytes())?;
+        w.write_all(&(self.json.len() as u32).to_le_bytes())?;
+        w.write_all(&CHUNK_JSON.to_le_bytes())?;
+        w.write_all(&self.json)?;
+        w.write_all(&(self.bin_len as u32).to_le_bytes())?;
+        w.write_all(&CHUNK_BIN.to_le_bytes())?;
+        for p in vertices.positions() {
+            vec3(w, p)?;
+        }
+        for n in vertices.normals().into_iter().flatten() {
+            // Checked by `of`: every normal has a direction.
+            vec3(w, n.normalize())?;
+        }
+        for &i in indices {
+            w.write_all(&i.to_le_bytes())?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn triangle(positions: &[Vec3]) -> Result<Vec<u8>, IoError> {
+        encode_glb(&GlbMesh { positions, normals: None, indices: &[0, 1, 2] })
+    }
+
+    #[test]
+    fn coordinates_that_are_no_normal_f32_are_refused_with_what_to_do() {
+        let tiny = 1e-40_f32; // subnormal
+        let error = triangle(&[Vec3::ZERO, Vec3::X * tiny, Vec3::Y * tiny]).unwrap_err().to_string();
+        assert!(error.contains("vertex 1") && error.contains("scale the mesh up"), "{error}");
+        // f64 coordinates that f32 flushes to 0: caught before the conversion.
+        let error = check_glb_positions([glam::DVec3::splat(1e-50)]).unwrap_err().to_string();
+        assert!(error.contains("vertex 0") && error.contains("scale the mesh up"), "{error}");
+        let error = check_glb_positions([glam::DVec3::new(0.0, 1e300, 0.0)]).unwrap_err().to_string();
+        assert!(error.contains("scale the mesh down"), "{error}");
+        // The bound itself and 0 are fine.
+        let small = MIN_GLB_EXTENT as f32;
+        assert_eq!(f64::from(small), MIN_GLB_EXTENT);
+        triangle(&[Vec3::ZERO, Vec3::X * small, Vec3::Y * small]).unwrap();
+    }
+}
