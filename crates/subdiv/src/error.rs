@@ -78,6 +78,18 @@ pub enum Error {
 }
 
 impl Error {
+    /// `Ok` if `requested` is within `limit`, else [`Error::Budget`] with the words given: the
+    /// one check every budget makes before its work.
+    pub(crate) fn check_budget(
+        requested: u64,
+        limit: u64,
+        verb: &'static str,
+        noun: &'static str,
+        raise: &'static str,
+    ) -> Result<(), Self> {
+        if requested > limit { Err(Self::Budget { verb, noun, requested, limit, raise }) } else { Ok(()) }
+    }
+
     /// Whether the error is a point asked of a hole (a face without limit surface), which
     /// callers evaluating many points often skip rather than stop at.
     pub fn is_hole(&self) -> bool {

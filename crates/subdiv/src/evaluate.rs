@@ -163,15 +163,13 @@ impl Evaluator {
                 points = points.saturating_add(exact.domain(face)?.grid_len(n));
             }
         }
-        if points > self.max_points {
-            return Err(Error::Budget {
-                verb: "the grid would evaluate",
-                noun: "points",
-                requested: points,
-                limit: self.max_points,
-                raise: "use a smaller grid, or raise the limit (EvalOptions::with_max_points, `subdiv eval --max-points`)",
-            });
-        }
+        Error::check_budget(
+            points,
+            self.max_points,
+            "the grid would evaluate",
+            "points",
+            "use a smaller grid, or raise the limit (EvalOptions::with_max_points, `subdiv eval --max-points`)",
+        )?;
         let mut grid = EvalGrid { points: Vec::with_capacity(points as usize), holes: 0 };
         for face in (0..self.inner.face_count() as u32).map(FaceId::new) {
             if self.method() == EvalMethod::Stencil {

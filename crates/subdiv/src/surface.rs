@@ -160,15 +160,13 @@ impl Surface {
     /// As [`refine`](Self::refine).
     pub fn refine_with_progress(&self, levels: usize, progress: impl FnMut(usize)) -> Result<Mesh, Error> {
         let faces = self.refined_faces_at_least(levels);
-        if faces > self.max_refined_faces {
-            return Err(Error::Budget {
-                verb: "refining would make at least",
-                noun: "faces",
-                requested: faces,
-                limit: self.max_refined_faces,
-                raise: "refine fewer levels, or raise the limit (Surface::with_max_refined_faces, `subdiv refine --max-faces`)",
-            });
-        }
+        Error::check_budget(
+            faces,
+            self.max_refined_faces,
+            "refining would make at least",
+            "faces",
+            "refine fewer levels, or raise the limit (Surface::with_max_refined_faces, `subdiv refine --max-faces`)",
+        )?;
         if faces > u64::from(u32::MAX) {
             return Err(Error::RefineLevels { levels, faces });
         }

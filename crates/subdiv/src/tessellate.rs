@@ -302,16 +302,13 @@ pub fn check_vertex_budget(
         Some(rings) => subdiv_tess::dual::predicted_vertex_count_with_rings(mesh, triangle, rates, rings),
         None => subdiv_tess::dual::predicted_vertex_count(mesh, triangle, rates),
     };
-    if vertices > max_vertices {
-        return Err(Error::Budget {
-            verb: "tessellating would make",
-            noun: "vertices",
-            requested: vertices as u64,
-            limit: max_vertices as u64,
-            raise: "lower the rates or raise the limit (TessOptions::max_vertices, `--max-vertices`)",
-        });
-    }
-    Ok(())
+    Error::check_budget(
+        vertices as u64,
+        max_vertices as u64,
+        "tessellating would make",
+        "vertices",
+        "lower the rates or raise the limit (TessOptions::max_vertices, `--max-vertices`)",
+    )
 }
 
 /// Writes a flat tessellation ([`FlatMesh`], e.g. from
