@@ -28,9 +28,10 @@ pub struct Report {
 }
 
 /// Runs `target` for `duration` on mutations of its seeds, from the random `seed`, calling
-/// `before(input)` before each run (the fuzz binary records the input there, so that a crash
+/// `before(input, cpu)` before each run, `cpu` being the process's [`processor_time`] then (the
+/// fuzz binary records the input there, so that a crash
 /// or a time-out it cannot catch is still reported). Stops at the first panic.
-pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMut(&[u8])) -> Report {
+pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMut(&[u8], Option<Duration>)) -> Report {
     let mut random = Random(seed ^ 0x9e37_79b9_7f4a_7c15);
     let mut corpus = target.seeds();
     let seeds = corpus.len();
@@ -49,8 +50,9 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
             let base = &corpus[random.below(corpus.len())];
             mutate(&mut random, base, &corpus)
         };
-        before(&input);
-        let (run, cpu) = (Instant::now(), processor_time());
+        let cpu = processor_time();
+        before(&input, cpu);
+        let run = Instant::now();
         let outcome = catch_unwind(AssertUnwindSafe(|| target.run(&input)));
         report.slowest = report.slowest.max(run.elapsed());
         if let (Some(before), Some(after)) = (cpu, processor_time()) {
@@ -235,7 +237,7 @@ mod tests {
 
     #[test]
     fn a_short_run_finds_nothing_and_grows_the_corpus() {
-        let report = fuzz(Target::Parameter, Duration::from_millis(300), 1, |_| {});
+        let report = fuzz(Target::Parameter, Duration::from_millis(300), 1, |_, _| {});
         assert_eq!(report.finding, None);
         assert!(report.executions > 10 && report.corpus >= Target::Parameter.seeds().len(), "{report:?}");
         assert!(report.outcomes > 1, "{report:?}");

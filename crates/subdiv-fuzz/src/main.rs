@@ -53,9 +53,9 @@ fn watchdog(epoch: Instant) {
     });
 }
 
-/// Marks the start of an input for the watchdog.
-fn start(epoch: Instant) {
-    STARTED_CPU.store(cpu_millis().unwrap_or(0), Ordering::Relaxed);
+/// Marks the start of an input for the watchdog, at the process's processor time `cpu`.
+fn start(epoch: Instant, cpu: Option<Duration>) {
+    STARTED_CPU.store(cpu.map_or(0, |t| t.as_millis() as u64), Ordering::Relaxed);
     STARTED.store((epoch.elapsed().as_millis() as u64).max(1), Ordering::Relaxed);
 }
 
@@ -77,13 +77,13 @@ fn main() -> ExitCode {
                 return ExitCode::from(2);
             };
             let file = Mutex::new(std::fs::File::create(current).expect("the CURRENT file can be created"));
-            let report = driver::fuzz(target, Duration::from_secs(seconds), seed, |input| {
+            let report = driver::fuzz(target, Duration::from_secs(seconds), seed, |input, cpu| {
                 use std::io::{Seek, Write};
                 let mut file = file.lock().expect("one thread writes");
                 let _ = file.set_len(0);
                 let _ = file.rewind();
                 let _ = file.write_all(input);
-                start(epoch);
+                start(epoch, cpu);
             });
             STARTED.store(0, Ordering::Relaxed);
             println!(
@@ -100,7 +100,7 @@ fn main() -> ExitCode {
         }
         ("exec", [file]) => {
             let input = std::fs::read(file).expect("the input file can be read");
-            start(epoch);
+            start(epoch, driver::processor_time());
             if driver::panics(target, &input) { ExitCode::from(3) } else { ExitCode::SUCCESS }
         }
         _ => {
