@@ -264,8 +264,7 @@ impl Surface {
     pub fn tessellate(&mut self, options: &TessOptions) -> Result<Tessellation, Error> {
         if options.method == Method::Dual {
             // The dual tessellator's own output, copied whole rather than vertex by vertex.
-            let (info, rings) = self.dual_rates(options)?;
-            let tess = self.dual(options)?;
+            let (info, rings, tess) = self.prepared_dual(options)?;
             let mesh = match &rings {
                 Some(rings) => tess.tessellate_with_rings(&info.rates, rings)?,
                 None => tess.tessellate(&info.rates)?,
@@ -299,8 +298,7 @@ impl Surface {
     /// As [`tessellate`](Self::tessellate).
     pub fn tessellate_flat(&mut self, options: &TessOptions, out: &mut FlatMesh) -> Result<TessInfo, Error> {
         if options.method == Method::Dual {
-            let (info, rings) = self.dual_rates(options)?;
-            let tess = self.dual(options)?;
+            let (info, rings, tess) = self.prepared_dual(options)?;
             match &rings {
                 Some(rings) => tess.tessellate_with_rings_into(&info.rates, rings, out)?,
                 None => tess.tessellate_flat(&info.rates, out)?,
@@ -336,8 +334,7 @@ impl Surface {
     ) -> Result<TessInfo, Error> {
         match options.method {
             Method::Dual => {
-                let (info, rings) = self.dual_rates(options)?;
-                let tess = self.dual(options)?;
+                let (info, rings, tess) = self.prepared_dual(options)?;
                 match &rings {
                     Some(rings) => tess.tessellate_with_rings_into(&info.rates, rings, sink)?,
                     None => tess.tessellate_into(&info.rates, sink)?,
@@ -369,10 +366,15 @@ impl Surface {
         }
     }
 
-    /// The dual method's rates as a [`TessInfo`], and its rings.
-    fn dual_rates(&mut self, options: &TessOptions) -> Result<(TessInfo, Option<RingDepths>), Error> {
+    /// The dual method's rates as a [`TessInfo`], its rings, and the dual tessellator to cut them
+    /// (the budget checked first, by [`face_rates`](Self::face_rates), before it is made).
+    fn prepared_dual(
+        &mut self,
+        options: &TessOptions,
+    ) -> Result<(TessInfo, Option<RingDepths>, &mut DualTessellator), Error> {
         let FaceRates { faces, rings, epsilon } = self.face_rates(options)?;
-        Ok((TessInfo { method: Method::Dual, rates: faces, epsilon, quadtree: None }, rings))
+        let info = TessInfo { method: Method::Dual, rates: faces, epsilon, quadtree: None };
+        Ok((info, rings, self.dual(options)?))
     }
 
     /// [`check_vertex_budget`](crate::check_vertex_budget) of `rates` with
