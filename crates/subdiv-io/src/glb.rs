@@ -122,6 +122,7 @@ impl Vertices<'_> {
     }
 
     fn positions(self) -> impl Iterator<Item = Vec3> {
+        // One iterator type for both layouts: the layout not in use is an empty slice.
         let (split, interleaved) = match self {
             Self::Split { positions, .. } => (positions, &[][..]),
             Self::Interleaved(v) => (&[][..], v),
