@@ -97,13 +97,11 @@ impl LoadedMesh {
             None => Self::built_in(shapes::default_model()),
         };
         // The soup goes into the mesh, not a copy of it, and its line table only lives while an
-        // error may need it: a large input is then held once (a 2000 × 2000 grid's soup and
-        // lines were 0.3 GB beside its mesh).
+        // error may need it: a large input is then held once, as its mesh.
         let Self { name, soup, lines } = loaded;
-        let located = Self { name, soup: PolygonSoup::default(), lines };
-        let mesh =
-            Mesh::build_with(soup, &BuildOptions::default()).map_err(|error| UserError(located.locate(&error)))?;
-        Ok((located.name, mesh))
+        let mesh = Mesh::build_with(soup, &BuildOptions::default())
+            .map_err(|error| UserError(locate(&name, lines.as_ref(), &error)))?;
+        Ok((name, mesh))
     }
 
     /// The built-in model.
@@ -113,7 +111,12 @@ impl LoadedMesh {
 
     /// `error` as one line: `FILE:LINE: rule`.
     pub(crate) fn locate(&self, error: &MeshError) -> String {
-        let line = self.lines.as_ref().and_then(|lines| lines.of_error(error));
-        IoError::Mesh { file: self.name.clone(), line, source: error.clone() }.to_string()
+        locate(&self.name, self.lines.as_ref(), error)
     }
+}
+
+/// `error` in the file `name` with the record lines `lines`, as one line: `FILE:LINE: rule`.
+fn locate(name: &str, lines: Option<&ObjLines>, error: &MeshError) -> String {
+    let line = lines.and_then(|lines| lines.of_error(error));
+    IoError::Mesh { file: name.to_string(), line, source: error.clone() }.to_string()
 }
