@@ -11,7 +11,7 @@ use crate::{FaceId, HalfEdgeId, Mesh, Sharpness, VertexId};
 /// half-edge and, in each face, visits the corners from the half-edge it entered by. It uses
 /// the connectivity alone, so two patches with the same [`signature`](Self::signature) list
 /// corresponding vertices at the same places, whatever the meshes and positions.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Patch {
     /// The patch's vertices, in canonical order; the face's own corners come first, starting
     /// at the origin of the start half-edge.
@@ -82,6 +82,42 @@ impl Mesh {
         ring
     }
 
+    /// The vertices within `radius` rings of faces of `centre` (counted as
+    /// [`face_rings`](Self::face_rings) counts them), ascending: marks over the whole mesh
+    /// instead of a map, for large centres (a refined level's every corner near a crease:
+    /// a map of hundreds of thousands of vertices rehashed as it grew).
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh, VertexId};
+    ///
+    /// let grid = Mesh::build(shapes::quad_grid(4, 4))?;
+    /// let near = grid.vertices_within(&[VertexId::new(12)], 1);
+    /// assert_eq!(near, [6, 7, 8, 11, 12, 13, 16, 17, 18].map(VertexId::new));
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
+    pub fn vertices_within(&self, centre: &[VertexId], radius: usize) -> Vec<VertexId> {
+        let mut marked = vec![false; self.vertex_count()];
+        let mut current: Vec<VertexId> =
+            centre.iter().copied().filter(|v| !std::mem::replace(&mut marked[v.index()], true)).collect();
+        for _ in 0..radius {
+            let mut next = Vec::new();
+            for &v in &current {
+                for f in self.vertex_faces(v) {
+                    for &w in self.face_vertices(f) {
+                        if !std::mem::replace(&mut marked[w.index()], true) {
+                            next.push(w);
+                        }
+                    }
+                }
+            }
+            if next.is_empty() {
+                break;
+            }
+            current = next;
+        }
+        marked.iter().enumerate().filter(|(_, m)| **m).map(|(v, _)| VertexId::new(v as u32)).collect()
+    }
+
     /// Whether every patch of `face` of radius at least 1 holds a semi-sharp feature: a
     /// semi-sharp vertex or interior edge on a face that touches one of `face`'s corners. Such
     /// a patch matches no stationary shape, and this answers it without walking the patch.
@@ -129,7 +165,27 @@ impl Mesh {
     /// # Ok::<(), subdiv_mesh::MeshError>(())
     /// ```
     pub fn patch(&self, start: HalfEdgeId, radius: usize) -> Patch {
-        self.walk_patch(start, radius, false)
+        let mut patch = Patch::default();
+        self.patch_into(start, radius, &mut patch);
+        patch
+    }
+
+    /// [`patch`](Self::patch) into `out`, reusing its allocations: for a search over many
+    /// rotations and faces, most of whose patches are looked up and dropped.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, FaceId, Mesh, Patch};
+    ///
+    /// let grid = Mesh::build(shapes::quad_grid(7, 7))?;
+    /// let mut reused = Patch::default();
+    /// for start in grid.face_half_edges(FaceId::new(24)) {
+    ///     grid.patch_into(start, 1, &mut reused);
+    ///     assert_eq!(reused, grid.patch(start, 1));
+    /// }
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
+    pub fn patch_into(&self, start: HalfEdgeId, radius: usize, out: &mut Patch) {
+        self.walk_patch(start, radius, false, out);
     }
 
     /// The patch of `start`'s face as its mirror image sees it: the same walk with every face
@@ -150,77 +206,157 @@ impl Mesh {
     /// # Ok::<(), subdiv_mesh::MeshError>(())
     /// ```
     pub fn mirrored_patch(&self, start: HalfEdgeId, radius: usize) -> Patch {
-        self.walk_patch(self.prev(start), radius, true)
+        let mut patch = Patch::default();
+        self.walk_patch(self.prev(start), radius, true, &mut patch);
+        patch
     }
 
     /// The walk of [`patch`](Self::patch); `mirrored` walks each face backwards, entering at
     /// the destination of the entry half-edge (see [`mirrored_patch`](Self::mirrored_patch)).
-    fn walk_patch(&self, start: HalfEdgeId, radius: usize, mirrored: bool) -> Patch {
-        // Patches are small: maps keyed by the few vertices they hold, not arrays over the mesh.
-        let start_face = self.face(start);
-        let ring = self.face_rings(self.face_vertices(start_face), radius);
-        // The patch's faces touch a vertex of ring < radius (the face itself when radius is 0).
-        let in_patch = |f: FaceId| {
-            f == start_face || self.face_vertices(f).iter().any(|v| ring.get(v).is_some_and(|&r| r < radius))
-        };
+    fn walk_patch(&self, start: HalfEdgeId, radius: usize, mirrored: bool, out: &mut Patch) {
+        WALK.with_borrow_mut(|scratch| scratch.walk(self, start, radius, mirrored, out));
+    }
+}
 
-        let mut place: HashMap<VertexId, u32> = HashMap::new();
-        let mut vertices = Vec::new();
-        let mut signature = Vec::new();
-        let mut walk_index: HashMap<FaceId, u32> = HashMap::new();
-        let mut queue = std::collections::VecDeque::from([start]);
+thread_local! {
+    /// [`Mesh::walk_patch`]'s marks, per thread (the walks of one level's faces run in
+    /// parallel).
+    static WALK: std::cell::RefCell<WalkScratch> = std::cell::RefCell::default();
+}
+
+/// Not a place or a walk index: a vertex or face the walk has not reached.
+const UNSEEN: u32 = u32::MAX;
+
+/// Marks over a mesh's vertices and faces for one walk at a time, every one [`UNSEEN`]
+/// between walks (each walk resets what it marked): a patch holds a few dozen vertices, and
+/// maps keyed by them cost more in hashing than the walk itself (the car's first
+/// tessellation spent 40 % of its time in the walks, most of it in their maps).
+#[derive(Debug, Default)]
+struct WalkScratch {
+    /// Per vertex: its ring (during the rings), then its place in the patch's vertices.
+    ring: Vec<u32>,
+    place: Vec<u32>,
+    /// Per face, its index in the walk.
+    walk_index: Vec<u32>,
+    ringed: Vec<VertexId>,
+    walked: Vec<(FaceId, HalfEdgeId)>,
+    sharp: Vec<u32>,
+}
+
+impl WalkScratch {
+    fn walk(&mut self, mesh: &Mesh, start: HalfEdgeId, radius: usize, mirrored: bool, out: &mut Patch) {
+        if self.ring.len() < mesh.vertex_count() {
+            self.ring.resize(mesh.vertex_count(), UNSEEN);
+            self.place.resize(mesh.vertex_count(), UNSEEN);
+        }
+        if self.walk_index.len() < mesh.face_count() {
+            self.walk_index.resize(mesh.face_count(), UNSEEN);
+        }
+        out.vertices.clear();
+        out.signature.clear();
+        self.walk_marked(mesh, start, radius, mirrored, out);
+        for v in self.ringed.drain(..) {
+            self.ring[v.index()] = UNSEEN;
+        }
+        for &v in &out.vertices {
+            self.place[v.index()] = UNSEEN;
+        }
+        for (f, _) in self.walked.drain(..) {
+            self.walk_index[f.index()] = UNSEEN;
+        }
+    }
+
+    /// The walk of [`Mesh::walk_patch`], leaving its marks for [`walk`](Self::walk) to reset.
+    fn walk_marked(&mut self, mesh: &Mesh, start: HalfEdgeId, radius: usize, mirrored: bool, out: &mut Patch) {
+        let start_face = mesh.face(start);
+        // The rings of faces around the face's corners, as `Mesh::face_rings` counts them.
+        for &v in mesh.face_vertices(start_face) {
+            self.ring[v.index()] = 0;
+            self.ringed.push(v);
+        }
+        let mut from = 0;
+        for r in 1..=radius as u32 {
+            let to = self.ringed.len();
+            for k in from..to {
+                let v = self.ringed[k];
+                for f in mesh.vertex_faces(v) {
+                    for &w in mesh.face_vertices(f) {
+                        if self.ring[w.index()] == UNSEEN {
+                            self.ring[w.index()] = r;
+                            self.ringed.push(w);
+                        }
+                    }
+                }
+            }
+            if self.ringed.len() == to {
+                break;
+            }
+            from = to;
+        }
+        let ring = &self.ring;
+        // The patch's faces touch a vertex of ring < radius (the face itself when radius is 0).
+        let in_patch =
+            |f: FaceId| f == start_face || mesh.face_vertices(f).iter().any(|v| ring[v.index()] < radius as u32);
+
+        let Patch { vertices, signature } = out;
         // (side number in walk order, class) of the sharp interior sides; boundary sides are
         // told by `ACROSS_BOUNDARY` (refinement makes them infinitely sharp anyway).
-        let mut sharp = Vec::new();
+        let sharp = &mut self.sharp;
+        sharp.clear();
         let mut side = 0u32;
-        walk_index.insert(start_face, 0);
-        while let Some(entry) = queue.pop_front() {
-            let size = self.face_size(self.face(entry));
+        self.walk_index[start_face.index()] = 0;
+        // The faces in the order the walk reaches them, with their entry half-edges: the
+        // walk's queue, breadth first.
+        self.walked.push((start_face, start));
+        let mut next = 0;
+        while let Some(&(_, entry)) = self.walked.get(next) {
+            next += 1;
+            let size = mesh.face_size(mesh.face(entry));
             signature.push(size as u32);
             let mut h = entry;
             for _ in 0..size {
-                let v = if mirrored { self.dest(h) } else { self.origin(h) };
-                let count = vertices.len() as u32;
-                let p = *place.entry(v).or_insert_with(|| {
+                let v = if mirrored { mesh.dest(h) } else { mesh.origin(h) };
+                let p = &mut self.place[v.index()];
+                if *p == UNSEEN {
+                    *p = vertices.len() as u32;
                     vertices.push(v);
-                    count
-                });
-                signature.push(p);
-                let class = sharpness_code(self.edge_sharpness(self.edge(h)));
-                if class != 0 && self.twin(h).is_some() {
+                }
+                signature.push(*p);
+                let class = sharpness_code(mesh.edge_sharpness(mesh.edge(h)));
+                if class != 0 && mesh.twin(h).is_some() {
                     sharp.extend([side, class]);
                 }
                 side += 1;
-                signature.push(match self.twin(h) {
+                signature.push(match mesh.twin(h) {
                     None => ACROSS_BOUNDARY,
-                    Some(t) if !in_patch(self.face(t)) => ACROSS_OUTSIDE,
+                    Some(t) if !in_patch(mesh.face(t)) => ACROSS_OUTSIDE,
                     Some(t) => {
-                        let count = walk_index.len() as u32;
-                        2 + *walk_index.entry(self.face(t)).or_insert_with(|| {
-                            queue.push_back(t);
-                            count
-                        })
+                        let index = &mut self.walk_index[mesh.face(t).index()];
+                        if *index == UNSEEN {
+                            *index = self.walked.len() as u32;
+                            self.walked.push((mesh.face(t), t));
+                        }
+                        2 + *index
                     }
                 });
-                h = if mirrored { self.prev(h) } else { self.next(h) };
+                h = if mirrored { mesh.prev(h) } else { mesh.next(h) };
             }
         }
-        for &v in &vertices {
-            signature.push(self.valence(v) as u32);
-            signature.push(u32::from(self.is_boundary_vertex(v)));
+        for &v in vertices.iter() {
+            signature.push(mesh.valence(v) as u32);
+            signature.push(u32::from(mesh.is_boundary_vertex(v)));
         }
         let corners = vertices.iter().enumerate().filter_map(|(p, &v)| {
-            let class = sharpness_code(self.vertex_sharpness(v));
+            let class = sharpness_code(mesh.vertex_sharpness(v));
             (class != 0).then_some([p as u32, class])
         });
-        let corners: Vec<[u32; 2]> = corners.collect();
-        if !sharp.is_empty() || !corners.is_empty() {
+        let mut corners = corners.peekable();
+        if !sharp.is_empty() || corners.peek().is_some() {
             signature.push(SHARP_FEATURES);
-            signature.extend(sharp);
+            signature.extend_from_slice(sharp);
             // Sides and vertices apart: a side count is never `SHARP_FEATURES`.
             signature.push(SHARP_FEATURES);
-            signature.extend(corners.into_iter().flatten());
+            signature.extend(corners.flatten());
         }
-        Patch { vertices, signature }
     }
 }

@@ -29,7 +29,7 @@ impl Mesh {
     /// rings of faces of theirs), with each vertex's fan completed where the faces found
     /// around it do not form one fan, so that the region is a manifold mesh: the part of the
     /// mesh whose refinement near `faces` equals the whole mesh's. Rings count as
-    /// [`face_rings`](Self::face_rings) does.
+    /// [`vertices_within`](Self::vertices_within) does.
     ///
     /// ```
     /// use subdiv_mesh::{shapes, FaceId, Mesh};
@@ -51,7 +51,7 @@ impl Mesh {
         corners.sort_unstable();
         corners.dedup();
         let mut inside = vec![false; self.face_count()];
-        for v in self.face_rings(&corners, rings).into_keys() {
+        for v in self.vertices_within(&corners, rings) {
             for f in self.vertex_faces(v) {
                 inside[f.index()] = true;
             }

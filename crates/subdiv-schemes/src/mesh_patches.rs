@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, Sharpness, VertexId};
+use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
 
 use crate::patch::{MAX_RADIUS, PatchMatrices, PatchType, SharpFeatures};
 use crate::{RefineOptions, Scheme, SchemeError};
@@ -80,9 +80,7 @@ impl MeshPatches {
             faces.into_iter().flat_map(|f| mesh.face_vertices(f).iter().copied()).collect();
         corners.sort_unstable();
         corners.dedup();
-        let mut near: Vec<VertexId> = mesh.face_rings(&corners, MAX_RADIUS).into_keys().collect();
-        near.sort_unstable();
-        Self::for_vertices(scheme, mesh, options, near)
+        Self::for_vertices(scheme, mesh, options, mesh.vertices_within(&corners, MAX_RADIUS))
     }
 
     fn for_vertices(
@@ -136,15 +134,27 @@ impl MeshPatches {
         if mesh.near_semi_sharp(face) {
             return None;
         }
-        mesh.face_half_edges(face).find_map(|start| self.at(mesh, start))
+        // One buffer for every rotation and radius tried: most walks are looked up and dropped.
+        let mut patch = Patch::default();
+        mesh.face_half_edges(face).find_map(|start| self.at_with(mesh, start, &mut patch))
     }
 
     /// The patch starting at `start`, if its shape is known.
     pub fn at(&self, mesh: &Mesh, start: HalfEdgeId) -> Option<FoundPatch> {
+        self.at_with(mesh, start, &mut Patch::default())
+    }
+
+    /// [`at`](Self::at), walking into `patch` (a buffer).
+    fn at_with(&self, mesh: &Mesh, start: HalfEdgeId, patch: &mut Patch) -> Option<FoundPatch> {
         self.lookup.iter().find_map(|(radius, shapes)| {
-            let patch = mesh.patch(start, *radius);
+            mesh.patch_into(start, *radius, patch);
             let &(table, shape) = shapes.get(&patch.signature)?;
-            Some(FoundPatch { start, vertices: patch.vertices, matrices: self.tables[table].clone(), shape })
+            Some(FoundPatch {
+                start,
+                vertices: std::mem::take(&mut patch.vertices),
+                matrices: self.tables[table].clone(),
+                shape,
+            })
         })
     }
 }
