@@ -1,6 +1,7 @@
 //! [`Mesh`]: the half-edge structure and its queries.
 
 use std::collections::BTreeMap;
+use std::sync::Arc;
 
 use glam::DVec3;
 use smallvec::SmallVec;
@@ -23,6 +24,19 @@ pub(crate) const NONE: u32 = u32::MAX;
 #[derive(Clone, Debug)]
 pub struct Mesh {
     positions: Vec<DVec3>,
+    /// Never changed after the build, and shared by clones: a copy of a mesh with other
+    /// sharpness (the boundary rule applied, as every evaluator's level 0 is) costs its tags,
+    /// not its connectivity (110 MB for a million quads).
+    links: Arc<Links>,
+    edge_sharpness: Vec<f64>,
+    vertex_sharpness: Vec<f64>,
+    hole: Vec<bool>,
+    tags: Tags,
+}
+
+/// A [`Mesh`]'s connectivity (see its docs for the numbering).
+#[derive(Debug)]
+struct Links {
     face_offsets: Vec<u32>,
     he_origin: Vec<VertexId>,
     he_face: Vec<FaceId>,
@@ -33,10 +47,6 @@ pub struct Mesh {
     /// vertex, its lowest outgoing half-edge; `NONE` for an isolated vertex.
     vertex_he: Vec<u32>,
     valence: Vec<u32>,
-    edge_sharpness: Vec<f64>,
-    vertex_sharpness: Vec<f64>,
-    hole: Vec<bool>,
-    tags: Tags,
 }
 
 /// The valences that count as regular for [`Mesh::is_extraordinary`]: one for interior vertices
@@ -98,14 +108,7 @@ impl Mesh {
         let ResolvedTags { edge_sharpness, vertex_sharpness, holes: hole } = resolved;
         Self {
             positions,
-            face_offsets,
-            he_origin,
-            he_face,
-            he_twin,
-            he_edge,
-            edge_he,
-            vertex_he,
-            valence,
+            links: Arc::new(Links { face_offsets, he_origin, he_face, he_twin, he_edge, edge_he, vertex_he, valence }),
             edge_sharpness,
             vertex_sharpness,
             hole,
@@ -122,22 +125,22 @@ impl Mesh {
 
     /// Number of faces.
     pub fn face_count(&self) -> usize {
-        self.face_offsets.len() - 1
+        self.links.face_offsets.len() - 1
     }
 
     /// Number of undirected edges.
     pub fn edge_count(&self) -> usize {
-        self.edge_he.len()
+        self.links.edge_he.len()
     }
 
     /// Number of half-edges (face corners).
     pub fn half_edge_count(&self) -> usize {
-        self.he_origin.len()
+        self.links.he_origin.len()
     }
 
     /// Number of boundary edges (edges with one face).
     pub fn boundary_edge_count(&self) -> usize {
-        self.he_twin.iter().filter(|&&t| t == NONE).count()
+        self.links.he_twin.iter().filter(|&&t| t == NONE).count()
     }
 
     /// All vertex ids.
@@ -233,24 +236,24 @@ impl Mesh {
 
     /// The vertices of `face`, in order.
     pub fn face_vertices(&self, face: FaceId) -> &[VertexId] {
-        &self.he_origin[self.face_range(face)]
+        &self.links.he_origin[self.face_range(face)]
     }
 
     /// Number of vertices (and edges) of `face`.
     pub fn face_size(&self, face: FaceId) -> usize {
         let f = face.index();
-        (self.face_offsets[f + 1] - self.face_offsets[f]) as usize
+        (self.links.face_offsets[f + 1] - self.links.face_offsets[f]) as usize
     }
 
     /// The faces in order, each as its vertex list.
     pub fn faces(&self) -> impl ExactSizeIterator<Item = &[VertexId]> + '_ {
-        self.face_offsets.windows(2).map(|w| &self.he_origin[w[0] as usize..w[1] as usize])
+        self.links.face_offsets.windows(2).map(|w| &self.links.he_origin[w[0] as usize..w[1] as usize])
     }
 
     /// The half-edges of `face`, in order; the first starts at the face's first vertex.
     pub fn face_half_edges(&self, face: FaceId) -> impl ExactSizeIterator<Item = HalfEdgeId> + use<> {
         let f = face.index();
-        (self.face_offsets[f]..self.face_offsets[f + 1]).map(HalfEdgeId::new)
+        (self.links.face_offsets[f]..self.links.face_offsets[f + 1]).map(HalfEdgeId::new)
     }
 
     /// The neighbours of `face` across each of its edges, in order (`None` across a boundary).
@@ -269,7 +272,7 @@ impl Mesh {
 
     fn face_range(&self, face: FaceId) -> std::ops::Range<usize> {
         let f = face.index();
-        self.face_offsets[f] as usize..self.face_offsets[f + 1] as usize
+        self.links.face_offsets[f] as usize..self.links.face_offsets[f + 1] as usize
     }
 
     // ---- half-edges ---------------------------------------------------------------------
@@ -277,7 +280,7 @@ impl Mesh {
     /// Where `h` starts.
     #[inline]
     pub fn origin(&self, h: HalfEdgeId) -> VertexId {
-        self.he_origin[h.index()]
+        self.links.he_origin[h.index()]
     }
 
     /// Where `h` ends.
@@ -289,7 +292,7 @@ impl Mesh {
     /// The face `h` belongs to.
     #[inline]
     pub fn face(&self, h: HalfEdgeId) -> FaceId {
-        self.he_face[h.index()]
+        self.links.he_face[h.index()]
     }
 
     /// The next half-edge around `h`'s face.
@@ -297,7 +300,7 @@ impl Mesh {
     pub fn next(&self, h: HalfEdgeId) -> HalfEdgeId {
         let f = self.face(h).index();
         let raw = h.raw();
-        HalfEdgeId::new(if raw + 1 == self.face_offsets[f + 1] { self.face_offsets[f] } else { raw + 1 })
+        HalfEdgeId::new(if raw + 1 == self.links.face_offsets[f + 1] { self.links.face_offsets[f] } else { raw + 1 })
     }
 
     /// The previous half-edge around `h`'s face.
@@ -305,27 +308,27 @@ impl Mesh {
     pub fn prev(&self, h: HalfEdgeId) -> HalfEdgeId {
         let f = self.face(h).index();
         let raw = h.raw();
-        HalfEdgeId::new(if raw == self.face_offsets[f] { self.face_offsets[f + 1] - 1 } else { raw - 1 })
+        HalfEdgeId::new(if raw == self.links.face_offsets[f] { self.links.face_offsets[f + 1] - 1 } else { raw - 1 })
     }
 
     /// The opposite half-edge of the neighbouring face, `None` on a boundary.
     #[inline]
     pub fn twin(&self, h: HalfEdgeId) -> Option<HalfEdgeId> {
-        let t = self.he_twin[h.index()];
+        let t = self.links.he_twin[h.index()];
         (t != NONE).then_some(HalfEdgeId::new(t))
     }
 
     /// The undirected edge of `h`.
     #[inline]
     pub fn edge(&self, h: HalfEdgeId) -> EdgeId {
-        self.he_edge[h.index()]
+        self.links.he_edge[h.index()]
     }
 
     // ---- edges --------------------------------------------------------------------------
 
     /// A half-edge of `edge`: the one of the lower-numbered face corner.
     pub fn edge_half_edge(&self, edge: EdgeId) -> HalfEdgeId {
-        self.edge_he[edge.index()]
+        self.links.edge_he[edge.index()]
     }
 
     /// The two end vertices of `edge`, in the direction of [`edge_half_edge`](Self::edge_half_edge).
@@ -365,27 +368,27 @@ impl Mesh {
     /// Number of edges at `vertex` (0 for an isolated vertex).
     #[inline]
     pub fn valence(&self, vertex: VertexId) -> usize {
-        self.valence[vertex.index()] as usize
+        self.links.valence[vertex.index()] as usize
     }
 
     /// Whether `vertex` is on a boundary edge.
     #[inline]
     pub fn is_boundary_vertex(&self, vertex: VertexId) -> bool {
-        let h = self.vertex_he[vertex.index()];
-        h != NONE && self.he_twin[h as usize] == NONE
+        let h = self.links.vertex_he[vertex.index()];
+        h != NONE && self.links.he_twin[h as usize] == NONE
     }
 
     /// Whether no face uses `vertex`.
     #[inline]
     pub fn is_isolated(&self, vertex: VertexId) -> bool {
-        self.vertex_he[vertex.index()] == NONE
+        self.links.vertex_he[vertex.index()] == NONE
     }
 
     /// Whether `vertex` is extraordinary under `regular`: an interior vertex whose valence is
     /// not `regular.interior`, or a boundary vertex whose valence is neither `regular.boundary`
     /// nor 2. Isolated vertices are not.
     pub fn is_extraordinary(&self, vertex: VertexId, regular: RegularValence) -> bool {
-        let valence = self.valence[vertex.index()];
+        let valence = self.links.valence[vertex.index()];
         if self.is_isolated(vertex) {
             false
         } else if self.is_boundary_vertex(vertex) {
@@ -413,7 +416,7 @@ impl Mesh {
     /// is its boundary edge (the one with no twin), so the fan is ordered from boundary to
     /// boundary.
     pub fn outgoing(&self, vertex: VertexId) -> OutgoingHalfEdges<'_> {
-        let start = self.vertex_he[vertex.index()];
+        let start = self.links.vertex_he[vertex.index()];
         OutgoingHalfEdges { mesh: self, start, current: start }
     }
 
@@ -469,7 +472,7 @@ impl Mesh {
         let mut seen = vec![false; self.half_edge_count()];
         let mut loops = Vec::new();
         for h in 0..self.half_edge_count() {
-            if self.he_twin[h] != NONE || seen[h] {
+            if self.links.he_twin[h] != NONE || seen[h] {
                 continue;
             }
             let mut current = h as u32;
@@ -479,7 +482,7 @@ impl Mesh {
             while !seen[current as usize] {
                 seen[current as usize] = true;
                 chain.push(HalfEdgeId::new(current));
-                current = self.vertex_he[self.dest(HalfEdgeId::new(current)).index()];
+                current = self.links.vertex_he[self.dest(HalfEdgeId::new(current)).index()];
             }
             loops.push(chain);
         }
@@ -566,7 +569,7 @@ impl Iterator for OutgoingHalfEdges<'_> {
             return None;
         }
         let h = HalfEdgeId::new(self.current);
-        let next = self.mesh.he_twin[self.mesh.prev(h).index()];
+        let next = self.mesh.links.he_twin[self.mesh.prev(h).index()];
         self.current = if next == self.start { NONE } else { next };
         Some(h)
     }

@@ -56,7 +56,7 @@ use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme, Split, Stencils};
 use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
-use super::topology::Topology;
+use super::topology::{Block, Topology};
 use crate::TessError;
 use crate::plan::{EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PlanBicubic, PlanBlock, PlanGeneral};
 use crate::quadtree::{check_bicubic, regular_grid};

@@ -32,8 +32,10 @@ pub(super) const BATCH: usize = 64;
 
 /// A piece of [`Evaluator::evaluate_into`]'s work.
 pub(super) enum Piece<'a, S> {
-    /// A bicubic face's dual grid.
-    Block { cv: &'a [u32; 16], rate: u32, out: S },
+    /// The dual grids of consecutive bicubic faces' blocks (contiguous in the vertex range):
+    /// one piece for many small blocks, not one each (a piece per block of a million-face
+    /// grid at rate 2 was a 96 MB list of pieces).
+    Blocks { blocks: &'a [Block], out: S },
     /// A typed face's cell points: its template over its cage points.
     Typed { template: &'a Template, cage: &'a [u32], out: S },
     /// Vertices `start..start + out.len()`: the patch grids' (all in the range), then each
@@ -131,8 +133,8 @@ impl Evaluator {
     /// patch grids, and the runs between them (general-route and pointwise bicubic vertices)
     /// cut to at most [`RUN`] vertices. Each vertex is computed alone, so the output does not
     /// depend on how the pieces are shared among threads.
-    pub(super) fn evaluate_into<S: Sink>(&self, topo: &Topology, parallel: bool, out: S) {
-        let mut pieces: Vec<Piece<'_, S>> = Vec::with_capacity(2 * topo.blocks.len() + 1);
+    pub(super) fn evaluate_into<'a, S: Sink>(&'a self, topo: &'a Topology, parallel: bool, out: S) {
+        let mut pieces: Vec<Piece<'a, S>> = Vec::new();
         let mut rest = out;
         let mut at = 0;
         let push_run = |rest: &mut S, at: &mut usize, end: usize, pieces: &mut Vec<Piece<'_, S>>| {
@@ -144,48 +146,57 @@ impl Evaluator {
                 *at += len;
             }
         };
+        // The bicubic blocks not yet pushed: `topo.blocks[group.0..group.1]`, vertices from `at`.
+        let mut group = (0, 0);
+        let mut grouped = 0;
+        let push_group = |rest: &mut S,
+                          at: &mut usize,
+                          group: &mut (usize, usize),
+                          grouped: &mut usize,
+                          pieces: &mut Vec<Piece<'a, S>>| {
+            if group.0 < group.1 {
+                let (piece, tail) = std::mem::replace(rest, S::empty()).split(*grouped);
+                *rest = tail;
+                pieces.push(Piece::Blocks { blocks: &topo.blocks[group.0..group.1], out: piece });
+                *at += *grouped;
+            }
+            *group = (group.1, group.1);
+            *grouped = 0;
+        };
         for (b, (block, &(first, last))) in topo.blocks.iter().zip(&self.block_grids).enumerate() {
-            let whole = self.block_templates[b].template().is_some()
-                || matches!(self.faces[block.face as usize], FacePlan::Bicubic { .. })
-                || first < last;
-            if !whole {
+            let template = self.block_templates[b].template();
+            let bicubic = template.is_none() && matches!(self.faces[block.face as usize], FacePlan::Bicubic { .. });
+            let len = block.len() as usize;
+            if bicubic && group.0 < group.1 && at + grouped == block.base as usize && grouped + len <= RUN {
+                group.1 = b + 1;
+                grouped += len;
+                continue;
+            }
+            push_group(&mut rest, &mut at, &mut group, &mut grouped, &mut pieces);
+            if !(template.is_some() || bicubic || first < last) {
                 continue;
             }
             push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
-            let len = block.len() as usize;
+            if bicubic {
+                (group, grouped) = ((b, b + 1), len);
+                continue;
+            }
             let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
             let start = at;
             (rest, at) = (tail, at + len);
-            // A general face with patch grids: one piece (its grids write anywhere in it).
-            let grids = &self.patch_grids[first as usize..last as usize];
-            pieces.push(self.block_piece(b, block.face, block.rate, piece).unwrap_or_else(|out| Piece::Run {
-                start,
-                out,
-                grids,
-            }));
+            pieces.push(match template {
+                Some(template) => {
+                    let ty = self.face_types[block.face as usize].expect("a typed face");
+                    let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
+                    Piece::Typed { template: &self.templates[template as usize], cage, out: piece }
+                }
+                // A general face with patch grids: one piece (its grids write anywhere in it).
+                None => Piece::Run { start, out: piece, grids: &self.patch_grids[first as usize..last as usize] },
+            });
         }
+        push_group(&mut rest, &mut at, &mut group, &mut grouped, &mut pieces);
         push_run(&mut rest, &mut at, topo.point_count() as usize, &mut pieces);
         self.run_pieces(pieces, parallel && topo.point_count() as usize >= PARALLEL_VERTICES);
-    }
-
-    /// Block `b` (of `face` at `rate`) as one piece if it is one (a typed face reading its
-    /// template, or a bicubic face), else its output back.
-    pub(super) fn block_piece<'a, S: Sink>(
-        &'a self,
-        b: usize,
-        face: u32,
-        rate: u32,
-        out: S,
-    ) -> Result<Piece<'a, S>, S> {
-        if let Some(template) = self.block_templates[b].template() {
-            let ty = self.face_types[face as usize].expect("a typed face");
-            let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
-            return Ok(Piece::Typed { template: &self.templates[template as usize], cage, out });
-        }
-        match &self.faces[face as usize] {
-            FacePlan::Bicubic { cv } => Ok(Piece::Block { cv, rate, out }),
-            _ => Err(out),
-        }
     }
 
     /// Evaluates `pieces`, on rayon's threads if `parallel`.
@@ -218,9 +229,16 @@ impl Evaluator {
     pub(super) fn evaluate_piece<S: Sink>(&self, piece: Piece<'_, S>, scratch: &mut Scratch) {
         let cage = &self.positions[0];
         match piece {
-            Piece::Block { cv, rate, mut out } => {
-                let basis = self.bases[rate as usize].as_deref().expect("prepared");
-                grid_block(cv, cage, basis, &mut out, &mut scratch.pending);
+            Piece::Blocks { blocks, mut out } => {
+                for block in blocks {
+                    let (mut piece, tail) = out.split(block.len() as usize);
+                    out = tail;
+                    let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else {
+                        unreachable!("a group of bicubic blocks")
+                    };
+                    let basis = self.bases[block.rate as usize].as_deref().expect("prepared");
+                    grid_block(cv, cage, basis, &mut piece, &mut scratch.pending);
+                }
             }
             Piece::Typed { template, cage: ids, mut out } => {
                 typed_block(template, ids, cage, &mut out, scratch);
