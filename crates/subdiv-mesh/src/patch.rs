@@ -61,25 +61,43 @@ impl Mesh {
     /// ```
     pub fn face_rings(&self, centre: &[VertexId], radius: usize) -> HashMap<VertexId, usize> {
         let mut ring: HashMap<VertexId, usize> = centre.iter().map(|&v| (v, 0)).collect();
-        let mut current = centre.to_vec();
+        let mut reached = centre.to_vec();
+        self.grow_face_rings(&mut reached, radius, |w, r| match ring.entry(w) {
+            hashbrown::hash_map::Entry::Vacant(e) => {
+                e.insert(r);
+                true
+            }
+            hashbrown::hash_map::Entry::Occupied(_) => false,
+        });
+        ring
+    }
+
+    /// The growth of [`face_rings`](Self::face_rings), with the caller's marks: `reached`
+    /// holds ring 0 (marked), and each vertex of the faces touching ring `r − 1` that
+    /// `mark(vertex, r)` newly marks is appended as ring `r`, up to `radius`.
+    fn grow_face_rings(
+        &self,
+        reached: &mut Vec<VertexId>,
+        radius: usize,
+        mut mark: impl FnMut(VertexId, usize) -> bool,
+    ) {
+        let mut from = 0;
         for r in 1..=radius {
-            let mut next = Vec::new();
-            for &v in &current {
-                for f in self.vertex_faces(v) {
+            let to = reached.len();
+            for k in from..to {
+                for f in self.vertex_faces(reached[k]) {
                     for &w in self.face_vertices(f) {
-                        ring.entry(w).or_insert_with(|| {
-                            next.push(w);
-                            r
-                        });
+                        if mark(w, r) {
+                            reached.push(w);
+                        }
                     }
                 }
             }
-            if next.is_empty() {
+            if reached.len() == to {
                 break;
             }
-            current = next;
+            from = to;
         }
-        ring
     }
 
     /// The vertices within `radius` rings of faces of `centre` (counted as
@@ -97,25 +115,11 @@ impl Mesh {
     /// ```
     pub fn vertices_within(&self, centre: &[VertexId], radius: usize) -> Vec<VertexId> {
         let mut marked = vec![false; self.vertex_count()];
-        let mut current: Vec<VertexId> =
+        let mut reached: Vec<VertexId> =
             centre.iter().copied().filter(|v| !std::mem::replace(&mut marked[v.index()], true)).collect();
-        for _ in 0..radius {
-            let mut next = Vec::new();
-            for &v in &current {
-                for f in self.vertex_faces(v) {
-                    for &w in self.face_vertices(f) {
-                        if !std::mem::replace(&mut marked[w.index()], true) {
-                            next.push(w);
-                        }
-                    }
-                }
-            }
-            if next.is_empty() {
-                break;
-            }
-            current = next;
-        }
-        marked.iter().enumerate().filter(|(_, m)| **m).map(|(v, _)| VertexId::new(v as u32)).collect()
+        self.grow_face_rings(&mut reached, radius, |w, _| !std::mem::replace(&mut marked[w.index()], true));
+        reached.sort_unstable();
+        reached
     }
 
     /// Whether every patch of `face` of radius at least 1 holds a semi-sharp feature: a
@@ -274,25 +278,14 @@ impl WalkScratch {
             self.ring[v.index()] = 0;
             self.ringed.push(v);
         }
-        let mut from = 0;
-        for r in 1..=radius as u32 {
-            let to = self.ringed.len();
-            for k in from..to {
-                let v = self.ringed[k];
-                for f in mesh.vertex_faces(v) {
-                    for &w in mesh.face_vertices(f) {
-                        if self.ring[w.index()] == UNSEEN {
-                            self.ring[w.index()] = r;
-                            self.ringed.push(w);
-                        }
-                    }
-                }
+        let ring = &mut self.ring;
+        mesh.grow_face_rings(&mut self.ringed, radius, |w, r| {
+            let seen = ring[w.index()] != UNSEEN;
+            if !seen {
+                ring[w.index()] = r as u32;
             }
-            if self.ringed.len() == to {
-                break;
-            }
-            from = to;
-        }
+            !seen
+        });
         let ring = &self.ring;
         // The patch's faces touch a vertex of ring < radius (the face itself when radius is 0).
         let in_patch =

@@ -55,6 +55,24 @@ pub(super) trait Sink: Send + Sized {
     fn put(&mut self, k: usize, p: DVec3, n: DVec3);
 }
 
+/// The part of [`Evaluator::evaluate_into`]'s output not yet cut into pieces: vertices from
+/// `at` on.
+struct Cut<S> {
+    rest: S,
+    at: usize,
+}
+
+impl<S: Sink> Cut<S> {
+    /// The next `len` vertices: their first vertex and their output.
+    fn take(&mut self, len: usize) -> (usize, S) {
+        let (piece, tail) = std::mem::replace(&mut self.rest, S::empty()).split(len);
+        self.rest = tail;
+        let start = self.at;
+        self.at += len;
+        (start, piece)
+    }
+}
+
 /// Interleaved f32: per vertex `px py pz nx ny nz`.
 pub(super) struct FlatSink<'a>(pub(super) &'a mut [f32]);
 
@@ -135,67 +153,57 @@ impl Evaluator {
     /// depend on how the pieces are shared among threads.
     pub(super) fn evaluate_into<'a, S: Sink>(&'a self, topo: &'a Topology, parallel: bool, out: S) {
         let mut pieces: Vec<Piece<'a, S>> = Vec::new();
-        let mut rest = out;
-        let mut at = 0;
-        let push_run = |rest: &mut S, at: &mut usize, end: usize, pieces: &mut Vec<Piece<'_, S>>| {
-            while *at < end {
-                let len = (end - *at).min(RUN);
-                let (piece, tail) = std::mem::replace(rest, S::empty()).split(len);
-                *rest = tail;
-                pieces.push(Piece::Run { start: *at, out: piece, grids: &[] });
-                *at += len;
+        let mut cut = Cut { rest: out, at: 0 };
+        let push_run = |cut: &mut Cut<S>, end: usize, pieces: &mut Vec<Piece<'a, S>>| {
+            while cut.at < end {
+                let (start, out) = cut.take((end - cut.at).min(RUN));
+                pieces.push(Piece::Run { start, out, grids: &[] });
             }
         };
-        // The bicubic blocks not yet pushed: `topo.blocks[group.0..group.1]`, vertices from `at`.
-        let mut group = (0, 0);
-        let mut grouped = 0;
-        let push_group = |rest: &mut S,
-                          at: &mut usize,
-                          group: &mut (usize, usize),
-                          grouped: &mut usize,
-                          pieces: &mut Vec<Piece<'a, S>>| {
-            if group.0 < group.1 {
-                let (piece, tail) = std::mem::replace(rest, S::empty()).split(*grouped);
-                *rest = tail;
-                pieces.push(Piece::Blocks { blocks: &topo.blocks[group.0..group.1], out: piece });
-                *at += *grouped;
+        // Consecutive bicubic blocks not pushed yet (their vertices start at `cut.at`).
+        let mut group = 0..0;
+        let push_group = |cut: &mut Cut<S>, group: &std::ops::Range<usize>, pieces: &mut Vec<Piece<'a, S>>| {
+            if let Some(last) = topo.blocks[group.clone()].last() {
+                let (_, out) = cut.take((last.base + last.len()) as usize - cut.at);
+                pieces.push(Piece::Blocks { blocks: &topo.blocks[group.clone()], out });
             }
-            *group = (group.1, group.1);
-            *grouped = 0;
         };
         for (b, (block, &(first, last))) in topo.blocks.iter().zip(&self.block_grids).enumerate() {
             let template = self.block_templates[b].template();
             let bicubic = template.is_none() && matches!(self.faces[block.face as usize], FacePlan::Bicubic { .. });
             let len = block.len() as usize;
-            if bicubic && group.0 < group.1 && at + grouped == block.base as usize && grouped + len <= RUN {
-                group.1 = b + 1;
-                grouped += len;
-                continue;
+            if bicubic && !group.is_empty() {
+                let end = (block.base + block.len()) as usize;
+                if topo.blocks[group.end - 1].base + topo.blocks[group.end - 1].len() == block.base
+                    && end - cut.at <= RUN
+                {
+                    group.end = b + 1;
+                    continue;
+                }
             }
-            push_group(&mut rest, &mut at, &mut group, &mut grouped, &mut pieces);
+            push_group(&mut cut, &group, &mut pieces);
+            group = b..b;
             if !(template.is_some() || bicubic || first < last) {
                 continue;
             }
-            push_run(&mut rest, &mut at, block.base as usize, &mut pieces);
+            push_run(&mut cut, block.base as usize, &mut pieces);
             if bicubic {
-                (group, grouped) = ((b, b + 1), len);
+                group = b..b + 1;
                 continue;
             }
-            let (piece, tail) = std::mem::replace(&mut rest, S::empty()).split(len);
-            let start = at;
-            (rest, at) = (tail, at + len);
+            let (start, out) = cut.take(len);
             pieces.push(match template {
                 Some(template) => {
                     let ty = self.face_types[block.face as usize].expect("a typed face");
                     let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
-                    Piece::Typed { template: &self.templates[template as usize], cage, out: piece }
+                    Piece::Typed { template: &self.templates[template as usize], cage, out }
                 }
                 // A general face with patch grids: one piece (its grids write anywhere in it).
-                None => Piece::Run { start, out: piece, grids: &self.patch_grids[first as usize..last as usize] },
+                None => Piece::Run { start, out, grids: &self.patch_grids[first as usize..last as usize] },
             });
         }
-        push_group(&mut rest, &mut at, &mut group, &mut grouped, &mut pieces);
-        push_run(&mut rest, &mut at, topo.point_count() as usize, &mut pieces);
+        push_group(&mut cut, &group, &mut pieces);
+        push_run(&mut cut, topo.point_count() as usize, &mut pieces);
         self.run_pieces(pieces, parallel && topo.point_count() as usize >= PARALLEL_VERTICES);
     }
 
