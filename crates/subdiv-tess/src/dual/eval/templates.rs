@@ -47,7 +47,7 @@ pub(super) const MAX_TYPED_POINTS: usize = 64;
 /// faces (next to semi-sharp features) take records: a face resolved on level `l` has up to
 /// `4^l` patches, and its cage rows sum `25^l` paths per point (the bishop's sharpness 6 made
 /// that minutes).
-const MAX_TYPED_LEVEL: usize = 2;
+pub(super) const MAX_TYPED_LEVEL: usize = 2;
 
 /// A template's key: the face type (or, with `Evaluator::copy_faces` off, the face, marked by
 /// the flag) and the rate.
@@ -77,13 +77,16 @@ impl Evaluator {
         let mut types: HashMap<Vec<u64>, u32> = HashMap::new();
         let (mut signature, mut patches) = (Vec::new(), Vec::new());
         let (mut rows, mut starts, mut columns, mut order) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut support = Vec::new();
         for f in mesh.face_ids() {
             if !matches!(self.faces[f.index()], FacePlan::General) {
                 continue;
             }
             signature.clear();
             patches.clear();
-            if !self.face_type(0, f, &mut signature, &mut patches) {
+            if !self.face_type(0, f, &mut signature, &mut patches)
+                || self.cage_support(&patches, &mut support) > MAX_TYPED_POINTS
+            {
                 continue;
             }
             self.cage_rows(&patches, &mut rows, &mut starts);
@@ -122,6 +125,38 @@ impl Evaluator {
                 cage: (cage, self.face_cage.len() as u32),
             });
         }
+    }
+
+    /// The number of cage points the control points of `patches` depend on (those that
+    /// [`Self::cage_rows`] names, in `support[0]`, ascending): the support found level by level,
+    /// each level's points once, in time linear in the stencils' sizes, where the cage rows
+    /// follow every path. A face next to a vertex of valence `N` depends on its `2N + 1` ring,
+    /// and its cage rows cost `O(N)` per control point: a valence-1000 disk spent 385 s on rows
+    /// that the limit then refused.
+    pub(super) fn cage_support(&self, patches: &[FacePatch], support: &mut Vec<Vec<u32>>) -> usize {
+        let stencils = self.levels.stencils();
+        let deepest = patches.iter().map(|p| p.patch.0 as usize).max().unwrap_or(0);
+        support.iter_mut().for_each(Vec::clear);
+        support.resize_with(support.len().max(deepest + 1), Vec::new);
+        for &FacePatch { patch: (level, face), .. } in patches {
+            let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face)) else {
+                unreachable!("face_type lists patches")
+            };
+            support[level as usize].extend(patch.vertices.iter().map(|v| v.index() as u32));
+        }
+        for level in (1..=deepest).rev() {
+            let (coarser, finer) = support.split_at_mut(level);
+            let points = &mut finer[0];
+            points.sort_unstable();
+            points.dedup();
+            for &v in points.iter() {
+                coarser[level - 1].extend(stencils[level - 1].row(v as usize).map(|(parent, _)| parent as u32));
+            }
+        }
+        let cage = &mut support[0];
+        cage.sort_unstable();
+        cage.dedup();
+        cage.len()
     }
 
     /// The control points of `patches` (in order, each patch's in its order) as combinations

@@ -205,3 +205,41 @@ fn refined_cage_matches_the_patch_levels() {
         }
     }
 }
+
+/// The typed faces' support, found level by level, is the set of cage points their cage rows
+/// name (found path by path), on faces resolved on levels 1 and 2 (typed faces are on the
+/// general route, which level-0 patches of these meshes are not): a torus, an open grid, a
+/// pole of valence 7 with its open rim, a creased cube.
+#[test]
+fn cage_support_is_what_the_cage_rows_name() {
+    let mut creased = Mesh::build(shapes::cube()).unwrap();
+    let edge = creased.edges().next().unwrap();
+    creased.set_edge_sharpness(edge, 2.5);
+    let meshes = [
+        Mesh::build(shapes::quad_torus(4, 3)).unwrap(),
+        Mesh::build(shapes::quad_grid(3, 2)).unwrap(),
+        Mesh::build(shapes::pole(7)).unwrap(),
+        creased,
+    ];
+    let (mut signature, mut patches, mut support) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut rows, mut starts) = (Vec::new(), Vec::new());
+    let mut levels_seen = [0usize; MAX_TYPED_LEVEL + 1];
+    for mesh in &meshes {
+        let ev = Evaluator::new(Builtin::CatmullClark.scheme(), mesh).unwrap();
+        for f in mesh.face_ids() {
+            signature.clear();
+            patches.clear();
+            if !ev.face_type(0, f, &mut signature, &mut patches) {
+                continue;
+            }
+            ev.cage_rows(&patches, &mut rows, &mut starts);
+            let mut named: Vec<u32> = rows.iter().map(|&(x, _)| x).collect();
+            named.sort_unstable();
+            named.dedup();
+            assert_eq!(ev.cage_support(&patches, &mut support), named.len(), "{f}");
+            assert_eq!(support[0], named, "{f}");
+            levels_seen[patches.iter().map(|p| p.patch.0 as usize).max().unwrap()] += 1;
+        }
+    }
+    assert!(levels_seen[1] > 0 && levels_seen[2] > 0, "faces resolved on levels 1 and 2: {levels_seen:?}");
+}
