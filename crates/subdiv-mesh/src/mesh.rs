@@ -295,6 +295,23 @@ impl Mesh {
         self.links.he_face[h.index()]
     }
 
+    /// The position of `h` in its face: `k` where `h` is the `k`-th of
+    /// [`face_half_edges`](Self::face_half_edges) (the corner at its origin).
+    ///
+    /// ```
+    /// use subdiv_mesh::{Mesh, shapes};
+    ///
+    /// let cube = Mesh::build(shapes::cube()).unwrap();
+    /// let face = cube.face_ids().nth(2).unwrap();
+    /// for (k, h) in cube.face_half_edges(face).enumerate() {
+    ///     assert_eq!(cube.corner(h), k);
+    /// }
+    /// ```
+    #[inline]
+    pub fn corner(&self, h: HalfEdgeId) -> usize {
+        (h.raw() - self.links.face_offsets[self.face(h).index()]) as usize
+    }
+
     /// The next half-edge around `h`'s face.
     #[inline]
     pub fn next(&self, h: HalfEdgeId) -> HalfEdgeId {

@@ -165,7 +165,7 @@ pub(crate) fn open_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     let limit = |v: VertexId| -> DVec3 {
         let h = mesh.outgoing(v).find(|&h| !mesh.is_hole(mesh.face(h))).unwrap();
         let f = mesh.face(h);
-        let c = mesh.face_half_edges(f).position(|x| x == h).unwrap();
+        let c = mesh.corner(h);
         let domain = evaluator.domain(f).unwrap();
         let p = match domain {
             subdiv_stencil::FaceDomain::Quad => [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][c],

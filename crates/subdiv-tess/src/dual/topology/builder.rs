@@ -1,6 +1,8 @@
 //! The topology's builder: each face's dual grid, the strips along edges and spokes, the
 //! polygons and rings around vertices, and the border points.
 
+use hashbrown::HashMap;
+
 use super::*;
 
 impl RingCorner {
@@ -65,18 +67,18 @@ pub(crate) struct Builder<'a> {
 }
 
 /// A [`Builder`]'s buffers between calls (kept by the tessellator, so that a call allocates
-/// nothing): the buffers of one mesh (`corner` is computed when its length is not the mesh's).
+/// nothing).
 #[derive(Debug, Default)]
 pub(crate) struct BuilderBuffers {
     faces: Vec<Option<FaceCells>>,
-    /// Per half-edge: its corner number in its face.
-    corner: Vec<u32>,
-    /// Per half-edge on a border: its border points nearest its origin and nearest its
-    /// destination (an infinitely sharp edge's two half-edges share their points).
-    border: Vec<(u32, u32)>,
+    /// Per half-edge on a border (by number): its border points nearest its origin and
+    /// nearest its destination (an infinitely sharp edge's two half-edges share their points).
+    /// Maps, not arrays per half-edge: most half-edges are on no border, and the arrays were
+    /// 80 MB of a million-face grid's peak.
+    border: HashMap<u32, (u32, u32)>,
     /// Per half-edge on the second side of an infinitely sharp edge: the extra normals of its
     /// border points nearest its origin and nearest its destination (that side's normals).
-    border_extra: Vec<Option<(u32, u32)>>,
+    border_extra: HashMap<u32, (u32, u32)>,
     /// The extra normals' sites, in order (appended to the topology's sites at the end).
     extra_sites: Vec<Site>,
     row: Vec<RowPoint>,
@@ -98,17 +100,8 @@ impl<'a> Builder<'a> {
         Self::with_buffers(mesh, triangle, quads, BuilderBuffers::default())
     }
 
-    /// A builder on the buffers of an earlier one of `mesh` ([`into_buffers`](Self::into_buffers)).
-    pub(crate) fn with_buffers(mesh: &'a Mesh, triangle: bool, quads: bool, mut buf: BuilderBuffers) -> Self {
-        if buf.corner.len() != mesh.half_edge_count() {
-            buf.corner.clear();
-            buf.corner.resize(mesh.half_edge_count(), 0);
-            for f in mesh.face_ids() {
-                for (k, h) in mesh.face_half_edges(f).enumerate() {
-                    buf.corner[h.index()] = k as u32;
-                }
-            }
-        }
+    /// A builder on the buffers of an earlier one ([`into_buffers`](Self::into_buffers)).
+    pub(crate) fn with_buffers(mesh: &'a Mesh, triangle: bool, quads: bool, buf: BuilderBuffers) -> Self {
         Self { mesh, triangle, quads, out: Topology::default(), buf }
     }
 
@@ -150,9 +143,7 @@ impl<'a> Builder<'a> {
         o.polygon_faces.clear();
         self.buf.faces.clear();
         self.buf.border.clear();
-        self.buf.border.resize(self.mesh.half_edge_count(), (u32::MAX, 0));
         self.buf.border_extra.clear();
-        self.buf.border_extra.resize(self.mesh.half_edge_count(), None);
         self.buf.extra_sites.clear();
         for f in 0..domains.len() {
             self.face(f, domains[f], rates[f]);
@@ -497,6 +488,12 @@ impl<'a> Builder<'a> {
     }
 
     /// Whether `h`'s edge is infinitely sharp (a crease of the limit surface).
+    /// The border points of border half-edge `h` nearest its origin and its destination
+    /// (made by [`edge`](Self::edge) before they are read).
+    fn border_points(&self, h: HalfEdgeId) -> (u32, u32) {
+        self.buf.border.get(&h.raw()).copied().unwrap_or((u32::MAX, 0))
+    }
+
     fn is_sharp(&self, h: HalfEdgeId) -> bool {
         self.mesh.edge_sharpness(self.mesh.edge(h)) >= subdiv_mesh::Tags::INFINITELY_SHARP
     }
@@ -505,7 +502,7 @@ impl<'a> Builder<'a> {
     /// face's row, or against new border points.
     pub(super) fn edge(&mut self, h: HalfEdgeId) {
         let f = self.mesh.face(h).index();
-        let c = self.buf.corner[h.index()] as usize;
+        let c = self.mesh.corner(h);
         let border = self.is_border(h);
         let twin = self.mesh.twin(h).filter(|_| !border);
         // Each interior edge once, from its lower half-edge.
@@ -517,7 +514,7 @@ impl<'a> Builder<'a> {
             // Between two blocks of one rate, the strip is a ladder of quads (the other row
             // reversed, as below).
             if let (Some((a, da, m)), Some((b, db, n))) =
-                (self.block_side(f, c), self.block_side(g, self.buf.corner[t.index()] as usize))
+                (self.block_side(f, c), self.block_side(g, self.mesh.corner(t)))
                 && m == n
             {
                 let (b, db) = (b.wrapping_add((m - 1).wrapping_mul(db)), db.wrapping_neg());
@@ -530,7 +527,7 @@ impl<'a> Builder<'a> {
         self.side_row(f, c, &mut row);
         if let Some(t) = twin {
             let g = self.mesh.face(t).index();
-            self.side_row(g, self.buf.corner[t.index()] as usize, &mut other);
+            self.side_row(g, self.mesh.corner(t), &mut other);
             other.reverse();
             for p in &mut other {
                 p.num = p.den - p.num;
@@ -540,9 +537,9 @@ impl<'a> Builder<'a> {
             // The second side of an infinitely sharp edge: against the first side's points,
             // so that both sides share them (welded, watertight).
             let g = self.mesh.face(t).index();
-            self.side_row(g, self.buf.corner[t.index()] as usize, &mut other);
+            self.side_row(g, self.mesh.corner(t), &mut other);
             other.retain(|p| p.near);
-            let (first, _) = self.buf.border[t.index()];
+            let (first, _) = self.border_points(t);
             for (k, p) in other.iter_mut().enumerate() {
                 p.vertex = first + k as u32;
             }
@@ -553,10 +550,10 @@ impl<'a> Builder<'a> {
                 let point = self.on_side(f, c, p.num, p.den);
                 p.extra = Some(self.push_extra(p.vertex, f, point));
             }
-            let (near_dest, near_origin) = self.buf.border[t.index()];
-            self.buf.border[h.index()] = (near_origin, near_dest);
-            if let (Some(a), Some(b)) = (other.first(), other.last()) {
-                self.buf.border_extra[h.index()] = a.extra.zip(b.extra);
+            let (near_dest, near_origin) = self.border_points(t);
+            self.buf.border.insert(h.raw(), (near_origin, near_dest));
+            if let Some(extra) = other.first().zip(other.last()).and_then(|(a, b)| a.extra.zip(b.extra)) {
+                self.buf.border_extra.insert(h.raw(), extra);
             }
             self.strip(&row, &other, f as u32);
         } else {
@@ -567,7 +564,7 @@ impl<'a> Builder<'a> {
                 let vertex = self.push_site(f, point);
                 other.push(RowPoint { vertex, num: p.num, den: p.den, near: true, extra: None });
             }
-            self.buf.border[h.index()] = (first, first + (other.len() as u32).max(1) - 1);
+            self.buf.border.insert(h.raw(), (first, first + (other.len() as u32).max(1) - 1));
             self.strip(&row, &other, f as u32);
         }
         (self.buf.row, self.buf.other) = (row, other);
@@ -634,19 +631,19 @@ impl<'a> Builder<'a> {
             corners.clear();
             let f0 = mesh.face(start).index();
             if !closed {
-                ring.push(self.buf.border[start.index()].0);
+                ring.push(self.border_points(start).0);
             }
             let mut h = start;
             // The run's last half-edge (into `v`, on its last border).
             let mut end = start;
             loop {
                 let f = mesh.face(h).index();
-                ring.push(self.corner_vertex(f, self.buf.corner[h.index()] as usize));
-                corners.push(RingCorner::Vertex { face: f as u32, corner: self.buf.corner[h.index()] });
+                ring.push(self.corner_vertex(f, self.mesh.corner(h)));
+                corners.push(RingCorner::Vertex { face: f as u32, corner: self.mesh.corner(h) as u32 });
                 let p = mesh.prev(h);
                 if self.is_border(p) {
                     if !closed {
-                        ring.push(self.buf.border[p.index()].1);
+                        ring.push(self.border_points(p).1);
                     }
                     end = p;
                     break;
@@ -661,14 +658,14 @@ impl<'a> Builder<'a> {
             let depth = self.buf.ring_vertices.get(v.index()).copied().unwrap_or(0);
             let regular = if self.triangle { 6 } else { 4 };
             if closed && depth > 0 && ring.len() >= 3 && ring.len() != regular {
-                let point = self.corner_point(f0, self.buf.corner[start.index()] as usize);
+                let point = self.corner_point(f0, self.mesh.corner(start));
                 self.rings(&corners, &ring, depth, (f0, point));
                 continue;
             }
             // Closed rings of 3 (and 4 under a quad split) are polygons of their own; rings of
             // fewer than 3 close nothing.
             let fan = !closed || (ring.len() >= 3 && (self.triangle || ring.len() >= 5));
-            let point = self.corner_point(f0, self.buf.corner[start.index()] as usize);
+            let point = self.corner_point(f0, self.mesh.corner(start));
             // The limit point is made by the first run; each further run (another smooth
             // sector, between infinitely sharp edges) takes its own normal there.
             let centre_corner = match centre {
@@ -689,10 +686,10 @@ impl<'a> Builder<'a> {
                 for k in 0..last {
                     let mut t = [c, Corner::from(ring[k]), Corner::from(ring[k + 1])];
                     if k == 0 {
-                        t[1].extra = self.buf.border_extra[start.index()].map(|e| e.0);
+                        t[1].extra = self.buf.border_extra.get(&start.raw()).map(|e| e.0);
                     }
                     if k + 1 == last {
-                        t[2].extra = self.buf.border_extra[end.index()].map(|e| e.1);
+                        t[2].extra = self.buf.border_extra.get(&end.raw()).map(|e| e.1);
                     }
                     self.triangle_at(t, f0 as u32);
                 }
