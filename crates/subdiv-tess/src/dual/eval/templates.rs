@@ -103,9 +103,8 @@ impl Evaluator {
                 order.push((at, end));
                 at = end;
             }
-            if order.len() > MAX_TYPED_POINTS {
-                continue;
-            }
+            // The support counted above is these points.
+            debug_assert!(order.len() <= MAX_TYPED_POINTS);
             let column = |&(a, b): &(usize, usize)| columns[a..b].iter().map(|c| (c.1, c.2));
             order.sort_unstable_by(|a, b| column(a).cmp(column(b)).then(columns[a.0].0.cmp(&columns[b.0].0)));
             signature.extend([5, order.len() as u64]);
@@ -127,6 +126,15 @@ impl Evaluator {
         }
     }
 
+    /// The patch of a [`FacePatch`] that [`Self::face_type`] listed.
+    fn listed_patch(&self, p: &FacePatch) -> &subdiv_schemes::FoundPatch {
+        let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(p.patch.0 as usize, FaceId::new(p.patch.1))
+        else {
+            unreachable!("face_type lists patches")
+        };
+        patch
+    }
+
     /// The number of cage points the control points of `patches` depend on (those that
     /// [`Self::cage_rows`] names, in `support[0]`, ascending): the support found level by level,
     /// each level's points once, in time linear in the stencils' sizes, where the cage rows
@@ -138,11 +146,8 @@ impl Evaluator {
         let deepest = patches.iter().map(|p| p.patch.0 as usize).max().unwrap_or(0);
         support.iter_mut().for_each(Vec::clear);
         support.resize_with(support.len().max(deepest + 1), Vec::new);
-        for &FacePatch { patch: (level, face), .. } in patches {
-            let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face)) else {
-                unreachable!("face_type lists patches")
-            };
-            support[level as usize].extend(patch.vertices.iter().map(|v| v.index() as u32));
+        for p in patches {
+            support[p.patch.0 as usize].extend(self.listed_patch(p).vertices.iter().map(|v| v.index() as u32));
         }
         for level in (1..=deepest).rev() {
             let (coarser, finer) = support.split_at_mut(level);
@@ -179,10 +184,8 @@ impl Evaluator {
         starts.clear();
         starts.push(0);
         let mut terms = Vec::new();
-        for &FacePatch { patch: (level, face), .. } in patches {
-            let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(level as usize, FaceId::new(face)) else {
-                unreachable!("face_type lists patches")
-            };
+        for p in patches {
+            let (level, patch) = (p.patch.0, self.listed_patch(p));
             for v in &patch.vertices {
                 terms.clear();
                 expand(self.levels.stencils(), level as usize, v.index(), 1.0, &mut terms);

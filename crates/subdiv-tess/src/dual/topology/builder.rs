@@ -66,19 +66,24 @@ pub(crate) struct Builder<'a> {
     buf: BuilderBuffers,
 }
 
+/// A border half-edge's border points nearest its origin and nearest its destination (an
+/// infinitely sharp edge's two half-edges share their points) and, on the second side of such
+/// an edge, the extra normals of those two points (that side's normals).
+#[derive(Clone, Copy, Debug)]
+struct Border {
+    points: (u32, u32),
+    extra: Option<(u32, u32)>,
+}
+
 /// A [`Builder`]'s buffers between calls (kept by the tessellator, so that a call allocates
 /// nothing).
 #[derive(Debug, Default)]
 pub(crate) struct BuilderBuffers {
     faces: Vec<Option<FaceCells>>,
-    /// Per half-edge on a border (by number): its border points nearest its origin and
-    /// nearest its destination (an infinitely sharp edge's two half-edges share their points).
-    /// Maps, not arrays per half-edge: most half-edges are on no border, and the arrays were
-    /// 80 MB of a million-face grid's peak.
-    border: HashMap<u32, (u32, u32)>,
-    /// Per half-edge on the second side of an infinitely sharp edge: the extra normals of its
-    /// border points nearest its origin and nearest its destination (that side's normals).
-    border_extra: HashMap<u32, (u32, u32)>,
+    /// Per half-edge on a border (by number), its [`Border`]: a map, not an array per
+    /// half-edge, since most half-edges are on no border (the arrays were 80 MB of a
+    /// million-face grid's peak).
+    border: HashMap<u32, Border>,
     /// The extra normals' sites, in order (appended to the topology's sites at the end).
     extra_sites: Vec<Site>,
     row: Vec<RowPoint>,
@@ -143,7 +148,6 @@ impl<'a> Builder<'a> {
         o.polygon_faces.clear();
         self.buf.faces.clear();
         self.buf.border.clear();
-        self.buf.border_extra.clear();
         self.buf.extra_sites.clear();
         for f in 0..domains.len() {
             self.face(f, domains[f], rates[f]);
@@ -487,13 +491,12 @@ impl<'a> Builder<'a> {
         self.mesh.twin(h).filter(|&t| self.buf.faces[self.mesh.face(t).index()].is_some())
     }
 
-    /// Whether `h`'s edge is infinitely sharp (a crease of the limit surface).
-    /// The border points of border half-edge `h` nearest its origin and its destination
-    /// (made by [`edge`](Self::edge) before they are read).
-    fn border_points(&self, h: HalfEdgeId) -> (u32, u32) {
-        self.buf.border.get(&h.raw()).copied().unwrap_or((u32::MAX, 0))
+    /// Border half-edge `h`'s [`Border`] (made by [`edge`](Self::edge) before it is read).
+    fn border(&self, h: HalfEdgeId) -> Border {
+        self.buf.border.get(&h.raw()).copied().unwrap_or(Border { points: (u32::MAX, 0), extra: None })
     }
 
+    /// Whether `h`'s edge is infinitely sharp (a crease of the limit surface).
     fn is_sharp(&self, h: HalfEdgeId) -> bool {
         self.mesh.edge_sharpness(self.mesh.edge(h)) >= subdiv_mesh::Tags::INFINITELY_SHARP
     }
@@ -539,7 +542,7 @@ impl<'a> Builder<'a> {
             let g = self.mesh.face(t).index();
             self.side_row(g, self.mesh.corner(t), &mut other);
             other.retain(|p| p.near);
-            let (first, _) = self.border_points(t);
+            let (first, _) = self.border(t).points;
             for (k, p) in other.iter_mut().enumerate() {
                 p.vertex = first + k as u32;
             }
@@ -550,11 +553,9 @@ impl<'a> Builder<'a> {
                 let point = self.on_side(f, c, p.num, p.den);
                 p.extra = Some(self.push_extra(p.vertex, f, point));
             }
-            let (near_dest, near_origin) = self.border_points(t);
-            self.buf.border.insert(h.raw(), (near_origin, near_dest));
-            if let Some(extra) = other.first().zip(other.last()).and_then(|(a, b)| a.extra.zip(b.extra)) {
-                self.buf.border_extra.insert(h.raw(), extra);
-            }
+            let (near_dest, near_origin) = self.border(t).points;
+            let extra = other.first().zip(other.last()).and_then(|(a, b)| a.extra.zip(b.extra));
+            self.buf.border.insert(h.raw(), Border { points: (near_origin, near_dest), extra });
             self.strip(&row, &other, f as u32);
         } else {
             other.clear();
@@ -564,7 +565,9 @@ impl<'a> Builder<'a> {
                 let vertex = self.push_site(f, point);
                 other.push(RowPoint { vertex, num: p.num, den: p.den, near: true, extra: None });
             }
-            self.buf.border.insert(h.raw(), (first, first + (other.len() as u32).max(1) - 1));
+            self.buf
+                .border
+                .insert(h.raw(), Border { points: (first, first + (other.len() as u32).max(1) - 1), extra: None });
             self.strip(&row, &other, f as u32);
         }
         (self.buf.row, self.buf.other) = (row, other);
@@ -631,19 +634,20 @@ impl<'a> Builder<'a> {
             corners.clear();
             let f0 = mesh.face(start).index();
             if !closed {
-                ring.push(self.border_points(start).0);
+                ring.push(self.border(start).points.0);
             }
             let mut h = start;
             // The run's last half-edge (into `v`, on its last border).
             let mut end = start;
             loop {
                 let f = mesh.face(h).index();
-                ring.push(self.corner_vertex(f, self.mesh.corner(h)));
-                corners.push(RingCorner::Vertex { face: f as u32, corner: self.mesh.corner(h) as u32 });
+                let corner = self.mesh.corner(h);
+                ring.push(self.corner_vertex(f, corner));
+                corners.push(RingCorner::Vertex { face: f as u32, corner: corner as u32 });
                 let p = mesh.prev(h);
                 if self.is_border(p) {
                     if !closed {
-                        ring.push(self.border_points(p).1);
+                        ring.push(self.border(p).points.1);
                     }
                     end = p;
                     break;
@@ -686,10 +690,10 @@ impl<'a> Builder<'a> {
                 for k in 0..last {
                     let mut t = [c, Corner::from(ring[k]), Corner::from(ring[k + 1])];
                     if k == 0 {
-                        t[1].extra = self.buf.border_extra.get(&start.raw()).map(|e| e.0);
+                        t[1].extra = self.border(start).extra.map(|e| e.0);
                     }
                     if k + 1 == last {
-                        t[2].extra = self.buf.border_extra.get(&end.raw()).map(|e| e.1);
+                        t[2].extra = self.border(end).extra.map(|e| e.1);
                     }
                     self.triangle_at(t, f0 as u32);
                 }
