@@ -5,8 +5,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use subdiv::mesh::{BoundaryInterpolation, FaceId};
-use subdiv::{EvalMethod, EvalOptions, GridPoint, MAX_GRID, Surface};
+use subdiv::mesh::{BoundaryInterpolation, Channel, FaceId};
+use subdiv::{EvalMethod, EvalOptions, GridPoint, LimitPoint, MAX_GRID, Surface};
 
 use crate::UserError;
 use crate::input::{InputArgs, LoadedMesh, check_output, write_error};
@@ -40,6 +40,12 @@ pub(crate) struct EvalArgs {
     /// interior Catmull-Clark or Loop-like ones, exact stencils elsewhere).
     #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
     method: MethodArg,
+    /// How texture coordinates are interpolated (none, corners-only, corners-plus1,
+    /// corners-plus2, boundaries, all); default: the mesh's `facevaryinginterpolateboundary`
+    /// tag, else all. When the mesh has texture coordinates, the columns `s,t,dsu,dtu,dsv,dtv`
+    /// (their exact values and derivatives) follow the position's.
+    #[arg(long, value_name = "MODE", value_parser = crate::refine::parse_face_varying)]
+    fvar_interpolation: Option<subdiv::mesh::FaceVaryingInterpolation>,
     /// The most points `--grid` may evaluate (a larger request is refused before any work).
     #[arg(long, value_name = "POINTS", default_value_t = subdiv::DEFAULT_MAX_POINTS)]
     max_points: u64,
@@ -84,9 +90,12 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
             Boundary::None => BoundaryInterpolation::None,
         });
     }
+    options.refine.face_varying = args.fvar_interpolation;
     let start = Instant::now();
     let named = |error: subdiv::Error| UserError(format!("{}: {error}", input_name));
-    let evaluator = Surface::new(mesh, &scheme).evaluator(&options).map_err(named)?;
+    let has_uv = mesh.channel(Channel::UV).is_some();
+    let surface = Surface::new(mesh, &scheme);
+    let evaluator = surface.evaluator(&options).map_err(named)?;
     let mut skipped = 0;
     let rows = match (args.grid, &args.samples) {
         (Some(n), _) => {
@@ -109,9 +118,17 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
         }
         (None, None) => return Err(UserError("give --grid N or --samples FILE".to_string())),
     };
+    // The texture coordinates at the same points.
+    let uv = if has_uv {
+        let channel = surface.channel_evaluator(Channel::UV, &options).map_err(named)?;
+        let at = |r: &GridPoint| channel.evaluate(r.face, r.u, r.v);
+        Some(rows.iter().map(at).collect::<Result<Vec<_>, _>>().map_err(named)?)
+    } else {
+        None
+    };
     let seconds = start.elapsed().as_secs_f64();
     // Everything is evaluated before anything is written, so a failure writes nothing.
-    let write = |w: &mut dyn Write| write_csv(w, &rows);
+    let write = |w: &mut dyn Write| write_csv(w, &rows, uv.as_deref());
     match &args.output {
         Some(path) => subdiv::io::write_atomic(path, write).map_err(|e| write_error(&input_name, path, e))?,
         None => write(out).map_err(|e| UserError(format!("{}: writing standard output: {e}", input_name)))?,
@@ -165,13 +182,16 @@ fn read_samples(path: &Path) -> Result<Vec<(usize, FaceId, f64, f64)>, UserError
     Ok(samples)
 }
 
-/// `osd_limit`'s CSV: `face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz`, shortest round-trip f64s.
-fn write_csv(w: &mut dyn Write, rows: &[GridPoint]) -> std::io::Result<()> {
+/// `osd_limit`'s CSV: `face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz`, and with texture
+/// coordinates (one per row) `s,t,dsu,dtu,dsv,dtv` (`osd_limit --fvar`'s), shortest
+/// round-trip f64s.
+fn write_csv(w: &mut dyn Write, rows: &[GridPoint], uv: Option<&[LimitPoint]>) -> std::io::Result<()> {
     let mut w = std::io::BufWriter::new(w);
-    writeln!(w, "face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz")?;
-    for GridPoint { face, u, v, point: p } in rows {
+    write!(w, "face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz")?;
+    writeln!(w, "{}", if uv.is_some() { ",s,t,dsu,dtu,dsv,dtv" } else { "" })?;
+    for (k, GridPoint { face, u, v, point: p }) in rows.iter().enumerate() {
         let (x, du, dv) = (p.position, p.du, p.dv);
-        writeln!(
+        write!(
             w,
             "{},{u:?},{v:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?},{:?}",
             face.index(),
@@ -185,6 +205,11 @@ fn write_csv(w: &mut dyn Write, rows: &[GridPoint]) -> std::io::Result<()> {
             dv.y,
             dv.z
         )?;
+        if let Some(t) = uv.and_then(|uv| uv.get(k)) {
+            let (x, du, dv) = (t.position, t.du, t.dv);
+            write!(w, ",{:?},{:?},{:?},{:?},{:?},{:?}", x.x, x.y, du.x, du.y, dv.x, dv.y)?;
+        }
+        writeln!(w)?;
     }
     w.flush()
 }

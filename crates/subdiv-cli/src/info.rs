@@ -76,7 +76,7 @@ fn tags_json(tags: &Tags) -> Value {
         "boundary_interpolation": tags.boundary_interpolation.map(|b| format!("{b:?}")),
         "crease_method": tags.crease_method.map(|c| format!("{c:?}")),
         "triangle_subdivision": tags.triangle_subdivision.map(|t| format!("{t:?}")),
-        "face_varying_interpolation": tags.face_varying_interpolation,
+        "face_varying_interpolation": tags.face_varying_interpolation.map(|m| m.name()),
         "unsupported": tags.unsupported,
     })
 }
@@ -109,6 +109,12 @@ fn report(name: &str, mesh: &Mesh) -> Value {
         "extraordinary_interior": extraordinary.len() - boundary_extraordinary,
         "extraordinary_boundary": boundary_extraordinary,
         "tags": tags_json(mesh.tags()),
+        "channels": mesh.channels().iter().map(|c| json!({
+            "name": c.name(),
+            "dimension": c.dimension(),
+            "values": c.value_count(),
+            "seams": mesh.edges().filter(|&e| mesh.is_seam(c, e)).count(),
+        })).collect::<Vec<_>>(),
         "problems": [],
     })
 }
@@ -176,6 +182,18 @@ fn write_text(out: &mut impl Write, report: &Value) -> std::io::Result<()> {
             regular["interior"],
             regular["boundary"],
         )?;
+    }
+    if let Some(Value::Array(channels)) = report.get("channels") {
+        for c in channels {
+            writeln!(
+                out,
+                "channel         {} ({} components): {} values, {} seam edges",
+                c["name"].as_str().unwrap_or_default(),
+                c["dimension"],
+                c["values"],
+                c["seams"]
+            )?;
+        }
     }
     writeln!(out, "tags            {}", tags_text(&get("tags")))?;
     match report.get("problems") {

@@ -5,6 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use subdiv::Surface;
+use subdiv::mesh::FaceVaryingInterpolation;
+use subdiv::schemes::RefineOptions;
 
 use crate::UserError;
 use crate::input::{InputArgs, LoadedMesh, check_output, write_error};
@@ -22,10 +24,17 @@ pub(crate) struct RefineArgs {
     /// Number of refinement levels (each multiplies the face count by about 4).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(0..=8))]
     levels: u32,
+    /// How texture coordinates refine: none, corners-only, corners-plus1, corners-plus2,
+    /// boundaries or all (OpenSubdiv's modes, from smooth everywhere to linear everywhere);
+    /// default: the mesh's `facevaryinginterpolateboundary` tag, else all.
+    #[arg(long, value_name = "MODE", value_parser = parse_face_varying)]
+    fvar_interpolation: Option<FaceVaryingInterpolation>,
     /// The most faces the refinement may make (a larger request is refused before any work).
     #[arg(long, value_name = "FACES", default_value_t = subdiv::DEFAULT_MAX_REFINED_FACES)]
     max_faces: u64,
-    /// Output OBJ file; standard output when omitted. Hole faces are left out.
+    /// Output OBJ file; standard output when omitted. The refined sharpness, holes (kept as
+    /// faces with a `t hole` tag) and texture coordinates are written, so that refining the
+    /// output again continues the same surface.
     #[arg(short, long)]
     output: Option<PathBuf>,
 }
@@ -40,7 +49,8 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
     let start = Instant::now();
     // A progress bar on stderr when the run is long (indicatif draws nothing when stderr is not
     // a terminal).
-    let surface = Surface::new(mesh, &scheme).with_max_refined_faces(args.max_faces);
+    let options = RefineOptions { face_varying: args.fvar_interpolation, ..RefineOptions::DEFAULT };
+    let surface = Surface::new(mesh, &scheme).with_max_refined_faces(args.max_faces).with_refine_options(options);
     let bar = if surface.refined_faces_at_least(levels) > 2_000_000 {
         indicatif::ProgressBar::new(levels as u64).with_message(format!("refining with {}", scheme.name()))
     } else {
@@ -55,7 +65,7 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
         .map_err(|error| UserError(format!("{}: {error}", input_name)))?;
     bar.finish_and_clear();
     let seconds = start.elapsed().as_secs_f64();
-    let soup = subdiv::without_holes(&refined);
+    let soup = refined.to_soup();
     match &args.output {
         Some(path) => subdiv::io::write_obj(path, &soup).map_err(|e| write_error(&input_name, path, e))?,
         None => subdiv::io::write_obj_to(&mut *out, &soup)
@@ -72,4 +82,12 @@ pub(crate) fn run(args: &RefineArgs, out: &mut impl Write) -> Result<(), UserErr
         faces as f64 / seconds.max(1e-9) / 1e6,
     );
     Ok(())
+}
+
+/// A face-varying interpolation mode by its name (OpenSubdiv's, as `osd_refine` takes them).
+pub(crate) fn parse_face_varying(name: &str) -> Result<FaceVaryingInterpolation, String> {
+    FaceVaryingInterpolation::ALL_MODES.into_iter().find(|m| m.name() == name).ok_or_else(|| {
+        let known: Vec<_> = FaceVaryingInterpolation::ALL_MODES.iter().map(|m| m.name()).collect();
+        format!("unknown face-varying interpolation {name:?}; known: {}", known.join(", "))
+    })
 }

@@ -92,6 +92,29 @@ pub enum IoError {
         /// The index as written.
         token: String,
     },
+    /// A face's texture-coordinate index names no `vt` line.
+    #[error("{file}:{line}: {}", texcoord_rule(*index, *count))]
+    TexCoordOutOfRange {
+        /// The file.
+        file: String,
+        /// The 1-based line of the face.
+        line: usize,
+        /// The index as written (1-based, or negative for relative indices).
+        index: i64,
+        /// How many `vt` lines the file has; for a negative index, how many precede the face.
+        count: usize,
+    },
+    /// Texture coordinates on some face corners but not on all: a face-varying channel needs
+    /// one value at every corner of every face.
+    #[error("{file}:{line}: {rule}")]
+    TexCoordsIncomplete {
+        /// The file.
+        file: String,
+        /// The 1-based line of the face.
+        line: usize,
+        /// What is missing, and where the file has them.
+        rule: String,
+    },
     /// A face lists fewer than three vertices.
     #[error("{file}:{line}: face has {count} vertices; a face needs at least 3")]
     FaceTooSmall {
@@ -222,6 +245,8 @@ impl IoError {
             | Self::IndexZero { line, .. }
             | Self::IndexOutOfRange { line, .. }
             | Self::IndexOverflow { line, .. }
+            | Self::TexCoordOutOfRange { line, .. }
+            | Self::TexCoordsIncomplete { line, .. }
             | Self::FaceTooSmall { line, .. }
             | Self::TagOutOfRange { line, .. } => Some(line),
             Self::Mesh { line, .. } => line,
@@ -242,6 +267,8 @@ impl IoError {
             Self::IndexZero { .. } => "index-zero",
             Self::IndexOutOfRange { .. } => "index-out-of-range",
             Self::IndexOverflow { .. } => "index-overflow",
+            Self::TexCoordOutOfRange { .. } => "texcoord-out-of-range",
+            Self::TexCoordsIncomplete { .. } => "texcoords-incomplete",
             Self::FaceTooSmall { .. } => "face-too-small",
             Self::TagOutOfRange { .. } => "tag-out-of-range",
             Self::Gltf { .. } => "gltf",
@@ -263,6 +290,14 @@ fn index_rule(index: i64, vertex_count: usize) -> String {
         )
     } else {
         format!("vertex index {index} is out of range: the file has {vertex_count} vertices (OBJ indices are 1-based)")
+    }
+}
+
+fn texcoord_rule(index: i64, count: usize) -> String {
+    if index < 0 {
+        format!("relative texture-coordinate index {index} reaches before the first vt: {count} precede this face")
+    } else {
+        format!("texture-coordinate index {index} is out of range: the file has {count} vt lines (1-based)")
     }
 }
 

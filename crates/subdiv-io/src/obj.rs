@@ -1,11 +1,14 @@
 //! Wavefront OBJ with OpenSubdiv's tag lines: [`ObjFile`], [`read_obj`], [`load_obj`],
 //! [`write_obj`], [`write_obj_to`].
 //!
-//! Read: `v x y z [w | r g b]` (only x y z are kept), `f` with every index form (`v`, `v/vt`,
-//! `v//vn`, `v/vt/vn`, negative = relative to the last vertex defined), `t` tag lines, and `\`
-//! line continuation. Texture coordinates, normals, groups, materials, smoothing groups, lines,
-//! comments and any other keyword are skipped, as OBJ readers do; a line that starts with no
-//! keyword at all (binary data, a bare number) is an error.
+//! Read: `v x y z [w | r g b]` (only x y z are kept), `vt u [v [w]]` (u and v are kept; v is 0
+//! when absent), `f` with every index form (`v`, `v/vt`, `v//vn`, `v/vt/vn`, negative = relative
+//! to the last vertex or `vt` defined), `t` tag lines, and `\` line continuation. Faces that
+//! refer to texture coordinates make the soup's [`Channel::UV`] channel; then every corner of
+//! every face must have one ([`IoError::TexCoordsIncomplete`] names the first that has none).
+//! Normals, groups, materials, smoothing groups, lines, comments and any other keyword are
+//! skipped, as OBJ readers do; a line that starts with no keyword at all (binary data, a bare
+//! number) is an error.
 //!
 //! Tag lines read `t NAME nints/nfloats/nstrings ints… floats… strings…` with 0-based vertex and
 //! face indices:
@@ -26,8 +29,8 @@ use std::num::IntErrorKind;
 use std::path::Path;
 
 use subdiv_mesh::{
-    BoundaryInterpolation, BuildOptions, CornerTag, CreaseMethod, CreaseTag, DVec3, FaceId, Mesh, MeshError,
-    PolygonSoup, Tags, TriangleSubdivision, VertexId,
+    BoundaryInterpolation, BuildOptions, Channel, CornerTag, CreaseMethod, CreaseTag, DVec3, FaceId,
+    FaceVaryingInterpolation, Mesh, MeshError, PolygonSoup, Tags, TriangleSubdivision, VertexId,
 };
 
 use crate::{IoError, atomic};
@@ -118,7 +121,7 @@ impl ObjFile {
     pub fn read(mut reader: impl BufRead, name: &str) -> Result<Self, IoError> {
         // Not `PolygonSoup::default()`: subdiv-mesh derives it with no face offsets at all.
         let obj = Self { name: name.to_owned(), soup: PolygonSoup::new(), lines: ObjLines::default() };
-        let mut parser = Parser { obj, tag_refs: Vec::new(), face: Vec::new() };
+        let mut parser = Parser { obj, tag_refs: Vec::new(), face: Vec::new(), uv: TexCoords::default() };
         let mut record = Vec::new();
         let mut line = 0;
         while let Some(first_line) = next_record(&mut reader, &mut record, &mut line)
@@ -204,8 +207,22 @@ struct Parser {
     obj: ObjFile,
     /// Vertex or face references of `t` lines, checked in [`Parser::finish`].
     tag_refs: Vec<TagRef>,
-    /// The vertices of the face being read.
-    face: Vec<VertexId>,
+    /// The vertices of the face being read, each with its `vt` index as written.
+    face: Vec<(VertexId, Option<i64>)>,
+    uv: TexCoords,
+}
+
+/// The texture coordinates read so far and the faces' references to them.
+#[derive(Default)]
+struct TexCoords {
+    /// `u v` of each `vt` line.
+    values: Vec<f64>,
+    /// One 1-based (or relative, resolved) index per face corner, for the faces read so far
+    /// with texture coordinates; 0 where a face has none (checked in [`Parser::finish`]).
+    indices: Vec<u64>,
+    /// The line of the first face with texture coordinates and of the first without.
+    first_with: Option<usize>,
+    first_without: Option<usize>,
 }
 
 struct TagRef {
@@ -228,9 +245,10 @@ impl Parser {
             |bytes| std::str::from_utf8(bytes).map_err(|_| IoError::NotUtf8 { file: self.obj.name.clone(), line });
         match keyword {
             b"v" => self.vertex(text(args)?, line),
+            b"vt" => self.texcoord(text(args)?, line),
             b"f" => self.face(text(args)?, line),
             b"t" => self.tag(text(args)?, line),
-            // Comments, and every other record (vt, vn, g, o, s, usemtl, mtllib, l, curves, …):
+            // Comments, and every other record (vn, g, o, s, usemtl, mtllib, l, curves, …):
             // skipped unread, so that e.g. a Latin-1 comment or group name is no error.
             [] | [b'#', ..] => Ok(()),
             [first, rest @ ..]
@@ -251,9 +269,9 @@ impl Parser {
         let mut xyz = [0.0; 3];
         let mut count = 0;
         for token in args.split_ascii_whitespace() {
-            let value: f64 = token
-                .parse()
-                .map_err(|_| self.syntax(line, format!("vertex coordinate {} {token:?} is not a number", count + 1)))?;
+            let value: f64 = token.parse().map_err(|_| {
+                self.syntax(line, format!("vertex coordinate {} {:?} is not a number", count + 1, clip(token)))
+            })?;
             // Only x y z are kept; a w or vertex colours after them just need to be numbers.
             if let Some(slot) = xyz.get_mut(count) {
                 if !value.is_finite() {
@@ -271,30 +289,96 @@ impl Parser {
         Ok(())
     }
 
+    fn texcoord(&mut self, args: &str, line: usize) -> Result<(), IoError> {
+        let mut uv = [0.0; 2];
+        let mut count = 0;
+        for token in args.split_ascii_whitespace() {
+            let value: f64 = token.parse().map_err(|_| {
+                self.syntax(line, format!("texture coordinate {} {:?} is not a number", count + 1, clip(token)))
+            })?;
+            if !value.is_finite() {
+                return Err(
+                    self.syntax(line, format!("texture coordinate {} {:?} is not finite", count + 1, clip(token)))
+                );
+            }
+            // u and v are kept; a third (w) just needs to be a number.
+            if let Some(slot) = uv.get_mut(count) {
+                *slot = value;
+            }
+            count += 1;
+        }
+        if count == 0 {
+            return Err(self.syntax(line, "a texture coordinate needs at least u (vt u [v [w]])".into()));
+        }
+        self.uv.values.extend(uv);
+        Ok(())
+    }
+
     fn face(&mut self, args: &str, line: usize) -> Result<(), IoError> {
         self.face.clear();
         for token in args.split_ascii_whitespace() {
-            let vertex = self.face_vertex(token, line)?;
-            self.face.push(vertex);
+            let corner = self.face_vertex(token, line)?;
+            self.face.push(corner);
         }
         if self.face.len() < 3 {
             return Err(IoError::FaceTooSmall { file: self.obj.name.clone(), line, count: self.face.len() });
         }
-        self.obj.soup.push_face(self.face.drain(..));
+        let with = self.face.iter().filter(|(_, t)| t.is_some()).count();
+        let uv = &mut self.uv;
+        if with == 0 {
+            uv.first_without.get_or_insert(line);
+            uv.indices.extend(std::iter::repeat_n(0, self.face.len()));
+        } else if with < self.face.len() {
+            let rule = format!(
+                "the face has texture coordinates at {with} of its {} corners; give every corner one (v/vt) or none",
+                self.face.len()
+            );
+            return Err(IoError::TexCoordsIncomplete { file: self.obj.name.clone(), line, rule });
+        } else {
+            uv.first_with.get_or_insert(line);
+            let defined = uv.values.len() / 2;
+            for &(_, t) in &self.face {
+                let t = t.unwrap_or_default();
+                // Relative indices count back from the texture coordinates defined so far.
+                let one_based = if t > 0 {
+                    t.unsigned_abs()
+                } else {
+                    (defined as u64 + 1).checked_sub(t.unsigned_abs()).filter(|&i| i > 0).ok_or_else(|| {
+                        IoError::TexCoordOutOfRange { file: self.obj.name.clone(), line, index: t, count: defined }
+                    })?
+                };
+                uv.indices.push(one_based);
+            }
+        }
+        self.obj.soup.push_face(self.face.drain(..).map(|(v, _)| v));
         self.obj.lines.faces.push(line);
         Ok(())
     }
 
-    /// One face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn`; only `v` is kept. Positive indices are
-    /// range-checked in [`finish`](Self::finish), negative ones here (they count back from the
-    /// vertices defined so far).
-    fn face_vertex(&self, token: &str, line: usize) -> Result<VertexId, IoError> {
+    /// One face vertex `v`, `v/vt`, `v//vn` or `v/vt/vn`, as the vertex and the `vt` index as
+    /// written (the normal is not kept). Positive vertex indices are range-checked in
+    /// [`finish`](Self::finish), negative ones here (they count back from the vertices defined
+    /// so far).
+    fn face_vertex(&self, token: &str, line: usize) -> Result<(VertexId, Option<i64>), IoError> {
         let file = || self.obj.name.clone();
         let mut parts = token.split('/');
         let vertex = parts.next().unwrap_or_default();
         let is_index = |s: &str| s.strip_prefix('-').unwrap_or(s).bytes().all(|b| b.is_ascii_digit());
+        let texcoord = parts.clone().next().filter(|t| !t.is_empty());
         if vertex.is_empty() || parts.clone().count() > 2 || !parts.all(is_index) {
-            return Err(self.syntax(line, format!("face vertex {token:?} is not v, v/vt, v//vn or v/vt/vn")));
+            return Err(self.syntax(line, format!("face vertex {:?} is not v, v/vt, v//vn or v/vt/vn", clip(token))));
+        }
+        let texcoord = match texcoord {
+            None => None,
+            Some(t) => Some(t.parse::<i64>().map_err(|e| match e.kind() {
+                IntErrorKind::PosOverflow | IntErrorKind::NegOverflow => {
+                    IoError::TexCoordOutOfRange { file: file(), line, index: i64::MAX, count: self.uv.values.len() / 2 }
+                }
+                _ => self.syntax(line, format!("texture-coordinate index {:?} is not an integer", clip(t))),
+            })?),
+        };
+        if texcoord == Some(0) {
+            return Err(IoError::IndexZero { file: file(), line });
         }
         let overflow = || IoError::IndexOverflow { file: file(), line, token: vertex.to_owned() };
         let index: i64 = vertex.parse().map_err(|e: std::num::ParseIntError| match e.kind() {
@@ -312,7 +396,8 @@ impl Parser {
                 vertex_count: defined,
             })?,
         };
-        u32::try_from(zero_based).map(VertexId::new).map_err(|_| overflow())
+        let vertex = u32::try_from(zero_based).map(VertexId::new).map_err(|_| overflow())?;
+        Ok((vertex, texcoord))
     }
 
     fn tag(&mut self, args: &str, line: usize) -> Result<(), IoError> {
@@ -334,11 +419,11 @@ impl Parser {
         }
         let ints = args[..ni]
             .iter()
-            .map(|s| s.parse::<i64>().map_err(|_| syntax(format!("t {name}: {s:?} is not an integer"))))
+            .map(|s| s.parse::<i64>().map_err(|_| syntax(format!("t {name}: {:?} is not an integer", clip(s)))))
             .collect::<Result<Vec<_>, _>>()?;
         let floats = args[ni..ni + nf]
             .iter()
-            .map(|s| s.parse::<f64>().map_err(|_| syntax(format!("t {name}: {s:?} is not a number"))))
+            .map(|s| s.parse::<f64>().map_err(|_| syntax(format!("t {name}: {:?} is not a number", clip(s)))))
             .collect::<Result<Vec<_>, _>>()?;
         let strings = &args[ni + nf..];
         let shape = |ok: bool, expected: &str| {
@@ -388,9 +473,10 @@ impl Parser {
             }
             "facevaryinginterpolateboundary" => {
                 shape((ni, nf, ns) == (1, 0, 0), "1/0/0")?;
-                let code = u8::try_from(ints[0]).ok().filter(|&k| k <= 5);
-                tags.face_varying_interpolation =
-                    Some(code.ok_or_else(|| syntax(format!("t {name} {}: expected 0..=5", ints[0])))?);
+                tags.face_varying_interpolation = Some(
+                    FaceVaryingInterpolation::from_code(ints[0])
+                        .ok_or_else(|| syntax(format!("t {name} {}: expected 0..=5", ints[0])))?,
+                );
             }
             "creasemethod" => {
                 shape((ni, nf, ns) == (0, 0, 1), "0/0/1")?;
@@ -415,7 +501,32 @@ impl Parser {
 
     /// Checks what needed the whole file: some geometry, and every face and tag reference.
     fn finish(self) -> Result<ObjFile, IoError> {
-        let obj = self.obj;
+        let mut obj = self.obj;
+        let uv = self.uv;
+        if let Some(first_with) = uv.first_with {
+            if let Some(line) = uv.first_without {
+                let rule = format!(
+                    "the face has no texture coordinates, but the face on line {first_with} has; give every face's \
+                     corners one (v/vt) or none"
+                );
+                return Err(IoError::TexCoordsIncomplete { file: obj.name.clone(), line, rule });
+            }
+            let count = uv.values.len() / 2;
+            let (offsets, _) = obj.soup.raw_faces();
+            if let Some(h) = uv.indices.iter().position(|&i| i as usize > count) {
+                let face = offsets.partition_point(|&o| o as usize <= h) - 1;
+                let index = i64::try_from(uv.indices[h]).unwrap_or(i64::MAX);
+                return Err(IoError::TexCoordOutOfRange {
+                    file: obj.name.clone(),
+                    line: obj.lines.faces[face],
+                    index,
+                    count,
+                });
+            }
+            let indices = uv.indices.iter().map(|&i| (i - 1) as u32).collect();
+            obj.soup.channels.push(Channel::new(Channel::UV, 2, uv.values, indices));
+        }
+        let obj = obj;
         let file = || obj.name.clone();
         let (vertex_count, face_count) = (obj.soup.vertex_count(), obj.soup.face_count());
         if vertex_count == 0 && face_count == 0 {
@@ -445,15 +556,18 @@ impl Parser {
 }
 
 /// Writes `soup` as an OBJ file at `path`: `v` lines with every coordinate's shortest exact
-/// decimal form (so reading it back gives the same `f64`s), 1-based `f` lines, and the tags as
-/// `t` lines ([`read_obj`] of the file gives `soup` back). Unsupported tags are written by name
-/// only (`t vertexedit 0/0/0`), as that is all the reader keeps of them.
+/// decimal form (so reading it back gives the same `f64`s), the [`Channel::UV`] channel as `vt`
+/// lines, 1-based `f` lines (`f v/vt` with the channel), and the tags as `t` lines ([`read_obj`]
+/// of the file gives `soup` back). OBJ has room for one face-varying channel: other channels are
+/// not written. Unsupported tags are written by name only (`t vertexedit 0/0/0`), as that is all
+/// the reader keeps of them.
 ///
 /// The file is written to a fresh `<name>.<16 hex>.tmp` and renamed, so a failure leaves `path` untouched.
 ///
 /// # Errors
 /// [`IoError::Unwritable`] when the soup cannot be read back (a face with fewer than 3
-/// vertices, an index out of range, a non-finite coordinate, a tag out of range);
+/// vertices, an index out of range, a non-finite coordinate, a tag out of range, a
+/// [`Channel::UV`] channel that is not 2-dimensional or not one valid index per corner);
 /// [`IoError::Io`] when writing fails.
 pub fn write_obj(path: impl AsRef<Path>, soup: &PolygonSoup) -> Result<(), IoError> {
     check_writable(soup)?;
@@ -483,16 +597,29 @@ fn check_writable(soup: &PolygonSoup) -> Result<(), IoError> {
         soup.faces().enumerate().find_map(|(f, face)| face.iter().find(|&&v| !in_range(v)).map(|v| (f, v)))
     {
         format!("face {f} refers to {v}, but the soup has {n} vertices")
+    } else if let Some(uv) = uv_channel(soup).filter(|uv| {
+        uv.dimension() != 2
+            || uv.values().iter().any(|x| !x.is_finite())
+            || uv.indices().len() != soup.corner_count()
+            || uv.indices().iter().any(|&i| i as usize >= uv.value_count())
+    }) {
+        format!(
+            "channel {:?} ({} components, {} values, {} indices for {} corners) is not 2-dimensional texture \
+             coordinates with one valid index per face corner",
+            uv.name(),
+            uv.dimension(),
+            uv.value_count(),
+            uv.indices().len(),
+            soup.corner_count()
+        )
     } else {
-        let Tags { creases, corners, holes, face_varying_interpolation, unsupported, .. } = &soup.tags;
+        let Tags { creases, corners, holes, unsupported, .. } = &soup.tags;
         if let Some(c) = creases.iter().find(|c| !c.vertices.into_iter().all(in_range)) {
             format!("crease {:?} refers to a vertex out of range 0..{n}", c.vertices)
         } else if let Some(c) = corners.iter().find(|c| !in_range(c.vertex)) {
             format!("corner tag refers to {}, out of range 0..{n}", c.vertex)
         } else if let Some(h) = holes.iter().find(|h| h.index() >= soup.face_count()) {
             format!("hole tag refers to {h}, out of range 0..{}", soup.face_count())
-        } else if let Some(k) = face_varying_interpolation.filter(|&k| k > 5) {
-            format!("face-varying interpolation {k} is not 0..=5")
         } else if let Some(name) = unsupported
             .iter()
             .find(|s| s.is_empty() || s.contains(char::is_whitespace) || KNOWN_TAGS.contains(&s.as_str()))
@@ -505,15 +632,30 @@ fn check_writable(soup: &PolygonSoup) -> Result<(), IoError> {
     Err(IoError::Unwritable { format: "OBJ", rule })
 }
 
+/// The channel the OBJ formats write as `vt`.
+fn uv_channel(soup: &PolygonSoup) -> Option<&Channel> {
+    soup.channels.iter().find(|c| c.name() == Channel::UV)
+}
+
 fn write_records(w: &mut impl Write, soup: &PolygonSoup) -> io::Result<()> {
     writeln!(w, "# subdiv-io; t (tag) lines use 0-based vertex and face indices")?;
     for p in soup.positions() {
         writeln!(w, "v {} {} {}", Num(p.x), Num(p.y), Num(p.z))?;
     }
+    let uv = uv_channel(soup);
+    if let Some(uv) = uv {
+        for t in uv.values().chunks_exact(2) {
+            writeln!(w, "vt {} {}", Num(t[0]), Num(t[1]))?;
+        }
+    }
+    let mut corners = uv.map(|uv| uv.indices().iter());
     for face in soup.faces() {
         w.write_all(b"f")?;
         for v in face {
             write!(w, " {}", u64::from(v.raw()) + 1)?;
+            if let Some(t) = corners.as_mut().and_then(Iterator::next) {
+                write!(w, "/{}", u64::from(*t) + 1)?;
+            }
         }
         writeln!(w)?;
     }
@@ -540,7 +682,7 @@ fn write_records(w: &mut impl Write, soup: &PolygonSoup) -> io::Result<()> {
         writeln!(w, "t interpolateboundary 1/0/0 {code}")?;
     }
     if let Some(k) = tags.face_varying_interpolation {
-        writeln!(w, "t facevaryinginterpolateboundary 1/0/0 {k}")?;
+        writeln!(w, "t facevaryinginterpolateboundary 1/0/0 {}", k.code())?;
     }
     if let Some(m) = tags.crease_method {
         let name = match m {
@@ -560,6 +702,15 @@ fn write_records(w: &mut impl Write, soup: &PolygonSoup) -> io::Result<()> {
         writeln!(w, "t {name} 0/0/0")?;
     }
     Ok(())
+}
+
+/// A token as an error message quotes it: its first 40 characters (a hostile file's token may
+/// be megabytes long).
+fn clip(token: &str) -> String {
+    match token.char_indices().nth(40) {
+        Some((end, _)) => format!("{}…", &token[..end]),
+        None => token.to_owned(),
+    }
 }
 
 /// An `f64` in its shortest decimal form that parses back to the same value; exponent notation
@@ -601,6 +752,38 @@ mod tests {
             records.push((first, String::from_utf8(record.clone()).unwrap()));
         }
         assert_eq!(records, [(1, "v 1   2 3".into()), (3, String::new()), (4, "f 1 2 3".into())]);
+    }
+
+    #[test]
+    fn texture_coordinates_make_the_uv_channel_in_every_face_form() {
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1 0.5\nvt 0 1\n\
+                    vn 0 0 1\nf 1/1 2/2/1 -2/-2/1\nf 1/1 3/3 4/-1\n";
+        let soup = read_obj(text.as_bytes(), "uv.obj").unwrap();
+        let uv = &soup.channels[0];
+        assert_eq!((uv.name(), uv.dimension(), uv.value_count()), (Channel::UV, 2, 4));
+        assert_eq!(uv.indices(), [0, 1, 2, 0, 2, 3]);
+        assert_eq!(uv.value(2), [1.0, 1.0]);
+        // Written and read back: the same soup.
+        let mut bytes = Vec::new();
+        write_obj_to(&mut bytes, &soup).unwrap();
+        assert_eq!(read_obj(&bytes[..], "back.obj").unwrap(), soup);
+        assert!(String::from_utf8(bytes).unwrap().contains("f 1/1 2/2 3/3\n"));
+    }
+
+    #[test]
+    fn incomplete_or_dangling_texture_coordinates_are_errors_on_their_face_line() {
+        let head = "v 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\n";
+        for (faces, rule, line) in [
+            ("f 1/1 2 3\n", "texcoords-incomplete", 5),
+            ("f 1/1 2/1 3/1\nf 1 2 3\n", "texcoords-incomplete", 6),
+            ("f 1 2 3\nf 1/1 2/1 3/1\n", "texcoords-incomplete", 5),
+            ("f 1/1 2/1 3/2\n", "texcoord-out-of-range", 5),
+            ("f 1/1 2/1 3/-2\n", "texcoord-out-of-range", 5),
+            ("f 1/0 2/1 3/1\n", "index-zero", 5),
+        ] {
+            let error = read_obj(format!("{head}{faces}").as_bytes(), "t.obj").unwrap_err();
+            assert_eq!((error.rule(), error.line()), (rule, Some(line)), "{faces}: {error}");
+        }
     }
 
     #[test]

@@ -5,8 +5,8 @@ use proptest::prelude::*;
 use subdiv_io::{IoError, ObjFile, load_mesh, read_obj, write_obj, write_obj_to};
 use subdiv_mesh::strategies::{MeshParams, meshes};
 use subdiv_mesh::{
-    BoundaryInterpolation, BuildOptions, CornerTag, CreaseMethod, CreaseTag, DVec3, FaceId, MeshError, PolygonSoup,
-    TriangleSubdivision, VertexId,
+    BoundaryInterpolation, BuildOptions, CornerTag, CreaseMethod, CreaseTag, DVec3, FaceId, FaceVaryingInterpolation,
+    MeshError, PolygonSoup, TriangleSubdivision, VertexId,
 };
 
 const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
@@ -25,11 +25,19 @@ fn v(i: u32) -> VertexId {
 
 #[test]
 fn every_index_form_reads_the_same_face() {
-    for face in
-        ["f 1 2 3 4", "f 1/1 2/2 3/3 4/4", "f 1//1 2//2 3//3 4//4", "f 1/1/1 2/2/2 3/3/3 4/4/4", "f -4 -3 -2 -1"]
-    {
-        let soup = read(format!("{QUAD}vt 0 0\nvn 0 0 1\n{face}\n")).unwrap();
+    for (face, with_uv) in [
+        ("f 1 2 3 4", false),
+        ("f 1/1 2/2 3/3 4/4", true),
+        ("f 1//1 2//2 3//3 4//4", false),
+        ("f 1/1/1 2/2/2 3/3/3 4/4/4", true),
+        ("f -4 -3 -2 -1", false),
+    ] {
+        let soup = read(format!("{QUAD}vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 1\n{face}\n")).unwrap();
         assert_eq!(faces(&soup), [[0, 1, 2, 3]], "{face}");
+        // The forms with texture coordinates make the channel, the others none.
+        let uv: Vec<&[u32]> = soup.channels.iter().map(|c| c.indices()).collect();
+        let expected: Vec<&[u32]> = if with_uv { vec![&[0, 1, 2, 3]] } else { vec![] };
+        assert_eq!(uv, expected, "{face}");
     }
 }
 
@@ -75,7 +83,7 @@ fn corner_hole_and_scheme_tags_are_read() {
     assert_eq!(tags.corners, [corner(0, 4.0), corner(1, 4.0), corner(2, 0.5), corner(3, 1.5)]);
     assert_eq!(tags.holes, [FaceId::new(1)]);
     assert_eq!(tags.boundary_interpolation, Some(BoundaryInterpolation::EdgeAndCorner));
-    assert_eq!(tags.face_varying_interpolation, Some(3));
+    assert_eq!(tags.face_varying_interpolation, Some(FaceVaryingInterpolation::CornersPlus2));
     assert_eq!(tags.crease_method, Some(CreaseMethod::Chaikin));
     assert_eq!(tags.triangle_subdivision, Some(TriangleSubdivision::Smooth));
     for (code, expected) in [(0, BoundaryInterpolation::None), (2, BoundaryInterpolation::EdgeOnly)] {
@@ -287,7 +295,7 @@ fn soup_with_every_tag() -> PolygonSoup {
     tags.corners = vec![CornerTag { vertex: v(3), sharpness: 2.0 }];
     tags.holes = vec![FaceId::new(1), FaceId::new(0)];
     tags.boundary_interpolation = Some(BoundaryInterpolation::EdgeOnly);
-    tags.face_varying_interpolation = Some(5);
+    tags.face_varying_interpolation = Some(FaceVaryingInterpolation::All);
     tags.crease_method = Some(CreaseMethod::Chaikin);
     tags.triangle_subdivision = Some(TriangleSubdivision::Smooth);
     tags.unsupported = vec!["vertexedit".into(), "edgeedit".into()];

@@ -58,6 +58,7 @@ pub fn validate(soup: &PolygonSoup) -> Vec<MeshError> {
     if let Some(topology) = connect(soup.positions(), offsets, fv, &mut sink) {
         apply_tags(&topology, fv, offsets, &soup.tags, &mut sink);
     }
+    sink.errors.extend(soup.channels.iter().filter_map(|c| c.check(offsets, fv.len())));
     sink.errors
 }
 
@@ -123,8 +124,13 @@ impl Mesh {
         if let Some(error) = sink.errors.pop() {
             return Err(error);
         }
-        let (positions, face_offsets, he_origin, tags_as_authored) = soup.into_parts();
-        Ok(Mesh::from_parts(positions, face_offsets, he_origin, tags_as_authored, topology, resolved))
+        if let Some(error) = soup.channels.iter().find_map(|c| c.check(offsets, fv.len())) {
+            return Err(error);
+        }
+        let (positions, face_offsets, he_origin, tags_as_authored, channels) = soup.into_parts();
+        let mut mesh = Mesh::from_parts(positions, face_offsets, he_origin, tags_as_authored, topology, resolved);
+        mesh.set_channels(channels);
+        Ok(mesh)
     }
 }
 

@@ -180,6 +180,39 @@ pub enum MeshError {
         /// The most supported.
         max: usize,
     },
+    /// A face-varying channel whose shape does not fit the soup: values that are not whole
+    /// `dimension`-tuples, or not one value index per face corner.
+    #[error("channel {channel:?}: {rule}")]
+    ChannelShape {
+        /// The channel's name.
+        channel: String,
+        /// The rule, with the counts.
+        rule: String,
+    },
+    /// A face corner's channel index names no value.
+    #[error(
+        "channel {channel:?}: corner {corner} of {face} refers to value {index}, but the channel has {value_count}"
+    )]
+    ChannelIndexOutOfRange {
+        /// The channel's name.
+        channel: String,
+        /// The face.
+        face: FaceId,
+        /// The corner of the face (0-based, in the face's order).
+        corner: usize,
+        /// The offending 0-based value index.
+        index: u32,
+        /// How many values the channel has.
+        value_count: usize,
+    },
+    /// A channel value with a NaN or infinite component.
+    #[error("channel {channel:?}: value {value} has a non-finite component")]
+    ChannelNonFinite {
+        /// The channel's name.
+        channel: String,
+        /// The value (0-based).
+        value: usize,
+    },
 }
 
 impl MeshError {
@@ -191,7 +224,8 @@ impl MeshError {
             | Self::IndexOutOfRange { face, .. }
             | Self::NonManifoldEdge { face, .. }
             | Self::InconsistentOrientation { face, .. }
-            | Self::NonOrientable { face } => Some(face),
+            | Self::NonOrientable { face }
+            | Self::ChannelIndexOutOfRange { face, .. } => Some(face),
             _ => None,
         }
     }
@@ -223,6 +257,9 @@ impl MeshError {
             Self::HoleOutOfRange { .. } => "hole-out-of-range",
             Self::InvalidSharpness { .. } => "invalid-sharpness",
             Self::TooLarge { .. } => "too-large",
+            Self::ChannelShape { .. } => "channel-shape",
+            Self::ChannelIndexOutOfRange { .. } => "channel-index-out-of-range",
+            Self::ChannelNonFinite { .. } => "channel-non-finite",
         }
     }
 }

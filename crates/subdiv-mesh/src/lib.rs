@@ -26,6 +26,7 @@
 //! ```
 
 mod build;
+mod channel;
 mod error;
 mod ids;
 mod mesh;
@@ -37,13 +38,15 @@ mod soup;
 pub mod strategies;
 
 pub use build::{BuildOptions, MAX_COORDINATE, validate};
+pub use channel::Channel;
 pub use error::MeshError;
 pub use ids::{EdgeId, FaceId, HalfEdgeId, VertexId};
 pub use mesh::{BoundaryLoop, Components, Mesh, OutgoingHalfEdges, RegularValence};
 pub use patch::Patch;
 pub use region::Region;
 pub use soup::{
-    BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, PolygonSoup, Sharpness, Tags, TriangleSubdivision,
+    BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, FaceVaryingInterpolation, PolygonSoup, Sharpness, Tags,
+    TriangleSubdivision,
 };
 
 pub use glam::DVec3;

@@ -7,7 +7,7 @@ use glam::DVec3;
 use smallvec::SmallVec;
 
 use crate::build::{ResolvedTags, Topology};
-use crate::{EdgeId, FaceId, HalfEdgeId, PolygonSoup, Tags, VertexId};
+use crate::{Channel, CornerTag, CreaseTag, EdgeId, FaceId, HalfEdgeId, PolygonSoup, Tags, VertexId};
 
 /// "No half-edge" in the `u32` link arrays.
 pub(crate) const NONE: u32 = u32::MAX;
@@ -32,6 +32,8 @@ pub struct Mesh {
     vertex_sharpness: Vec<f64>,
     hole: Vec<bool>,
     tags: Tags,
+    /// Face-varying channels, shared by clones as the connectivity is.
+    channels: Arc<[Channel]>,
 }
 
 /// A [`Mesh`]'s connectivity (see its docs for the numbering).
@@ -113,6 +115,7 @@ impl Mesh {
             vertex_sharpness,
             hole,
             tags,
+            channels: Arc::new([]),
         }
     }
 
@@ -180,6 +183,29 @@ impl Mesh {
         &self.tags
     }
 
+    /// The face-varying channels (texture coordinates, …), each with one value index per
+    /// half-edge (face corner).
+    pub fn channels(&self) -> &[Channel] {
+        &self.channels
+    }
+
+    /// The channel named `name`, if any.
+    pub fn channel(&self, name: &str) -> Option<&Channel> {
+        self.channels.iter().find(|c| c.name() == name)
+    }
+
+    /// Replaces the channels (refinement sets the refined ones on the child level).
+    ///
+    /// # Panics
+    /// When a channel breaks a rule [`Mesh::build`] checks (one index per face corner, indices
+    /// in range, finite values): callers build channels for this mesh's corners.
+    pub fn set_channels(&mut self, channels: Vec<Channel>) {
+        if let Some(error) = channels.iter().find_map(|c| c.check(&self.links.face_offsets, self.half_edge_count())) {
+            panic!("set_channels: {error}");
+        }
+        self.channels = channels.into();
+    }
+
     /// Sharpness of `edge` (0 smooth; ≥ [`Tags::INFINITELY_SHARP`] infinitely sharp).
     pub fn edge_sharpness(&self, edge: EdgeId) -> f64 {
         self.edge_sharpness[edge.index()]
@@ -219,7 +245,23 @@ impl Mesh {
         Some(used.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
     }
 
-    /// The mesh as a soup again: positions, faces and tags as built.
+    /// The mesh as a soup again: positions, faces, channels, and tags that give the mesh's
+    /// sharpness and holes as they are now (a refined level's, which has no authored tags, or
+    /// a base mesh's after [`set_edge_sharpness`](Self::set_edge_sharpness) and the like): one
+    /// crease per sharp edge in edge order, one corner per sharp vertex, the holes, and the
+    /// authored rules (boundary, crease method, …) as they were. Building the soup gives a mesh
+    /// equal to this one.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh, VertexId};
+    ///
+    /// let mut mesh = Mesh::build(shapes::cube())?;
+    /// let edge = mesh.find_edge(VertexId::new(0), VertexId::new(1)).unwrap();
+    /// mesh.set_edge_sharpness(edge, 2.5);
+    /// let again = Mesh::build(mesh.to_soup())?;
+    /// assert_eq!(again.edge_sharpness(edge), 2.5);
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
     pub fn to_soup(&self) -> PolygonSoup {
         let mut soup = PolygonSoup::with_capacity(self.vertex_count(), self.face_count(), self.half_edge_count());
         for &p in &self.positions {
@@ -228,7 +270,21 @@ impl Mesh {
         for face in self.faces() {
             soup.push_face(face.iter().copied());
         }
-        soup.tags = self.tags.clone();
+        soup.tags = Tags {
+            creases: self
+                .edges()
+                .filter(|&e| self.edge_sharpness(e) > 0.0)
+                .map(|e| CreaseTag { vertices: self.edge_vertices(e), sharpness: self.edge_sharpness(e) })
+                .collect(),
+            corners: self
+                .vertices()
+                .filter(|&v| self.vertex_sharpness(v) > 0.0)
+                .map(|v| CornerTag { vertex: v, sharpness: self.vertex_sharpness(v) })
+                .collect(),
+            holes: self.face_ids().filter(|&f| self.is_hole(f)).collect(),
+            ..self.tags.clone()
+        };
+        soup.channels = self.channels.to_vec();
         soup
     }
 

@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use crate::{FaceId, VertexId};
+use crate::{Channel, FaceId, VertexId};
 
 /// Polygon soup: positions plus faces given as lists of vertex indices, with the tags authored
 /// on them (creases, corners, holes, boundary rules).
@@ -30,6 +30,9 @@ pub struct PolygonSoup {
     face_vertices: Vec<VertexId>,
     /// Creases, corners, holes and boundary rules authored on the soup.
     pub tags: Tags,
+    /// Face-varying channels (texture coordinates, …), each with one value index per face
+    /// corner; checked by [`Mesh::build`](crate::Mesh::build).
+    pub channels: Vec<Channel>,
 }
 
 impl Default for PolygonSoup {
@@ -41,7 +44,13 @@ impl Default for PolygonSoup {
 impl PolygonSoup {
     /// An empty soup.
     pub fn new() -> Self {
-        Self { positions: Vec::new(), face_offsets: vec![0], face_vertices: Vec::new(), tags: Tags::default() }
+        Self {
+            positions: Vec::new(),
+            face_offsets: vec![0],
+            face_vertices: Vec::new(),
+            tags: Tags::default(),
+            channels: Vec::new(),
+        }
     }
 
     /// An empty soup with room for `vertices` positions, `faces` faces and `corners` face corners.
@@ -53,6 +62,7 @@ impl PolygonSoup {
             face_offsets,
             face_vertices: Vec::with_capacity(corners),
             tags: Tags::default(),
+            channels: Vec::new(),
         }
     }
 
@@ -121,10 +131,13 @@ impl PolygonSoup {
     }
 
     /// Reverses the vertex order of `face`, keeping its first vertex first (so a flipped quad
-    /// `(v0, v1, v2, v3)` becomes `(v0, v3, v2, v1)`).
+    /// `(v0, v1, v2, v3)` becomes `(v0, v3, v2, v1)`); the channels' corners follow.
     pub fn flip_face(&mut self, face: FaceId) {
         let f = face.index();
         let range = self.face_offsets[f] as usize + 1..self.face_offsets[f + 1] as usize;
+        for channel in &mut self.channels {
+            channel.reverse_corners(range.clone());
+        }
         self.face_vertices[range].reverse();
     }
 
@@ -133,9 +146,9 @@ impl PolygonSoup {
         (&self.face_offsets, &self.face_vertices)
     }
 
-    /// Splits the soup into its parts: `(positions, offsets, vertices, tags)`.
-    pub fn into_parts(self) -> (Vec<DVec3>, Vec<u32>, Vec<VertexId>, Tags) {
-        (self.positions, self.face_offsets, self.face_vertices, self.tags)
+    /// Splits the soup into its parts: `(positions, offsets, vertices, tags, channels)`.
+    pub fn into_parts(self) -> (Vec<DVec3>, Vec<u32>, Vec<VertexId>, Tags, Vec<Channel>) {
+        (self.positions, self.face_offsets, self.face_vertices, self.tags, self.channels)
     }
 }
 
@@ -154,9 +167,8 @@ pub struct Tags {
     pub holes: Vec<FaceId>,
     /// `t interpolateboundary`; `None` when the file does not say.
     pub boundary_interpolation: Option<BoundaryInterpolation>,
-    /// `t facevaryinginterpolateboundary`, the raw OpenSubdiv value 0..=5 (`FVAR_LINEAR_NONE` ..
-    /// `FVAR_LINEAR_ALL`); `None` when the file does not say.
-    pub face_varying_interpolation: Option<u8>,
+    /// `t facevaryinginterpolateboundary`; `None` when the file does not say.
+    pub face_varying_interpolation: Option<FaceVaryingInterpolation>,
     /// `t creasemethod`; `None` when the file does not say.
     pub crease_method: Option<CreaseMethod>,
     /// `t smoothtriangles`; `None` when the file does not say.
@@ -248,6 +260,52 @@ impl BoundaryInterpolation {
             2 => Some(Self::EdgeOnly),
             _ => None,
         }
+    }
+}
+
+/// Where face-varying channels (texture coordinates) are linear rather than smooth: OpenSubdiv's
+/// `Sdc::Options::FVarLinearInterpolation`, from none (smooth everywhere, seams and channel
+/// boundaries refined like creases) to all (linear everywhere, the default of OpenSubdiv and of
+/// this library). Only channels are affected, never the positions.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum FaceVaryingInterpolation {
+    /// Smooth everywhere; seams and channel boundaries follow the crease rule, their corners
+    /// included (`t facevaryinginterpolateboundary 1/0/0 0`).
+    None,
+    /// As [`None`](Self::None), but a channel corner (a value used by one face only) is sharp
+    /// (`… 1`).
+    CornersOnly,
+    /// As [`CornersOnly`](Self::CornersOnly), and every value of a vertex with more than two
+    /// values is sharp; with two, both are when one is disjoint (`… 2`).
+    CornersPlus1,
+    /// As [`CornersPlus1`](Self::CornersPlus1), and with two values both are sharp when one is
+    /// a corner; darts of the channel (a seam that ends inside) are sharp (`… 3`).
+    CornersPlus2,
+    /// Linear along seams and channel boundaries, smooth inside (`… 4`).
+    Boundaries,
+    /// Linear everywhere: each refined value interpolates its parent face's values (`… 5`).
+    All,
+}
+
+impl FaceVaryingInterpolation {
+    /// All six, in the order of their codes.
+    pub const ALL_MODES: [Self; 6] =
+        [Self::None, Self::CornersOnly, Self::CornersPlus1, Self::CornersPlus2, Self::Boundaries, Self::All];
+
+    /// From OpenSubdiv's shape-file code 0..=5.
+    pub fn from_code(code: i64) -> Option<Self> {
+        usize::try_from(code).ok().and_then(|i| Self::ALL_MODES.get(i).copied())
+    }
+
+    /// OpenSubdiv's shape-file code 0..=5.
+    pub fn code(self) -> u8 {
+        self as u8
+    }
+
+    /// The name the CLI and the peer harness use: `none`, `corners-only`, `corners-plus1`,
+    /// `corners-plus2`, `boundaries`, `all`.
+    pub fn name(self) -> &'static str {
+        ["none", "corners-only", "corners-plus1", "corners-plus2", "boundaries", "all"][self as usize]
     }
 }
 

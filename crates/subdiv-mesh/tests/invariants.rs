@@ -186,7 +186,11 @@ fn tags_resolve_to_edges_vertices_and_faces() {
     assert_eq!(mesh.edges().filter(|&e| mesh.edge_sharpness(e) > 0.0).count(), 1);
     assert_eq!(mesh.vertex_sharpness(VertexId::new(7)), 10.0);
     assert!(mesh.is_hole(FaceId::new(2)) && !mesh.is_hole(FaceId::new(0)));
-    assert_eq!(mesh.to_soup(), soup);
+    // The soup again, with the tags as resolved: one crease per edge, corners, holes.
+    let again = mesh.to_soup();
+    assert_eq!((again.positions(), again.raw_faces()), (soup.positions(), soup.raw_faces()));
+    assert_eq!(again.tags.creases, [subdiv_mesh::CreaseTag { vertices: mesh.edge_vertices(edge), sharpness: 2.5 }]);
+    assert_eq!((&again.tags.corners, &again.tags.holes), (&soup.tags.corners, &soup.tags.holes));
 
     let mut bad = shapes::cube();
     bad.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [VertexId::new(0), VertexId::new(7)], sharpness: 1.0 });

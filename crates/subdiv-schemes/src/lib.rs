@@ -79,6 +79,7 @@
 //!
 mod analysis;
 mod canonical;
+mod channel;
 mod crease;
 mod curve;
 mod dual;
@@ -96,6 +97,7 @@ mod stencil;
 pub mod strategies;
 
 pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, LocalSpectrum};
+pub use channel::ChannelSurface;
 pub use curve::{CurveError, CurveMatrix, CurveScheme, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};

@@ -4,9 +4,10 @@
 //! boundaries, creases, corners and holes.
 
 use glam::DVec3;
-use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, Mesh, TriangleSubdivision};
+use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, FaceVaryingInterpolation, Mesh, TriangleSubdivision};
 
 use crate::crease::INFINITE;
+use crate::primal::{ChannelLevel, ChannelRules};
 use crate::scheme::{Rules, Scheme};
 use crate::stencil::Stencils;
 use crate::{SchemeError, dual, primal};
@@ -26,6 +27,13 @@ pub struct RefineOptions {
     /// ([`QuadEdgeMask::triangle_face`](crate::QuadEdgeMask::triangle_face); of the built-ins
     /// only Catmull-Clark has one) ignore it.
     pub triangle_subdivision: Option<TriangleSubdivision>,
+    /// Where face-varying channels (texture coordinates) are linear; default: the mesh's
+    /// `facevaryinginterpolateboundary` tag, else [`FaceVaryingInterpolation::All`]
+    /// (OpenSubdiv's default: every refined value interpolates its parent face's values).
+    /// Channels are refined by the primal schemes with crease rules (Catmull-Clark, Loop,
+    /// bilinear, and scheme files with crease masks); the other schemes' refined meshes have no
+    /// channels.
+    pub face_varying: Option<FaceVaryingInterpolation>,
     /// The largest valence whose sub-patch matrices the exact pipeline derives (refinement
     /// itself takes any valence): past it [`MeshPatches`](crate::MeshPatches) refuses the mesh
     /// with [`SchemeError::ValenceTooLarge`](crate::SchemeError::ValenceTooLarge) before any
@@ -41,18 +49,38 @@ pub const MAX_PATCH_VALENCE: usize = 1024;
 
 impl RefineOptions {
     /// The defaults: everything from the mesh's tags, valences up to [`MAX_PATCH_VALENCE`].
-    pub const DEFAULT: Self =
-        Self { boundary: None, crease_method: None, triangle_subdivision: None, max_patch_valence: MAX_PATCH_VALENCE };
+    pub const DEFAULT: Self = Self {
+        boundary: None,
+        crease_method: None,
+        triangle_subdivision: None,
+        face_varying: None,
+        max_patch_valence: MAX_PATCH_VALENCE,
+    };
+
+    /// Sets [`face_varying`](Self::face_varying).
+    pub fn with_face_varying(mut self, mode: FaceVaryingInterpolation) -> Self {
+        self.face_varying = Some(mode);
+        self
+    }
 
     pub(crate) fn boundary_for(&self, mesh: &Mesh) -> BoundaryInterpolation {
         self.boundary.or(mesh.tags().boundary_interpolation).unwrap_or(BoundaryInterpolation::EdgeOnly)
     }
 
-    fn rules_for(&self, mesh: &Mesh) -> Options {
+    pub(crate) fn rules_for(&self, mesh: &Mesh) -> Options {
+        let crease_method = self.crease_method.or(mesh.tags().crease_method).unwrap_or(CreaseMethod::Uniform);
         Options {
-            crease_method: self.crease_method.or(mesh.tags().crease_method).unwrap_or(CreaseMethod::Uniform),
+            crease_method,
             smooth_triangles: self.triangle_subdivision.or(mesh.tags().triangle_subdivision)
                 == Some(TriangleSubdivision::Smooth),
+            channels: ChannelRules {
+                mode: self
+                    .face_varying
+                    .or(mesh.tags().face_varying_interpolation)
+                    .unwrap_or(FaceVaryingInterpolation::All),
+                sharp_mesh_corners: self.boundary_for(mesh) == BoundaryInterpolation::EdgeAndCorner,
+                crease_method,
+            },
         }
     }
 }
@@ -62,6 +90,7 @@ impl RefineOptions {
 pub(crate) struct Options {
     pub(crate) crease_method: CreaseMethod,
     pub(crate) smooth_triangles: bool,
+    pub(crate) channels: ChannelRules,
 }
 
 /// Refines `mesh` `levels` times with `scheme` (0 returns a copy with the boundary rule
@@ -144,8 +173,10 @@ impl Refiner {
         let rules = options.rules_for(mesh);
         let mut current = if scheme.has_crease_rules() { prepared(mesh, options) } else { mesh.clone() };
         let mut stencils = Vec::with_capacity(levels);
+        // The channels' face-varying topology, carried from level to level.
+        let mut channels = Vec::new();
         for level in 0..levels {
-            let (child, level_stencils) = refine_once(&current, scheme, rules)?;
+            let (child, level_stencils) = refine_once(&current, scheme, rules, &mut channels)?;
             current = child;
             stencils.push(level_stencils);
             progress(level + 1);
@@ -191,11 +222,17 @@ pub fn refine(mesh: &Mesh, scheme: &Scheme, options: &RefineOptions) -> Result<M
     refine_uniform(mesh, scheme, 1, options)
 }
 
-/// One level of any scheme.
-fn refine_once(mesh: &Mesh, scheme: &Scheme, options: Options) -> Result<(Mesh, Stencils), SchemeError> {
+/// One level of any scheme; `channels` holds the face-varying topology of `mesh`'s channels
+/// (empty at the base level) and is replaced by the child's.
+fn refine_once(
+    mesh: &Mesh,
+    scheme: &Scheme,
+    options: Options,
+    channels: &mut Vec<ChannelLevel>,
+) -> Result<(Mesh, Stencils), SchemeError> {
     match &scheme.rules {
         Rules::Quad { .. } | Rules::Triangle { .. } | Rules::FourPointQuad { .. } => {
-            primal::refine(mesh, scheme, options)
+            primal::refine(mesh, scheme, options, channels)
         }
         Rules::Dual { own, corner } => dual::doo_sabin(mesh, own, corner),
         Rules::Midedge => dual::midedge(mesh),
@@ -245,7 +282,7 @@ fn check_input(mesh: &Mesh, scheme: &Scheme) -> Result<(), SchemeError> {
 /// infinitely sharp; with edge-and-corner, so do boundary vertices with one face; with none,
 /// the faces around a boundary vertex that is not explicitly sharp become holes.
 /// Idempotent, so it may run at every level.
-fn prepared(mesh: &Mesh, options: &RefineOptions) -> Mesh {
+pub(crate) fn prepared(mesh: &Mesh, options: &RefineOptions) -> Mesh {
     let boundary = options.boundary_for(mesh);
     let mut out = mesh.clone();
     if boundary == BoundaryInterpolation::None {

@@ -42,6 +42,11 @@ impl Row {
         }
     }
 
+    /// The entries `(parent, weight)`, each parent once.
+    pub(crate) fn entries(&self) -> &[(u32, f64)] {
+        &self.0
+    }
+
     /// `self · a + other · (1 − a)`.
     pub(crate) fn blend(self, other: &Row, a: f64) -> Row {
         let mut out = Row::default();

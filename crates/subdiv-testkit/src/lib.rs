@@ -11,6 +11,7 @@
 #![allow(clippy::print_stderr)]
 
 pub mod opensubdiv;
+pub mod refined;
 
 use std::path::{Path, PathBuf};
 
@@ -61,6 +62,21 @@ pub fn gpu() -> Option<subdiv_gpu::Gpu> {
             None
         }
     }
+}
+
+/// A peer harness program named by the environment variable `var` (`SUBDIV_OSD_REFINE`,
+/// `SUBDIV_OSD_LIMIT`, which `.ci/run` sets): `None` (after saying so on stderr) when it is
+/// unset.
+///
+/// # Panics
+/// When the variable is set but names no file.
+pub fn peer_program(var: &str) -> Option<PathBuf> {
+    let path = std::env::var_os(var).map(PathBuf::from);
+    match &path {
+        Some(p) => assert!(p.is_file(), "{var}={} does not exist", p.display()),
+        None => eprintln!("{var} is unset: comparison with OpenSubdiv not run"),
+    }
+    path
 }
 
 /// The shared meshes folder, `<shared>/testdata/meshes`; `None` as for [`shared_dir`].
@@ -119,6 +135,29 @@ pub fn creased_meshes() -> Vec<(PathBuf, subdiv_schemes::Builtin, subdiv_mesh::M
         } else {
             subdiv_schemes::Builtin::CatmullClark
         };
+        out.push((path, builtin, mesh));
+    }
+    out
+}
+
+/// The shared meshes with texture coordinates that build, with the scheme each is meant for
+/// (as [`opensubdiv::compare_refinement`] picks it: `loop_` and other all-triangle meshes Loop,
+/// `bilinear_` bilinear, else Catmull-Clark), in path order; empty when the shared folder is
+/// not set.
+///
+/// # Panics
+/// When the shared folder is set but a mesh file cannot be read.
+pub fn textured_meshes() -> Vec<(PathBuf, subdiv_schemes::Builtin, subdiv_mesh::Mesh)> {
+    let Some(dir) = meshes_dir() else { return Vec::new() };
+    let mut out = Vec::new();
+    for path in obj_files(&dir) {
+        let soup = subdiv_io::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        if soup.channels.is_empty() {
+            continue;
+        }
+        let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let (builtin, _) = opensubdiv::scheme_of(&name, &soup);
+        let Ok(mesh) = subdiv_mesh::Mesh::build(soup) else { continue };
         out.push((path, builtin, mesh));
     }
     out

@@ -43,6 +43,14 @@ pub enum Error {
         /// The rates given, in words.
         given: &'static str,
     },
+    /// A face-varying channel asked for by a name the mesh has no channel of.
+    #[error("the mesh has no channel {channel:?} (its channels: {channels:?})")]
+    NoChannel {
+        /// The name asked for.
+        channel: String,
+        /// The mesh's channels.
+        channels: Vec<String>,
+    },
     /// Refinement to so many levels that the faces would not fit 32-bit ids.
     #[error("refining {levels} levels would make at least {faces} faces, more than 32-bit face ids can name")]
     RefineLevels {

@@ -4,7 +4,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use subdiv_mesh::{BuildOptions, FaceId, Mesh, PolygonSoup};
-use subdiv_schemes::{RefineOptions, Refiner, Scheme, Split};
+use subdiv_schemes::{ChannelSurface, RefineOptions, Refiner, Scheme, Split};
 use subdiv_stencil::LimitPoint;
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv_tess::{
@@ -52,6 +52,8 @@ pub struct Surface {
     quadtree: Option<QuadtreeTessellator>,
     /// The most faces [`Surface::refine`] makes.
     max_refined_faces: u64,
+    /// The options of [`Surface::refine`].
+    refine_options: RefineOptions,
 }
 
 /// The most faces [`Surface::refine`] makes unless raised with
@@ -70,7 +72,35 @@ impl Surface {
             dual: None,
             quadtree: None,
             max_refined_faces: DEFAULT_MAX_REFINED_FACES,
+            refine_options: RefineOptions::DEFAULT,
         }
+    }
+
+    /// The same surface, with [`refine`](Self::refine) taking `options` (the boundary rule,
+    /// crease method, face-varying interpolation, …) instead of [`RefineOptions::DEFAULT`],
+    /// which takes everything from the mesh's tags.
+    ///
+    /// ```
+    /// use subdiv::mesh::{Channel, FaceVaryingInterpolation, shapes};
+    /// use subdiv::schemes::{Builtin, RefineOptions};
+    /// use subdiv::Surface;
+    ///
+    /// // A quad with texture coordinates at its corners: linear (the default) keeps the centre's
+    /// // coordinate at the average, smooth ("none") follows the boundary curve.
+    /// let mut soup = shapes::quad_grid(1, 1);
+    /// soup.channels.push(Channel::new("uv", 2, vec![0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0], vec![0, 1, 2, 3]));
+    /// let surface = Surface::build(soup, Builtin::CatmullClark.scheme())?;
+    /// let linear = surface.refine(1)?;
+    /// let smooth = RefineOptions::DEFAULT.with_face_varying(FaceVaryingInterpolation::None);
+    /// let smooth = surface.with_refine_options(smooth).refine(1)?;
+    /// assert_eq!(linear.channels()[0].value_count(), 9);
+    /// assert_ne!(linear.channels()[0].values(), smooth.channels()[0].values());
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
+    #[must_use]
+    pub fn with_refine_options(mut self, options: RefineOptions) -> Self {
+        self.refine_options = options;
+        self
     }
 
     /// The same surface, letting [`refine`](Self::refine) make up to `faces` faces (by the
@@ -170,7 +200,7 @@ impl Surface {
         if faces > u64::from(u32::MAX) {
             return Err(Error::RefineLevels { levels, faces });
         }
-        Ok(Refiner::with_progress(&self.mesh, &self.scheme, levels, &RefineOptions::DEFAULT, progress)?.into_mesh())
+        Ok(Refiner::with_progress(&self.mesh, &self.scheme, levels, &self.refine_options, progress)?.into_mesh())
     }
 
     /// The limit point of `face` at its `Bfr` parameters `(u, v)`, with first derivatives: by
@@ -199,6 +229,49 @@ impl Surface {
     /// corners, faces the scheme does not take.
     pub fn evaluator(&self, options: &EvalOptions) -> Result<Evaluator, Error> {
         Evaluator::new(&self.scheme, &self.mesh, options)
+    }
+
+    /// An evaluator of the face-varying channel `channel` (one of the mesh's, by name: `"uv"`
+    /// for texture coordinates) as the surface its values lie on: at a face's `(u, v)` its
+    /// [`LimitPoint::position`](subdiv_stencil::LimitPoint) holds the channel's value (padded
+    /// to three components) and `du`, `dv` the value's derivatives. `options.refine` gives the
+    /// face-varying interpolation mode; [`EvalMethod::Eigen`](crate::EvalMethod) becomes
+    /// [`EvalMethod::Auto`](crate::EvalMethod) (a channel's seams are boundaries).
+    ///
+    /// ```
+    /// use subdiv::mesh::{Channel, FaceId, shapes};
+    /// use subdiv::schemes::Builtin;
+    /// use subdiv::{EvalOptions, Surface};
+    ///
+    /// // Texture coordinates equal to each vertex's x and y, on a grid: under the default (linear
+    /// // everywhere) the coordinate at a face's centre is the average of its corners'.
+    /// let mut soup = shapes::quad_grid(3, 3);
+    /// let xy: Vec<f64> = soup.positions().iter().flat_map(|p| [p.x, p.y]).collect();
+    /// let corners = soup.raw_faces().1.iter().map(|v| v.raw()).collect();
+    /// soup.channels.push(Channel::new("uv", 2, xy, corners));
+    /// let surface = Surface::build(soup, Builtin::CatmullClark.scheme())?;
+    /// let uv = surface.channel_evaluator("uv", &EvalOptions::DEFAULT)?;
+    /// let centre = uv.evaluate(FaceId::new(4), 0.5, 0.5)?;
+    /// assert!((centre.position.x - 1.5).abs() < 1e-12 && (centre.position.y - 1.5).abs() < 1e-12);
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`Error::NoChannel`] when the mesh has no channel of that name; [`Error::Scheme`] for a
+    /// scheme without face-varying rules or a channel of more than three components; as
+    /// [`evaluator`](Self::evaluator) otherwise.
+    pub fn channel_evaluator(&self, channel: &str, options: &EvalOptions) -> Result<Evaluator, Error> {
+        let found = self.mesh.channel(channel).ok_or_else(|| Error::NoChannel {
+            channel: channel.to_owned(),
+            channels: self.mesh.channels().iter().map(|c| c.name().to_owned()).collect(),
+        })?;
+        let surface = ChannelSurface::new(&self.mesh, found, &self.scheme, &options.refine)?;
+        let method = match options.method {
+            crate::EvalMethod::Eigen => crate::EvalMethod::Auto,
+            method => method,
+        };
+        let options = EvalOptions { method, refine: RefineOptions::DEFAULT, ..*options };
+        Evaluator::new(surface.scheme(), surface.mesh(), &options)
     }
 
     fn default_evaluator(&self) -> Result<&Evaluator, Error> {

@@ -24,21 +24,14 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use subdiv::DVec3;
-use subdiv::mesh::{FaceId, Mesh, Tags, VertexId};
-use subdiv::schemes::{Builtin, ChildDomain, RefineOptions, Split, child_faces, refine};
+use subdiv::mesh::{Mesh, Tags, VertexId};
+use subdiv::schemes::{Builtin, RefineOptions};
 use subdiv::stencil::{Dyadic, FaceDomain, LimitEvaluator};
+use subdiv_testkit::peer_program;
+use subdiv_testkit::refined::{corner_points, far_limit_exceptions, refined_parameters};
 
 /// The largest level-`L` face count compared.
 const MAX_FACES: usize = 2_000_000;
-
-fn program(var: &str) -> Option<PathBuf> {
-    let path = std::env::var_os(var).map(PathBuf::from);
-    match &path {
-        Some(p) => assert!(p.is_file(), "{var}={} does not exist", p.display()),
-        None => eprintln!("{var} is unset: comparison with OpenSubdiv not run"),
-    }
-    path
-}
 
 /// The creased meshes of the corpus that are valid here, with their scheme.
 fn creased_meshes() -> Vec<(PathBuf, Builtin, Mesh)> {
@@ -61,96 +54,13 @@ fn osd_points(program: &Path, args: &[&str], mesh: &Path) -> Vec<DVec3> {
         .collect()
 }
 
-/// Each vertex of `mesh` refined `levels` times as a base face's parameter, with the refined
-/// mesh (`None` for a vertex no face reaches).
-fn refined_parameters(mesh: &Mesh, split: Split, levels: usize) -> (Mesh, Vec<Option<(FaceId, Dyadic)>>) {
-    // Per face of the current level: its base face and the base parameters of its corners.
-    let mut current = mesh.clone();
-    let mut faces: Vec<(FaceId, Vec<Dyadic>)> = Vec::new();
-    let scheme = match split {
-        Split::Triangle => Builtin::Loop.scheme(),
-        _ => Builtin::CatmullClark.scheme(),
-    };
-    for level in 0..levels {
-        let child = refine(&current, scheme, &RefineOptions::DEFAULT).unwrap();
-        let mut next = vec![(FaceId::new(0), Vec::new()); child.face_count()];
-        for f in current.face_ids() {
-            let size = current.face_size(f);
-            let Some(range) = child_faces(split, &current, f) else { unreachable!("a primal split") };
-            for (j, c) in range.enumerate() {
-                let corners = corner_points(child.face_size(FaceId::new(c as u32)));
-                let base: Vec<Dyadic> = if level == 0 {
-                    let domain = FaceDomain::of(split, size).unwrap();
-                    match domain {
-                        FaceDomain::SubFaces { .. } => corners.iter().map(|&p| domain.from_sub_face(j, p)).collect(),
-                        _ => corners.iter().map(|&p| to_parent(ChildDomain::of_face(size)[j], p)).collect(),
-                    }
-                } else {
-                    let (_, parent) = &faces[f.index()];
-                    corners
-                        .iter()
-                        .map(|&p| interpolate(parent, to_parent(ChildDomain::of_face(size)[j], p), size))
-                        .collect()
-                };
-                next[c] = (if level == 0 { f } else { faces[f.index()].0 }, base);
-            }
-        }
-        faces = next;
-        current = child;
-    }
-    let mut at = vec![None; current.vertex_count()];
-    for (f, (base, corners)) in faces.iter().enumerate() {
-        for (k, &v) in current.face_vertices(FaceId::new(f as u32)).iter().enumerate() {
-            at[v.index()].get_or_insert((*base, corners[k]));
-        }
-    }
-    (current, at)
-}
-
-fn corner_points(size: usize) -> Vec<Dyadic> {
-    let d = |u, v| Dyadic::new(u, v, 1);
-    if size == 3 { vec![d(0, 0), d(1, 0), d(0, 1)] } else { vec![d(0, 0), d(1, 0), d(1, 1), d(0, 1)] }
-}
-
-fn to_parent(child: ChildDomain, p: Dyadic) -> Dyadic {
-    let sign = if child.flipped { -1 } else { 1 };
-    let (o0, o1) = (i64::from(child.offset[0]), i64::from(child.offset[1]));
-    Dyadic::new(sign * p.u + o0 * p.denominator, sign * p.v + o1 * p.denominator, 2 * p.denominator).reduced()
-}
-
-/// The base parameter of the point `p` of a face whose corners are at `corners` (an affine
-/// map: bilinear interpolation is affine on these parallelogram images).
-fn interpolate(corners: &[Dyadic], p: Dyadic, size: usize) -> Dyadic {
-    let (a, b, c) = if size == 3 { (corners[0], corners[1], corners[2]) } else { (corners[0], corners[1], corners[3]) };
-    let den = p.denominator * a.denominator * b.denominator * c.denominator;
-    let at = |q: Dyadic, x: i64| x * (den / q.denominator);
-    let (pu, pv, pd) = (p.u, p.v, p.denominator);
-    let u = at(a, a.u) * pd + (at(b, b.u) - at(a, a.u)) * pu + (at(c, c.u) - at(a, a.u)) * pv;
-    let v = at(a, a.v) * pd + (at(b, b.v) - at(a, a.v)) * pu + (at(c, c.v) - at(a, a.v)) * pv;
-    Dyadic::new(u, v, den * pd).reduced()
-}
-
-/// Darts (one sharp edge, no sharp vertex, interior) and interior valence-2 vertices of `mesh`,
-/// with their one-rings.
-fn excepted(mesh: &Mesh) -> HashSet<VertexId> {
-    let mut out = HashSet::new();
-    for v in mesh.vertices().filter(|&v| !mesh.is_isolated(v) && !mesh.is_boundary_vertex(v)) {
-        let sharp = mesh.outgoing(v).filter(|&h| mesh.edge_sharpness(mesh.edge(h)) > 0.0).count();
-        if (sharp == 1 && mesh.vertex_sharpness(v) == 0.0) || mesh.valence(v) == 2 {
-            out.insert(v);
-            out.extend(mesh.one_ring(v));
-        }
-    }
-    out
-}
-
 fn bbox_diagonal(mesh: &Mesh) -> f64 {
     mesh.bounding_box().map_or(1.0, |(lo, hi)| lo.distance(hi))
 }
 
 #[test]
 fn refined_limit_points_equal_opensubdiv() {
-    let Some(osd_refine) = program("SUBDIV_OSD_REFINE") else { return };
+    let Some(osd_refine) = peer_program("SUBDIV_OSD_REFINE") else { return };
     let (mut compared, mut skipped) = (0, Vec::new());
     for (path, builtin, mesh) in creased_meshes() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
@@ -186,7 +96,7 @@ fn refined_limit_points_equal_opensubdiv() {
                 .unwrap_or_else(|| panic!("{name}: OpenSubdiv has no refined point at {p:?}"))
         };
         let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
-        let skip = excepted(&ours);
+        let skip = far_limit_exceptions(&ours);
         let ours_positions = ours.positions();
         let mut worst: f64 = 0.0;
         for (v, at) in parameters.iter().enumerate() {
@@ -214,7 +124,7 @@ fn refined_limit_points_equal_opensubdiv() {
 
 #[test]
 fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
-    let Some(osd_limit) = program("SUBDIV_OSD_LIMIT") else { return };
+    let Some(osd_limit) = peer_program("SUBDIV_OSD_LIMIT") else { return };
     for (path, builtin, mesh) in creased_meshes() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let scheme = if builtin == Builtin::Loop { "loop" } else { "catmark" };
@@ -231,7 +141,7 @@ fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
             })
             .collect();
         let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
-        let darts = excepted(&mesh);
+        let darts = far_limit_exceptions(&mesh);
         let d = bbox_diagonal(&mesh);
         for f in mesh.face_ids().filter(|&f| eval.has_surface(f).unwrap()) {
             let domain = eval.domain(f).unwrap();
@@ -277,13 +187,13 @@ fn base_vertex_limits_equal_opensubdiv_except_at_darts() {
 /// corner is printed per mesh, not asserted.
 #[test]
 fn grids_equal_bfr_away_from_irregular_vertices() {
-    let Some(osd_limit) = program("SUBDIV_OSD_LIMIT") else { return };
+    let Some(osd_limit) = peer_program("SUBDIV_OSD_LIMIT") else { return };
     let (mut compared, mut points, mut corners) = (0, 0usize, 0usize);
     for (path, builtin, mesh) in creased_meshes() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let scheme = if builtin == Builtin::Loop { "loop" } else { "catmark" };
         let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
-        let darts = excepted(&mesh);
+        let darts = far_limit_exceptions(&mesh);
         let d = bbox_diagonal(&mesh);
         let (mut worst_p, mut worst_d, mut worst_corner, mut corner_angle) = (0.0_f64, 0.0_f64, 0.0_f64, 0.0_f64);
         for n in [3u32, 4] {

@@ -9,6 +9,10 @@
 use smallvec::SmallVec;
 use subdiv_mesh::{EdgeId, FaceId, HalfEdgeId, Mesh, PolygonSoup, Tags, VertexId};
 
+pub(crate) mod face_varying;
+
+pub(crate) use face_varying::{ChannelLevel, ChannelRules};
+
 use crate::crease::{self, Rule};
 use crate::refine::Options;
 use crate::scheme::{CreaseMask, ExtraordinaryEdgeMask, Rules, Scheme, TriangleEdgeMask, extraordinary_spokes};
@@ -141,7 +145,14 @@ impl Numbering {
     }
 }
 
-pub(crate) fn refine(mesh: &Mesh, scheme: &Scheme, options: Options) -> Result<(Mesh, Stencils), SchemeError> {
+/// One primal level; `channels` holds the face-varying topology of `mesh`'s channels (empty at
+/// the base level, where it is derived) and is replaced by the child's.
+pub(crate) fn refine(
+    mesh: &Mesh,
+    scheme: &Scheme,
+    options: Options,
+    channels: &mut Vec<ChannelLevel>,
+) -> Result<(Mesh, Stencils), SchemeError> {
     let masks = Masks::new(scheme, mesh, options);
     let method = options.crease_method;
     let quads = masks.splits_into_quads();
@@ -243,7 +254,55 @@ pub(crate) fn refine(mesh: &Mesh, scheme: &Scheme, options: Options) -> Result<(
             }
         }
     }
+    refine_channels(mesh, &mut child, &masks, options, &numbering, channels)?;
     Ok((child, stencils))
+}
+
+/// The child level's channels, for the schemes with crease rules (the face-varying rules are
+/// OpenSubdiv's, which its seams and channel boundaries follow); the others drop them.
+fn refine_channels(
+    mesh: &Mesh,
+    child: &mut Mesh,
+    masks: &Masks,
+    options: Options,
+    numbering: &Numbering,
+    levels: &mut Vec<ChannelLevel>,
+) -> Result<(), SchemeError> {
+    let Some(crease) = masks.crease.filter(|_| !mesh.channels().is_empty()) else {
+        levels.clear();
+        return Ok(());
+    };
+    let rules = options.channels;
+    if levels.len() != mesh.channels().len() {
+        *levels = mesh.channels().iter().map(|c| face_varying::analyze(mesh, c, rules)).collect();
+    }
+    // The positions' masks with each face point as one symbolic parent, `vertex_count + face`:
+    // matched values apply them to the face points' values.
+    let nv = mesh.vertex_count() as u32;
+    let face_points: Vec<Row> = match masks.kind {
+        Kind::Quad { .. } => mesh.face_ids().map(|f| Row::single(nv + f.raw())).collect(),
+        _ => Vec::new(),
+    };
+    let edge_mask = |e| edge_row(mesh, masks, &face_points, options, e);
+    let vertex_mask = |v| vertex_row(mesh, masks, &face_points, options.crease_method, v);
+    let at = face_varying::Children {
+        parent: mesh,
+        child,
+        face_base: numbering.face_base,
+        edge_base: numbering.edge_base,
+        quads: masks.splits_into_quads(),
+        crease,
+    };
+    let mut refined = Vec::with_capacity(levels.len());
+    let mut next = Vec::with_capacity(levels.len());
+    for (channel, level) in mesh.channels().iter().zip(levels.iter()) {
+        let (c, l) = face_varying::refine(&at, channel, level, rules, edge_mask, vertex_mask)?;
+        refined.push(c);
+        next.push(l);
+    }
+    child.set_channels(refined);
+    *levels = next;
+    Ok(())
 }
 
 /// The smooth edge point of the edge of `h` (its rule away from creases).
