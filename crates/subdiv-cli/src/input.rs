@@ -15,11 +15,16 @@ pub(crate) struct InputArgs {
     /// symlinks that lead out); refused by default.
     #[arg(long)]
     pub(crate) allow_outside_uris: bool,
+    /// glTF: weld vertices with equal positions into one cage vertex (exporters split vertices
+    /// along normal and texture seams; unwelded, such a cage comes apart there). Each corner
+    /// keeps its texture coordinates.
+    #[arg(long)]
+    pub(crate) weld: bool,
 }
 
 impl InputArgs {
     fn gltf(self) -> GltfOptions {
-        GltfOptions::DEFAULT.with_allow_outside_uris(self.allow_outside_uris)
+        GltfOptions::DEFAULT.with_allow_outside_uris(self.allow_outside_uris).with_weld(self.weld)
     }
 }
 

@@ -20,7 +20,7 @@ use ::gltf::json::{
 use base64::Engine as _;
 use glam::Vec3;
 use serde_json::Value;
-use subdiv_mesh::{PolygonSoup, VertexId};
+use subdiv_mesh::{Channel, PolygonSoup, VertexId};
 
 use crate::IoError;
 
@@ -49,12 +49,18 @@ pub struct GltfOptions {
     /// counts, or vertex counts where they have none), checked before anything is allocated.
     /// Default 2^28 (about 268 million, 89 million triangles).
     pub max_indices: u64,
+    /// Weld vertices with equal positions into one cage vertex, keeping each corner's texture
+    /// coordinates: exporters split a vertex wherever its normal or texture coordinate differs,
+    /// and without welding such a cage comes apart into pieces along those seams. Default
+    /// `false`: vertices are read as they are.
+    pub weld: bool,
 }
 
 impl GltfOptions {
     /// The defaults: buffers inside the glTF's folder only, at most 2^26 vertices and 2^28
     /// indices.
-    pub const DEFAULT: Self = Self { allow_outside_uris: false, max_vertices: 1 << 26, max_indices: 1 << 28 };
+    pub const DEFAULT: Self =
+        Self { allow_outside_uris: false, max_vertices: 1 << 26, max_indices: 1 << 28, weld: false };
 
     /// With [`allow_outside_uris`](Self::allow_outside_uris) set to `allow`.
     #[must_use]
@@ -72,6 +78,12 @@ impl GltfOptions {
     #[must_use]
     pub const fn with_max_indices(self, max: u64) -> Self {
         Self { max_indices: max, ..self }
+    }
+
+    /// With [`weld`](Self::weld) set to `weld`.
+    #[must_use]
+    pub const fn with_weld(self, weld: bool) -> Self {
+        Self { weld, ..self }
     }
 }
 
@@ -125,7 +137,11 @@ pub fn parse_gltf(bytes: &[u8], name: &str, base_dir: Option<&Path>) -> Result<P
 /// POSITION and optional `u8`/`u16`/`u32` indices (none: consecutive vertex triples). The
 /// result is one soup of triangles; each primitive's vertices are appended as they are, so
 /// vertices that an exporter split along normal or UV seams stay split (those seams are then
-/// boundaries). Node transforms and instancing are ignored: each mesh appears once, in its own
+/// boundaries) unless [`GltfOptions::weld`] welds equal positions. `TEXCOORD_n` (`VEC2` of
+/// `FLOAT`, or normalized unsigned bytes or shorts) becomes the channel `uv` (n = 0) or `uvN`,
+/// one value per glTF vertex, as stored (glTF's `v` runs down the image; nothing is flipped);
+/// when some primitives have it and others not, the channel would be incomplete, which is an
+/// error. Node transforms and instancing are ignored: each mesh appears once, in its own
 /// coordinates, which is the cage as modelled. Other attributes, materials and animation are
 /// ignored.
 ///
@@ -168,6 +184,7 @@ pub fn parse_gltf_with(
     let reader = Reader { root: &root, buffers, error: &error };
 
     let mut soup = PolygonSoup::new();
+    let (mut texcoord_sets, mut texcoords): (Option<Vec<u32>>, Vec<Vec<f64>>) = (None, Vec::new());
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
             let at = format!("meshes[{m}].primitives[{p}]");
@@ -187,6 +204,34 @@ pub fn parse_gltf_with(
             };
             let base = soup.vertex_count();
             let count = reader.positions(position.value(), &format!("{at}.attributes.POSITION"), &mut soup)?;
+            // Texture coordinates, per vertex; primitives must agree on which sets they have.
+            let mut sets: Vec<(u32, usize)> = primitive
+                .attributes
+                .iter()
+                .filter_map(|(k, a)| match k {
+                    Checked::Valid(Semantic::TexCoords(n)) => Some((*n, a.value())),
+                    _ => None,
+                })
+                .collect();
+            sets.sort_unstable();
+            let names: Vec<u32> = sets.iter().map(|s| s.0).collect();
+            match &texcoord_sets {
+                None => {
+                    texcoord_sets = Some(names);
+                    texcoords = vec![Vec::new(); sets.len()];
+                }
+                Some(known) if *known != names => {
+                    let rule = format!(
+                        "has TEXCOORD sets {names:?}, but the primitives before it {known:?}; a channel needs a value \
+                         at every vertex"
+                    );
+                    return Err(error(&format!("{at}.attributes"), rule));
+                }
+                Some(_) => {}
+            }
+            for ((n, accessor), values) in sets.iter().zip(&mut texcoords) {
+                reader.texcoords(*accessor, &format!("{at}.attributes.TEXCOORD_{n}"), count, values)?;
+            }
             let indices = match primitive.indices {
                 Some(index) => reader.indices(index.value(), &format!("{at}.indices"), count)?,
                 None => (0..count).collect(),
@@ -210,7 +255,31 @@ pub fn parse_gltf_with(
     if soup.vertex_count() == 0 {
         return Err(IoError::NoGeometry { file: name.to_owned() });
     }
-    Ok(soup)
+    // One value per glTF vertex, so each corner's index is its vertex's (before any welding).
+    let corners: Vec<u32> = soup.raw_faces().1.iter().map(|v| v.raw()).collect();
+    for (n, values) in texcoord_sets.unwrap_or_default().into_iter().zip(texcoords) {
+        let name = if n == 0 { Channel::UV.to_owned() } else { format!("{}{n}", Channel::UV) };
+        soup.channels.push(Channel::new(name, 2, values, corners.clone()));
+    }
+    Ok(if options.weld { welded(soup) } else { soup })
+}
+
+/// `soup` with vertices of equal positions made one (the first of them), faces and tags
+/// renumbered; channels keep their per-corner values.
+fn welded(soup: PolygonSoup) -> PolygonSoup {
+    let mut first: std::collections::HashMap<[u64; 3], VertexId> = std::collections::HashMap::new();
+    let mut out = PolygonSoup::with_capacity(soup.vertex_count(), soup.face_count(), soup.corner_count());
+    let to: Vec<VertexId> = soup
+        .positions()
+        .iter()
+        .map(|p| *first.entry(p.to_array().map(f64::to_bits)).or_insert_with(|| out.push_vertex(*p)))
+        .collect();
+    for face in soup.faces() {
+        out.push_face(face.iter().map(|v| to[v.index()]));
+    }
+    out.channels = soup.channels;
+    out.tags = soup.tags;
+    out
 }
 
 type ErrorFn<'a> = dyn Fn(&str, String) -> IoError + 'a;
@@ -554,6 +623,40 @@ impl Reader<'_> {
         Ok(elements.count)
     }
 
+    /// Appends the texture coordinates of accessor `index` (one `u v` per vertex of a primitive
+    /// with `vertex_count` vertices) to `values`.
+    fn texcoords(
+        &self,
+        index: usize,
+        referrer: &str,
+        vertex_count: usize,
+        values: &mut Vec<f64>,
+    ) -> Result<(), IoError> {
+        let expected = "TEXCOORD must be VEC2 of FLOAT, or of normalized unsigned bytes or shorts";
+        let (component, elements) = self.accessor(index, referrer, expected, |c, k| {
+            k == Type::Vec2 && matches!(c, ComponentType::F32 | ComponentType::U8 | ComponentType::U16)
+        })?;
+        if elements.count != vertex_count {
+            let rule = format!("has {} elements, but POSITION has {vertex_count}", elements.count);
+            return Err((self.error)(&format!("accessors[{index}]"), rule));
+        }
+        let read: fn(&[u8], usize) -> f64 = match component {
+            ComponentType::F32 => {
+                |b, k| f64::from(f32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]))
+            }
+            ComponentType::U8 => |b, k| f64::from(b[k]) / 255.0,
+            _ => |b, k| f64::from(u16::from_le_bytes([b[2 * k], b[2 * k + 1]])) / 65535.0,
+        };
+        for (i, bytes) in elements.iter().enumerate() {
+            let (u, v) = (read(bytes, 0), read(bytes, 1));
+            if !(u.is_finite() && v.is_finite()) {
+                return Err((self.error)(&format!("accessors[{index}]"), format!("element {i} is not finite")));
+            }
+            values.extend([u, v]);
+        }
+        Ok(())
+    }
+
     /// The vertex indices of accessor `index`, each checked against `vertex_count`.
     fn indices(&self, index: usize, referrer: &str, vertex_count: usize) -> Result<Vec<usize>, IoError> {
         let expected = "indices must be SCALAR of u8, u16 or u32";
@@ -608,6 +711,60 @@ mod tests {
         let path = dir.join(name);
         fs::write(&path, json.to_string()).unwrap();
         load_gltf_with(&path, options)
+    }
+
+    /// A unit square as two triangles whose shared vertices are split, as an exporter splits
+    /// them along a UV seam: six vertices, positions then texture coordinates in one buffer.
+    fn split_square(with_uv_on_second: bool) -> Value {
+        let p =
+            [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+        let t = [[0.0f32, 0.0], [0.5, 0.0], [0.5, 0.5], [0.6, 0.0], [1.0, 0.5], [0.6, 0.5]];
+        let mut bytes: Vec<u8> = p.iter().flatten().flat_map(|x| x.to_le_bytes()).collect();
+        bytes.extend(t.iter().flatten().flat_map(|x| x.to_le_bytes()));
+        let uri = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bytes)
+        );
+        let second =
+            if with_uv_on_second { json!({ "POSITION": 1, "TEXCOORD_0": 3 }) } else { json!({ "POSITION": 1 }) };
+        json!({
+            "asset": { "version": "2.0" },
+            "buffers": [{ "uri": uri, "byteLength": bytes.len() }],
+            "bufferViews": [{ "buffer": 0, "byteLength": 72 }, { "buffer": 0, "byteOffset": 72, "byteLength": 48 }],
+            "accessors": [
+                { "bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3" },
+                { "bufferView": 0, "byteOffset": 36, "componentType": 5126, "count": 3, "type": "VEC3" },
+                { "bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC2" },
+                { "bufferView": 1, "byteOffset": 24, "componentType": 5126, "count": 3, "type": "VEC2" },
+            ],
+            "meshes": [{ "primitives": [
+                { "attributes": { "POSITION": 0, "TEXCOORD_0": 2 } },
+                { "attributes": second },
+            ] }],
+        })
+    }
+
+    #[test]
+    fn texcoords_become_the_uv_channel_and_welding_joins_split_vertices() {
+        let dir = tempfile::tempdir().unwrap();
+        let split = load_json(dir.path(), "square.gltf", &split_square(true), &GltfOptions::DEFAULT).unwrap();
+        assert_eq!((split.vertex_count(), split.channels.len()), (6, 1));
+        let welded =
+            load_json(dir.path(), "square.gltf", &split_square(true), &GltfOptions::DEFAULT.with_weld(true)).unwrap();
+        assert_eq!(welded.vertex_count(), 4);
+        let mesh = subdiv_mesh::Mesh::build(welded).unwrap();
+        assert_eq!(mesh.boundary_edge_count(), 4, "one piece: the diagonal is shared");
+        let uv = mesh.channel(Channel::UV).unwrap();
+        // Each corner keeps its own coordinate: the diagonal is a seam of the channel.
+        let diagonal = mesh.find_edge(VertexId::new(0), VertexId::new(2)).unwrap();
+        assert!(mesh.is_seam(uv, diagonal));
+        assert_eq!(
+            uv.value(uv.corner_value(mesh.face_half_edges(subdiv_mesh::FaceId::new(1)).next().unwrap())),
+            [0.6, 0.0].map(|x: f32| f64::from(x))
+        );
+        // A primitive without the set the others have: an error naming it.
+        let error = load_json(dir.path(), "square.gltf", &split_square(false), &GltfOptions::DEFAULT).unwrap_err();
+        assert!(error.to_string().contains("meshes[0].primitives[1].attributes"), "{error}");
     }
 
     #[test]
