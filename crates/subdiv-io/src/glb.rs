@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use serde_json::{Value, json};
 
 use crate::gltf::{CHUNK_BIN, CHUNK_JSON, GLB_MAGIC};
@@ -13,14 +13,17 @@ use crate::{IoError, atomic};
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
 
-/// A triangle mesh to write as GLB: positions, optional normals (one per position), and three
-/// indices per triangle, counter-clockwise seen from outside.
+/// A triangle mesh to write as GLB: positions, optional normals and texture coordinates (one
+/// per position), and three indices per triangle, counter-clockwise seen from outside.
 #[derive(Clone, Copy, Debug)]
 pub struct GlbMesh<'a> {
     /// Vertex positions.
     pub positions: &'a [Vec3],
     /// Vertex normals, one per position; written normalised.
     pub normals: Option<&'a [Vec3]>,
+    /// Texture coordinates, one per position, written as `TEXCOORD_0` as given (glTF's `v`
+    /// runs down the image).
+    pub texcoords: Option<&'a [Vec2]>,
     /// Triangle vertex indices, three per triangle.
     pub indices: &'a [u32],
 }
@@ -63,17 +66,18 @@ pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> 
 }
 
 /// Encodes `mesh` as a GLB file: one scene, one node, one mesh with one TRIANGLES primitive;
-/// POSITION (with the `min`/`max` the spec requires), NORMAL when given, `u32` indices, one
+/// POSITION (with the `min`/`max` the spec requires), NORMAL and TEXCOORD_0 when given, `u32` indices, one
 /// tightly packed buffer view per accessor with its target, 4-byte aligned and padded chunks,
 /// `asset.generator = "subdiv"`. The same mesh always gives the same bytes.
 ///
 /// # Errors
 /// [`IoError::Unwritable`] for a mesh no valid GLB can hold: no triangle, an index count not a
 /// multiple of 3, an index out of range, a coordinate that is not finite or is too small to be
-/// a normal f32 (see [`check_glb_positions`]), a normal count that differs from
-/// the position count, a zero or non-finite normal, more than 4 GiB.
+/// a normal f32 (see [`check_glb_positions`]), a normal or texture-coordinate count that
+/// differs from the position count, a zero or non-finite normal, a non-finite texture
+/// coordinate, more than 4 GiB.
 pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
-    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals };
+    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals, texcoords: mesh.texcoords };
     let header = GlbHeader::of(vertices, mesh.indices)?;
     let mut glb = Vec::with_capacity(header.total as usize);
     header
@@ -89,7 +93,7 @@ pub fn encode_glb(mesh: &GlbMesh<'_>) -> Result<Vec<u8>, IoError> {
 /// # Errors
 /// As [`encode_glb`]; [`IoError::Io`] when writing fails.
 pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoError> {
-    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals };
+    let vertices = Vertices::Split { positions: mesh.positions, normals: mesh.normals, texcoords: mesh.texcoords };
     let header = GlbHeader::of(vertices, mesh.indices)?;
     atomic::write_file(path.as_ref(), |w| header.write(vertices, mesh.indices, w))
 }
@@ -109,11 +113,11 @@ pub fn write_glb_interleaved(path: impl AsRef<Path>, vertices: &[[f32; 6]], indi
 /// The vertices the GLB writer takes.
 #[derive(Clone, Copy)]
 enum Vertices<'a> {
-    Split { positions: &'a [Vec3], normals: Option<&'a [Vec3]> },
+    Split { positions: &'a [Vec3], normals: Option<&'a [Vec3]>, texcoords: Option<&'a [Vec2]> },
     Interleaved(&'a [[f32; 6]]),
 }
 
-impl Vertices<'_> {
+impl<'a> Vertices<'a> {
     fn len(self) -> usize {
         match self {
             Self::Split { positions, .. } => positions.len(),
@@ -138,6 +142,13 @@ impl Vertices<'_> {
             Self::Interleaved(v) => (&[][..], v),
         };
         Some(split.iter().copied().chain(interleaved.iter().map(|v| Vec3::new(v[3], v[4], v[5]))))
+    }
+
+    fn texcoords(self) -> Option<&'a [Vec2]> {
+        match self {
+            Self::Split { texcoords, .. } => texcoords,
+            Self::Interleaved(_) => None,
+        }
     }
 }
 
@@ -170,6 +181,14 @@ impl GlbHeader {
         {
             return Err(unwritable(format!("normal {i} = {v} has no direction")));
         }
+        if let Some(texcoords) = vertices.texcoords() {
+            if texcoords.len() != n {
+                return Err(unwritable(format!("{} texture coordinates for {n} vertices", texcoords.len())));
+            }
+            if let Some((i, t)) = texcoords.iter().enumerate().find(|(_, t)| !t.is_finite()) {
+                return Err(unwritable(format!("texture coordinate {i} = {t} is not finite")));
+            }
+        }
         let mut views = Vec::new();
         let mut accessors = Vec::new();
         let mut attributes = serde_json::Map::new();
@@ -192,6 +211,11 @@ impl GlbHeader {
             let view = push_view(12 * n, ARRAY_BUFFER);
             attributes.insert("NORMAL".into(), accessors.len().into());
             accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3" }));
+        }
+        if vertices.texcoords().is_some() {
+            let view = push_view(8 * n, ARRAY_BUFFER);
+            attributes.insert("TEXCOORD_0".into(), accessors.len().into());
+            accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC2" }));
         }
         let view = push_view(4 * indices.len(), ELEMENT_ARRAY_BUFFER);
         let index_accessor = accessors.len();
@@ -240,6 +264,10 @@ impl GlbHeader {
             // Checked by `of`: every normal has a direction.
             vec3(w, n.normalize())?;
         }
+        for t in vertices.texcoords().into_iter().flatten() {
+            w.write_all(&t.x.to_le_bytes())?;
+            w.write_all(&t.y.to_le_bytes())?;
+        }
         for &i in indices {
             w.write_all(&i.to_le_bytes())?;
         }
@@ -252,7 +280,7 @@ mod tests {
     use super::*;
 
     fn triangle(positions: &[Vec3]) -> Result<Vec<u8>, IoError> {
-        encode_glb(&GlbMesh { positions, normals: None, indices: &[0, 1, 2] })
+        encode_glb(&GlbMesh { positions, normals: None, texcoords: None, indices: &[0, 1, 2] })
     }
 
     #[test]

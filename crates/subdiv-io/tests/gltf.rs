@@ -2,7 +2,7 @@
 //! (each error typed and located, never a panic).
 
 use base64::Engine as _;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use serde_json::{Value, json};
 use subdiv_io::{GlbMesh, GltfOptions, IoError, encode_glb, load_gltf, parse_gltf, parse_gltf_with, write_glb};
 use subdiv_mesh::{BuildOptions, PolygonSoup};
@@ -13,7 +13,7 @@ const POSITIONS: [Vec3; 4] =
 const INDICES: [u32; 12] = [0, 2, 1, 0, 1, 3, 1, 2, 3, 2, 0, 3];
 
 fn tetrahedron() -> GlbMesh<'static> {
-    GlbMesh { positions: &POSITIONS, normals: None, indices: &INDICES }
+    GlbMesh { positions: &POSITIONS, normals: None, texcoords: None, indices: &INDICES }
 }
 
 fn parse(bytes: &[u8]) -> Result<PolygonSoup, IoError> {
@@ -130,6 +130,21 @@ fn written_glb_follows_the_container_and_accessor_rules() {
 }
 
 #[test]
+fn texture_coordinates_are_written_as_texcoord_0_and_read_back_as_the_uv_channel() {
+    let uv = [Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::new(0.25, 0.75)];
+    let glb = encode_glb(&GlbMesh { texcoords: Some(&uv), ..tetrahedron() }).unwrap();
+    let (json, _) = split(&glb);
+    assert_eq!(json["meshes"][0]["primitives"][0]["attributes"], json!({ "POSITION": 0, "TEXCOORD_0": 1 }));
+    assert_eq!(json["accessors"][1]["type"], "VEC2");
+    let soup = parse(&glb).unwrap();
+    let channel = &soup.channels[0];
+    assert_eq!(channel.name(), subdiv_mesh::Channel::UV);
+    for (corner, &v) in channel.indices().iter().zip(soup.raw_faces().1) {
+        assert_eq!(channel.value(*corner), uv[v.index()].to_array().map(f64::from));
+    }
+}
+
+#[test]
 fn meshes_no_glb_can_hold_are_refused_and_leave_no_file() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.glb");
@@ -139,9 +154,11 @@ fn meshes_no_glb_can_hold_are_refused_and_leave_no_file() {
         GlbMesh { indices: &[], ..tetrahedron() },
         GlbMesh { indices: &[0, 1], ..tetrahedron() },
         GlbMesh { indices: &[0, 1, 4], ..tetrahedron() },
-        GlbMesh { positions: &nan, indices: &[0, 1, 2], normals: None },
+        GlbMesh { positions: &nan, indices: &[0, 1, 2], normals: None, texcoords: None },
         GlbMesh { normals: Some(&POSITIONS[..3]), ..tetrahedron() },
         GlbMesh { normals: Some(&zero_normals), ..tetrahedron() },
+        GlbMesh { texcoords: Some(&[Vec2::ZERO; 3]), ..tetrahedron() },
+        GlbMesh { texcoords: Some(&[Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::NAN]), ..tetrahedron() },
     ] {
         let error = write_glb(&path, &mesh).unwrap_err();
         assert!(matches!(error, IoError::Unwritable { format: "GLB", .. }), "{error:?}");
