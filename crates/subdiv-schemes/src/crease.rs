@@ -27,7 +27,7 @@ pub(crate) fn is_infinite(s: f32) -> bool {
     s >= INFINITE
 }
 
-fn is_semi_sharp(s: f32) -> bool {
+pub(crate) fn is_semi_sharp(s: f32) -> bool {
     s > 0.0 && s < INFINITE
 }
 

@@ -20,7 +20,7 @@ use subdiv_mesh::{
     Channel, CreaseMethod, EdgeId, FaceId, FaceVaryingInterpolation as Mode, HalfEdgeId, Mesh, PolygonSoup, VertexId,
 };
 
-use super::vertex_edges;
+use super::{sharpness, vertex_edges};
 use crate::SchemeError;
 use crate::crease;
 use crate::stencil::Row;
@@ -114,14 +114,6 @@ impl ChannelLevel {
     fn is_matched(&self, v: VertexId) -> bool {
         !self.of(v)[0].tag.mismatch
     }
-}
-
-fn sharpness(s: f64) -> f32 {
-    s as f32
-}
-
-fn is_semi_sharp(s: f32) -> bool {
-    crease::is_sharp(s) && !crease::is_infinite(s)
 }
 
 /// The vertex's outgoing half-edges, one per face, in fan order (a boundary fan starts at its
@@ -260,7 +252,7 @@ pub(crate) fn analyze(mesh: &Mesh, channel: &Channel, rules: ChannelRules) -> Ch
             if span.discontinuous <= 0 {
                 let inf_sharp = all_corners_sharp || span.inf_sharp > 0 || (span.size == 1 && rules.mode != Mode::None);
                 if !inf_sharp {
-                    if span.semi_sharp > 0 || is_semi_sharp(vertex) {
+                    if span.semi_sharp > 0 || crease::is_semi_sharp(vertex) {
                         tag.semi_sharp = true;
                     } else if dependent_values_to_sharpen {
                         tag.semi_sharp = true;
@@ -523,14 +515,14 @@ pub(crate) fn refine(
 /// span holds no semi-sharp edge any more becomes a crease.
 fn reclassify_semi_sharp(parent: &Mesh, child: &Mesh, first: &[u32], siblings: &mut [Sibling], rules: ChannelRules) {
     let semi_edges = |mesh: &Mesh, v: VertexId| {
-        vertex_edges(mesh, v).iter().any(|&(e, _)| is_semi_sharp(sharpness(mesh.edge_sharpness(e))))
+        vertex_edges(mesh, v).iter().any(|&(e, _)| crease::is_semi_sharp(sharpness(mesh.edge_sharpness(e))))
     };
     for v in parent.vertices() {
         let own = &mut siblings[first[v.index()] as usize..first[v.index() + 1] as usize];
         if !own[0].tag.mismatch {
             continue;
         }
-        if !is_semi_sharp(sharpness(parent.vertex_sharpness(v))) && !semi_edges(parent, v) {
+        if !crease::is_semi_sharp(sharpness(parent.vertex_sharpness(v))) && !semi_edges(parent, v) {
             continue;
         }
         if crease::is_sharp(sharpness(child.vertex_sharpness(v))) {
@@ -549,7 +541,7 @@ fn reclassify_semi_sharp(parent: &Mesh, child: &Mesh, first: &[u32], siblings: &
         }
         for s in own.iter_mut().filter(|s| s.tag.semi_sharp && !s.tag.dep_sharp) {
             let still = s.ends.is_some_and(|ends| {
-                span_edges(child, ends).iter().any(|&e| is_semi_sharp(sharpness(child.edge_sharpness(e))))
+                span_edges(child, ends).iter().any(|&e| crease::is_semi_sharp(sharpness(child.edge_sharpness(e))))
             });
             if !still {
                 to_crease(&mut s.tag);
