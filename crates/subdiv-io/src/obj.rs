@@ -265,22 +265,37 @@ impl Parser {
         }
     }
 
-    fn vertex(&mut self, args: &str, line: usize) -> Result<(), IoError> {
-        let mut xyz = [0.0; 3];
+    /// The numbers of a `v` or `vt` record (`what` names them in errors): the first `N`, kept,
+    /// must be finite (else `non_finite` of the value); any after them (a `w`, vertex colours)
+    /// just need to be numbers. Returns the kept ones and how many numbers there were.
+    fn numbers<const N: usize>(
+        &self,
+        args: &str,
+        line: usize,
+        what: &str,
+        non_finite: impl Fn(f64) -> IoError,
+    ) -> Result<([f64; N], usize), IoError> {
+        let mut kept = [0.0; N];
         let mut count = 0;
         for token in args.split_ascii_whitespace() {
-            let value: f64 = token.parse().map_err(|_| {
-                self.syntax(line, format!("vertex coordinate {} {:?} is not a number", count + 1, clip(token)))
-            })?;
-            // Only x y z are kept; a w or vertex colours after them just need to be numbers.
-            if let Some(slot) = xyz.get_mut(count) {
+            let value: f64 = token
+                .parse()
+                .map_err(|_| self.syntax(line, format!("{what} {} {:?} is not a number", count + 1, clip(token))))?;
+            if let Some(slot) = kept.get_mut(count) {
                 if !value.is_finite() {
-                    return Err(IoError::NonFiniteCoordinate { file: self.obj.name.clone(), line, value });
+                    return Err(non_finite(value));
                 }
                 *slot = value;
             }
             count += 1;
         }
+        Ok((kept, count))
+    }
+
+    fn vertex(&mut self, args: &str, line: usize) -> Result<(), IoError> {
+        let file = &self.obj.name;
+        let non_finite = |value| IoError::NonFiniteCoordinate { file: file.clone(), line, value };
+        let (xyz, count) = self.numbers::<3>(args, line, "vertex coordinate", non_finite)?;
         if count < 3 {
             return Err(self.syntax(line, format!("a vertex needs 3 coordinates (v x y z); this one has {count}")));
         }
@@ -290,23 +305,9 @@ impl Parser {
     }
 
     fn texcoord(&mut self, args: &str, line: usize) -> Result<(), IoError> {
-        let mut uv = [0.0; 2];
-        let mut count = 0;
-        for token in args.split_ascii_whitespace() {
-            let value: f64 = token.parse().map_err(|_| {
-                self.syntax(line, format!("texture coordinate {} {:?} is not a number", count + 1, clip(token)))
-            })?;
-            if !value.is_finite() {
-                return Err(
-                    self.syntax(line, format!("texture coordinate {} {:?} is not finite", count + 1, clip(token)))
-                );
-            }
-            // u and v are kept; a third (w) just needs to be a number.
-            if let Some(slot) = uv.get_mut(count) {
-                *slot = value;
-            }
-            count += 1;
-        }
+        let non_finite = |value| self.syntax(line, format!("texture coordinate {value} is not finite"));
+        // u and v are kept (v is 0 when absent); a w just needs to be a number.
+        let (uv, count) = self.numbers::<2>(args, line, "texture coordinate", non_finite)?;
         if count == 0 {
             return Err(self.syntax(line, "a texture coordinate needs at least u (vt u [v [w]])".into()));
         }

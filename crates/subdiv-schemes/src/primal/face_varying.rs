@@ -21,9 +21,10 @@ use subdiv_mesh::{
 };
 
 use super::{sharpness, vertex_edges};
-use crate::SchemeError;
 use crate::crease;
+use crate::patch::child_faces;
 use crate::stencil::Row;
+use crate::{SchemeError, Split};
 
 /// What decides a channel's rules besides its topology.
 #[derive(Clone, Copy, Debug)]
@@ -340,8 +341,8 @@ pub(crate) struct Children<'a> {
     pub(crate) child: &'a Mesh,
     pub(crate) face_base: u32,
     pub(crate) edge_base: u32,
-    /// Whether faces split into quads (one face point each) or triangles into four.
-    pub(crate) quads: bool,
+    /// The split: quads (one face point per face) or triangles into four.
+    pub(crate) split: Split,
     /// The scheme's crease mask `(own, neighbour)`, which a channel's creases follow
     /// (OpenSubdiv writes Catmull-Clark's and Loop's `(3/4, 1/8)` into its face-varying code
     /// and makes the bilinear scheme's channels linear: the bilinear mask `(1, 0)` is that).
@@ -376,10 +377,14 @@ impl Children<'_> {
         VertexId::new(self.edge_base + e.raw())
     }
 
-    /// The half-edge leaving `from` in the child face at corner `corner` of parent face `f`,
-    /// whose first child face is `first`.
-    fn child_half_edge(&self, first: &[u32], f: FaceId, corner: usize, from: VertexId) -> Option<HalfEdgeId> {
-        let face = FaceId::new(first[f.index()] + corner as u32);
+    /// The child faces of parent face `f` (child `j` at its corner `j`).
+    fn children(&self, f: FaceId) -> std::ops::Range<usize> {
+        child_faces(self.split, self.parent, f).unwrap_or(0..0)
+    }
+
+    /// The half-edge leaving `from` in the child face at corner `corner` of parent face `f`.
+    fn child_half_edge(&self, f: FaceId, corner: usize, from: VertexId) -> Option<HalfEdgeId> {
+        let face = FaceId::new((self.children(f).start + corner) as u32);
         self.child.face_half_edges(face).find(|&h| self.child.origin(h) == from)
     }
 }
@@ -405,16 +410,6 @@ pub(crate) fn refine(
     vertex_mask: impl Fn(VertexId) -> Row,
 ) -> Result<(Channel, ChannelLevel), SchemeError> {
     let (parent, child) = (at.parent, at.child);
-    // Each parent face's first child face.
-    let mut first_face = Vec::with_capacity(parent.face_count() + 1);
-    first_face.push(0u32);
-    for f in parent.face_ids() {
-        let n = if at.quads { parent.face_size(f) as u32 } else { 4 };
-        first_face.push(first_face[f.index()] + n);
-    }
-    if first_face[parent.face_count()] as usize != child.face_count() {
-        return Err(internal("the child faces are not the parent faces' splits"));
-    }
 
     // Sibling counts, in child-vertex order.
     let mut first = Vec::with_capacity(child.vertex_count() + 1);
@@ -432,8 +427,8 @@ pub(crate) fn refine(
     // Each child corner's sibling, and the child channel's indices.
     let mut corner_sibling = vec![0u32; child.half_edge_count()];
     for f in parent.face_ids() {
-        for c in first_face[f.index()]..first_face[f.index() + 1] {
-            for h in child.face_half_edges(FaceId::new(c)) {
+        for c in at.children(f) {
+            for h in child.face_half_edges(FaceId::new(c as u32)) {
                 corner_sibling[h.index()] = match at.parent_of(child.origin(h)) {
                     Parent::Vertex(v) if !level.is_matched(v) => {
                         let ph = half_edge_from(parent, f, v).ok_or_else(|| internal("a child corner's parent"))?;
@@ -472,7 +467,7 @@ pub(crate) fn refine(
             sibling.tag = from.tag;
             if let (true, Some([h0, h1])) = (smooth_boundaries && !from.tag.is_inf_sharp(), from.ends) {
                 let map = |h: HalfEdgeId| {
-                    at.child_half_edge(&first_face, parent.face(h), parent.corner(h), v)
+                    at.child_half_edge(parent.face(h), parent.corner(h), v)
                         .ok_or_else(|| internal("a crease end's child"))
                 };
                 sibling.ends = Some([map(h0)?, map(h1)?]);
@@ -494,8 +489,8 @@ pub(crate) fn refine(
                 let f = faces[j];
                 let h = parent.face_half_edges(f).find(|&h| parent.edge(h) == e).ok_or_else(|| internal("edge"))?;
                 let (k, n) = (parent.corner(h), parent.face_size(f));
-                let lead = at.child_half_edge(&first_face, f, (k + 1) % n, point);
-                let trail = at.child_half_edge(&first_face, f, k, point);
+                let lead = at.child_half_edge(f, (k + 1) % n, point);
+                let trail = at.child_half_edge(f, k, point);
                 let (Some(lead), Some(trail)) = (lead, trail) else {
                     return Err(internal("an edge point's child faces"));
                 };
@@ -615,7 +610,7 @@ fn interpolate(
     };
 
     // Face points (triangle splits have none).
-    for f in parent.face_ids().filter(|_| at.quads) {
+    for f in parent.face_ids().filter(|_| at.split == Split::Quad) {
         let value = slot(at.face_child(f));
         let w = 1.0 / parent.face_size(f) as f64;
         for h in parent.face_half_edges(f) {
