@@ -1,7 +1,9 @@
-//! `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]… [--mode MODE]…`: dual-grid tessellation
-//! throughput into welded flat buffers (f32 positions and normals, u32 indices), one
-//! `key=value` line per measurement; with `SUBDIV_OSD_BENCH` pointing at the peer harness's
-//! `osd_bench`, OpenSubdiv's Bfr on the same meshes and rates, side by side.
+//! `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]… [--mode MODE]… [--channels yes|no]…`:
+//! dual-grid tessellation throughput into welded flat buffers (f32 positions and normals, u32
+//! indices), one `key=value` line per measurement; with `SUBDIV_OSD_BENCH` pointing at the peer
+//! harness's `osd_bench`, OpenSubdiv's Bfr on the same meshes and rates, side by side.
+//! `--channels yes` carries the meshes' face-varying channels (texture coordinates: exact values,
+//! seams split); the default `no` measures positions and normals alone, as `osd_bench` does.
 //!
 //! `first`: a new tessellator and its first flat output, what a fresh process meets. Then two
 //! modes, as `osd_bench` has: `full` (topology, stencil records, evaluation and flat
@@ -43,6 +45,7 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let mut rates: Vec<u32> = Vec::new();
     let mut threads: Vec<usize> = Vec::new();
     let mut modes: Vec<&'static str> = Vec::new();
+    let mut channels: Vec<bool> = Vec::new();
     let mut rest = args.iter();
     while let Some(a) = rest.next() {
         let value = rest.next().ok_or_else(|| format!("{a} needs a value; {USAGE}"))?;
@@ -63,6 +66,11 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                     .find(|m| m == value)
                     .ok_or_else(|| format!("--mode {value}: not one of {MODES:?}"))?,
             ),
+            "--channels" => channels.push(match value.as_str() {
+                "yes" => true,
+                "no" => false,
+                _ => return Err(format!("--channels {value}: yes or no; {USAGE}")),
+            }),
             _ => return Err(format!("unknown option {a:?}; {USAGE}")),
         }
     }
@@ -82,13 +90,18 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     if modes.is_empty() {
         modes = MODES.to_vec();
     }
+    if channels.is_empty() {
+        channels.push(false);
+    }
     let peer = std::env::var_os("SUBDIV_OSD_BENCH").map(PathBuf::from);
     for path in &meshes {
         let mesh = load_mesh(path, &Default::default()).map_err(|e| format!("{}: {e}", path.display()))?;
         let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
         for &rate in &rates {
             for &t in &threads {
-                measure(&mesh, &name, rate, t, &modes)?;
+                for &with in &channels {
+                    measure(&mesh, &name, rate, t, &modes, with)?;
+                }
             }
             if let Some(osd) = &peer {
                 osd_bench(osd, path, &name, rate)?;
@@ -98,19 +111,20 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-const USAGE: &str = "usage: cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]...";
+const USAGE: &str = "usage: cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]...";
 
 /// What is measured (see the module docs).
 const MODES: [&str; 5] = ["first", "full", "animate", "full_mesh", "animate_mesh"];
 
-/// Our lines for one mesh, rate and thread count.
-fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -> Result<(), String> {
+/// Our lines for one mesh, rate and thread count, with or without the mesh's channels.
+fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str], channels: bool) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().map_err(|e| e.to_string())?;
-    let options = DualOptions::DEFAULT.with_quads(false).with_parallelism(if threads > 1 {
+    let options = DualOptions::DEFAULT.with_quads(false).with_channels(channels).with_parallelism(if threads > 1 {
         Parallelism::Rayon
     } else {
         Parallelism::Serial
     });
+    let channels = if channels { "yes" } else { "no" };
     let rates = vec![rate; mesh.face_count()];
     if modes.contains(&"first") {
         // What a fresh process meets: the tessellator built (patch levels, stencil records)
@@ -128,7 +142,8 @@ fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -
             .map_err(|e| e.to_string())?;
         samples.sort_by(f64::total_cmp);
         println!(
-            "bench=tess peer=subdiv mesh={name} mode=first rate={rate} threads={threads} median_s={:.6}",
+            "bench=tess peer=subdiv mesh={name} mode=first rate={rate} threads={threads} channels={channels} \
+             median_s={:.6}",
             samples[1]
         );
     }
@@ -155,8 +170,8 @@ fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str]) -
                 std::hint::black_box(flat.indices.len());
             });
             println!(
-                "bench=tess peer=subdiv mesh={name} mode={mode} rate={rate} threads={threads} tris={tris} \
-                 vertices={vertices} median_s={seconds:.6} tris_per_s={:.0} bytes_per_tri={bytes_per_tri:.2}",
+                "bench=tess peer=subdiv mesh={name} mode={mode} rate={rate} threads={threads} channels={channels} \
+                 tris={tris} vertices={vertices} median_s={seconds:.6} tris_per_s={:.0} bytes_per_tri={bytes_per_tri:.2}",
                 tris as f64 / seconds
             );
         }

@@ -4,10 +4,11 @@
 //!   clippy with warnings denied, and the README's test command.
 //! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named: `topology`,
 //!   `refine`, `stencil` or `eval`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
-//! - `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]… [--mode MODE]…` measures dual-grid
-//!   tessellation into welded flat buffers (default: the peer harness's torus_big, cube and
-//!   valence56 at rates 8, 16, 32, on one thread and on all), beside OpenSubdiv's Bfr when
-//!   `SUBDIV_OSD_BENCH` names the harness's `osd_bench`.
+//! - `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]… [--mode MODE]… [--channels yes|no]…`
+//!   measures dual-grid tessellation into welded flat buffers (default: the peer harness's
+//!   torus_big, cube and valence56 at rates 8, 16, 32, on one thread and on all, without the
+//!   meshes' texture coordinates), beside OpenSubdiv's Bfr when `SUBDIV_OSD_BENCH` names the
+//!   harness's `osd_bench`.
 //! - `cargo xtask bench gpu [--mesh M]… [--rate N]… [--frames K]` measures milliseconds per
 //!   animation frame to re-evaluate a tessellation on the GPU (default: the built-in model and
 //!   a 100 000-face torus at rates 8 and 16), beside the CPU's animation path, with the
@@ -41,7 +42,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {

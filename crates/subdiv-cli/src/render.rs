@@ -11,7 +11,8 @@ use subdiv::mesh::shapes::twist;
 use subdiv::tess::rates::ScreenSpace;
 use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE};
 use subdiv_gpu::{
-    Gpu, GpuCage, GpuEvalOptions, GpuOptions, GpuTessellation, MAX_IMAGE_SIDE, RenderOptions, Renderer, View,
+    Gpu, GpuCage, GpuEvalOptions, GpuOptions, GpuTessellation, GpuTexcoords, MAX_IMAGE_SIDE, RenderOptions, Renderer,
+    View,
 };
 
 use crate::UserError;
@@ -66,6 +67,28 @@ pub(crate) struct RenderArgs {
     /// frame 0 undeformed) as a numbered PNG sequence.
     #[arg(long, value_name = "K")]
     frames: Option<u32>,
+    /// Texture the surface through its texture coordinates (exact at every vertex, split at
+    /// seams) so that the mapping can be checked: `checker` (16 squares per unit), or
+    /// `checker:N` for N squares per unit (1 to 4096).
+    #[arg(long, value_name = "checker[:N]", value_parser = parse_texture)]
+    texture: Option<u32>,
+}
+
+/// `--texture checker[:N]`: the checker's squares per unit of texture coordinates.
+fn parse_texture(text: &str) -> Result<u32, String> {
+    let squares = match text.split_once(':') {
+        None if text == "checker" => RenderOptions::DEFAULT.checker,
+        Some(("checker", n)) => n.parse().map_err(|_| format!("checker:{n}: N must be an integer"))?,
+        _ => {
+            return Err(format!(
+                "{text}: the texture is `checker` or `checker:N` (an image file is not supported yet)"
+            ));
+        }
+    };
+    if !(1..=subdiv_gpu::MAX_CHECKER).contains(&squares) {
+        return Err(format!("checker:{squares}: squares per unit are 1 to {}", subdiv_gpu::MAX_CHECKER));
+    }
+    Ok(squares)
 }
 
 /// Checks every argument that needs no mesh and no device, so that bad input fails before any
@@ -94,18 +117,26 @@ fn check(args: &RenderArgs) -> Result<([u32; 2], Option<u32>), UserError> {
 
 pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserError> {
     let ([width, height], frames) = check(args)?;
-    let options = RenderOptions { wireframe: args.wireframe, ..RenderOptions::default().with_size(width, height) };
+    let options = RenderOptions {
+        wireframe: args.wireframe,
+        checker: args.texture.unwrap_or(RenderOptions::DEFAULT.checker),
+        ..RenderOptions::default().with_size(width, height)
+    };
     let (input_name, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", input_name));
+    if args.texture.is_some() && mesh.channel(subdiv::mesh::Channel::UV).is_none_or(|c| c.dimension() < 2) {
+        return Err(located(&"--texture: the mesh has no texture coordinates (OBJ `vt`, glTF TEXCOORD_0)"));
+    }
     let start = Instant::now();
     let budget = |rates: &[u32]| {
         subdiv::check_vertex_budget(&mesh, &scheme, rates, None, args.max_vertices).map_err(|e| located(&e))
     };
     let framing = vec![FRAMING_RATE; mesh.face_count()];
     budget(&framing)?;
-    let mut tess = DualTessellator::new(&scheme, &mesh, &DualOptions { quads: false, ..DualOptions::default() })
-        .map_err(|e| located(&e))?;
+    // The texture coordinates only when they are drawn: carrying them cuts the seams.
+    let dual = DualOptions { quads: false, channels: args.texture.is_some(), ..DualOptions::default() };
+    let mut tess = DualTessellator::new(&scheme, &mesh, &dual).map_err(|e| located(&e))?;
     let mut flat = FlatMesh::default();
 
     // The camera, from the undeformed surface (so that frames do not jump).
@@ -133,12 +164,17 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
     let eval_options = GpuEvalOptions { edges: args.wireframe, ..GpuEvalOptions::default() };
     let surface = GpuTessellation::new(&gpu, &tess.evaluation_plan(), &flat.indices, mesh.positions(), &eval_options)?;
     let cage = if args.cage { Some(GpuCage::upload(&gpu, &mesh)?) } else { None };
+    let texcoords = if args.texture.is_some() { Some(GpuTexcoords::upload(&gpu, &flat.texcoords)?) } else { None };
+    let scene = |view| subdiv_gpu::Scene {
+        cage: cage.as_ref().map(GpuCage::lines),
+        texcoords: texcoords.as_ref().map(|t| &t.buffer),
+        ..surface.scene(view)
+    };
 
     let drawing = Instant::now();
     let written = match frames {
         None => {
-            let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-            write_png(&input_name, &args.output, &renderer.render(&gpu, &scene)?)?;
+            write_png(&input_name, &args.output, &renderer.render(&gpu, &scene(view))?)?;
             args.output.display().to_string()
         }
         Some(frames) => {
@@ -150,8 +186,7 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
                 if let Some(cage) = &cage {
                     cage.write_positions(&gpu, &moved)?;
                 }
-                let scene = subdiv_gpu::Scene { cage: cage.as_ref().map(GpuCage::lines), ..surface.scene(view) };
-                write_png(&input_name, path, &renderer.render(&gpu, &scene)?)?;
+                write_png(&input_name, path, &renderer.render(&gpu, &scene(view))?)?;
             }
             format!("{} … {}", paths[0].display(), paths[paths.len() - 1].display())
         }

@@ -76,11 +76,20 @@ pub(crate) struct TessellateArgs {
     /// Output file, .glb (triangles with normals) or .obj; written atomically.
     #[arg(short, long, default_value = DEFAULT_OUTPUT)]
     output: PathBuf,
-    /// Also write `vertex,face,u,v` per output vertex, in output order (Bfr parameters), as CSV.
+    /// Also write `vertex,face,u,v` per output vertex, in output order (Bfr parameters), as CSV:
+    /// the GLB's vertices, a crease's or seam's split copies after the others, and with
+    /// texture coordinates their `s,t`.
     #[arg(long, value_name = "OUT.csv")]
     params: Option<PathBuf>,
+    /// How texture coordinates are interpolated (none, corners-only, corners-plus1,
+    /// corners-plus2, boundaries, all); default: the mesh's `facevaryinginterpolateboundary`
+    /// tag, else all. The dual method carries them (exact at every vertex, seams split; GLB
+    /// `TEXCOORD_0`, OBJ `vt`); the quadtree does not.
+    #[arg(long, value_name = "MODE", value_parser = crate::refine::parse_face_varying)]
+    fvar_interpolation: Option<subdiv::mesh::FaceVaryingInterpolation>,
     /// Dual: evaluate the vertices on the GPU (wgpu, any Vulkan adapter) in f32 instead of on
-    /// the CPU in f64; the same tessellation, positions and normals to f32 precision.
+    /// the CPU in f64; the same tessellation, positions, normals and texture coordinates to f32
+    /// precision.
     #[arg(long)]
     gpu: bool,
 }
@@ -127,7 +136,11 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", input_name));
     let options = options(args)?;
-    let mut surface = Surface::new(mesh, &scheme);
+    let refine = subdiv::schemes::RefineOptions {
+        face_varying: args.fvar_interpolation,
+        ..subdiv::schemes::RefineOptions::DEFAULT
+    };
+    let mut surface = Surface::new(mesh, &scheme).with_refine_options(refine);
     let start = Instant::now();
     let bar = Spinner::new(surface.mesh().face_count());
     // GLB without --params needs neither the f64 output nor the parameters: the flat f32
@@ -135,7 +148,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     // 1.1 GB after; docs/perf-log.md).
     let lean = format == Format::Glb && args.params.is_none() && !args.gpu;
     let (result, gpu_detail) = if args.gpu {
-        let (result, detail) = gpu_tessellate(&mut surface, &options, &bar, located)?;
+        let (result, detail) = gpu_tessellate(&mut surface, &options, args.fvar_interpolation, &bar, located)?;
         (Output::Mesh(Box::new(result)), detail)
     } else {
         bar.say(if args.method == Method::Quadtree { "quadtree" } else { "dual-grid stitching" });
@@ -251,11 +264,17 @@ fn options(args: &TessellateArgs) -> Result<TessOptions, UserError> {
 fn gpu_tessellate(
     surface: &mut Surface,
     options: &TessOptions,
+    face_varying: Option<subdiv::mesh::FaceVaryingInterpolation>,
     bar: &Spinner,
     located: impl Fn(&dyn std::fmt::Display) -> UserError,
 ) -> Result<(Tessellation, String), UserError> {
     let FaceRates { faces, rings, epsilon } = surface.face_rates(options).map_err(|e| located(&e))?;
-    let dual = DualOptions { quads: options.polygons, ..DualOptions::default() };
+    let dual = DualOptions {
+        quads: options.polygons,
+        channels: surface.scheme().has_crease_rules(),
+        face_varying,
+        ..DualOptions::default()
+    };
     let mut tess = DualTessellator::new(surface.scheme(), surface.mesh(), &dual).map_err(|e| located(&e))?;
     bar.say("dual-grid stitching");
     match &rings {
@@ -264,8 +283,18 @@ fn gpu_tessellate(
     }
     .map_err(|e| located(&e))?;
     bar.say("evaluating on the GPU");
-    let (vertices, adapter) = gpu_evaluate(&tess, surface.mesh())?;
+    let (vertices, channels, adapter) = gpu_evaluate(&tess, surface.mesh())?;
     let mut mesh = tess.into_mesh();
+    // Each channel's values too: per flat vertex the first components of its plan's output.
+    let stride = mesh.channels.stride();
+    for (name, values) in channels {
+        let range = mesh.channels.find(&name).expect("a carried channel");
+        for (point, v) in mesh.channels.values.chunks_exact_mut(stride).zip(values.chunks_exact(6)) {
+            for (x, &g) in point[range.clone()].iter_mut().zip(v) {
+                *x = f64::from(g);
+            }
+        }
+    }
     // The GPU's f32 values replace the CPU's f64 ones: per flat vertex its normal (a crease
     // vertex's extra normals past the vertices) and, for the vertices, the position.
     for (k, v) in vertices.chunks_exact(6).enumerate() {
@@ -279,18 +308,29 @@ fn gpu_tessellate(
     Ok((Tessellation { mesh, info }, format!(", evaluated on {adapter}")))
 }
 
+/// A channel's values evaluated on the GPU: its name, and per flat vertex six floats (the
+/// value padded to three, then the value surface's normal).
+type GpuChannel = (String, Vec<f32>);
+
 /// Evaluates `tess`'s last tessellation on the GPU: per flat vertex (the vertices, then one
-/// per extra normal) `px py pz nx ny nz` (f32), and the adapter's name.
-fn gpu_evaluate(tess: &DualTessellator, mesh: &Mesh) -> Result<(Vec<f32>, String), UserError> {
+/// per extra normal) `px py pz nx ny nz` (f32), each carried channel through its own plan, and
+/// the adapter's name.
+fn gpu_evaluate(tess: &DualTessellator, mesh: &Mesh) -> Result<(Vec<f32>, Vec<GpuChannel>, String), UserError> {
     use subdiv_gpu::{Gpu, GpuEvalOptions, GpuOptions, GpuTessellation};
     let gpu_error = |e: subdiv_gpu::GpuError| UserError(format!("--gpu: {e}"));
     let gpu = Gpu::new(&GpuOptions::default()).map_err(gpu_error)?;
     let indices = tess.mesh().flat_indices();
+    let options = GpuEvalOptions::default();
     let on_gpu =
-        GpuTessellation::new(&gpu, &tess.evaluation_plan(), &indices, mesh.positions(), &GpuEvalOptions::default())
-            .map_err(gpu_error)?;
+        GpuTessellation::new(&gpu, &tess.evaluation_plan(), &indices, mesh.positions(), &options).map_err(gpu_error)?;
     let vertices = on_gpu.read_vertices(&gpu).map_err(gpu_error)?;
-    Ok((vertices, gpu.adapter_name()))
+    let mut channels = Vec::new();
+    for name in &tess.mesh().channels.names {
+        let (plan, values) = tess.channel_plan(name).expect("a carried channel");
+        let on_gpu = GpuTessellation::new(&gpu, &plan, &indices, values, &options).map_err(gpu_error)?;
+        channels.push((name.clone(), on_gpu.read_vertices(&gpu).map_err(gpu_error)?));
+    }
+    Ok((vertices, channels, gpu.adapter_name()))
 }
 
 /// `--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ[,FOVY_DEG]`.

@@ -593,3 +593,52 @@ fn a_glb_of_a_mesh_too_small_for_f32_is_refused_naming_input_and_output() {
     fails_with_one_line(&run, &["tiny.obj", "tiny.glb", "scale the mesh up"]);
     assert!(!output.exists());
 }
+
+/// `subdiv tessellate --params` lists every GLB vertex (the seams' split copies included) with
+/// its texture coordinates; `subdiv eval --samples` at those parameters gives the same `s,t`
+/// to 1e-12, and the GLB's `TEXCOORD_0` holds them (f32), on spot and `catmark_fvar_bound1`.
+#[test]
+fn tessellated_texture_coordinates_are_evals_at_their_params() {
+    for file in ["keenan/spot_control_mesh.obj", "opensubdiv/catmark_fvar_bound1.obj"] {
+        let Some(mesh) = shared_mesh(file) else { return };
+        let dir = tempfile::tempdir().unwrap();
+        let (glb, csv, samples) = (dir.path().join("s.glb"), dir.path().join("p.csv"), dir.path().join("s.txt"));
+        let out = subdiv(&[
+            "tessellate",
+            mesh.to_str().unwrap(),
+            "--rate",
+            "3",
+            "--params",
+            csv.to_str().unwrap(),
+            "-o",
+            glb.to_str().unwrap(),
+        ]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let mut lines = text.lines();
+        assert_eq!(lines.next(), Some("vertex,face,u,v,s,t"), "{file}");
+        let rows: Vec<Vec<f64>> = lines.map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+        let points: String = rows.iter().map(|r| format!("{} {:?} {:?}\n", r[1], r[2], r[3])).collect();
+        std::fs::write(&samples, points).unwrap();
+        let out = subdiv(&["eval", mesh.to_str().unwrap(), "--samples", samples.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let evaluated = String::from_utf8(out.stdout).unwrap();
+        let mut evaluated = evaluated.lines();
+        let header: Vec<&str> = evaluated.next().unwrap().split(',').collect();
+        let (s, t) = (header.iter().position(|&c| c == "s").unwrap(), header.iter().position(|&c| c == "t").unwrap());
+        let evaluated: Vec<Vec<f64>> = evaluated.map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+        assert_eq!(evaluated.len(), rows.len(), "{file}");
+        for (row, e) in rows.iter().zip(&evaluated) {
+            assert!((row[4] - e[s]).abs() <= 1e-12 && (row[5] - e[t]).abs() <= 1e-12, "{file}: {row:?} against {e:?}");
+        }
+        // The GLB's vertices are the rows, in order, with their coordinates.
+        let back = subdiv::io::load(&glb).unwrap();
+        let uv = back.channels.iter().find(|c| c.name() == "uv").expect("TEXCOORD_0 read back");
+        assert_eq!(uv.value_count(), rows.len(), "{file}");
+        for (k, row) in rows.iter().enumerate() {
+            let v = uv.value(k as u32);
+            assert!((v[0] - row[4]).abs() < 1e-6 && (v[1] - row[5]).abs() < 1e-6, "{file}: vertex {k}");
+        }
+        assert_eq!(back.positions().len(), rows.len(), "{file}");
+    }
+}

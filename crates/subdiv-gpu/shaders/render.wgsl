@@ -16,7 +16,8 @@ struct Uniforms {
     wire: vec4<f32>,
     // rgb and alpha of the cage's lines (hidden parts at a third of it).
     cage: vec4<f32>,
-    // x: specular strength; y: Blinn-Phong exponent.
+    // x: specular strength; y: Blinn-Phong exponent; z: checker squares per unit of texture
+    // coordinates (the textured surface).
     specular: vec4<f32>,
 };
 
@@ -37,21 +38,57 @@ fn vs_surface(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) 
     return out;
 }
 
-@fragment
-fn fs_surface(in: SurfaceOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+// The surface's colour at a point with albedo `albedo`, lit by the key and fill lights.
+fn shade(world: vec3<f32>, normal: vec3<f32>, front: bool, albedo: vec3<f32>) -> vec4<f32> {
     // Two-sided: the inside of an open surface is lit as seen.
-    var n = normalize(in.normal);
+    var n = normalize(normal);
     if !front {
         n = -n;
     }
-    let v = normalize(u.eye.xyz - in.world);
+    let v = normalize(u.eye.xyz - world);
     let diffuse = u.key.w * max(dot(n, u.key.xyz), 0.0) + u.fill.w * max(dot(n, u.fill.xyz), 0.0);
     // A little more ambient from above the view than from below.
     let ambient = u.surface.a * (0.75 + 0.25 * dot(n, normalize(u.key.xyz + u.fill.xyz)));
     let h = normalize(u.key.xyz + v);
     let specular = u.specular.x * pow(max(dot(n, h), 0.0), u.specular.y) * select(0.0, 1.0, dot(n, u.key.xyz) > 0.0);
-    let colour = u.surface.rgb * (ambient + diffuse) + vec3<f32>(specular);
+    let colour = albedo * (ambient + diffuse) + vec3<f32>(specular);
     return vec4<f32>(min(colour, vec3<f32>(1.0)), 1.0);
+}
+
+@fragment
+fn fs_surface(in: SurfaceOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    return shade(in.world, in.normal, front, u.surface.rgb);
+}
+
+struct TexturedOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) world: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+};
+
+@vertex
+fn vs_textured(
+    @location(0) position: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) uv: vec2<f32>,
+) -> TexturedOut {
+    var out: TexturedOut;
+    out.clip = u.view_proj * vec4<f32>(position, 1.0);
+    out.world = position;
+    out.normal = normal;
+    out.uv = uv;
+    return out;
+}
+
+// A checker of `u.specular.z` squares per unit of the texture coordinates: the surface's colour
+// and a dark one, so that stretching, seams and flips of the mapping show.
+@fragment
+fn fs_textured(in: TexturedOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
+    let cell = floor(in.uv * u.specular.z);
+    let odd = (i32(cell.x) + i32(cell.y)) & 1;
+    let albedo = select(u.surface.rgb, u.surface.rgb * 0.22, odd == 1);
+    return shade(in.world, in.normal, front, albedo);
 }
 
 @vertex

@@ -23,5 +23,7 @@ mod scene;
 pub use adapter::{Gpu, GpuOptions};
 pub use error::GpuError;
 pub use evaluate::{GpuEvalOptions, GpuTessellation, RateCache};
-pub use render::{CAGE_VERTEX_STRIDE, Image, MAX_IMAGE_SIDE, RenderOptions, Renderer, VERTEX_STRIDE};
-pub use scene::{Cage, GpuCage, GpuMesh, Lines, Scene, View, bounds, unique_edges};
+pub use render::{
+    CAGE_VERTEX_STRIDE, Image, MAX_CHECKER, MAX_IMAGE_SIDE, RenderOptions, Renderer, TEXCOORD_STRIDE, VERTEX_STRIDE,
+};
+pub use scene::{Cage, GpuCage, GpuMesh, GpuTexcoords, Lines, Scene, View, bounds, unique_edges};

@@ -28,6 +28,10 @@ pub const VERTEX_STRIDE: u64 = 24;
 /// Bytes per vertex of a cage position buffer: `x y z` as `f32`.
 pub const CAGE_VERTEX_STRIDE: u64 = 12;
 
+/// The bytes per texture coordinate of [`Scene::texcoords`]: `s t` as `f32`
+/// ([`FlatMesh::texcoords`](subdiv_tess::FlatMesh::texcoords)).
+pub const TEXCOORD_STRIDE: u64 = 8;
+
 /// The largest image side [`Renderer::new`] takes (lower if the device's limit is lower).
 pub const MAX_IMAGE_SIDE: u32 = 16384;
 
@@ -59,7 +63,14 @@ pub struct RenderOptions {
     /// The cage's colour and opacity; hidden parts are drawn at a third of it. Default: orange,
     /// `[255, 128, 0, 255]`.
     pub cage: [u8; 4],
+    /// The checker texture drawn through [`Scene::texcoords`], when the scene has them: squares
+    /// per unit of the texture coordinates (so a `[0, 1]²` atlas shows `checker²` squares),
+    /// `1..=`[`MAX_CHECKER`]. Default: 16.
+    pub checker: u32,
 }
+
+/// The most checker squares per unit of texture coordinates ([`RenderOptions::checker`]).
+pub const MAX_CHECKER: u32 = 4096;
 
 impl RenderOptions {
     /// The defaults, as documented on each field.
@@ -72,6 +83,7 @@ impl RenderOptions {
         surface: [176, 190, 212],
         wire: [28, 32, 44, 150],
         cage: [255, 128, 0, 255],
+        checker: 16,
     };
 
     /// The options with another image size.
@@ -86,6 +98,12 @@ impl RenderOptions {
         Self { wireframe, ..self }
     }
 
+    /// The options with another checker texture ([`checker`](Self::checker)).
+    #[must_use]
+    pub fn with_checker(self, checker: u32) -> Self {
+        Self { checker, ..self }
+    }
+
     /// Width over height.
     pub fn aspect(&self) -> f32 {
         self.width as f32 / self.height.max(1) as f32
@@ -94,9 +112,17 @@ impl RenderOptions {
     /// Checks the image size against [`MAX_IMAGE_SIDE`] (no device needed).
     ///
     /// # Errors
-    /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`].
+    /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`];
+    /// [`GpuError::Scene`] for a [`checker`](Self::checker) outside `1..=`[`MAX_CHECKER`].
     pub fn check(&self) -> Result<(), GpuError> {
-        check_size(self.width, self.height, MAX_IMAGE_SIDE)
+        check_size(self.width, self.height, MAX_IMAGE_SIDE)?;
+        if !(1..=MAX_CHECKER).contains(&self.checker) {
+            return Err(GpuError::Scene(format!(
+                "checker {}: squares per unit of texture coordinates are 1..={MAX_CHECKER}",
+                self.checker
+            )));
+        }
+        Ok(())
     }
 }
 
@@ -157,7 +183,7 @@ impl Uniforms {
             surface: [r, g, b, 0.16],
             wire: rgba(options.wire),
             cage: rgba(options.cage),
-            specular: [0.22, 48.0, 0.0, 0.0],
+            specular: [0.22, 48.0, options.checker as f32, 0.0],
         }
     }
 }
@@ -233,6 +259,8 @@ pub struct Renderer {
     uniforms: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     surface: wgpu::RenderPipeline,
+    /// The surface with its checker texture (a second vertex buffer of texture coordinates).
+    textured: wgpu::RenderPipeline,
     wire: wgpu::RenderPipeline,
     cage: wgpu::RenderPipeline,
     cage_hidden: wgpu::RenderPipeline,
@@ -252,6 +280,7 @@ impl Renderer {
     /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`] (or the device's
     /// texture limit); [`GpuError::Wgpu`] if the device refuses a resource.
     pub fn new(gpu: &Gpu, options: &RenderOptions) -> Result<Self, GpuError> {
+        options.check()?;
         check_size(options.width, options.height, MAX_IMAGE_SIDE.min(gpu.limits().max_texture_dimension_2d))?;
         let device = &gpu.device;
         let scopes = ErrorScopes::push(device, "creating the renderer");
@@ -290,7 +319,8 @@ impl Renderer {
         });
         let samples = if options.msaa { 4 } else { 1 };
         let pipelines = Pipelines { device, shader: &shader, layout: &pipeline_layout, samples };
-        let surface = pipelines.surface();
+        let surface = pipelines.surface(false);
+        let textured = pipelines.surface(true);
         let wire = pipelines.lines("wireframe", VERTEX_STRIDE, "fs_wire", wgpu::CompareFunction::LessEqual);
         let cage = pipelines.lines("cage", CAGE_VERTEX_STRIDE, "fs_cage", wgpu::CompareFunction::LessEqual);
         let cage_hidden =
@@ -330,6 +360,7 @@ impl Renderer {
             uniforms,
             bind_group,
             surface,
+            textured,
             wire,
             cage,
             cage_hidden,
@@ -388,8 +419,14 @@ impl Renderer {
                 multiview_mask: None,
             });
             pass.set_bind_group(0, &self.bind_group, &[]);
-            pass.set_pipeline(&self.surface);
             pass.set_vertex_buffer(0, scene.vertices.slice(..));
+            match scene.texcoords {
+                Some(texcoords) => {
+                    pass.set_pipeline(&self.textured);
+                    pass.set_vertex_buffer(1, texcoords.slice(..));
+                }
+                None => pass.set_pipeline(&self.surface),
+            }
             pass.set_index_buffer(scene.triangles.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..scene.index_count, 0, 0..1);
             if let (Some(wire), true) = (&scene.wireframe, options.wireframe) {
@@ -549,7 +586,7 @@ impl Pipelines<'_> {
     fn pipeline(
         &self,
         label: &str,
-        vertex: (&str, wgpu::VertexBufferLayout<'_>),
+        vertex: (&str, &[Option<wgpu::VertexBufferLayout<'_>>]),
         fragment: (&str, Option<wgpu::BlendState>),
         topology: wgpu::PrimitiveTopology,
         depth: (bool, wgpu::CompareFunction),
@@ -561,7 +598,7 @@ impl Pipelines<'_> {
                 module: self.shader,
                 entry_point: Some(vertex.0),
                 compilation_options: wgpu::PipelineCompilationOptions::default(),
-                buffers: &[Some(vertex.1)],
+                buffers: vertex.1,
             },
             primitive: wgpu::PrimitiveState {
                 topology,
@@ -592,17 +629,30 @@ impl Pipelines<'_> {
         })
     }
 
-    fn surface(&self) -> wgpu::RenderPipeline {
+    /// The shaded surface, `textured` through a second buffer of texture coordinates.
+    fn surface(&self, textured: bool) -> wgpu::RenderPipeline {
         const ATTRIBUTES: [wgpu::VertexAttribute; 2] = wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3];
+        const TEXCOORDS: [wgpu::VertexAttribute; 1] = wgpu::vertex_attr_array![2 => Float32x2];
         let layout = wgpu::VertexBufferLayout {
             array_stride: VERTEX_STRIDE,
             step_mode: wgpu::VertexStepMode::Vertex,
             attributes: &ATTRIBUTES,
         };
+        let texcoords = wgpu::VertexBufferLayout {
+            array_stride: TEXCOORD_STRIDE,
+            step_mode: wgpu::VertexStepMode::Vertex,
+            attributes: &TEXCOORDS,
+        };
+        let (label, vertex, fragment) = if textured {
+            ("textured surface", "vs_textured", "fs_textured")
+        } else {
+            ("surface", "vs_surface", "fs_surface")
+        };
+        let buffers = [Some(layout), textured.then_some(texcoords)];
         self.pipeline(
-            "surface",
-            ("vs_surface", layout),
-            ("fs_surface", None),
+            label,
+            (vertex, &buffers[..if textured { 2 } else { 1 }]),
+            (fragment, None),
             wgpu::PrimitiveTopology::TriangleList,
             (true, wgpu::CompareFunction::Less),
         )
@@ -619,7 +669,7 @@ impl Pipelines<'_> {
         };
         self.pipeline(
             label,
-            ("vs_line", layout),
+            ("vs_line", &[Some(layout)]),
             (fragment, Some(wgpu::BlendState::ALPHA_BLENDING)),
             wgpu::PrimitiveTopology::LineList,
             (false, compare),

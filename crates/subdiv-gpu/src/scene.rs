@@ -8,7 +8,7 @@ use subdiv_tess::FlatMesh;
 use subdiv_tess::rates::Camera;
 use wgpu::util::DeviceExt;
 
-use crate::render::{CAGE_VERTEX_STRIDE, ErrorScopes, RenderOptions, VERTEX_STRIDE};
+use crate::render::{CAGE_VERTEX_STRIDE, ErrorScopes, RenderOptions, TEXCOORD_STRIDE, VERTEX_STRIDE};
 use crate::{Gpu, GpuError};
 
 /// A pinhole camera: eye, target, up, vertical field of view, and the depth range drawn.
@@ -168,6 +168,10 @@ pub struct Scene<'a> {
     pub vertices: &'a wgpu::Buffer,
     /// The number of vertices in `vertices`.
     pub vertex_count: u32,
+    /// Per vertex its texture coordinates `s t` ([`TEXCOORD_STRIDE`] bytes; usage `VERTEX`,
+    /// e.g. a [`GpuTexcoords`]): when given, the surface is drawn with a checker texture
+    /// through them ([`RenderOptions::checker`]), so that the mapping can be looked at.
+    pub texcoords: Option<&'a wgpu::Buffer>,
     /// The surface's triangles: `u32` indices into `vertices`, three per triangle (usage
     /// `INDEX`).
     pub triangles: &'a wgpu::Buffer,
@@ -189,6 +193,15 @@ impl Scene<'_> {
         let fits = |buffer: &wgpu::Buffer, count: u32, stride: u64| u64::from(count) * stride <= buffer.size();
         if !fits(self.vertices, self.vertex_count, VERTEX_STRIDE) {
             return bad(format!("{} vertices do not fit a {}-byte buffer", self.vertex_count, self.vertices.size()));
+        }
+        if let Some(texcoords) = self.texcoords
+            && !fits(texcoords, self.vertex_count, TEXCOORD_STRIDE)
+        {
+            return bad(format!(
+                "texture coordinates of {} vertices do not fit a {}-byte buffer",
+                self.vertex_count,
+                texcoords.size()
+            ));
         }
         if !self.index_count.is_multiple_of(3) || !fits(self.triangles, self.index_count, 4) {
             return bad(format!(
@@ -345,9 +358,47 @@ impl GpuMesh {
             triangles: &self.triangles,
             index_count: self.index_count,
             wireframe: self.edges.as_ref().map(|indices| Lines { indices, index_count: self.edge_index_count }),
+            texcoords: None,
             cage: None,
             view,
         }
+    }
+}
+
+/// Texture coordinates on the device, `s t` as `f32` per vertex of a surface (a
+/// [`FlatMesh::texcoords`]), for [`Scene::texcoords`]. They do not move with an animated cage.
+#[derive(Debug)]
+pub struct GpuTexcoords {
+    /// The coordinates ([`TEXCOORD_STRIDE`] bytes per vertex; usage `VERTEX`).
+    pub buffer: wgpu::Buffer,
+    /// The number of vertices.
+    pub vertex_count: u32,
+}
+
+impl GpuTexcoords {
+    /// Uploads `texcoords`, two per vertex.
+    ///
+    /// # Errors
+    /// [`GpuError::Scene`] for an odd count, no coordinates, or one that is not finite;
+    /// [`GpuError::Wgpu`] if the device refuses the buffer.
+    pub fn upload(gpu: &Gpu, texcoords: &[f32]) -> Result<Self, GpuError> {
+        if texcoords.is_empty() || !texcoords.len().is_multiple_of(2) {
+            return Err(GpuError::Scene(format!("texture coordinates: {} floats, two per vertex", texcoords.len())));
+        }
+        if let Some(k) = texcoords.iter().position(|x| !x.is_finite()) {
+            return Err(GpuError::Scene(format!("texture coordinate of vertex {}: not finite", k / 2)));
+        }
+        let vertex_count = u32::try_from(texcoords.len() / 2)
+            .map_err(|_| GpuError::Scene("texture coordinates: more than u32::MAX vertices".to_string()))?;
+        let scopes = ErrorScopes::push(&gpu.device, "uploading texture coordinates");
+        let buffer = gpu.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("texture coordinates"),
+            contents: bytemuck::cast_slice(texcoords),
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        scopes.pop()?;
+        debug_assert_eq!(buffer.size(), u64::from(vertex_count) * TEXCOORD_STRIDE);
+        Ok(Self { buffer, vertex_count })
     }
 }
 

@@ -279,3 +279,38 @@ fn malformed_plans_are_refused_by_the_upload() {
     // The plan itself uploads.
     assert!(GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &options).is_ok());
 }
+
+/// Texture coordinates on the GPU: each carried channel's plan over its own control values,
+/// evaluated as positions are, equals the CPU's exact values (f32 against f64) to 1e-6 at every
+/// flat vertex (the seams' second sides included), on spot, blub and `catmark_fvar_bound0..4`
+/// at rates 3 and 8.
+#[test]
+fn texture_coordinates_match_the_cpu() {
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
+    let mut files = vec!["keenan/spot_control_mesh.obj".to_string(), "keenan/blub_control_mesh.obj".to_string()];
+    files.extend((0..5).map(|k| format!("opensubdiv/catmark_fvar_bound{k}.obj")));
+    let mut compared = 0;
+    for file in &files {
+        let Some(path) = subdiv_testkit::shared_mesh(file) else { return };
+        let mesh = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
+        let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
+        for rate in [3, 8] {
+            let out = tess.tessellate(&vec![rate; mesh.face_count()]).unwrap().clone();
+            let (plan, values) = tess.channel_plan("uv").expect("the texture coordinates are carried");
+            let on_gpu =
+                GpuTessellation::new(&gpu, &plan, &out.flat_indices(), values, &GpuEvalOptions::default()).unwrap();
+            let vertices = on_gpu.read_vertices(&gpu).unwrap();
+            assert_eq!(vertices.len(), 6 * out.flat_vertex_count());
+            let uv = out.channels.find("uv").unwrap();
+            let mut worst = 0.0f64;
+            for (k, v) in vertices.chunks_exact(6).enumerate() {
+                let cpu = &out.channels.point(k)[uv.clone()];
+                worst = worst.max((f64::from(v[0]) - cpu[0]).abs()).max((f64::from(v[1]) - cpu[1]).abs());
+            }
+            eprintln!("{file} at rate {rate}: texture coordinates within {worst:.2e} of the CPU's");
+            assert!(worst <= 1e-6, "{file} at rate {rate}: {worst:e}");
+            compared += 1;
+        }
+    }
+    assert_eq!(compared, 14);
+}

@@ -3,8 +3,8 @@
 //! and bad scenes are typed errors after which the renderer still works.
 
 use glam::Vec3;
-use subdiv_gpu::{GpuError, GpuMesh, Lines, RenderOptions, Renderer, Scene, View};
-use subdiv_mesh::{Mesh, shapes};
+use subdiv_gpu::{GpuError, GpuMesh, GpuTexcoords, Lines, RenderOptions, Renderer, Scene, View};
+use subdiv_mesh::{Channel, Mesh, shapes};
 use subdiv_schemes::Builtin;
 use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
 use wgpu::util::DeviceExt;
@@ -52,6 +52,7 @@ fn raw_buffers_draw_like_an_uploaded_mesh_and_frames_move() {
         triangles: &triangles,
         index_count: flat.indices.len() as u32,
         wireframe: Some(Lines { indices: &lines, index_count: edges.len() as u32 }),
+        texcoords: None,
         cage: None,
         view,
     };
@@ -105,9 +106,9 @@ fn bad_scenes_are_errors_and_the_renderer_survives_them() {
     assert_eq!(image.dimensions(), (96, 72));
 
     // Mesh data that breaks the layout.
-    let broken = FlatMesh { vertices: flat.vertices.clone(), indices: vec![0, 1, u32::MAX] };
+    let broken = FlatMesh { vertices: flat.vertices.clone(), indices: vec![0, 1, u32::MAX], ..FlatMesh::default() };
     assert!(matches!(GpuMesh::upload(&gpu, &broken), Err(GpuError::Scene(m)) if m.contains("not below")));
-    let broken = FlatMesh { vertices: vec![0.0; 7], indices: vec![] };
+    let broken = FlatMesh { vertices: vec![0.0; 7], indices: vec![], ..FlatMesh::default() };
     assert!(matches!(GpuMesh::upload(&gpu, &broken), Err(GpuError::Scene(_))));
     // Sizes.
     for (w, h) in [(0, 10), (10, 0), (16385, 10)] {
@@ -164,5 +165,49 @@ fn images_are_rows_of_rgba_bytes() {
         let rgb: Vec<u8> = image.pixels().chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
         assert_eq!(decoded.into_rgb8().into_raw(), rgb);
         assert_eq!(image.clone().into_rgba_image().into_raw(), image.into_pixels());
+    }
+}
+
+/// A checker through texture coordinates: a cube whose faces each map the unit square shows
+/// dark squares (the plain surface hardly any dark pixels), more of them for a finer checker, and the same
+/// image for the same coordinates; bad coordinates and checkers are typed errors.
+#[test]
+fn texture_coordinates_draw_a_checker() {
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
+    let mut soup = shapes::cube();
+    let square = [0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0];
+    soup.channels.push(Channel::new("uv", 2, square.repeat(6), (0..24).map(|i| i % 4).collect()));
+    let mesh = Mesh::build(soup).unwrap();
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
+    let mut flat = FlatMesh::default();
+    tess.tessellate_flat(&[8; 6], &mut flat).unwrap();
+    assert_eq!(flat.texcoords.len(), 2 * (flat.vertices.len() / 6));
+    let uploaded = GpuMesh::upload(&gpu, &flat).unwrap();
+    let texcoords = GpuTexcoords::upload(&gpu, &flat.texcoords).unwrap();
+    let plain = uploaded.scene(framing(&flat));
+    let textured = Scene { texcoords: Some(&texcoords.buffer), ..plain };
+    let dark = |image: &subdiv_gpu::Image| image.pixels().chunks_exact(4).filter(|p| p[0] < 90).count();
+    let coarse = Renderer::new(&gpu, &options().with_checker(2)).unwrap();
+    let fine = Renderer::new(&gpu, &options().with_checker(8)).unwrap();
+    let (none, two) = (dark(&coarse.render(&gpu, &plain).unwrap()), coarse.render(&gpu, &textured).unwrap());
+    // The plain surface has few dark pixels (its least lit rims), the checker hundreds.
+    assert!(dark(&two) > none + 200, "{} dark pixels against {none}", dark(&two));
+    assert_eq!(coarse.render(&gpu, &textured).unwrap(), two);
+    // Edges between dark and light squares: more of them for the finer checker.
+    let edges = |image: &subdiv_gpu::Image| {
+        let p = image.pixels();
+        (0..p.len() / 4 - 1).filter(|&k| (p[4 * k] < 90) != (p[4 * k + 4] < 90)).count()
+    };
+    assert!(edges(&fine.render(&gpu, &textured).unwrap()) > edges(&two));
+
+    assert!(matches!(GpuTexcoords::upload(&gpu, &[0.0; 3]), Err(GpuError::Scene(_))));
+    assert!(matches!(GpuTexcoords::upload(&gpu, &[0.0, f32::NAN]), Err(GpuError::Scene(m)) if m.contains("vertex 0")));
+    let short = GpuTexcoords::upload(&gpu, &flat.texcoords[..4]).unwrap();
+    match coarse.render(&gpu, &Scene { texcoords: Some(&short.buffer), ..plain }) {
+        Err(GpuError::Scene(m)) => assert!(m.contains("texture coordinates"), "{m}"),
+        other => panic!("expected a scene error, got {other:?}"),
+    }
+    for checker in [0, subdiv_gpu::MAX_CHECKER + 1] {
+        assert!(matches!(Renderer::new(&gpu, &options().with_checker(checker)), Err(GpuError::Scene(_))));
     }
 }

@@ -99,13 +99,19 @@ pub fn write_glb(path: impl AsRef<Path>, mesh: &GlbMesh<'_>) -> Result<(), IoErr
 }
 
 /// [`write_glb`] of interleaved vertices, `px py pz nx ny nz` each (a tessellator's flat
-/// buffers, `subdiv-tess`'s `FlatMesh`), without splitting them into arrays first: the same
-/// file as [`write_glb`] of their positions and normals.
+/// buffers, `subdiv-tess`'s `FlatMesh`), without splitting them into arrays first, with
+/// texture coordinates if given (one per vertex): the same file as [`write_glb`] of their
+/// positions, normals and texture coordinates.
 ///
 /// # Errors
 /// As [`write_glb`].
-pub fn write_glb_interleaved(path: impl AsRef<Path>, vertices: &[[f32; 6]], indices: &[u32]) -> Result<(), IoError> {
-    let vertices = Vertices::Interleaved(vertices);
+pub fn write_glb_interleaved(
+    path: impl AsRef<Path>,
+    vertices: &[[f32; 6]],
+    texcoords: Option<&[Vec2]>,
+    indices: &[u32],
+) -> Result<(), IoError> {
+    let vertices = Vertices::Interleaved { vertices, texcoords };
     let header = GlbHeader::of(vertices, indices)?;
     atomic::write_file(path.as_ref(), |w| header.write(vertices, indices, w))
 }
@@ -114,14 +120,14 @@ pub fn write_glb_interleaved(path: impl AsRef<Path>, vertices: &[[f32; 6]], indi
 #[derive(Clone, Copy)]
 enum Vertices<'a> {
     Split { positions: &'a [Vec3], normals: Option<&'a [Vec3]>, texcoords: Option<&'a [Vec2]> },
-    Interleaved(&'a [[f32; 6]]),
+    Interleaved { vertices: &'a [[f32; 6]], texcoords: Option<&'a [Vec2]> },
 }
 
 impl<'a> Vertices<'a> {
     fn len(self) -> usize {
         match self {
             Self::Split { positions, .. } => positions.len(),
-            Self::Interleaved(v) => v.len(),
+            Self::Interleaved { vertices, .. } => vertices.len(),
         }
     }
 
@@ -129,7 +135,7 @@ impl<'a> Vertices<'a> {
         // One iterator type for both layouts: the layout not in use is an empty slice.
         let (split, interleaved) = match self {
             Self::Split { positions, .. } => (positions, &[][..]),
-            Self::Interleaved(v) => (&[][..], v),
+            Self::Interleaved { vertices, .. } => (&[][..], vertices),
         };
         split.iter().copied().chain(interleaved.iter().map(|v| Vec3::new(v[0], v[1], v[2])))
     }
@@ -139,15 +145,14 @@ impl<'a> Vertices<'a> {
         let (split, interleaved) = match self {
             Self::Split { normals: None, .. } => return None,
             Self::Split { normals: Some(normals), .. } => (normals, &[][..]),
-            Self::Interleaved(v) => (&[][..], v),
+            Self::Interleaved { vertices, .. } => (&[][..], vertices),
         };
         Some(split.iter().copied().chain(interleaved.iter().map(|v| Vec3::new(v[3], v[4], v[5]))))
     }
 
     fn texcoords(self) -> Option<&'a [Vec2]> {
         match self {
-            Self::Split { texcoords, .. } => texcoords,
-            Self::Interleaved(_) => None,
+            Self::Split { texcoords, .. } | Self::Interleaved { texcoords, .. } => texcoords,
         }
     }
 }

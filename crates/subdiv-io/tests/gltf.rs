@@ -120,13 +120,17 @@ fn written_glb_follows_the_container_and_accessor_rules() {
         POSITIONS.iter().zip(&normals).map(|(p, n)| [p.x, p.y, p.z, n.x, n.y, n.z]).collect();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("tet.glb");
-    subdiv_io::write_glb_interleaved(&path, &interleaved, &INDICES).unwrap();
+    subdiv_io::write_glb_interleaved(&path, &interleaved, None, &INDICES).unwrap();
     assert_eq!(std::fs::read(&path).unwrap(), glb);
+    let uv = [Vec2::ZERO, Vec2::X, Vec2::Y, Vec2::new(0.25, 0.75)];
+    subdiv_io::write_glb_interleaved(&path, &interleaved, Some(&uv), &INDICES).unwrap();
+    let textured = GlbMesh { normals: Some(&normals), texcoords: Some(&uv), ..tetrahedron() };
+    assert_eq!(std::fs::read(&path).unwrap(), encode_glb(&textured).unwrap());
     let mut zero = interleaved.clone();
     zero[2][3..].fill(0.0);
-    let error = subdiv_io::write_glb_interleaved(&path, &zero, &INDICES).unwrap_err();
+    let error = subdiv_io::write_glb_interleaved(&path, &zero, None, &INDICES).unwrap_err();
     assert!(error.to_string().contains("normal 2"), "{error}");
-    assert_eq!(std::fs::read(&path).unwrap(), glb, "a refused mesh leaves the file alone");
+    assert_eq!(std::fs::read(&path).unwrap(), encode_glb(&textured).unwrap(), "a refused mesh leaves the file alone");
 }
 
 #[test]

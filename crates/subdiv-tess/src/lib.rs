@@ -70,7 +70,7 @@ pub mod sink;
 pub use dual::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, MAX_DUAL_RATE};
 pub use error::TessError;
 pub use flatness::Tolerance;
-pub use mesh::{SurfaceParameter, TessMesh};
+pub use mesh::{SurfaceParameter, TessChannels, TessMesh};
 pub use normal::unit_normal;
 pub use par::Parallelism;
 pub use quadtree::{FaceCurvature, QuadtreeOptions, QuadtreeStats, QuadtreeTessellator};

@@ -26,6 +26,14 @@ pub struct SurfaceParameter {
 /// buffers, [`FlatMesh`](crate::FlatMesh)) split exactly those vertices: the flat vertices are the
 /// vertices, then one copy per extra normal, and the flat triangles are `triangle_normals`.
 /// Without sharp creases there are no extra normals and `triangle_normals == triangles`.
+///
+/// **Channels.** Face-varying channels (texture coordinates) are carried by the dual
+/// tessellator ([`DualOptions::channels`](crate::DualOptions::channels)): every point — vertex
+/// and extra normal — has every channel's exact limit value in [`channels`](Self::channels).
+/// A seam of a channel (an edge whose two faces use different values) is cut like a crease:
+/// the output stays welded in positions, and a point on the seam has the first side's values
+/// as a vertex and the second side's as an extra normal (its normal equals the vertex's, the
+/// surface being smooth there), so the flat outputs split it into one vertex per side.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct TessMesh {
     /// Vertex positions.
@@ -38,6 +46,12 @@ pub struct TessMesh {
     pub normal_vertices: Vec<u32>,
     /// Per vertex, its parameter point.
     pub parameters: Vec<SurfaceParameter>,
+    /// Per extra normal `normals[positions.len() + k]`, the parameter point it was evaluated at:
+    /// its vertex's point seen from a face of its own sector (or side of a seam).
+    pub normal_parameters: Vec<SurfaceParameter>,
+    /// The face-varying channels' values at every point (the vertices, then the extra normals);
+    /// empty without channels.
+    pub channels: TessChannels,
     /// Triangles, counter-clockwise as the input faces.
     pub triangles: Vec<[u32; 3]>,
     /// Per triangle, its corners' normals: indices into [`normals`](Self::normals), equal to
@@ -78,6 +92,8 @@ impl TessMesh {
             normals,
             normal_vertices,
             parameters,
+            normal_parameters,
+            channels,
             triangles,
             triangle_normals,
             triangle_faces,
@@ -90,6 +106,8 @@ impl TessMesh {
         normals.clear();
         normal_vertices.clear();
         parameters.clear();
+        normal_parameters.clear();
+        channels.clear();
         triangles.clear();
         triangle_normals.clear();
         triangle_faces.clear();
@@ -109,5 +127,79 @@ impl TessMesh {
     /// The number of flat vertices: the vertices and the extra normals (`normals.len()`).
     pub fn flat_vertex_count(&self) -> usize {
         self.positions.len() + self.normal_vertices.len()
+    }
+}
+
+/// Face-varying channels' values at a tessellation's points (see [`TessMesh`]'s channels).
+///
+/// ```
+/// use subdiv_mesh::{shapes, Channel, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{DualOptions, DualTessellator};
+///
+/// // A cube whose six faces each map the whole unit square: every edge is a seam.
+/// let mut soup = shapes::cube();
+/// let square = [0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0];
+/// soup.channels.push(Channel::new("uv", 2, square.repeat(6), (0..24).map(|i| i % 4).collect()));
+/// let mesh = Mesh::build(soup)?;
+/// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::DEFAULT)?;
+/// let out = tess.tessellate(&[4; 6])?;
+/// let uv = out.channels.find("uv").expect("the mesh's channel");
+/// assert_eq!(out.channels.stride(), 2);
+/// // One value per point: the vertices, then the seams' second sides.
+/// assert_eq!(out.channels.values.len(), 2 * out.normals.len());
+/// assert!(out.normals.len() > out.positions.len());
+/// // Each face maps the square; its corners' points take its corners' values.
+/// assert!(out.channels.values.iter().all(|x| (-1e-12..=1.0 + 1e-12).contains(x)));
+/// assert_eq!(out.channels.point(0)[uv].len(), 2);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TessChannels {
+    /// The channels' names, in the mesh's order (`"uv"` for texture coordinates).
+    pub names: Vec<String>,
+    /// Per channel, its number of components.
+    pub dimensions: Vec<usize>,
+    /// Per point, every channel's components, channel after channel: [`stride`](Self::stride)
+    /// numbers per point.
+    pub values: Vec<f64>,
+}
+
+impl TessChannels {
+    /// The number of channel components per point: the sum of the dimensions.
+    pub fn stride(&self) -> usize {
+        self.dimensions.iter().sum()
+    }
+
+    /// Whether there are no channels.
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// Where channel `name`'s components lie within a point's values, if there is one.
+    pub fn find(&self, name: &str) -> Option<std::ops::Range<usize>> {
+        let k = self.names.iter().position(|n| n == name)?;
+        let start = self.dimensions[..k].iter().sum();
+        Some(start..start + self.dimensions[k])
+    }
+
+    /// Where the texture coordinates start within a point's values: the channel named `"uv"`
+    /// ([`Channel::UV`](subdiv_mesh::Channel::UV)), its first two components, if it has two
+    /// or more.
+    pub fn texcoords(&self) -> Option<usize> {
+        self.find(subdiv_mesh::Channel::UV).filter(|r| r.len() >= 2).map(|r| r.start)
+    }
+
+    /// Point `k`'s values (every channel's; empty without channels).
+    pub fn point(&self, k: usize) -> &[f64] {
+        let stride = self.stride();
+        &self.values[k * stride..(k + 1) * stride]
+    }
+
+    /// Empties the lists, keeping their allocations.
+    pub fn clear(&mut self) {
+        self.names.clear();
+        self.dimensions.clear();
+        self.values.clear();
     }
 }

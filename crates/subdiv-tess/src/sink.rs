@@ -42,7 +42,7 @@
 //! let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::DEFAULT)?;
 //! let mut buffers: VertexBuffers<Vertex> = VertexBuffers::new();
 //! let rates = vec![4; mesh.face_count()];
-//! tess.tessellate_into(&rates, &mut BuffersBuilder::new(&mut buffers, |v: &TessVertex| Vertex {
+//! tess.tessellate_into(&rates, &mut BuffersBuilder::new(&mut buffers, |v: &TessVertex<'_>| Vertex {
 //!     position: v.position.as_vec3().to_array(),
 //!     uv: [v.parameter.u as f32, v.parameter.v as f32],
 //! }))?;
@@ -79,11 +79,16 @@ pub struct TessCounts {
     pub polygons: usize,
     /// The number of vertex indices over those polygons.
     pub polygon_vertices: usize,
+    /// The number of channel values per point ([`TessVertex::channels`]' length: every
+    /// channel's components, see [`TessChannels`](crate::TessChannels)).
+    pub channels: usize,
+    /// Whether the vertices have [texture coordinates](TessVertex::texcoords).
+    pub texcoords: bool,
 }
 
 /// An output vertex: a limit point of the surface, evaluated once.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TessVertex {
+pub struct TessVertex<'a> {
     /// The position.
     pub position: DVec3,
     /// The unit normal from the exact tangents (at an extraordinary vertex from its limit
@@ -91,6 +96,13 @@ pub struct TessVertex {
     pub normal: DVec3,
     /// The face and `Bfr` parameters the vertex was evaluated at.
     pub parameter: SurfaceParameter,
+    /// Its face-varying channels' values there, channel after channel ([`TessCounts::channels`]
+    /// of them; empty without channels).
+    pub channels: &'a [f64],
+    /// Its texture coordinates, if the tessellation carries them: the `"uv"` channel's first
+    /// two components (also in [`channels`](Self::channels)), what GLB's `TEXCOORD_0` and a
+    /// renderer take.
+    pub texcoords: Option<[f64; 2]>,
 }
 
 /// An output triangle.
@@ -120,13 +132,13 @@ pub trait TessSink {
     fn begin(&mut self, counts: &TessCounts);
 
     /// Vertex `index` (called for `0, 1, 2, …` in order).
-    fn vertex(&mut self, index: u32, vertex: &TessVertex);
+    fn vertex(&mut self, index: u32, vertex: &TessVertex<'_>);
 
     /// Extra normal `index` (called for `V, V + 1, …` in order after the `V` vertices): a
     /// further normal of vertex `vertex`, on an infinitely sharp crease, in another smooth
     /// sector around it. `split` is the vertex with that normal (its position and parameter),
     /// the split copy a flat sink appends. The default ignores it (one normal per vertex).
-    fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex) {
+    fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex<'_>) {
         let _ = (index, vertex, split);
     }
 
@@ -154,11 +166,11 @@ impl<S: TessSink + ?Sized> TessSink for &mut S {
         (**self).begin(counts);
     }
 
-    fn vertex(&mut self, index: u32, vertex: &TessVertex) {
+    fn vertex(&mut self, index: u32, vertex: &TessVertex<'_>) {
         (**self).vertex(index, vertex);
     }
 
-    fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex) {
+    fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex<'_>) {
         (**self).normal(index, vertex, split);
     }
 
@@ -188,6 +200,8 @@ impl TessSink for TessMesh {
         self.normals.reserve(counts.vertices + counts.extra_normals);
         self.normal_vertices.reserve(counts.extra_normals);
         self.parameters.reserve(counts.vertices);
+        self.normal_parameters.reserve(counts.extra_normals);
+        self.channels.values.reserve(counts.channels * (counts.vertices + counts.extra_normals));
         self.triangles.reserve(counts.triangles);
         self.triangle_normals.reserve(counts.triangles);
         self.triangle_faces.reserve(counts.triangles);
@@ -199,15 +213,18 @@ impl TessSink for TessMesh {
     }
 
     #[inline]
-    fn vertex(&mut self, _: u32, vertex: &TessVertex) {
+    fn vertex(&mut self, _: u32, vertex: &TessVertex<'_>) {
         self.positions.push(vertex.position);
         self.normals.push(vertex.normal);
         self.parameters.push(vertex.parameter);
+        self.channels.values.extend_from_slice(vertex.channels);
     }
 
-    fn normal(&mut self, _: u32, vertex: u32, split: &TessVertex) {
+    fn normal(&mut self, _: u32, vertex: u32, split: &TessVertex<'_>) {
         self.normals.push(split.normal);
         self.normal_vertices.push(vertex);
+        self.normal_parameters.push(split.parameter);
+        self.channels.values.extend_from_slice(split.channels);
     }
 
     #[inline]
@@ -230,24 +247,31 @@ impl TessSink for TessMesh {
 }
 
 /// `px py pz nx ny nz` in f32 per flat vertex (the vertices, then one split copy per extra
-/// normal) and three `u32` indices per triangle ([`TessTriangle::normals`]), the buffers
-/// cleared (keeping their allocations) and refilled: the bytes of
-/// [`DualTessellator::write_flat`](crate::DualTessellator::write_flat).
+/// normal), the texture coordinates if the tessellation has them, and three `u32` indices per
+/// triangle ([`TessTriangle::normals`]), the buffers cleared (keeping their allocations) and
+/// refilled: the bytes of [`DualTessellator::write_flat`](crate::DualTessellator::write_flat).
 impl TessSink for FlatMesh {
     fn begin(&mut self, counts: &TessCounts) {
+        let points = counts.vertices + counts.extra_normals;
         self.vertices.clear();
-        self.vertices.reserve(6 * (counts.vertices + counts.extra_normals));
+        self.vertices.reserve(6 * points);
+        self.texcoords.clear();
+        if counts.texcoords {
+            self.texcoords.reserve(2 * points);
+        }
         self.indices.clear();
         self.indices.reserve(3 * counts.triangles);
     }
 
     #[inline]
-    fn vertex(&mut self, _: u32, vertex: &TessVertex) {
+    fn vertex(&mut self, _: u32, vertex: &TessVertex<'_>) {
         self.vertices.extend_from_slice(&flat_vertex(vertex.position, vertex.normal));
+        self.texcoords.extend(vertex.texcoords.into_iter().flatten().map(|x| x as f32));
     }
 
-    fn normal(&mut self, _: u32, _: u32, split: &TessVertex) {
+    fn normal(&mut self, _: u32, _: u32, split: &TessVertex<'_>) {
         self.vertices.extend_from_slice(&flat_vertex(split.position, split.normal));
+        self.texcoords.extend(split.texcoords.into_iter().flatten().map(|x| x as f32));
     }
 
     #[inline]
@@ -285,14 +309,14 @@ pub struct BuffersBuilder<'a, V, F> {
     constructor: F,
 }
 
-impl<'a, V: bytemuck::Pod, F: Fn(&TessVertex) -> V> BuffersBuilder<'a, V, F> {
+impl<'a, V: bytemuck::Pod, F: Fn(&TessVertex<'_>) -> V> BuffersBuilder<'a, V, F> {
     /// A sink into `buffers` making each vertex with `constructor`.
     pub fn new(buffers: &'a mut VertexBuffers<V>, constructor: F) -> Self {
         Self { buffers, constructor }
     }
 }
 
-impl<V: bytemuck::Pod, F: Fn(&TessVertex) -> V> TessSink for BuffersBuilder<'_, V, F> {
+impl<V: bytemuck::Pod, F: Fn(&TessVertex<'_>) -> V> TessSink for BuffersBuilder<'_, V, F> {
     fn begin(&mut self, counts: &TessCounts) {
         self.buffers.vertices.clear();
         self.buffers.vertices.reserve(counts.vertices + counts.extra_normals);
@@ -301,11 +325,11 @@ impl<V: bytemuck::Pod, F: Fn(&TessVertex) -> V> TessSink for BuffersBuilder<'_, 
     }
 
     #[inline]
-    fn vertex(&mut self, _: u32, vertex: &TessVertex) {
+    fn vertex(&mut self, _: u32, vertex: &TessVertex<'_>) {
         self.buffers.vertices.push((self.constructor)(vertex));
     }
 
-    fn normal(&mut self, _: u32, _: u32, split: &TessVertex) {
+    fn normal(&mut self, _: u32, _: u32, split: &TessVertex<'_>) {
         self.buffers.vertices.push((self.constructor)(split));
     }
 
@@ -342,15 +366,24 @@ impl TessMesh {
             triangles: self.triangles.len(),
             polygons: if polygons { self.polygon_count() } else { 0 },
             polygon_vertices: if polygons { self.polygon_vertices.len() } else { 0 },
+            channels: self.channels.stride(),
+            texcoords: self.channels.texcoords().is_some(),
         });
+        let uv = self.channels.texcoords();
+        let point = |k: usize| {
+            let channels = self.channels.point(k);
+            (channels, uv.map(|s| [channels[s], channels[s + 1]]))
+        };
         let vertices = self.positions.iter().zip(&self.normals).zip(&self.parameters);
         for (k, ((&position, &normal), &parameter)) in vertices.enumerate() {
-            sink.vertex(k as u32, &TessVertex { position, normal, parameter });
+            let (channels, texcoords) = point(k);
+            sink.vertex(k as u32, &TessVertex { position, normal, parameter, channels, texcoords });
         }
-        let extra = self.normal_vertices.iter().zip(&self.normals[self.positions.len()..]);
-        for (k, (&vertex, &normal)) in extra.enumerate() {
-            let (position, parameter) = (self.positions[vertex as usize], self.parameters[vertex as usize]);
-            sink.normal((self.positions.len() + k) as u32, vertex, &TessVertex { position, normal, parameter });
+        let extra = self.normal_vertices.iter().zip(&self.normals[self.positions.len()..]).zip(&self.normal_parameters);
+        for (k, ((&vertex, &normal), &parameter)) in extra.enumerate() {
+            let (position, index) = (self.positions[vertex as usize], self.positions.len() + k);
+            let (channels, texcoords) = point(index);
+            sink.normal(index as u32, vertex, &TessVertex { position, normal, parameter, channels, texcoords });
         }
         let triangles = self.triangles.iter().zip(&self.triangle_normals);
         let triangles = triangles.zip(&self.triangle_faces).zip(&self.triangle_parameters);
@@ -400,7 +433,7 @@ mod tests {
         let extra = mesh.normal_vertices.iter().map(|&v| mesh.positions[v as usize]);
         let positions = mesh.positions.iter().copied().chain(extra);
         let vertices = positions.zip(&mesh.normals).flat_map(|(p, n)| flat_vertex(p, *n)).collect();
-        FlatMesh { vertices, indices: mesh.triangle_normals.as_flattened().to_vec() }
+        FlatMesh { vertices, indices: mesh.triangle_normals.as_flattened().to_vec(), ..FlatMesh::default() }
     }
 
     /// A sink that checks the call order and counts against `begin`'s.
@@ -418,13 +451,13 @@ mod tests {
             self.counts = *counts;
         }
 
-        fn vertex(&mut self, index: u32, vertex: &TessVertex) {
+        fn vertex(&mut self, index: u32, vertex: &TessVertex<'_>) {
             assert_eq!(index as usize, self.seen.vertices);
             assert!((vertex.normal.length() - 1.0).abs() < 1e-12 || vertex.normal == DVec3::ZERO);
             self.seen.vertices += 1;
         }
 
-        fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex) {
+        fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex<'_>) {
             assert_eq!(self.seen.vertices, self.counts.vertices, "vertices before extra normals");
             assert_eq!(index as usize, self.counts.vertices + self.seen.extra_normals);
             assert!((vertex as usize) < self.counts.vertices);
@@ -474,7 +507,8 @@ mod tests {
             assert_eq!(written, flat_of(&expected), "{name}");
 
             // Sinks that already hold another output are cleared first.
-            let (mut mesh_sink, mut flat) = (expected.clone(), FlatMesh { vertices: vec![1.0; 7], indices: vec![9] });
+            let (mut mesh_sink, mut flat) =
+                (expected.clone(), FlatMesh { vertices: vec![1.0; 7], indices: vec![9], ..FlatMesh::default() });
             mesh_sink.positions.push(DVec3::ONE);
             tess.tessellate_into(&rates, &mut mesh_sink).unwrap();
             tess.tessellate_into(&rates, &mut flat).unwrap();
@@ -548,7 +582,8 @@ mod tests {
     #[test]
     fn pod_vertices_are_the_flat_bytes() {
         let cc = Builtin::CatmullClark.scheme();
-        let make = |v: &TessVertex| Vertex { position: v.position.as_vec3().into(), normal: v.normal.as_vec3().into() };
+        let make =
+            |v: &TessVertex<'_>| Vertex { position: v.position.as_vec3().into(), normal: v.normal.as_vec3().into() };
         let mut buffers = VertexBuffers::new();
         for (name, mesh) in meshes().into_iter().chain([("all-sharp cube", sharp_cube())]) {
             let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
@@ -564,7 +599,8 @@ mod tests {
         let mesh = Mesh::build(shapes::cube()).unwrap();
         let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::DEFAULT).unwrap();
         let mut uv = VertexBuffers::<[f32; 2]>::new();
-        let builder = &mut BuffersBuilder::new(&mut uv, |v: &TessVertex| [v.parameter.u as f32, v.parameter.v as f32]);
+        let builder =
+            &mut BuffersBuilder::new(&mut uv, |v: &TessVertex<'_>| [v.parameter.u as f32, v.parameter.v as f32]);
         tess.tessellate_into(&[2; 6], builder).unwrap();
         let out = tess.mesh();
         assert_eq!(uv.vertices.len(), out.positions.len());

@@ -225,7 +225,7 @@ fn update_cage_equals_a_fresh_tessellation() {
         assert_eq!(direct, written, "{builtin:?}: update_cage_flat");
         // The flat-only tessellation: the same buffers, and the same animation after it.
         let mut flat_tess = DualTessellator::new(builtin.scheme(), &moved_mesh, &DualOptions::default()).unwrap();
-        let mut stale = FlatMesh { vertices: vec![7.0; 5], indices: vec![3; 2] };
+        let mut stale = FlatMesh { vertices: vec![7.0; 5], indices: vec![3; 2], ..FlatMesh::default() };
         flat_tess.tessellate_flat(&rates, &mut stale).unwrap();
         assert_eq!(stale, written, "{builtin:?}: tessellate_flat");
         assert_eq!(flat_tess.mesh(), &TessMesh::default(), "{builtin:?}: the mesh is left empty");
@@ -449,7 +449,7 @@ fn bad_input_is_a_typed_error() {
     let too_big = subdiv_tess::MAX_DUAL_RATE + 1;
     assert!(matches!(tess.tessellate(&[1, 1, 1, 1, too_big, 1]), Err(TessError::Rate { face: 4, .. })));
     // The flat path: the same errors, and the caller's buffers untouched.
-    let mut flat = FlatMesh { vertices: vec![7.0; 5], indices: vec![3; 2] };
+    let mut flat = FlatMesh { vertices: vec![7.0; 5], indices: vec![3; 2], ..FlatMesh::default() };
     let kept = flat.clone();
     assert!(matches!(tess.tessellate_flat(&[1; 7], &mut flat), Err(TessError::RateCount { expected: 6, got: 7 })));
     assert!(matches!(tess.tessellate_flat(&[0; 6], &mut flat), Err(TessError::Rate { face: 0, rate: 0, .. })));

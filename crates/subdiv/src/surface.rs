@@ -78,7 +78,8 @@ impl Surface {
 
     /// The same surface, with [`refine`](Self::refine) taking `options` (the boundary rule,
     /// crease method, face-varying interpolation, …) instead of [`RefineOptions::DEFAULT`],
-    /// which takes everything from the mesh's tags.
+    /// which takes everything from the mesh's tags; the dual tessellations carry the channels
+    /// in `options`' face-varying mode.
     ///
     /// ```
     /// use subdiv::mesh::{Channel, FaceVaryingInterpolation, shapes};
@@ -100,6 +101,8 @@ impl Surface {
     #[must_use]
     pub fn with_refine_options(mut self, options: RefineOptions) -> Self {
         self.refine_options = options;
+        // The dual tessellator carries the channels in the face-varying mode it was made with.
+        self.dual = None;
         self
     }
 
@@ -459,7 +462,14 @@ impl Surface {
     /// The dual tessellator with `options`' quads and parallelism, made on first use (later
     /// calls keep its patches, stencils and templates whatever their options).
     fn dual(&mut self, options: &TessOptions) -> Result<&mut DualTessellator, Error> {
-        let wanted = DualOptions { quads: options.polygons, parallelism: options.parallelism };
+        // Channels under a scheme without face-varying rules (sw-quad, the interpolating ones) are
+        // not carried: the surface is still tessellated, without them.
+        let wanted = DualOptions {
+            quads: options.polygons,
+            parallelism: options.parallelism,
+            channels: self.scheme.has_crease_rules(),
+            face_varying: self.refine_options.face_varying,
+        };
         let tess = match self.dual.take() {
             Some(tess) => tess,
             None => DualTessellator::new(&self.scheme, &self.mesh, &wanted)?,
@@ -502,7 +512,7 @@ impl<S: TessSink + ?Sized> TessSink for WithoutPolygons<'_, S> {
     }
 
     #[inline]
-    fn vertex(&mut self, index: u32, vertex: &TessVertex) {
+    fn vertex(&mut self, index: u32, vertex: &TessVertex<'_>) {
         self.0.vertex(index, vertex);
     }
 
@@ -655,7 +665,7 @@ mod tests {
             s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::PerFace(vec![2; 3]))),
             Err(Error::Tess(_))
         ));
-        let mut flat = FlatMesh { vertices: vec![1.0], indices: vec![] };
+        let mut flat = FlatMesh { vertices: vec![1.0], indices: vec![], ..FlatMesh::default() };
         assert!(s.tessellate_into(&TessOptions::DEFAULT.with_rates(Rates::Uniform(500)), &mut flat).is_err());
         assert_eq!(flat.vertices, [1.0], "a failed call leaves the sink alone");
         let bad_camera = Rates::Screen {

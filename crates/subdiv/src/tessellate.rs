@@ -206,9 +206,10 @@ impl Tessellation {
         self.mesh
     }
 
-    /// Writes the triangles as GLB (f32 positions and normals, `u32` indices), atomically:
-    /// the flat vertices ([`FlatMesh`](subdiv_tess::FlatMesh)'s), so a vertex with two normals
-    /// on an infinitely sharp crease is split into one GLB vertex per normal.
+    /// Writes the triangles as GLB (f32 positions and normals, `TEXCOORD_0` when the mesh has
+    /// texture coordinates, `u32` indices), atomically: the flat vertices
+    /// ([`FlatMesh`](subdiv_tess::FlatMesh)'s), so a vertex with two normals on an infinitely
+    /// sharp crease, or two sides' coordinates on a seam, is split into one GLB vertex each.
     ///
     /// # Errors
     /// [`Error::Io`] naming the file; [`IoError::Unwritable`](subdiv_io::IoError::Unwritable)
@@ -222,9 +223,10 @@ impl Tessellation {
         write_flat_glb(path, &flat)
     }
 
-    /// Writes OBJ (`v`, `vn` and `f v//vn` lines), atomically: one `v` per (welded) vertex,
-    /// one `vn` per normal (a crease vertex's extra normals after the vertices', see
-    /// [`TessMesh`]), each corner's own normal; the triangles, or with
+    /// Writes OBJ (`v`, `vn` and `f v//vn` lines; with texture coordinates `vt` and
+    /// `f v/vt/vn`), atomically: one `v` per (welded) vertex, one `vn` (and `vt`) per normal (a
+    /// crease or seam vertex's extra normals after the vertices', see [`TessMesh`]), each
+    /// corner's own; the triangles, or with
     /// `polygons` the polygons where there are any — the quadtree's leaves alone (they cover
     /// the surface), the dual tessellation's quads and the triangles outside them.
     ///
@@ -248,16 +250,25 @@ impl Tessellation {
         write_obj(w, &self.mesh, faces)
     }
 
-    /// Writes `vertex,face,u,v` per output vertex, in output order (`Bfr` parameters, shortest
-    /// round-trip f64s), as CSV, atomically.
+    /// Writes `vertex,face,u,v` per flat vertex, in output order (`Bfr` parameters, shortest
+    /// round-trip f64s), as CSV, atomically: the vertices, then the split copies of crease and
+    /// seam vertices (the GLB's vertices, whose numbers these are), each at the point it was
+    /// evaluated at. With texture coordinates, the columns `s,t` follow.
     ///
     /// # Errors
     /// [`Error::Io`] naming the file.
     pub fn write_params(&self, path: impl AsRef<Path>) -> Result<(), Error> {
+        let mesh = &self.mesh;
+        let uv = mesh.channels.texcoords();
         write_atomic(path, |w| {
-            writeln!(w, "vertex,face,u,v")?;
-            for (k, p) in self.mesh.parameters.iter().enumerate() {
-                writeln!(w, "{k},{},{:?},{:?}", p.face.index(), p.u, p.v)?;
+            writeln!(w, "vertex,face,u,v{}", if uv.is_some() { ",s,t" } else { "" })?;
+            for (k, p) in mesh.parameters.iter().chain(&mesh.normal_parameters).enumerate() {
+                write!(w, "{k},{},{:?},{:?}", p.face.index(), p.u, p.v)?;
+                if let Some(start) = uv {
+                    let c = mesh.channels.point(k);
+                    write!(w, ",{:?},{:?}", c[start], c[start + 1])?;
+                }
+                writeln!(w)?;
             }
             Ok(())
         })?;
@@ -338,7 +349,9 @@ pub fn check_vertex_budget(
 pub fn write_flat_glb(path: impl AsRef<Path>, flat: &FlatMesh) -> Result<(), Error> {
     let (vertices, rest) = flat.vertices.as_chunks::<6>();
     debug_assert!(rest.is_empty(), "six floats per flat vertex");
-    subdiv_io::write_glb_interleaved(path, vertices, &flat.indices)?;
+    let texcoords: Option<Vec<glam::Vec2>> =
+        (!flat.texcoords.is_empty()).then(|| flat.texcoords.chunks_exact(2).map(glam::Vec2::from_slice).collect());
+    subdiv_io::write_glb_interleaved(path, vertices, texcoords.as_deref(), &flat.indices)?;
     Ok(())
 }
 
@@ -363,10 +376,21 @@ fn write_obj(w: &mut dyn Write, mesh: &TessMesh, faces: ObjFaces) -> std::io::Re
     for n in &mesh.normals {
         writeln!(w, "vn {} {} {}", n.x, n.y, n.z)?;
     }
+    // Texture coordinates per point, as the normals: a seam's second side is an extra normal.
+    let uv = mesh.channels.texcoords();
+    if let Some(start) = uv {
+        for k in 0..mesh.normals.len() {
+            let p = mesh.channels.point(k);
+            writeln!(w, "vt {} {}", p[start], p[start + 1])?;
+        }
+    }
     let face = |w: &mut dyn Write, vertices: &[u32], normals: &[u32]| -> std::io::Result<()> {
         write!(w, "f")?;
         for (&v, &n) in vertices.iter().zip(normals) {
-            write!(w, " {}//{}", v + 1, n + 1)?;
+            match uv {
+                Some(_) => write!(w, " {}/{}/{}", v + 1, n + 1, n + 1)?,
+                None => write!(w, " {}//{}", v + 1, n + 1)?,
+            }
         }
         writeln!(w)
     };

@@ -225,3 +225,146 @@ fn texture_coordinates_equal_far_limits_at_dyadic_points() {
     }
     assert!(compared >= 12 * 6, "{compared} mesh-modes compared");
 }
+
+/// The points' surface parameters of a tessellation: the vertices', then the extra normals'.
+fn point_parameters(out: &subdiv::TessMesh) -> Vec<subdiv::tess::SurfaceParameter> {
+    out.parameters.iter().chain(&out.normal_parameters).copied().collect()
+}
+
+/// Whether faces `a` and `b` use one value of `channel` somewhere they meet: at a shared vertex
+/// where their corners take the same value. (A triangle of a vertex's fan may join two faces
+/// across a seam that starts at the vertex: at the vertex they agree.)
+fn joined(mesh: &Mesh, channel: &Channel, a: subdiv::FaceId, b: subdiv::FaceId) -> bool {
+    a == b
+        || mesh.face_half_edges(a).any(|h| {
+            mesh.face_half_edges(b)
+                .any(|g| mesh.origin(g) == mesh.origin(h) && channel.corner_value(g) == channel.corner_value(h))
+        })
+}
+
+/// Tessellations of spot, blub and `catmark_fvar_bound0..4` at rates 3, 8 and screen-space:
+/// watertight and welded in positions (each directed edge once, borders only where the cage
+/// has them, the cage's Euler characteristic), every point's texture coordinates equal to the
+/// channel's evaluator at the point's parameters to 1e-12 (the vertices and the seams' second
+/// sides, each in its own face), no triangle across a seam (its corners' faces use one value
+/// where they meet), and the seams split (some vertex has a second side of other values).
+#[test]
+fn tessellations_carry_exact_texture_coordinates_split_at_seams() {
+    use subdiv::tess::rates::ScreenSpace;
+    use subdiv::{Camera, DVec3, EvalOptions, Rates, Surface, TessOptions};
+    if subdiv_testkit::meshes_dir().is_none() {
+        return;
+    }
+    let wanted = ["spot_control_mesh.obj", "blub_control_mesh.obj"]
+        .into_iter()
+        .map(String::from)
+        .chain((0..5).map(|k| format!("catmark_fvar_bound{k}.obj")))
+        .collect::<Vec<_>>();
+    let mut compared = 0;
+    for (path, builtin, mesh) in subdiv_testkit::textured_meshes() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        if !wanted.contains(&name) {
+            continue;
+        }
+        let channel = mesh.channel(Channel::UV).unwrap().clone();
+        let mut surface = Surface::new(mesh.clone(), builtin.scheme());
+        let uv = surface.channel_evaluator(Channel::UV, &EvalOptions::DEFAULT).unwrap();
+        let (lo, hi) = mesh.bounding_box().unwrap();
+        let camera =
+            Camera::look_at((lo + hi) * 0.5 + (hi - lo) * DVec3::new(0.9, 0.7, 1.3), (lo + hi) * 0.5, DVec3::Y);
+        let screen = Rates::Screen { camera, viewport: [640, 480], pixels_per_edge: 12.0 };
+        assert!(ScreenSpace::new(camera, [640, 480], 12.0).face_rates(&mesh).is_ok());
+        let mut split = 0;
+        for rates in [Rates::Uniform(3), Rates::Uniform(8), screen] {
+            let tessellation = surface.tessellate(&TessOptions { rates, ..TessOptions::DEFAULT }).unwrap();
+            let predicted = subdiv::tess::dual::predicted_vertex_count(&mesh, false, &tessellation.info.rates);
+            let out = tessellation.into_mesh();
+            assert_eq!(out.positions.len(), predicted, "{name}: the budget's count, seams included");
+            let coords = out.channels.find(Channel::UV).expect("the texture coordinates are carried");
+            // Welded and watertight in positions.
+            let mut directed = std::collections::HashMap::new();
+            for t in &out.triangles {
+                for i in 0..3 {
+                    assert!(
+                        directed.insert((t[i], t[(i + 1) % 3]), ()).is_none(),
+                        "{name}: an edge used twice one way"
+                    );
+                }
+            }
+            let open = mesh.edges().any(|e| mesh.is_boundary_edge(e)) || mesh.face_ids().any(|f| mesh.is_hole(f));
+            let border = directed.keys().filter(|&&(a, b)| !directed.contains_key(&(b, a))).count();
+            assert!(open || border == 0, "{name}: {border} border edges on a closed cage");
+            let mut seen = std::collections::HashSet::new();
+            assert!(out.positions.iter().all(|p| seen.insert(p.to_array().map(f64::to_bits))), "{name}: not welded");
+            if !open {
+                let edges = directed.len() / 2;
+                let euler = out.positions.len() as i64 - edges as i64 + out.triangles.len() as i64;
+                assert_eq!(euler, mesh.euler_characteristic(), "{name}");
+            }
+            // Every point's coordinates, at its own parameters.
+            let parameters = point_parameters(&out);
+            assert_eq!(out.channels.values.len(), 2 * parameters.len());
+            for (k, p) in parameters.iter().enumerate() {
+                let expected = uv.evaluate(p.face, p.u, p.v).unwrap().position;
+                let got = &out.channels.point(k)[coords.clone()];
+                let error = (got[0] - expected.x).abs().max((got[1] - expected.y).abs());
+                assert!(error <= 1e-12, "{name}: point {k} at {p:?}: {got:?} against {expected}");
+            }
+            // No triangle across a seam; the seams split.
+            for (t, corners) in out.triangle_normals.iter().enumerate() {
+                let faces = corners.map(|c| parameters[c as usize].face);
+                for (a, b) in [(0, 1), (1, 2), (2, 0)] {
+                    assert!(
+                        joined(&mesh, &channel, faces[a], faces[b]),
+                        "{name}: triangle {t} crosses a seam: {faces:?}"
+                    );
+                }
+            }
+            let positions = out.positions.len();
+            split += out
+                .normal_vertices
+                .iter()
+                .enumerate()
+                .filter(|&(k, &v)| out.channels.point(positions + k) != out.channels.point(v as usize))
+                .count();
+        }
+        assert!(split > 0 || mesh.edges().all(|e| !mesh.is_seam(&channel, e)), "{name}: no seam split");
+        eprintln!("{name}: {split} seam points split");
+        compared += 1;
+    }
+    assert_eq!(compared, 7, "spot, blub and catmark_fvar_bound0..4");
+}
+
+/// Every shared mesh with texture coordinates tessellates with them at rate 2 (its scheme's
+/// face-varying surface prepared by the dual tessellator's own evaluator): one value per point,
+/// every seventh point equal to the channel's evaluator to 1e-12, positions welded.
+#[test]
+fn every_textured_shared_mesh_tessellates_with_its_texture_coordinates() {
+    use subdiv::{EvalOptions, Rates, Surface, TessOptions};
+    let meshes = subdiv_testkit::textured_meshes();
+    if subdiv_testkit::meshes_dir().is_none() {
+        return;
+    }
+    let mut points = 0;
+    for (path, builtin, mesh) in &meshes {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let mut surface = Surface::new(mesh.clone(), builtin.scheme());
+        let out = surface
+            .tessellate(&TessOptions { rates: Rates::Uniform(2), ..TessOptions::DEFAULT })
+            .unwrap_or_else(|e| panic!("{name}: {e}"))
+            .into_mesh();
+        let uv = surface.channel_evaluator(Channel::UV, &EvalOptions::DEFAULT).unwrap();
+        let coords = out.channels.find(Channel::UV).unwrap_or_else(|| panic!("{name}: no texture coordinates"));
+        let parameters = point_parameters(&out);
+        assert_eq!(out.channels.values.len(), out.channels.stride() * parameters.len(), "{name}");
+        for (k, p) in parameters.iter().enumerate().step_by(7) {
+            let expected = uv.evaluate(p.face, p.u, p.v).unwrap().position;
+            let got = &out.channels.point(k)[coords.clone()];
+            let error = (got[0] - expected.x).abs().max((got[1] - expected.y).abs());
+            assert!(error <= 1e-12, "{name}: point {k} at {p:?}: {got:?} against {expected}");
+            points += 1;
+        }
+    }
+    eprintln!("{} meshes, {points} points compared", meshes.len());
+    assert!(meshes.len() >= 100, "{} textured meshes", meshes.len());
+}

@@ -58,22 +58,24 @@
 //! exact stencils and kept across calls. [`DualTessellator::update_cage`] re-evaluates
 //! positions and normals for a moved cage without any topology or stencil work.
 
+mod channels;
 pub(crate) mod eval;
 mod topology;
 
 use glam::DVec3;
-use subdiv_mesh::{FaceId, Mesh};
+use subdiv_mesh::{FaceId, FaceVaryingInterpolation, Mesh};
 use subdiv_schemes::{Scheme, Split};
 use subdiv_stencil::FaceDomain;
 
+use self::channels::Channels;
 use self::eval::Evaluator;
-use self::topology::{Builder, BuilderBuffers, Topology};
+use self::topology::{Builder, BuilderBuffers, Site, Topology};
 use crate::par::{self, Parallelism};
 pub use crate::plan::{
     EvaluationPlan, PlanBicubic, PlanBlock, PlanEntry, PlanError, PlanGeneral, PlanItem, PlanParts, PlanRecord,
 };
 use crate::rates::RingDepths;
-use crate::{SurfaceParameter, TessError, TessMesh, TessSink};
+use crate::{SurfaceParameter, TessChannels, TessError, TessMesh, TessSink};
 
 /// The largest rate [`DualTessellator::tessellate`] takes.
 pub const MAX_DUAL_RATE: u32 = 128;
@@ -97,6 +99,14 @@ pub struct DualOptions {
     /// Also list the output's quads (face grids, equal-rate strips, valence-4 vertices) as
     /// [`TessMesh`] polygons. Triangles are always output. Default: `true`.
     pub quads: bool,
+    /// Carry the mesh's face-varying channels (texture coordinates): every output point gets
+    /// every channel's exact value, and the channels' seams are cut (see [`TessMesh`]). Fixed
+    /// when the tessellator is made. Default: `true`.
+    pub channels: bool,
+    /// The channels' face-varying interpolation: `None` takes the mesh's tag, else
+    /// [`FaceVaryingInterpolation::All`] (OpenSubdiv's default). Fixed when the tessellator is
+    /// made. Default: `None`.
+    pub face_varying: Option<FaceVaryingInterpolation>,
     /// Whether the evaluation and the index writing may use rayon's threads (the output is the
     /// same, bit for bit, either way). Default: [`Parallelism::Rayon`].
     pub parallelism: Parallelism,
@@ -104,12 +114,25 @@ pub struct DualOptions {
 
 impl DualOptions {
     /// The defaults: quads listed, [`Parallelism::Rayon`].
-    pub const DEFAULT: Self = Self { quads: true, parallelism: Parallelism::DEFAULT };
+    pub const DEFAULT: Self =
+        Self { quads: true, channels: true, face_varying: None, parallelism: Parallelism::DEFAULT };
 
     /// These options with [`quads`](Self::quads) set.
     #[must_use]
     pub const fn with_quads(self, quads: bool) -> Self {
         Self { quads, ..self }
+    }
+
+    /// These options with [`channels`](Self::channels) set.
+    #[must_use]
+    pub const fn with_channels(self, channels: bool) -> Self {
+        Self { channels, ..self }
+    }
+
+    /// These options with [`face_varying`](Self::face_varying) set.
+    #[must_use]
+    pub const fn with_face_varying(self, face_varying: FaceVaryingInterpolation) -> Self {
+        Self { face_varying: Some(face_varying), ..self }
     }
 
     /// These options with [`parallelism`](Self::parallelism) set.
@@ -126,12 +149,17 @@ impl Default for DualOptions {
 }
 
 /// Flat output buffers for GPUs, GLB files and benchmarks: one normal per vertex, so a
-/// vertex with extra normals (on an infinitely sharp crease, see [`TessMesh`]) is split.
+/// vertex with extra normals (on an infinitely sharp crease or a channel's seam, see
+/// [`TessMesh`]) is split.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct FlatMesh {
     /// Per flat vertex `px py pz nx ny nz`: the [`TessMesh`]'s vertices, then one per extra
     /// normal (its vertex's position, that normal).
     pub vertices: Vec<f32>,
+    /// Per flat vertex its texture coordinates `s t` (the `"uv"` channel's first two
+    /// components, [`TessChannels::texcoords`](crate::TessChannels::texcoords)), if the
+    /// tessellation carries them; else empty.
+    pub texcoords: Vec<f32>,
     /// Three indices per triangle, counter-clockwise: its [`triangle_normals`](TessMesh::triangle_normals).
     pub indices: Vec<u32>,
 }
@@ -178,6 +206,9 @@ pub struct DualTessellator {
     scheme: String,
     vertex_count: usize,
     evaluator: Evaluator,
+    /// The carried face-varying channels, and their values at the last topology's points.
+    channels: Channels,
+    channel_values: TessChannels,
     builder: TopologyBuilder,
     topology: Topology,
     rates: Vec<u32>,
@@ -194,19 +225,27 @@ impl DualTessellator {
     /// Prepares `mesh` under `scheme`: its patches, the levels of refinement its N-gons and
     /// double extraordinary faces need, and the bicubic faces' control points.
     ///
+    /// With [`DualOptions::channels`], also prepares the surface of each of the mesh's
+    /// face-varying channels.
+    ///
     /// # Errors
     /// [`TessError::Surface`] as [`PatchLevels::new`](subdiv_stencil::PatchLevels::new): schemes
-    /// without sub-patch matrices (√3, Doo-Sabin, mid-edge), creases and corners, faces the
-    /// scheme does not take.
+    /// without sub-patch matrices (√3, Doo-Sabin, mid-edge), faces the scheme does not take;
+    /// [`TessError::Scheme`] for a mesh with channels under a scheme without face-varying rules
+    /// (carry none: [`DualOptions::with_channels`]).
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &DualOptions) -> Result<Self, TessError> {
         let evaluator = Evaluator::new(scheme, mesh)?;
         let triangle = evaluator.levels().split() == Split::Triangle;
+        let (channels, seams) =
+            if options.channels { Channels::new(scheme, mesh, options.face_varying)? } else { Default::default() };
         Ok(Self {
             options: *options,
             scheme: scheme.name().to_string(),
             vertex_count: mesh.vertex_count(),
             evaluator,
-            builder: TopologyBuilder { triangle, quads: options.quads, buffers: BuilderBuffers::default() },
+            channels,
+            channel_values: TessChannels::default(),
+            builder: TopologyBuilder { triangle, quads: options.quads, seams, buffers: BuilderBuffers::default() },
             topology: Topology::default(),
             rates: Vec::new(),
             output: TessMesh::default(),
@@ -236,9 +275,10 @@ impl DualTessellator {
 
     /// Takes new options: [`parallelism`](DualOptions::parallelism) from the next call on,
     /// [`quads`](DualOptions::quads) from the next tessellation (the animation paths keep the
-    /// last one's polygons). Nothing prepared is lost.
+    /// last one's polygons); the channels stay as made. Nothing prepared is lost.
     pub fn set_options(&mut self, options: &DualOptions) {
-        self.options = *options;
+        self.options =
+            DualOptions { channels: self.options.channels, face_varying: self.options.face_varying, ..*options };
         self.builder.quads = options.quads;
     }
 
@@ -375,7 +415,11 @@ impl DualTessellator {
     fn rebuild(&mut self, rates: &[u32], rings: Option<&RingDepths>) -> Result<(), TessError> {
         self.check_rates(rates)?;
         self.builder.build(self.evaluator.levels().mesh(0), self.evaluator.domains(), rates, rings, &mut self.topology);
-        let prepared = self.evaluator.prepare(&self.topology, rates, self.options.parallelism.forks());
+        let parallel = self.options.parallelism.forks();
+        let prepared = self
+            .evaluator
+            .prepare(&self.topology, rates, parallel)
+            .and_then(|()| self.channels.evaluate(&self.topology, rates, parallel, &mut self.channel_values));
         self.settle(rates, prepared)
     }
 
@@ -460,6 +504,8 @@ impl DualTessellator {
             &self.flat_indices
         };
         let evaluator = &self.evaluator;
+        // The channels do not move with the cage: the values of the last tessellation.
+        channels::write_texcoords(&self.channel_values, &mut out.texcoords);
         beside(
             t,
             parallel,
@@ -487,10 +533,16 @@ impl DualTessellator {
     /// accepted (the failure came from a stencil), untouched if not.
     pub fn tessellate_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
         self.check_rates(rates)?;
-        let done = self.build_flat(rates, out);
-        if done.is_err() {
-            out.vertices.clear();
-            out.indices.clear();
+        let done = self.build_flat(rates, out).and_then(|()| {
+            self.channels.evaluate(&self.topology, rates, self.options.parallelism.forks(), &mut self.channel_values)
+        });
+        match done {
+            Ok(()) => channels::write_texcoords(&self.channel_values, &mut out.texcoords),
+            Err(_) => {
+                out.vertices.clear();
+                out.texcoords.clear();
+                out.indices.clear();
+            }
         }
         self.settle(rates, done)?;
         // Cleared, not dropped: the next `update_cage` or `tessellate` refills the buffers.
@@ -530,6 +582,32 @@ impl DualTessellator {
     /// levels it goes through. See [`EvaluationPlan`]; empty before the first tessellation.
     pub fn evaluation_plan(&self) -> EvaluationPlan {
         self.evaluator.plan(&self.topology)
+    }
+
+    /// The last tessellation's evaluation of face-varying channel `channel` (by name, one of
+    /// the carried ones) as an [`EvaluationPlan`] over the channel's own control values, with
+    /// those values: the channel's value at every flat vertex as a linear function of them,
+    /// for a GPU to evaluate as it evaluates the positions (each point's "position" is the
+    /// channel's value, padded to three components with zeros). `None` for a channel not carried.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Channel, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::{DualOptions, DualTessellator};
+    ///
+    /// let mut soup = shapes::cube();
+    /// let square = [0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0];
+    /// soup.channels.push(Channel::new("uv", 2, square.repeat(6), (0..24).map(|i| i % 4).collect()));
+    /// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &Mesh::build(soup)?, &DualOptions::DEFAULT)?;
+    /// let points = tess.tessellate(&[3; 6])?.normals.len();
+    /// let (plan, values) = tess.channel_plan("uv").expect("a carried channel");
+    /// assert_eq!((plan.vertex_count(), values.len()), (points, 24));
+    /// assert!(tess.channel_plan("colour").is_none());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn channel_plan(&self, channel: &str) -> Option<(EvaluationPlan, &[DVec3])> {
+        let k = self.channels.names().iter().position(|n| n == channel)?;
+        Some(self.channels.plan(k, &self.topology))
     }
 
     /// The last output, keeping nothing else (a one-shot tessellation without a copy).
@@ -573,10 +651,14 @@ impl DualTessellator {
         t.write_triangle_faces(&mut out.triangle_faces, parallel);
         out.parameters.clear();
         out.parameters.reserve(t.vertex_count as usize);
-        t.for_each_site(|s| {
+        let parameter = |s: &Site| {
             let (u, v) = s.point.to_f64();
-            out.parameters.push(SurfaceParameter { face: FaceId::new(s.face), u, v });
-        });
+            SurfaceParameter { face: FaceId::new(s.face), u, v }
+        };
+        t.for_each_site(|s| out.parameters.push(parameter(&s)));
+        out.normal_parameters.clear();
+        out.normal_parameters.extend(t.sites[t.sites.len() - t.extra.len()..].iter().map(parameter));
+        out.channels.clone_from(&self.channel_values);
         std::mem::swap(&mut out.polygon_offsets, &mut t.polygon_offsets);
         std::mem::swap(&mut out.polygon_vertices, &mut t.polygon_vertices);
         std::mem::swap(&mut out.polygon_faces, &mut t.polygon_faces);
@@ -644,6 +726,8 @@ fn write_indices(t: &Topology, parallel: bool, indices: &mut Vec<u32>) {
 struct TopologyBuilder {
     triangle: bool,
     quads: bool,
+    /// Per edge, whether it is a seam of a carried channel (cut as a border; empty: none).
+    seams: Vec<bool>,
     buffers: BuilderBuffers,
 }
 
@@ -659,7 +743,7 @@ impl TopologyBuilder {
         out: &mut Topology,
     ) {
         let buffers = std::mem::take(&mut self.buffers);
-        let mut builder = Builder::with_buffers(mesh, self.triangle, self.quads, buffers);
+        let mut builder = Builder::with_buffers(mesh, &self.seams, self.triangle, self.quads, buffers);
         builder.build(domains, rates, rings, out);
         self.buffers = builder.into_buffers();
     }
@@ -683,7 +767,7 @@ fn beside<E: Send>(
     evaluate: impl FnOnce(&mut [f32]) -> Result<(), E> + Send,
     indices: impl FnOnce(&mut Vec<u32>) + Send,
 ) -> Result<(), E> {
-    let FlatMesh { vertices, indices: out_indices } = out;
+    let FlatMesh { vertices, indices: out_indices, .. } = out;
     vertices.resize(6 * t.point_count() as usize, 0.0);
     if parallel && t.triangle_count() > BESIDE {
         par::join(true, || evaluate(vertices), || indices(out_indices)).0

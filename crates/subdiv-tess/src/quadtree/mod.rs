@@ -457,11 +457,17 @@ impl QuadtreeTessellator {
         }
 
         // Every vertex evaluated once, exactly.
-        let evaluated: Vec<TessVertex> = crate::par::try_map(parallel, creators, |&(r, x, y)| {
+        let evaluated: Vec<TessVertex<'_>> = crate::par::try_map(parallel, creators, |&(r, x, y)| {
             let root = self.roots[r];
             let (position, normal) = self.eval(root, x, y)?;
             let (u, v) = bfr(root, x, y);
-            Ok::<_, TessError>(TessVertex { position, normal, parameter: SurfaceParameter { face: root.face, u, v } })
+            Ok::<_, TessError>(TessVertex {
+                position,
+                normal,
+                parameter: SurfaceParameter { face: root.face, u, v },
+                channels: &[],
+                texcoords: None,
+            })
         })?;
 
         // Polygons with their hanging vertices, and their fans.
@@ -483,6 +489,9 @@ impl QuadtreeTessellator {
             triangles: corners,
             polygons: if polygons { centres.len() } else { 0 },
             polygon_vertices: if polygons { corners } else { 0 },
+            // Face-varying channels are the dual tessellator's (ARCHITECTURE.md).
+            channels: 0,
+            texcoords: false,
         });
         for (k, vertex) in evaluated.iter().enumerate() {
             sink.vertex(k as u32, vertex);

@@ -139,11 +139,23 @@ impl Evaluator {
         positions: &mut Vec<DVec3>,
         normals: &mut Vec<DVec3>,
     ) {
+        self.evaluate_points(topo, parallel, positions, normals);
+        positions.truncate(topo.vertex_count as usize);
+    }
+
+    /// As [`evaluate`](Self::evaluate), keeping every point's position (an extra normal's at
+    /// its own site: a channel's value on a seam's second side).
+    pub(crate) fn evaluate_points(
+        &self,
+        topo: &Topology,
+        parallel: bool,
+        positions: &mut Vec<DVec3>,
+        normals: &mut Vec<DVec3>,
+    ) {
         let n = topo.point_count() as usize;
         positions.resize(n, DVec3::ZERO);
         normals.resize(n, DVec3::ZERO);
         self.evaluate_into(topo, parallel, WideSink(positions, normals));
-        positions.truncate(topo.vertex_count as usize);
     }
 
     /// Every vertex into `out`, in one pass over

@@ -60,6 +60,8 @@ pub(super) struct FaceCells {
 /// Builds the topology of `mesh` (level 0 of the patch levels, holes tagged) at `rates`.
 pub(crate) struct Builder<'a> {
     mesh: &'a Mesh,
+    /// Per edge, whether it is a seam of a carried face-varying channel (empty: none).
+    seams: &'a [bool],
     triangle: bool,
     quads: bool,
     pub(super) out: Topology,
@@ -102,12 +104,19 @@ impl<'a> Builder<'a> {
     /// `domains[f]` is `None` for a hole.
     #[cfg(test)]
     pub(crate) fn new(mesh: &'a Mesh, triangle: bool, quads: bool) -> Self {
-        Self::with_buffers(mesh, triangle, quads, BuilderBuffers::default())
+        Self::with_buffers(mesh, &[], triangle, quads, BuilderBuffers::default())
     }
 
-    /// A builder on the buffers of an earlier one ([`into_buffers`](Self::into_buffers)).
-    pub(crate) fn with_buffers(mesh: &'a Mesh, triangle: bool, quads: bool, buf: BuilderBuffers) -> Self {
-        Self { mesh, triangle, quads, out: Topology::default(), buf }
+    /// A builder on the buffers of an earlier one ([`into_buffers`](Self::into_buffers)), which
+    /// cuts the edges marked in `seams` (per edge; empty: none) as borders.
+    pub(crate) fn with_buffers(
+        mesh: &'a Mesh,
+        seams: &'a [bool],
+        triangle: bool,
+        quads: bool,
+        buf: BuilderBuffers,
+    ) -> Self {
+        Self { mesh, seams, triangle, quads, out: Topology::default(), buf }
     }
 
     /// The buffers, for the next builder of the same mesh.
@@ -480,10 +489,17 @@ impl<'a> Builder<'a> {
         }
     }
 
-    /// Whether half-edge `h` (of a face with a surface) is a border: no surface across it, or
-    /// an infinitely sharp edge, where the surface has a crease that dual points would cut off.
+    /// Whether half-edge `h` (of a face with a surface) is a border: no surface across it, an
+    /// infinitely sharp edge, where the surface has a crease that dual points would cut off, or
+    /// a seam of a carried channel, whose values jump there (points on the edge then take one
+    /// value per side, where a strip across it would blend the two sides' values).
     pub(super) fn is_border(&self, h: HalfEdgeId) -> bool {
-        self.across(h).is_none() || self.is_sharp(h)
+        self.across(h).is_none() || self.is_sharp(h) || self.is_seam(h)
+    }
+
+    /// Whether `h`'s edge is a seam of a carried channel.
+    fn is_seam(&self, h: HalfEdgeId) -> bool {
+        self.seams.get(self.mesh.edge(h).index()).copied().unwrap_or(false)
     }
 
     /// The half-edge across `h` if its face has a surface.

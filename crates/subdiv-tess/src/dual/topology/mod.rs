@@ -384,10 +384,18 @@ fn write_runs<T: Copy + Send + Sync>(
 }
 
 /// The number of output vertices at `rates`, from the construction's counts (for tests and for
-/// sizing): cells, triangle interiors, N-gon centres, border points, vertex points.
+/// sizing): cells, triangle interiors, N-gon centres, border points (boundaries, holes,
+/// infinitely sharp edges and the seams of the mesh's channels), vertex points.
 pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rings: Option<&RingDepths>) -> usize {
     let hole = |f: FaceId| mesh.is_hole(f);
     let rate_of = |f: FaceId| rates[f.index()] as usize;
+    // Edges the construction cuts between two faces: infinitely sharp ones, and the seams of
+    // the mesh's channels (carried by default).
+    let cut = |h: HalfEdgeId| {
+        let e = mesh.edge(h);
+        mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP
+            || mesh.channels().iter().any(|c| mesh.is_seam(c, e))
+    };
     let mut count = 0;
     for f in mesh.face_ids().filter(|&f| !hole(f)) {
         let (n, size) = (rate_of(f), mesh.face_size(f));
@@ -407,7 +415,13 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             size * n.div_ceil(2).pow(2) + centre
         };
         for h in mesh.face_half_edges(f) {
-            if mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) {
+            // A border's points are on its first side (an edge cut between two faces: the
+            // lower half-edge's).
+            let first = match mesh.twin(h) {
+                None => true,
+                Some(t) => hole(mesh.face(t)) || (cut(h) && h.index() < t.index()),
+            };
+            if first {
                 count += if triangle || size == 4 { n } else { 2 * n.div_ceil(2) };
             }
         }
@@ -417,8 +431,9 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
         if faces.is_empty() {
             continue;
         }
-        let border = mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)))
-            || mesh.is_boundary_vertex(v);
+        let border =
+            mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)) || cut(h))
+                || mesh.is_boundary_vertex(v);
         let depth = rings.map_or(0, |r| r.vertices[v.index()]);
         let regular = if triangle { 6 } else { 4 };
         if !border && depth > 0 && faces.len() >= 3 && faces.len() != regular {
