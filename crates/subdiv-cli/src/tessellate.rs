@@ -179,6 +179,17 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
             format!("{policy}, rates {lo}..={hi}{gpu_detail}")
         }
     };
+    // Said, not silent: the output has no texture coordinates although the input has some.
+    let dropped = if surface.mesh().channels().is_empty() {
+        ""
+    } else if args.method == Method::Quadtree {
+        "; the quadtree does not carry texture coordinates (the dual method does)"
+    } else if !surface.scheme().has_crease_rules() {
+        "; texture coordinates not carried (the scheme has no face-varying rules)"
+    } else {
+        ""
+    };
+    let detail = format!("{detail}{dropped}");
     let seconds = start.elapsed().as_secs_f64();
     bar.say("writing");
     let written = match (&result, format) {

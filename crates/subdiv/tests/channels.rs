@@ -368,3 +368,39 @@ fn every_textured_shared_mesh_tessellates_with_its_texture_coordinates() {
     eprintln!("{} meshes, {points} points compared", meshes.len());
     assert!(meshes.len() >= 100, "{} textured meshes", meshes.len());
 }
+
+/// In every face-varying mode, the tessellation's texture coordinates (the surface made
+/// `with_refine_options` of that mode) are the channel's evaluator's in that mode at every point,
+/// to 1e-12, on spot and `catmark_fvar_bound1` at rate 3; the modes give different values.
+#[test]
+fn tessellated_texture_coordinates_follow_the_face_varying_mode() {
+    use subdiv::{EvalOptions, Rates, Surface, TessOptions};
+    if subdiv_testkit::meshes_dir().is_none() {
+        return;
+    }
+    let mut compared = 0;
+    for (path, builtin, mesh) in subdiv_testkit::textured_meshes() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        if name != "spot_control_mesh.obj" && name != "catmark_fvar_bound1.obj" {
+            continue;
+        }
+        let mut seen: Vec<Vec<f64>> = Vec::new();
+        for mode in FaceVaryingInterpolation::ALL_MODES {
+            let refine = RefineOptions::DEFAULT.with_face_varying(mode);
+            let mut surface = Surface::new(mesh.clone(), builtin.scheme()).with_refine_options(refine);
+            let out = surface.tessellate(&TessOptions { rates: Rates::Uniform(3), ..TessOptions::DEFAULT }).unwrap();
+            let out = out.into_mesh();
+            let uv = surface.channel_evaluator(Channel::UV, &EvalOptions { refine, ..EvalOptions::DEFAULT }).unwrap();
+            for (k, p) in point_parameters(&out).iter().enumerate() {
+                let expected = uv.evaluate(p.face, p.u, p.v).unwrap().position;
+                let got = out.channels.point(k);
+                let error = (got[0] - expected.x).abs().max((got[1] - expected.y).abs());
+                assert!(error <= 1e-12, "{name} in mode {}: point {k}: {got:?} against {expected}", mode.name());
+            }
+            seen.push(out.channels.values.clone());
+            compared += 1;
+        }
+        assert!(seen.windows(2).any(|w| w[0] != w[1]), "{name}: every mode gave the same values");
+    }
+    assert_eq!(compared, 12);
+}
