@@ -12,7 +12,7 @@ use subdiv::tess::rates::ScreenSpace;
 use subdiv::tess::{DualOptions, DualTessellator, FlatMesh, MAX_DUAL_RATE};
 use subdiv_gpu::{
     Gpu, GpuCage, GpuEvalOptions, GpuOptions, GpuTessellation, GpuTexcoords, MAX_IMAGE_SIDE, RenderOptions, Renderer,
-    View,
+    Texture, TextureImage, View,
 };
 
 use crate::UserError;
@@ -68,27 +68,48 @@ pub(crate) struct RenderArgs {
     #[arg(long, value_name = "K")]
     frames: Option<u32>,
     /// Texture the surface through its texture coordinates (exact at every vertex, split at
-    /// seams) so that the mapping can be checked: `checker` (16 squares per unit), or
-    /// `checker:N` for N squares per unit (1 to 4096).
-    #[arg(long, value_name = "checker[:N]", value_parser = parse_texture)]
-    texture: Option<u32>,
+    /// seams): `checker` (16 squares per unit, to check the mapping), `checker:N` (N squares per
+    /// unit, 1 to 4096), or an image file (PNG, JPEG, …; `t` runs up the image).
+    #[arg(long, value_name = "checker[:N]|IMAGE", value_parser = parse_texture)]
+    texture: Option<TextureArg>,
 }
 
-/// `--texture checker[:N]`: the checker's squares per unit of texture coordinates.
-fn parse_texture(text: &str) -> Result<u32, String> {
+/// `--texture`.
+#[derive(Clone, Debug, PartialEq)]
+enum TextureArg {
+    /// A checker of this many squares per unit of texture coordinates.
+    Checker(u32),
+    /// An image file.
+    Image(PathBuf),
+}
+
+/// The checker's squares per unit when `--texture checker` says no number.
+const DEFAULT_CHECKER: u32 = 16;
+
+/// `--texture checker[:N]|IMAGE`.
+fn parse_texture(text: &str) -> Result<TextureArg, String> {
     let squares = match text.split_once(':') {
-        None if text == "checker" => RenderOptions::DEFAULT.checker,
+        None if text == "checker" => DEFAULT_CHECKER,
         Some(("checker", n)) => n.parse().map_err(|_| format!("checker:{n}: N must be an integer"))?,
-        _ => {
-            return Err(format!(
-                "{text}: the texture is `checker` or `checker:N` (an image file is not supported yet)"
-            ));
-        }
+        _ => return Ok(TextureArg::Image(PathBuf::from(text))),
     };
     if !(1..=subdiv_gpu::MAX_CHECKER).contains(&squares) {
         return Err(format!("checker:{squares}: squares per unit are 1 to {}", subdiv_gpu::MAX_CHECKER));
     }
-    Ok(squares)
+    Ok(TextureArg::Checker(squares))
+}
+
+/// The image `--texture` asks for.
+fn texture_image(texture: &TextureArg, surface: [u8; 3]) -> Result<TextureImage, UserError> {
+    match texture {
+        TextureArg::Checker(squares) => Ok(TextureImage::checker(*squares, surface)?),
+        TextureArg::Image(path) => {
+            let failed = |e: &dyn std::fmt::Display| UserError(format!("{}: --texture: {e}", path.display()));
+            let image = image::open(path).map_err(|e| failed(&e))?.to_rgba8();
+            let (width, height) = image.dimensions();
+            TextureImage::rgba(width, height, image.into_raw()).map_err(|e| failed(&e))
+        }
+    }
 }
 
 /// Checks every argument that needs no mesh and no device, so that bad input fails before any
@@ -117,11 +138,9 @@ fn check(args: &RenderArgs) -> Result<([u32; 2], Option<u32>), UserError> {
 
 pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserError> {
     let ([width, height], frames) = check(args)?;
-    let options = RenderOptions {
-        wireframe: args.wireframe,
-        checker: args.texture.unwrap_or(RenderOptions::DEFAULT.checker),
-        ..RenderOptions::default().with_size(width, height)
-    };
+    let options = RenderOptions { wireframe: args.wireframe, ..RenderOptions::default().with_size(width, height) };
+    // The image first: a missing file fails before any work.
+    let image = args.texture.as_ref().map(|t| texture_image(t, options.surface)).transpose()?;
     let (input_name, mesh) = LoadedMesh::read_and_build(args.mesh.as_deref(), &args.input)?;
     let scheme = args.scheme.resolve()?;
     let located = |error: &dyn std::fmt::Display| UserError(format!("{}: {error}", input_name));
@@ -164,10 +183,13 @@ pub(crate) fn run(args: &RenderArgs, _out: &mut impl Write) -> Result<(), UserEr
     let eval_options = GpuEvalOptions { edges: args.wireframe, ..GpuEvalOptions::default() };
     let surface = GpuTessellation::new(&gpu, &tess.evaluation_plan(), &flat.indices, mesh.positions(), &eval_options)?;
     let cage = if args.cage { Some(GpuCage::upload(&gpu, &mesh)?) } else { None };
-    let texcoords = if args.texture.is_some() { Some(GpuTexcoords::upload(&gpu, &flat.texcoords)?) } else { None };
+    let texture = match &image {
+        Some(image) => Some((GpuTexcoords::upload(&gpu, &flat.texcoords)?, renderer.texture(&gpu, image)?)),
+        None => None,
+    };
     let scene = |view| subdiv_gpu::Scene {
         cage: cage.as_ref().map(GpuCage::lines),
-        texcoords: texcoords.as_ref().map(|t| &t.buffer),
+        texture: texture.as_ref().map(|(t, image)| Texture { texcoords: &t.buffer, image }),
         ..surface.scene(view)
     };
 

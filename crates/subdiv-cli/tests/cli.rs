@@ -465,6 +465,44 @@ fn render_writes_numbered_frames_and_rejects_bad_arguments() {
     assert_eq!(names, ["plain.png", "spin_0000.png", "spin_0001.png"]);
 }
 
+/// `render --texture`: a checker or an image through spot's texture coordinates, each a
+/// different picture from the plain surface; a bad checker, a missing image or a mesh without
+/// texture coordinates are errors naming what is wrong, with nothing written.
+#[test]
+fn render_draws_textures_through_the_texture_coordinates() {
+    let Some(spot) = shared_mesh("keenan/spot_control_mesh.obj") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("t.png");
+    let (spot, out_arg) = (spot.to_str().unwrap(), out.to_str().unwrap());
+    for (args, expect) in [
+        (&["render", spot, "--texture", "checker:0"][..], "checker:0: squares per unit are 1 to 4096"),
+        (&["render", spot, "--texture", "checker:x"][..], "checker:x: N must be an integer"),
+        (&["render", spot, "--texture", "/nonexistent/t.png"][..], "/nonexistent/t.png: --texture"),
+        (&["render", "--texture", "checker"][..], "--texture: the mesh has no texture coordinates"),
+    ] {
+        let output = subdiv(&[args, &["-o", out_arg][..]].concat());
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert!(!output.status.success() && stderr.contains(expect), "{args:?}: expected {expect:?} in {stderr:?}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "nothing written on bad input");
+    if subdiv_testkit::gpu().is_none() {
+        return;
+    }
+    let size = ["--size", "96,72", "--rate", "3"];
+    let render = |name: &str, texture: &[&str]| {
+        let path = dir.path().join(name);
+        let output = subdiv(&[&["render", spot, "-o", path.to_str().unwrap()][..], &size, texture].concat());
+        assert!(output.status.success(), "{texture:?}: {}", String::from_utf8_lossy(&output.stderr));
+        image::open(&path).unwrap().to_rgb8()
+    };
+    let plain = render("plain.png", &[]);
+    let checker = render("checker.png", &["--texture", "checker:8"]);
+    let image = render("image.png", &["--texture", dir.path().join("checker.png").to_str().unwrap()]);
+    assert_ne!(plain, checker);
+    assert_ne!(checker, image);
+    assert_ne!(plain, image);
+}
+
 /// A unit cube as OBJ, its coordinates multiplied by `scale`.
 fn cube_obj(scale: f64) -> String {
     let mut text = String::new();

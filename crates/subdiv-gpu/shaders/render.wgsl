@@ -16,12 +16,16 @@ struct Uniforms {
     wire: vec4<f32>,
     // rgb and alpha of the cage's lines (hidden parts at a third of it).
     cage: vec4<f32>,
-    // x: specular strength; y: Blinn-Phong exponent; z: checker squares per unit of texture
-    // coordinates (the textured surface).
+    // x: specular strength; y: Blinn-Phong exponent; z: the texture's repetitions per unit of
+    // texture coordinates (the textured surface).
     specular: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> u: Uniforms;
+
+// The textured surface's image (its pipeline only).
+@group(1) @binding(0) var image: texture_2d<f32>;
+@group(1) @binding(1) var image_sampler: sampler;
 
 struct SurfaceOut {
     @builtin(position) clip: vec4<f32>,
@@ -81,13 +85,10 @@ fn vs_textured(
     return out;
 }
 
-// A checker of `u.specular.z` squares per unit of the texture coordinates: the surface's colour
-// and a dark one, so that stretching, seams and flips of the mapping show.
+// The image at `(s, 1 - t) · repeat`: texture coordinates run up the image (OBJ's `vt`).
 @fragment
 fn fs_textured(in: TexturedOut, @builtin(front_facing) front: bool) -> @location(0) vec4<f32> {
-    let cell = floor(in.uv * u.specular.z);
-    let odd = (i32(cell.x) + i32(cell.y)) & 1;
-    let albedo = select(u.surface.rgb, u.surface.rgb * 0.22, odd == 1);
+    let albedo = textureSample(image, image_sampler, vec2<f32>(in.uv.x, 1.0 - in.uv.y) * u.specular.z).rgb;
     return shade(in.world, in.normal, front, albedo);
 }
 

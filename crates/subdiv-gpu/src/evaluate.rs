@@ -459,7 +459,7 @@ impl GpuTessellation {
                 .edges
                 .as_ref()
                 .map(|(indices, index_count)| crate::Lines { indices, index_count: *index_count }),
-            texcoords: None,
+            texture: None,
             cage: None,
             view,
         }

@@ -24,6 +24,7 @@ pub use adapter::{Gpu, GpuOptions};
 pub use error::GpuError;
 pub use evaluate::{GpuEvalOptions, GpuTessellation, RateCache};
 pub use render::{
-    CAGE_VERTEX_STRIDE, Image, MAX_CHECKER, MAX_IMAGE_SIDE, RenderOptions, Renderer, TEXCOORD_STRIDE, VERTEX_STRIDE,
+    CAGE_VERTEX_STRIDE, GpuTexture, Image, MAX_CHECKER, MAX_IMAGE_SIDE, RenderOptions, Renderer, TEXCOORD_STRIDE,
+    Texture, TextureImage, VERTEX_STRIDE,
 };
 pub use scene::{Cage, GpuCage, GpuMesh, GpuTexcoords, Lines, Scene, View, bounds, unique_edges};

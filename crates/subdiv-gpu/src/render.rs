@@ -28,7 +28,7 @@ pub const VERTEX_STRIDE: u64 = 24;
 /// Bytes per vertex of a cage position buffer: `x y z` as `f32`.
 pub const CAGE_VERTEX_STRIDE: u64 = 12;
 
-/// The bytes per texture coordinate of [`Scene::texcoords`]: `s t` as `f32`
+/// The bytes per texture coordinate of a [`Texture`]'s coordinates: `s t` as `f32`
 /// ([`FlatMesh::texcoords`](subdiv_tess::FlatMesh::texcoords)).
 pub const TEXCOORD_STRIDE: u64 = 8;
 
@@ -63,14 +63,76 @@ pub struct RenderOptions {
     /// The cage's colour and opacity; hidden parts are drawn at a third of it. Default: orange,
     /// `[255, 128, 0, 255]`.
     pub cage: [u8; 4],
-    /// The checker texture drawn through [`Scene::texcoords`], when the scene has them: squares
-    /// per unit of the texture coordinates (so a `[0, 1]²` atlas shows `checker²` squares),
-    /// `1..=`[`MAX_CHECKER`]. Default: 16.
-    pub checker: u32,
 }
 
-/// The most checker squares per unit of texture coordinates ([`RenderOptions::checker`]).
+/// The most checker squares per unit of texture coordinates ([`TextureImage::checker`]).
 pub const MAX_CHECKER: u32 = 4096;
+
+/// An image to draw on the surface through its texture coordinates ([`Scene::texture`]):
+/// RGBA8 sRGB pixels, rows from the top, sampled at `(s, 1 − t) · repeat` (texture coordinates
+/// run up the image, as OBJ's `vt` and most atlases do) with the image repeated outside
+/// `[0, 1]²`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureImage {
+    width: u32,
+    height: u32,
+    pixels: Vec<u8>,
+    repeat: f32,
+    nearest: bool,
+}
+
+impl TextureImage {
+    /// An image of `width × height` RGBA8 sRGB pixels (rows from the top), filtered linearly.
+    ///
+    /// # Errors
+    /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`]; [`GpuError::Scene`]
+    /// unless there are `4 · width · height` bytes.
+    pub fn rgba(width: u32, height: u32, pixels: Vec<u8>) -> Result<Self, GpuError> {
+        check_size(width, height, MAX_IMAGE_SIDE)?;
+        if pixels.len() as u64 != 4 * u64::from(width) * u64::from(height) {
+            return Err(GpuError::Scene(format!("texture: {} bytes for {width}×{height} RGBA pixels", pixels.len())));
+        }
+        Ok(Self { width, height, pixels, repeat: 1.0, nearest: false })
+    }
+
+    /// A checker of `squares` squares per unit of the texture coordinates (so a `[0, 1]²` atlas
+    /// shows `squares²`), in `surface`'s colour and a dark shade of it: stretching, seams and
+    /// flips of a mapping show.
+    ///
+    /// # Errors
+    /// [`GpuError::Scene`] for `squares` outside `1..=`[`MAX_CHECKER`].
+    pub fn checker(squares: u32, surface: [u8; 3]) -> Result<Self, GpuError> {
+        if !(1..=MAX_CHECKER).contains(&squares) {
+            return Err(GpuError::Scene(format!(
+                "checker {squares}: squares per unit of texture coordinates are 1..={MAX_CHECKER}"
+            )));
+        }
+        let light = [surface[0], surface[1], surface[2], 255];
+        let dark = linear_rgb(surface).map(|c| srgb(0.22 * c));
+        let dark = [dark[0], dark[1], dark[2], 255];
+        let pixels = [light, dark, dark, light].concat();
+        // Two squares per repetition of the 2 × 2 image, sampled nearest.
+        Ok(Self { width: 2, height: 2, pixels, repeat: squares as f32 / 2.0, nearest: true })
+    }
+}
+
+/// A [`TextureImage`] on the device, made by [`Renderer::texture`] for that renderer's
+/// textured pipeline.
+#[derive(Debug)]
+pub struct GpuTexture {
+    bind_group: wgpu::BindGroup,
+    repeat: f32,
+}
+
+/// What [`Scene::texture`] draws: an image through the surface's texture coordinates.
+#[derive(Clone, Copy, Debug)]
+pub struct Texture<'a> {
+    /// Per vertex its texture coordinates `s t` ([`TEXCOORD_STRIDE`] bytes; usage `VERTEX`,
+    /// e.g. a [`GpuTexcoords`](crate::GpuTexcoords)).
+    pub texcoords: &'a wgpu::Buffer,
+    /// The image, on the device of the renderer that draws it.
+    pub image: &'a GpuTexture,
+}
 
 impl RenderOptions {
     /// The defaults, as documented on each field.
@@ -83,7 +145,6 @@ impl RenderOptions {
         surface: [176, 190, 212],
         wire: [28, 32, 44, 150],
         cage: [255, 128, 0, 255],
-        checker: 16,
     };
 
     /// The options with another image size.
@@ -98,12 +159,6 @@ impl RenderOptions {
         Self { wireframe, ..self }
     }
 
-    /// The options with another checker texture ([`checker`](Self::checker)).
-    #[must_use]
-    pub fn with_checker(self, checker: u32) -> Self {
-        Self { checker, ..self }
-    }
-
     /// Width over height.
     pub fn aspect(&self) -> f32 {
         self.width as f32 / self.height.max(1) as f32
@@ -112,17 +167,9 @@ impl RenderOptions {
     /// Checks the image size against [`MAX_IMAGE_SIDE`] (no device needed).
     ///
     /// # Errors
-    /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`];
-    /// [`GpuError::Scene`] for a [`checker`](Self::checker) outside `1..=`[`MAX_CHECKER`].
+    /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`].
     pub fn check(&self) -> Result<(), GpuError> {
-        check_size(self.width, self.height, MAX_IMAGE_SIDE)?;
-        if !(1..=MAX_CHECKER).contains(&self.checker) {
-            return Err(GpuError::Scene(format!(
-                "checker {}: squares per unit of texture coordinates are 1..={MAX_CHECKER}",
-                self.checker
-            )));
-        }
-        Ok(())
+        check_size(self.width, self.height, MAX_IMAGE_SIDE)
     }
 }
 
@@ -160,12 +207,20 @@ fn linear(c: u8) -> f32 {
     if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
 }
 
+/// A linear colour component as an sRGB byte.
+fn srgb(c: f32) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let encoded = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (encoded * 255.0).round() as u8
+}
+
 fn linear_rgb(c: [u8; 3]) -> [f32; 3] {
     c.map(linear)
 }
 
 impl Uniforms {
-    fn new(options: &RenderOptions, view: &View, frame: [Vec3; 3]) -> Self {
+    /// The uniforms of one image; `repeat` is the texture's (1 without one).
+    fn new(options: &RenderOptions, view: &View, frame: [Vec3; 3], repeat: f32) -> Self {
         let [right, up, back] = frame;
         // Lights fixed to the camera: the key from the upper left, the fill from the right.
         let key = (-0.45 * right + 0.6 * up + 0.65 * back).normalize();
@@ -183,7 +238,7 @@ impl Uniforms {
             surface: [r, g, b, 0.16],
             wire: rgba(options.wire),
             cage: rgba(options.cage),
-            specular: [0.22, 48.0, options.checker as f32, 0.0],
+            specular: [0.22, 48.0, repeat, 0.0],
         }
     }
 }
@@ -259,8 +314,10 @@ pub struct Renderer {
     uniforms: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     surface: wgpu::RenderPipeline,
-    /// The surface with its checker texture (a second vertex buffer of texture coordinates).
+    /// The surface with a texture (a second vertex buffer of texture coordinates, the image in
+    /// bind group 1).
     textured: wgpu::RenderPipeline,
+    texture_layout: wgpu::BindGroupLayout,
     wire: wgpu::RenderPipeline,
     cage: wgpu::RenderPipeline,
     cage_hidden: wgpu::RenderPipeline,
@@ -280,7 +337,6 @@ impl Renderer {
     /// [`GpuError::ImageSize`] for a side of 0 or above [`MAX_IMAGE_SIDE`] (or the device's
     /// texture limit); [`GpuError::Wgpu`] if the device refuses a resource.
     pub fn new(gpu: &Gpu, options: &RenderOptions) -> Result<Self, GpuError> {
-        options.check()?;
         check_size(options.width, options.height, MAX_IMAGE_SIDE.min(gpu.limits().max_texture_dimension_2d))?;
         let device = &gpu.device;
         let scopes = ErrorScopes::push(device, "creating the renderer");
@@ -317,10 +373,36 @@ impl Renderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
+        let texture_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("render texture"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let textured_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("render textured"),
+            bind_group_layouts: &[Some(&layout), Some(&texture_layout)],
+            immediate_size: 0,
+        });
         let samples = if options.msaa { 4 } else { 1 };
         let pipelines = Pipelines { device, shader: &shader, layout: &pipeline_layout, samples };
         let surface = pipelines.surface(false);
-        let textured = pipelines.surface(true);
+        let textured = Pipelines { layout: &textured_layout, ..pipelines }.surface(true);
         let wire = pipelines.lines("wireframe", VERTEX_STRIDE, "fs_wire", wgpu::CompareFunction::LessEqual);
         let cage = pipelines.lines("cage", CAGE_VERTEX_STRIDE, "fs_cage", wgpu::CompareFunction::LessEqual);
         let cage_hidden =
@@ -361,6 +443,7 @@ impl Renderer {
             bind_group,
             surface,
             textured,
+            texture_layout,
             wire,
             cage,
             cage_hidden,
@@ -377,6 +460,59 @@ impl Renderer {
         &self.options
     }
 
+    /// Puts `image` on the device for this renderer's textured surface ([`Scene::texture`]).
+    ///
+    /// # Errors
+    /// [`GpuError::ImageSize`] for an image larger than the device's textures;
+    /// [`GpuError::Wgpu`] if the device refuses it.
+    pub fn texture(&self, gpu: &Gpu, image: &TextureImage) -> Result<GpuTexture, GpuError> {
+        check_size(image.width, image.height, MAX_IMAGE_SIDE.min(gpu.limits().max_texture_dimension_2d))?;
+        let device = &gpu.device;
+        let scopes = ErrorScopes::push(device, "uploading a texture");
+        let size = wgpu::Extent3d { width: image.width, height: image.height, depth_or_array_layers: 1 };
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("surface texture"),
+            size,
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba8UnormSrgb,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        });
+        gpu.queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d::ZERO,
+                aspect: wgpu::TextureAspect::All,
+            },
+            &image.pixels,
+            wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(4 * image.width), rows_per_image: None },
+            size,
+        );
+        let filter = if image.nearest { wgpu::FilterMode::Nearest } else { wgpu::FilterMode::Linear };
+        let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
+            label: Some("surface texture"),
+            address_mode_u: wgpu::AddressMode::Repeat,
+            address_mode_v: wgpu::AddressMode::Repeat,
+            mag_filter: filter,
+            min_filter: filter,
+            ..wgpu::SamplerDescriptor::default()
+        });
+        let view = texture.create_view(&wgpu::TextureViewDescriptor::default());
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("surface texture"),
+            layout: &self.texture_layout,
+            entries: &[
+                wgpu::BindGroupEntry { binding: 0, resource: wgpu::BindingResource::TextureView(&view) },
+                wgpu::BindGroupEntry { binding: 1, resource: wgpu::BindingResource::Sampler(&sampler) },
+            ],
+        });
+        scopes.pop()?;
+        Ok(GpuTexture { bind_group, repeat: image.repeat })
+    }
+
     /// Draws `scene` and reads the image back (waiting for the device).
     ///
     /// # Errors
@@ -390,7 +526,8 @@ impl Renderer {
         let frame = scene.view.frame()?;
         let (device, queue) = (&gpu.device, &gpu.queue);
         let scopes = ErrorScopes::push(device, "rendering");
-        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&Uniforms::new(options, &scene.view, frame)));
+        let repeat = scene.texture.map_or(1.0, |t| t.image.repeat);
+        queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&Uniforms::new(options, &scene.view, frame, repeat)));
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor { label: Some("render") });
         {
             let [r, g, b] = linear_rgb(options.background).map(f64::from);
@@ -420,10 +557,11 @@ impl Renderer {
             });
             pass.set_bind_group(0, &self.bind_group, &[]);
             pass.set_vertex_buffer(0, scene.vertices.slice(..));
-            match scene.texcoords {
-                Some(texcoords) => {
+            match scene.texture {
+                Some(texture) => {
                     pass.set_pipeline(&self.textured);
-                    pass.set_vertex_buffer(1, texcoords.slice(..));
+                    pass.set_bind_group(1, &texture.image.bind_group, &[]);
+                    pass.set_vertex_buffer(1, texture.texcoords.slice(..));
                 }
                 None => pass.set_pipeline(&self.surface),
             }

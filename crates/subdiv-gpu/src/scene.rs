@@ -8,7 +8,7 @@ use subdiv_tess::FlatMesh;
 use subdiv_tess::rates::Camera;
 use wgpu::util::DeviceExt;
 
-use crate::render::{CAGE_VERTEX_STRIDE, ErrorScopes, RenderOptions, TEXCOORD_STRIDE, VERTEX_STRIDE};
+use crate::render::{CAGE_VERTEX_STRIDE, ErrorScopes, RenderOptions, TEXCOORD_STRIDE, Texture, VERTEX_STRIDE};
 use crate::{Gpu, GpuError};
 
 /// A pinhole camera: eye, target, up, vertical field of view, and the depth range drawn.
@@ -168,10 +168,10 @@ pub struct Scene<'a> {
     pub vertices: &'a wgpu::Buffer,
     /// The number of vertices in `vertices`.
     pub vertex_count: u32,
-    /// Per vertex its texture coordinates `s t` ([`TEXCOORD_STRIDE`] bytes; usage `VERTEX`,
-    /// e.g. a [`GpuTexcoords`]): when given, the surface is drawn with a checker texture
-    /// through them ([`RenderOptions::checker`]), so that the mapping can be looked at.
-    pub texcoords: Option<&'a wgpu::Buffer>,
+    /// An image drawn on the surface through its texture coordinates (a checker,
+    /// [`TextureImage::checker`](crate::TextureImage::checker), shows the mapping), or the
+    /// plain surface.
+    pub texture: Option<Texture<'a>>,
     /// The surface's triangles: `u32` indices into `vertices`, three per triangle (usage
     /// `INDEX`).
     pub triangles: &'a wgpu::Buffer,
@@ -194,13 +194,13 @@ impl Scene<'_> {
         if !fits(self.vertices, self.vertex_count, VERTEX_STRIDE) {
             return bad(format!("{} vertices do not fit a {}-byte buffer", self.vertex_count, self.vertices.size()));
         }
-        if let Some(texcoords) = self.texcoords
-            && !fits(texcoords, self.vertex_count, TEXCOORD_STRIDE)
+        if let Some(texture) = self.texture
+            && !fits(texture.texcoords, self.vertex_count, TEXCOORD_STRIDE)
         {
             return bad(format!(
                 "texture coordinates of {} vertices do not fit a {}-byte buffer",
                 self.vertex_count,
-                texcoords.size()
+                texture.texcoords.size()
             ));
         }
         if !self.index_count.is_multiple_of(3) || !fits(self.triangles, self.index_count, 4) {
@@ -358,7 +358,7 @@ impl GpuMesh {
             triangles: &self.triangles,
             index_count: self.index_count,
             wireframe: self.edges.as_ref().map(|indices| Lines { indices, index_count: self.edge_index_count }),
-            texcoords: None,
+            texture: None,
             cage: None,
             view,
         }
@@ -366,7 +366,7 @@ impl GpuMesh {
 }
 
 /// Texture coordinates on the device, `s t` as `f32` per vertex of a surface (a
-/// [`FlatMesh::texcoords`]), for [`Scene::texcoords`]. They do not move with an animated cage.
+/// [`FlatMesh::texcoords`]), for a [`Scene::texture`]. They do not move with an animated cage.
 #[derive(Debug)]
 pub struct GpuTexcoords {
     /// The coordinates ([`TEXCOORD_STRIDE`] bytes per vertex; usage `VERTEX`).

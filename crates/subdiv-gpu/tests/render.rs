@@ -3,7 +3,7 @@
 //! and bad scenes are typed errors after which the renderer still works.
 
 use glam::Vec3;
-use subdiv_gpu::{GpuError, GpuMesh, GpuTexcoords, Lines, RenderOptions, Renderer, Scene, View};
+use subdiv_gpu::{GpuError, GpuMesh, GpuTexcoords, Lines, RenderOptions, Renderer, Scene, Texture, TextureImage, View};
 use subdiv_mesh::{Channel, Mesh, shapes};
 use subdiv_schemes::Builtin;
 use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
@@ -52,7 +52,7 @@ fn raw_buffers_draw_like_an_uploaded_mesh_and_frames_move() {
         triangles: &triangles,
         index_count: flat.indices.len() as u32,
         wireframe: Some(Lines { indices: &lines, index_count: edges.len() as u32 }),
-        texcoords: None,
+        texture: None,
         cage: None,
         view,
     };
@@ -168,11 +168,12 @@ fn images_are_rows_of_rgba_bytes() {
     }
 }
 
-/// A checker through texture coordinates: a cube whose faces each map the unit square shows
-/// dark squares (the plain surface hardly any dark pixels), more of them for a finer checker, and the same
-/// image for the same coordinates; bad coordinates and checkers are typed errors.
+/// Textures through texture coordinates: a cube whose faces each map the unit square, with a
+/// checker, shows dark squares (the plain surface hardly any dark pixels), more edges between
+/// squares for a finer checker, the same image for the same texture; an image texture's colour
+/// shows; bad coordinates, checkers and images are typed errors.
 #[test]
-fn texture_coordinates_draw_a_checker() {
+fn textures_draw_through_the_texture_coordinates() {
     let Some(gpu) = subdiv_testkit::gpu() else { return };
     let mut soup = shapes::cube();
     let square = [0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0];
@@ -184,30 +185,41 @@ fn texture_coordinates_draw_a_checker() {
     assert_eq!(flat.texcoords.len(), 2 * (flat.vertices.len() / 6));
     let uploaded = GpuMesh::upload(&gpu, &flat).unwrap();
     let texcoords = GpuTexcoords::upload(&gpu, &flat.texcoords).unwrap();
+    let renderer = Renderer::new(&gpu, &options()).unwrap();
+    let surface = options().surface;
+    let coarse = renderer.texture(&gpu, &TextureImage::checker(2, surface).unwrap()).unwrap();
+    let fine = renderer.texture(&gpu, &TextureImage::checker(8, surface).unwrap()).unwrap();
     let plain = uploaded.scene(framing(&flat));
-    let textured = Scene { texcoords: Some(&texcoords.buffer), ..plain };
+    let with = |image| Scene { texture: Some(Texture { texcoords: &texcoords.buffer, image }), ..plain };
     let dark = |image: &subdiv_gpu::Image| image.pixels().chunks_exact(4).filter(|p| p[0] < 90).count();
-    let coarse = Renderer::new(&gpu, &options().with_checker(2)).unwrap();
-    let fine = Renderer::new(&gpu, &options().with_checker(8)).unwrap();
-    let (none, two) = (dark(&coarse.render(&gpu, &plain).unwrap()), coarse.render(&gpu, &textured).unwrap());
+    let none = dark(&renderer.render(&gpu, &plain).unwrap());
+    let two = renderer.render(&gpu, &with(&coarse)).unwrap();
     // The plain surface has few dark pixels (its least lit rims), the checker hundreds.
     assert!(dark(&two) > none + 200, "{} dark pixels against {none}", dark(&two));
-    assert_eq!(coarse.render(&gpu, &textured).unwrap(), two);
+    assert_eq!(renderer.render(&gpu, &with(&coarse)).unwrap(), two);
     // Edges between dark and light squares: more of them for the finer checker.
     let edges = |image: &subdiv_gpu::Image| {
         let p = image.pixels();
         (0..p.len() / 4 - 1).filter(|&k| (p[4 * k] < 90) != (p[4 * k + 4] < 90)).count()
     };
-    assert!(edges(&fine.render(&gpu, &textured).unwrap()) > edges(&two));
+    assert!(edges(&renderer.render(&gpu, &with(&fine)).unwrap()) > edges(&two));
+    // A pure red image: the surface turns red (green and blue only from the highlight).
+    let red = renderer.texture(&gpu, &TextureImage::rgba(1, 1, vec![255, 0, 0, 255]).unwrap()).unwrap();
+    let image = renderer.render(&gpu, &with(&red)).unwrap();
+    let reddish = image.pixels().chunks_exact(4).filter(|p| p[0] > 120 && p[1] < 60 && p[2] < 60).count();
+    assert!(reddish > 1000, "{reddish} red pixels");
 
     assert!(matches!(GpuTexcoords::upload(&gpu, &[0.0; 3]), Err(GpuError::Scene(_))));
     assert!(matches!(GpuTexcoords::upload(&gpu, &[0.0, f32::NAN]), Err(GpuError::Scene(m)) if m.contains("vertex 0")));
     let short = GpuTexcoords::upload(&gpu, &flat.texcoords[..4]).unwrap();
-    match coarse.render(&gpu, &Scene { texcoords: Some(&short.buffer), ..plain }) {
+    match renderer.render(&gpu, &Scene { texture: Some(Texture { texcoords: &short.buffer, image: &coarse }), ..plain })
+    {
         Err(GpuError::Scene(m)) => assert!(m.contains("texture coordinates"), "{m}"),
         other => panic!("expected a scene error, got {other:?}"),
     }
-    for checker in [0, subdiv_gpu::MAX_CHECKER + 1] {
-        assert!(matches!(Renderer::new(&gpu, &options().with_checker(checker)), Err(GpuError::Scene(_))));
+    for squares in [0, subdiv_gpu::MAX_CHECKER + 1] {
+        assert!(matches!(TextureImage::checker(squares, surface), Err(GpuError::Scene(_))));
     }
+    assert!(matches!(TextureImage::rgba(2, 2, vec![0; 15]), Err(GpuError::Scene(_))));
+    assert!(matches!(TextureImage::rgba(0, 2, vec![]), Err(GpuError::ImageSize { .. })));
 }
