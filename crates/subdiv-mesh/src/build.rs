@@ -129,7 +129,8 @@ impl Mesh {
         }
         let (positions, face_offsets, he_origin, tags_as_authored, channels) = soup.into_parts();
         let mut mesh = Mesh::from_parts(positions, face_offsets, he_origin, tags_as_authored, topology, resolved);
-        mesh.set_channels(channels);
+        // Checked above, against the soup's corners (the mesh's).
+        mesh.set_channels(channels)?;
         Ok(mesh)
     }
 }

@@ -194,16 +194,36 @@ impl Mesh {
         self.channels.iter().find(|c| c.name() == name)
     }
 
-    /// Replaces the channels (refinement sets the refined ones on the child level).
+    /// Replaces the channels (refinement sets the refined ones on the child level), after the
+    /// checks [`Mesh::build`] makes; on an error the mesh keeps its channels.
     ///
-    /// # Panics
-    /// When a channel breaks a rule [`Mesh::build`] checks (one index per face corner, indices
-    /// in range, finite values): callers build channels for this mesh's corners.
-    pub fn set_channels(&mut self, channels: Vec<Channel>) {
+    /// ```
+    /// use subdiv_mesh::{shapes, Channel, Mesh, MeshError};
+    ///
+    /// let mut quad = Mesh::build(shapes::quad_grid(1, 1))?;
+    /// quad.set_channels(vec![Channel::new("uv", 2, vec![0.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 1.0], vec![0, 1, 2, 3])])?;
+    /// // An index past the values is refused, naming the face and corner.
+    /// let bad = Channel::new("uv", 2, vec![0.0, 0.0], vec![0, 0, 0, 1]);
+    /// assert!(matches!(quad.set_channels(vec![bad]), Err(MeshError::ChannelIndexOutOfRange { .. })));
+    /// assert_eq!(quad.channels().len(), 1);
+    /// # Ok::<(), MeshError>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`MeshError::ChannelShape`], [`MeshError::ChannelIndexOutOfRange`] or
+    /// [`MeshError::ChannelNonFinite`] for a channel that breaks a rule: one index per face
+    /// corner, indices in range, finite values.
+    pub fn set_channels(&mut self, channels: Vec<Channel>) -> Result<(), crate::MeshError> {
         if let Some(error) = channels.iter().find_map(|c| c.check(&self.links.face_offsets, self.half_edge_count())) {
-            panic!("set_channels: {error}");
+            return Err(error);
         }
         self.channels = channels.into();
+        Ok(())
+    }
+
+    /// Removes every channel.
+    pub fn clear_channels(&mut self) {
+        self.channels = Arc::new([]);
     }
 
     /// Sharpness of `edge` (0 smooth; ≥ [`Tags::INFINITELY_SHARP`] infinitely sharp).

@@ -161,7 +161,7 @@ impl PatchLevels {
         // Level 0 with the boundary rule applied (boundary edges sharp, holes of `none`), without
         // the face-varying channels: the levels here are the positions' alone.
         let mut base = Refiner::new(mesh, scheme, 0, options)?.into_mesh();
-        base.set_channels(Vec::new());
+        base.clear_channels();
         let mut levels = Vec::new();
         let mut stencils = Vec::new();
         let mut wanted: Vec<FaceId> = base.face_ids().collect();

@@ -300,7 +300,7 @@ fn refine_channels(
         refined.push(c);
         next.push(l);
     }
-    child.set_channels(refined);
+    child.set_channels(refined).map_err(|e| SchemeError::Internal(format!("a refined channel is invalid: {e}")))?;
     *levels = next;
     Ok(())
 }

@@ -27,7 +27,7 @@ pub(crate) fn tessellate(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> TessMe
 /// counts the seams of the mesh's channels).
 pub(crate) fn without_channels(mesh: &Mesh) -> Mesh {
     let mut bare = mesh.clone();
-    bare.set_channels(Vec::new());
+    bare.clear_channels();
     bare
 }
 
