@@ -34,6 +34,7 @@ mod patch;
 mod region;
 pub mod shapes;
 mod soup;
+mod split;
 #[cfg(feature = "proptest")]
 pub mod strategies;
 
@@ -48,5 +49,6 @@ pub use soup::{
     BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, FaceVaryingInterpolation, PolygonSoup, Sharpness, Tags,
     TriangleSubdivision,
 };
+pub use split::PrimalSplit;
 
 pub use glam::DVec3;

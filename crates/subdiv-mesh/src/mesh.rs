@@ -23,32 +23,32 @@ pub(crate) const NONE: u32 = u32::MAX;
 /// Build one with [`Mesh::build`]; see the crate docs for an example.
 #[derive(Clone, Debug)]
 pub struct Mesh {
-    positions: Vec<DVec3>,
+    pub(crate) positions: Vec<DVec3>,
     /// Never changed after the build, and shared by clones: a copy of a mesh with other
     /// sharpness (the boundary rule applied, as every evaluator's level 0 is) costs its tags,
     /// not its connectivity (110 MB for a million quads).
-    links: Arc<Links>,
-    edge_sharpness: Vec<f64>,
-    vertex_sharpness: Vec<f64>,
-    hole: Vec<bool>,
-    tags: Tags,
+    pub(crate) links: Arc<Links>,
+    pub(crate) edge_sharpness: Vec<f64>,
+    pub(crate) vertex_sharpness: Vec<f64>,
+    pub(crate) hole: Vec<bool>,
+    pub(crate) tags: Tags,
     /// Face-varying channels, shared by clones as the connectivity is.
-    channels: Arc<[Channel]>,
+    pub(crate) channels: Arc<[Channel]>,
 }
 
 /// A [`Mesh`]'s connectivity (see its docs for the numbering).
 #[derive(Debug)]
-struct Links {
-    face_offsets: Vec<u32>,
-    he_origin: Vec<VertexId>,
-    he_face: Vec<FaceId>,
-    he_twin: Vec<u32>,
-    he_edge: Vec<EdgeId>,
-    edge_he: Vec<HalfEdgeId>,
+pub(crate) struct Links {
+    pub(crate) face_offsets: Vec<u32>,
+    pub(crate) he_origin: Vec<VertexId>,
+    pub(crate) he_face: Vec<FaceId>,
+    pub(crate) he_twin: Vec<u32>,
+    pub(crate) he_edge: Vec<EdgeId>,
+    pub(crate) edge_he: Vec<HalfEdgeId>,
     /// For a boundary vertex, its boundary half-edge (the start of its fan); for an interior
     /// vertex, its lowest outgoing half-edge; `NONE` for an isolated vertex.
-    vertex_he: Vec<u32>,
-    valence: Vec<u32>,
+    pub(crate) vertex_he: Vec<u32>,
+    pub(crate) valence: Vec<u32>,
 }
 
 /// The valences that count as regular for [`Mesh::is_extraordinary`]: one for interior vertices

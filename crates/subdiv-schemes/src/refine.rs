@@ -122,7 +122,47 @@ pub fn refine_uniform(
     levels: usize,
     options: &RefineOptions,
 ) -> Result<Mesh, SchemeError> {
-    Refiner::new(mesh, scheme, levels, options).map(Refiner::into_mesh)
+    refine_uniform_with_progress(mesh, scheme, levels, options, |_| {})
+}
+
+/// As [`refine_uniform`], calling `progress(level)` after each level is done (1 to `levels`),
+/// for a progress bar.
+///
+/// # Errors
+/// As [`refine_uniform`].
+pub fn refine_uniform_with_progress(
+    mesh: &Mesh,
+    scheme: &Scheme,
+    levels: usize,
+    options: &RefineOptions,
+    progress: impl FnMut(usize),
+) -> Result<Mesh, SchemeError> {
+    refine_levels(mesh, scheme, levels, options, false, progress).map(|(mesh, _)| mesh)
+}
+
+/// The loop of [`refine_uniform_with_progress`] and [`Refiner::with_progress`]: `levels` levels,
+/// with each level's stencils when `stencils` asks for them.
+fn refine_levels(
+    mesh: &Mesh,
+    scheme: &Scheme,
+    levels: usize,
+    options: &RefineOptions,
+    stencils: bool,
+    mut progress: impl FnMut(usize),
+) -> Result<(Mesh, Vec<Stencils>), SchemeError> {
+    check_input(mesh, scheme)?;
+    let rules = options.rules_for(mesh);
+    let mut current = if scheme.has_crease_rules() { prepared(mesh, options) } else { mesh.clone() };
+    let mut all = Vec::with_capacity(if stencils { levels } else { 0 });
+    // The channels' face-varying topology, carried from level to level.
+    let mut channels = Vec::new();
+    for level in 0..levels {
+        let (child, level_stencils) = refine_once(&current, scheme, rules, &mut channels, stencils)?;
+        current = child;
+        all.extend(level_stencils);
+        progress(level + 1);
+    }
+    Ok((current, all))
 }
 
 /// Uniform refinement split as OpenSubdiv's `Far` splits it: the topology of every level and
@@ -167,21 +207,10 @@ impl Refiner {
         scheme: &Scheme,
         levels: usize,
         options: &RefineOptions,
-        mut progress: impl FnMut(usize),
+        progress: impl FnMut(usize),
     ) -> Result<Self, SchemeError> {
-        check_input(mesh, scheme)?;
-        let rules = options.rules_for(mesh);
-        let mut current = if scheme.has_crease_rules() { prepared(mesh, options) } else { mesh.clone() };
-        let mut stencils = Vec::with_capacity(levels);
-        // The channels' face-varying topology, carried from level to level.
-        let mut channels = Vec::new();
-        for level in 0..levels {
-            let (child, level_stencils) = refine_once(&current, scheme, rules, &mut channels)?;
-            current = child;
-            stencils.push(level_stencils);
-            progress(level + 1);
-        }
-        Ok(Self { levels: stencils, mesh: current })
+        let (mesh, levels) = refine_levels(mesh, scheme, levels, options, true, progress)?;
+        Ok(Self { levels, mesh })
     }
 
     /// The refined mesh (topology, sharpness, holes, and the positions refined from the cage's).
@@ -222,22 +251,25 @@ pub fn refine(mesh: &Mesh, scheme: &Scheme, options: &RefineOptions) -> Result<M
     refine_uniform(mesh, scheme, 1, options)
 }
 
-/// One level of any scheme; `channels` holds the face-varying topology of `mesh`'s channels
-/// (empty at the base level) and is replaced by the child's.
+/// One level of any scheme, with its stencils when `stencils` asks for them; `channels` holds
+/// the face-varying topology of `mesh`'s channels (empty at the base level) and is replaced by
+/// the child's.
 fn refine_once(
     mesh: &Mesh,
     scheme: &Scheme,
     options: Options,
     channels: &mut Vec<ChannelLevel>,
-) -> Result<(Mesh, Stencils), SchemeError> {
-    match &scheme.rules {
+    stencils: bool,
+) -> Result<(Mesh, Option<Stencils>), SchemeError> {
+    let (child, level_stencils) = match &scheme.rules {
         Rules::Quad { .. } | Rules::Triangle { .. } | Rules::FourPointQuad { .. } => {
-            primal::refine(mesh, scheme, options, channels)
+            return primal::refine(mesh, scheme, options, channels, stencils);
         }
-        Rules::Dual { own, corner } => dual::doo_sabin(mesh, own, corner),
-        Rules::Midedge => dual::midedge(mesh),
-        Rules::Sqrt3 { vertex } => dual::sqrt3(mesh, vertex),
-    }
+        Rules::Dual { own, corner } => dual::doo_sabin(mesh, own, corner)?,
+        Rules::Midedge => dual::midedge(mesh)?,
+        Rules::Sqrt3 { vertex } => dual::sqrt3(mesh, vertex)?,
+    };
+    Ok((child, stencils.then_some(level_stencils)))
 }
 
 /// Rejects what the scheme cannot take: faces of the wrong size and, for a scheme without

@@ -140,25 +140,30 @@ pub fn creased_meshes() -> Vec<(PathBuf, subdiv_schemes::Builtin, subdiv_mesh::M
     out
 }
 
-/// The shared meshes with texture coordinates that build, with the scheme each is meant for
-/// (as [`opensubdiv::compare_refinement`] picks it: `loop_` and other all-triangle meshes Loop,
-/// `bilinear_` bilinear, else Catmull-Clark), in path order; empty when the shared folder is
-/// not set.
+/// Every shared mesh that builds, with the scheme it is meant for (as
+/// [`opensubdiv::compare_refinement`] picks it: `loop_` and other all-triangle meshes Loop,
+/// `bilinear_` bilinear, else Catmull-Clark), in path order; empty when the shared folder is not
+/// set.
 ///
 /// # Panics
 /// When the shared folder is set but a mesh file cannot be read.
-pub fn textured_meshes() -> Vec<(PathBuf, subdiv_schemes::Builtin, subdiv_mesh::Mesh)> {
+pub fn shared_meshes() -> Vec<(PathBuf, subdiv_schemes::Builtin, subdiv_mesh::Mesh)> {
     let Some(dir) = meshes_dir() else { return Vec::new() };
     let mut out = Vec::new();
     for path in obj_files(&dir) {
         let soup = subdiv_io::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-        if soup.channels.is_empty() {
-            continue;
-        }
         let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let (builtin, _) = opensubdiv::scheme_of(&name, &soup);
         let Ok(mesh) = subdiv_mesh::Mesh::build(soup) else { continue };
         out.push((path, builtin, mesh));
     }
     out
+}
+
+/// The [`shared_meshes`] with texture coordinates.
+///
+/// # Panics
+/// As [`shared_meshes`].
+pub fn textured_meshes() -> Vec<(PathBuf, subdiv_schemes::Builtin, subdiv_mesh::Mesh)> {
+    shared_meshes().into_iter().filter(|(_, _, mesh)| !mesh.channels().is_empty()).collect()
 }

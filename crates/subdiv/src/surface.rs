@@ -4,7 +4,7 @@ use std::path::Path;
 use std::sync::OnceLock;
 
 use subdiv_mesh::{BuildOptions, FaceId, Mesh, PolygonSoup};
-use subdiv_schemes::{ChannelSurface, RefineOptions, Refiner, Scheme, Split};
+use subdiv_schemes::{ChannelSurface, RefineOptions, Scheme, Split, refine_uniform_with_progress};
 use subdiv_stencil::LimitPoint;
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv_tess::{
@@ -203,7 +203,7 @@ impl Surface {
         if faces > u64::from(u32::MAX) {
             return Err(Error::RefineLevels { levels, faces });
         }
-        Ok(Refiner::with_progress(&self.mesh, &self.scheme, levels, &self.refine_options, progress)?.into_mesh())
+        Ok(refine_uniform_with_progress(&self.mesh, &self.scheme, levels, &self.refine_options, progress)?)
     }
 
     /// The limit point of `face` at its `Bfr` parameters `(u, v)`, with first derivatives: by

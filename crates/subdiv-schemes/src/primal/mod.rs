@@ -7,9 +7,10 @@
 //! schemes), then edge points.
 
 use smallvec::SmallVec;
-use subdiv_mesh::{EdgeId, FaceId, HalfEdgeId, Mesh, PolygonSoup, Tags, VertexId};
+use subdiv_mesh::{EdgeId, FaceId, HalfEdgeId, Mesh, PrimalSplit, VertexId};
 
 pub(crate) mod face_varying;
+mod values;
 
 pub(crate) use face_varying::{ChannelLevel, ChannelRules};
 
@@ -103,6 +104,86 @@ impl Masks {
     fn splits_into_quads(&self) -> bool {
         !matches!(self.kind, Kind::Triangle { .. })
     }
+
+    fn split(&self) -> PrimalSplit {
+        if self.splits_into_quads() { PrimalSplit::Quads } else { PrimalSplit::Triangles }
+    }
+}
+
+/// Where a mask's face points come from: their own stencil rows over the parent's vertices, or
+/// symbolic parents `base + face` (the channels' masks, and rows applied to values whose face
+/// points are computed already).
+#[derive(Clone, Copy)]
+enum FacePoints<'a> {
+    Rows(&'a [Row]),
+    Symbolic(u32),
+}
+
+impl FacePoints<'_> {
+    fn add(self, row: &mut Row, f: FaceId, weight: f64) {
+        match self {
+            Self::Rows(rows) => row.add_row(&rows[f.index()], weight),
+            Self::Symbolic(base) => row.add(base + f.raw(), weight),
+        }
+    }
+}
+
+/// How an edge point refines where crease rules apply.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum EdgeRule {
+    /// The smooth rule.
+    Smooth,
+    /// The midpoint: both child edges stay sharp.
+    Crease,
+    /// `s ·` midpoint `+ (1 − s) ·` smooth rule: a semi-sharp edge fading out.
+    Blend(f64),
+}
+
+/// The rule of edge `e`'s point.
+fn edge_rule(mesh: &Mesh, masks: &Masks, options: Options, e: EdgeId) -> EdgeRule {
+    let s = sharpness(mesh.edge_sharpness(e));
+    if !crease::is_sharp(s) || masks.crease.is_none() {
+        return EdgeRule::Smooth;
+    }
+    let [a, b] = mesh.edge_vertices(e);
+    // The child vertex is a crease if both halves stay sharp; otherwise blend by sharpness.
+    let half = |v: VertexId| {
+        let around: SmallVec<[f32; 8]> =
+            vertex_edges(mesh, v).iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
+        crease::child_edge_sharpness(options.crease_method, s, &around)
+    };
+    if crease::is_sharp(half(a)) && crease::is_sharp(half(b)) {
+        EdgeRule::Crease
+    } else {
+        EdgeRule::Blend(f64::from(s))
+    }
+}
+
+/// The `(endpoint, face)` weights of a quad scheme's smooth edge rule between faces `g0` and
+/// `g1`: the scheme's, or OpenSubdiv's (and Hbr's) "smooth triangle" weights next to a triangle
+/// when the options ask for them, in their order of operations: each side's face weight,
+/// averaged; the endpoints take the rest.
+fn quad_edge_weights(
+    mesh: &Mesh,
+    endpoint: f64,
+    face: f64,
+    triangle_face: Option<f64>,
+    g0: FaceId,
+    g1: FaceId,
+) -> (f64, f64) {
+    let (tri0, tri1) = (mesh.face_size(g0) == 3, mesh.face_size(g1) == 3);
+    match triangle_face {
+        Some(w) if tri0 || tri1 => {
+            let face_weight = 0.5 * (if tri0 { w } else { face } + if tri1 { w } else { face });
+            (0.5 * (1.0 - 2.0 * face_weight), face_weight)
+        }
+        _ => (endpoint, face),
+    }
+}
+
+/// Whether any edge or vertex of `mesh` is sharp.
+fn has_sharpness(mesh: &Mesh) -> bool {
+    mesh.edges().any(|e| mesh.edge_sharpness(e) > 0.0) || mesh.vertices().any(|v| mesh.vertex_sharpness(v) > 0.0)
 }
 
 /// The edges at `v` in fan order, each with its far end; for a boundary vertex the trailing
@@ -135,42 +216,73 @@ struct Numbering {
     edge_base: u32,
 }
 
-impl Numbering {
-    fn face(&self, f: FaceId) -> VertexId {
-        VertexId::new(self.face_base + f.raw())
-    }
-
-    fn edge(&self, e: EdgeId) -> VertexId {
-        VertexId::new(self.edge_base + e.raw())
-    }
-}
-
 /// One primal level; `channels` holds the face-varying topology of `mesh`'s channels (empty at
-/// the base level, where it is derived) and is replaced by the child's.
+/// the base level, where it is derived) and is replaced by the child's. The level's stencils
+/// are made when `stencils` asks for them (or when the scheme's rules have no direct path);
+/// otherwise the positions are refined by applying the masks to them.
 pub(crate) fn refine(
     mesh: &Mesh,
     scheme: &Scheme,
     options: Options,
     channels: &mut Vec<ChannelLevel>,
-) -> Result<(Mesh, Stencils), SchemeError> {
+    stencils: bool,
+) -> Result<(Mesh, Option<Stencils>), SchemeError> {
     let masks = Masks::new(scheme, mesh, options);
-    let method = options.crease_method;
-    let quads = masks.splits_into_quads();
+    let split = masks.split();
     let nv = mesh.vertex_count() as u32;
-    let face_points = if quads { mesh.face_count() as u32 } else { 0 };
+    let face_points = if masks.splits_into_quads() { mesh.face_count() as u32 } else { 0 };
     let numbering = Numbering { face_base: nv, edge_base: nv + face_points };
-    let child_count = (numbering.edge_base as usize) + mesh.edge_count();
 
-    // Geometry: one stencil row per child vertex, in child order.
+    let (positions, level_stencils) = if stencils || !values::supports(&masks) {
+        let level_stencils = stencil_rows(mesh, &masks, options, &numbering);
+        let mut positions = Vec::new();
+        level_stencils.apply(mesh.positions(), &mut positions);
+        (positions, stencils.then_some(level_stencils))
+    } else {
+        let mut positions = Vec::new();
+        values::refine(mesh, &masks, options, mesh.positions(), &mut positions);
+        (positions, None)
+    };
+    let mut child = mesh.split(split, positions);
+
+    // Sharpness of the child level, where the parent has any.
+    if masks.crease.is_some() && has_sharpness(mesh) {
+        for v in mesh.vertices() {
+            child.set_vertex_sharpness(v, f64::from(crease::decrement(sharpness(mesh.vertex_sharpness(v)))));
+        }
+        for e in mesh.edges() {
+            let s = sharpness(mesh.edge_sharpness(e));
+            if !crease::is_sharp(s) {
+                continue;
+            }
+            let ends = mesh.edge_vertices(e);
+            for (end, half) in ends.into_iter().zip(split.edge_children(mesh, &child, e)) {
+                let around: SmallVec<[f32; 8]> =
+                    vertex_edges(mesh, end).iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
+                child.set_edge_sharpness(
+                    half,
+                    f64::from(crease::child_edge_sharpness(options.crease_method, s, &around)),
+                );
+            }
+        }
+    }
+    refine_channels(mesh, &mut child, &masks, options, &numbering, channels)?;
+    Ok((child, level_stencils))
+}
+
+/// One stencil row per child vertex, in child order.
+fn stencil_rows(mesh: &Mesh, masks: &Masks, options: Options, numbering: &Numbering) -> Stencils {
+    let child_count = (numbering.edge_base as usize) + mesh.edge_count();
     let mut stencils = Stencils::with_capacity(child_count, 8 * child_count, mesh.vertex_count());
     // Face points of the averaging quad schemes, which their edge and vertex rules reuse.
     let face_rows: Vec<Row> = match &masks.kind {
         Kind::Quad { corners, .. } => mesh.face_ids().map(|f| face_point(mesh, corners, f)).collect(),
         _ => vec![],
     };
-    let edge_rows: Vec<Row> = mesh.edges().map(|e| edge_row(mesh, &masks, &face_rows, options, e)).collect();
+    let faces = FacePoints::Rows(&face_rows);
+    let edge_rows: Vec<Row> = mesh.edges().map(|e| edge_row(mesh, masks, faces, options, e)).collect();
     for v in mesh.vertices() {
-        stencils.push(&vertex_row(mesh, &masks, &face_rows, method, v));
+        stencils.push(&vertex_row(mesh, masks, faces, options.crease_method, v));
     }
     match &masks.kind {
         Kind::FourPoint { weight } => {
@@ -187,75 +299,7 @@ pub(crate) fn refine(
     for row in &edge_rows {
         stencils.push(row);
     }
-    let mut positions = Vec::with_capacity(child_count);
-    stencils.apply(mesh.positions(), &mut positions);
-
-    // Topology.
-    let mut soup = PolygonSoup::with_capacity(child_count, 4 * mesh.face_count(), 4 * mesh.half_edge_count());
-    for p in positions {
-        soup.push_vertex(p);
-    }
-    let mut holes = Vec::new();
-    for f in mesh.face_ids() {
-        let halves: SmallVec<[HalfEdgeId; 8]> = mesh.face_half_edges(f).collect();
-        let n = halves.len();
-        let first_child = soup.face_count();
-        for j in 0..n {
-            let corner = mesh.origin(halves[j]);
-            let after = numbering.edge(mesh.edge(halves[j]));
-            let before = numbering.edge(mesh.edge(halves[(j + n - 1) % n]));
-            if quads {
-                let mut child = [corner, after, numbering.face(f), before];
-                // OpenSubdiv rotates a quad's children so that the corner sits at position j.
-                if n == 4 {
-                    child.rotate_right(j);
-                }
-                soup.push_face(child);
-            } else {
-                let mut child = [corner, after, before];
-                child.rotate_right(j);
-                soup.push_face(child);
-            }
-        }
-        if !quads {
-            let e = |j: usize| numbering.edge(mesh.edge(halves[j]));
-            soup.push_face([e(1), e(2), e(0)]);
-        }
-        if mesh.is_hole(f) {
-            holes.extend((first_child..soup.face_count()).map(|c| FaceId::new(c as u32)));
-        }
-    }
-    soup.tags = Tags {
-        boundary_interpolation: mesh.tags().boundary_interpolation,
-        crease_method: mesh.tags().crease_method,
-        triangle_subdivision: mesh.tags().triangle_subdivision,
-        face_varying_interpolation: mesh.tags().face_varying_interpolation,
-        ..Tags::default()
-    };
-    let mut child =
-        Mesh::build(soup).map_err(|e| SchemeError::Internal(format!("the refined mesh is invalid: {e}")))?;
-
-    // Sharpness and holes of the child level.
-    for f in holes {
-        child.set_hole(f, true);
-    }
-    if masks.crease.is_some() {
-        for v in mesh.vertices() {
-            child.set_vertex_sharpness(v, f64::from(crease::decrement(sharpness(mesh.vertex_sharpness(v)))));
-            let edges = vertex_edges(mesh, v);
-            let around: SmallVec<[f32; 8]> = edges.iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
-            for (&(e, _), &s) in edges.iter().zip(&around) {
-                if crease::is_sharp(s) {
-                    let half = child
-                        .find_edge(v, numbering.edge(e))
-                        .ok_or_else(|| SchemeError::Internal(format!("the child of edge {e} at {v} is missing")))?;
-                    child.set_edge_sharpness(half, f64::from(crease::child_edge_sharpness(method, s, &around)));
-                }
-            }
-        }
-    }
-    refine_channels(mesh, &mut child, &masks, options, &numbering, channels)?;
-    Ok((child, stencils))
+    stencils
 }
 
 /// The child level's channels, for the schemes with crease rules (the face-varying rules are
@@ -278,13 +322,9 @@ fn refine_channels(
     }
     // The positions' masks with each face point as one symbolic parent, `vertex_count + face`:
     // matched values apply them to the face points' values.
-    let nv = mesh.vertex_count() as u32;
-    let face_points: Vec<Row> = match masks.kind {
-        Kind::Quad { .. } => mesh.face_ids().map(|f| Row::single(nv + f.raw())).collect(),
-        _ => Vec::new(),
-    };
-    let edge_mask = |e| edge_row(mesh, masks, &face_points, options, e);
-    let vertex_mask = |v| vertex_row(mesh, masks, &face_points, options.crease_method, v);
+    let face_points = FacePoints::Symbolic(mesh.vertex_count() as u32);
+    let edge_mask = |e| edge_row(mesh, masks, face_points, options, e);
+    let vertex_mask = |v| vertex_row(mesh, masks, face_points, options.crease_method, v);
     let at = face_varying::Children {
         parent: mesh,
         child,
@@ -306,7 +346,7 @@ fn refine_channels(
 }
 
 /// The smooth edge point of the edge of `h` (its rule away from creases).
-fn smooth_edge_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], h: HalfEdgeId) -> Row {
+fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdgeId) -> Row {
     let (a, b) = (mesh.origin(h), mesh.dest(h));
     let Some(t) = mesh.twin(h) else {
         return midpoint(a, b);
@@ -315,21 +355,12 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], h: HalfEdgeId)
     match &masks.kind {
         Kind::Quad { endpoint, face, triangle_face, .. } => {
             let (g0, g1) = (mesh.face(h), mesh.face(t));
-            let (tri0, tri1) = (mesh.face_size(g0) == 3, mesh.face_size(g1) == 3);
-            let (vertex_weight, face_weight) = match triangle_face {
-                Some(w) if tri0 || tri1 => {
-                    // OpenSubdiv's (and Hbr's) "smooth triangle" weights, in their order of
-                    // operations: each side's face weight, averaged; the endpoints take the rest.
-                    let face_weight = 0.5 * (if tri0 { *w } else { *face } + if tri1 { *w } else { *face });
-                    (0.5 * (1.0 - 2.0 * face_weight), face_weight)
-                }
-                _ => (*endpoint, *face),
-            };
+            let (vertex_weight, face_weight) = quad_edge_weights(mesh, *endpoint, *face, *triangle_face, g0, g1);
             add(&mut row, a, vertex_weight);
             add(&mut row, b, vertex_weight);
             if face_weight != 0.0 {
-                row.add_row(&face_rows[g0.index()], face_weight);
-                row.add_row(&face_rows[g1.index()], face_weight);
+                faces.add(&mut row, g0, face_weight);
+                faces.add(&mut row, g1, face_weight);
             }
         }
         Kind::FourPoint { weight } => {
@@ -445,24 +476,15 @@ fn four_point_face(mesh: &Mesh, edge_rows: &[Row], w: f64, f: FaceId) -> Row {
 }
 
 /// The stencil of the point of edge `e`.
-fn edge_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], options: Options, e: EdgeId) -> Row {
+fn edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, options: Options, e: EdgeId) -> Row {
     let h = mesh.edge_half_edge(e);
-    let smooth = smooth_edge_row(mesh, masks, face_rows, h);
-    let s = sharpness(mesh.edge_sharpness(e));
-    if !crease::is_sharp(s) || masks.crease.is_none() {
-        return smooth;
-    }
+    let smooth = smooth_edge_row(mesh, masks, faces, h);
     let (a, b) = (mesh.origin(h), mesh.dest(h));
-    // The child vertex is a crease if both halves stay sharp; otherwise blend by sharpness.
-    let half = |v: VertexId| {
-        let around: SmallVec<[f32; 8]> =
-            vertex_edges(mesh, v).iter().map(|&(e, _)| sharpness(mesh.edge_sharpness(e))).collect();
-        crease::child_edge_sharpness(options.crease_method, s, &around)
-    };
-    if crease::is_sharp(half(a)) && crease::is_sharp(half(b)) {
-        return midpoint(a, b);
+    match edge_rule(mesh, masks, options, e) {
+        EdgeRule::Smooth => smooth,
+        EdgeRule::Crease => midpoint(a, b),
+        EdgeRule::Blend(s) => midpoint(a, b).blend(&smooth, s),
     }
-    midpoint(a, b).blend(&smooth, f64::from(s))
 }
 
 /// The stencil of the face point of `f`, from the corner weights per face size.
@@ -477,7 +499,13 @@ fn face_point(mesh: &Mesh, corners: &[Vec<f64>], f: FaceId) -> Row {
 
 /// The stencil of the child of vertex `v`: the smooth, crease or corner mask, or a blend of the
 /// parent's and the child's where a semi-sharp feature fades out.
-fn vertex_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], method: subdiv_mesh::CreaseMethod, v: VertexId) -> Row {
+fn vertex_row(
+    mesh: &Mesh,
+    masks: &Masks,
+    faces: FacePoints<'_>,
+    method: subdiv_mesh::CreaseMethod,
+    v: VertexId,
+) -> Row {
     if mesh.is_isolated(v) {
         return Row::single(v.raw());
     }
@@ -493,7 +521,7 @@ fn vertex_row(mesh: &Mesh, masks: &Masks, face_rows: &[Row], method: subdiv_mesh
         }
         if face != 0.0 {
             for f in mesh.vertex_faces(v) {
-                row.add_row(&face_rows[f.index()], face);
+                faces.add(&mut row, f, face);
             }
         }
         row

@@ -1,0 +1,60 @@
+//! Uniform refinement has two paths to the refined positions: the masks applied to the values
+//! level by level (`refine_uniform`, what `subdiv refine` runs), and stencil rows
+//! (`Refiner`, for callers that re-apply them). Both must give the same mesh on every shared
+//! mesh: the same faces, sharpness, holes and channels, positions to 1e-14 × the bounding box.
+
+use subdiv::mesh::Mesh;
+use subdiv::schemes::{Builtin, RefineOptions, Refiner, refine_uniform};
+use subdiv_testkit::shared_meshes;
+
+fn assert_same_mesh(name: &str, direct: &Mesh, rows: &Mesh) {
+    assert!(direct.faces().eq(rows.faces()), "{name}: faces differ");
+    assert_eq!(direct.vertex_count(), rows.vertex_count(), "{name}: vertex counts");
+    for e in direct.edges() {
+        assert_eq!(direct.edge_sharpness(e), rows.edge_sharpness(e), "{name}: sharpness of edge {e}");
+    }
+    for v in direct.vertices() {
+        assert_eq!(direct.vertex_sharpness(v), rows.vertex_sharpness(v), "{name}: sharpness of vertex {v}");
+    }
+    for f in direct.face_ids() {
+        assert_eq!(direct.is_hole(f), rows.is_hole(f), "{name}: hole flag of face {f}");
+    }
+    assert_eq!(direct.channels(), rows.channels(), "{name}: channels");
+    // The two paths sum in other orders: a vertex of valence k sums k spokes (and k faces), each
+    // rounded, so past valence 11 the bound grows with k (catmark_pole360: 2.1e-14 × bbox).
+    let (lo, hi) = rows.bounding_box().expect("refined meshes have vertices");
+    let valence = direct.vertices().map(|v| direct.valence(v)).max().unwrap_or(0);
+    let tolerance = (hi - lo).length() * 1e-14_f64.max(valence as f64 * 4.0 * f64::EPSILON);
+    for (v, (a, b)) in direct.positions().iter().zip(rows.positions()).enumerate() {
+        assert!(a.distance(*b) <= tolerance, "{name}: vertex {v} at {a}, the stencils' at {b}");
+    }
+}
+
+#[test]
+fn refined_values_equal_the_stencil_rows_on_every_shared_mesh() {
+    let meshes = shared_meshes();
+    assert!(subdiv_testkit::shared_dir().is_none() || meshes.len() > 100, "the shared corpus is missing");
+    let mut compared = 0;
+    for (path, builtin, mesh) in &meshes {
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        // Bilinear takes every mesh; Schaefer and Warren's, the four-point and Butterfly rules
+        // take closed meshes without tags (the last two go through stencil rows on both paths).
+        let extra = match builtin {
+            Builtin::Loop => vec![Builtin::Bilinear, Builtin::Butterfly],
+            _ => vec![Builtin::Bilinear, Builtin::Kobbelt, Builtin::SwQuad],
+        };
+        for scheme in std::iter::once(*builtin).chain(extra) {
+            for levels in 1..=2 {
+                let options = RefineOptions::DEFAULT;
+                let Ok(direct) = refine_uniform(mesh, scheme.scheme(), levels, &options) else {
+                    assert!(scheme != *builtin, "{name}: its own scheme refuses it");
+                    continue;
+                };
+                let rows = Refiner::new(mesh, scheme.scheme(), levels, &options).expect("the same checks").into_mesh();
+                assert_same_mesh(&format!("{name} ({scheme:?}, {levels} levels)"), &direct, &rows);
+                compared += 1;
+            }
+        }
+    }
+    println!("{compared} refined meshes compared");
+}
