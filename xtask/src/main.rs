@@ -3,7 +3,11 @@
 //! - `cargo xtask ci` runs what `.ci/run` runs after installing packages: `cargo fmt --check`,
 //!   clippy with warnings denied, and the README's test command.
 //! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named: `topology`,
-//!   `refine`, `stencil` or `eval`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
+//!   `stencil` or `eval`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
+//! - `cargo xtask bench refine [--mesh M]… [--levels K]… [--threads T]… [--rounds R]` measures
+//!   uniform refinement (topology and positions, topology alone, stencils, stencil application)
+//!   beside OpenSubdiv's `Far` when `SUBDIV_OSD_BENCH` names the harness's `osd_bench`,
+//!   alternated in the same rounds.
 //! - `cargo xtask bench tess [--mesh M]… [--rate N]… [--threads T]… [--mode MODE]… [--channels yes|no]…`
 //!   measures dual-grid tessellation into welded flat buffers (default: the peer harness's
 //!   torus_big, cube and valence56 at rates 8, 16, 32, on one thread and on all, without the
@@ -32,6 +36,7 @@
 
 mod adaptive;
 mod bench_gpu;
+mod bench_refine;
 mod bench_tess;
 mod fuzz;
 mod osd;
@@ -42,7 +47,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|refine|stencil|eval] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--rounds R] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -51,6 +56,7 @@ fn main() -> ExitCode {
         Some("ci") => ci(),
         Some("bench") if args.get(1).is_some_and(|a| a == "tess") => bench_tess::run(&args[2..]),
         Some("bench") if args.get(1).is_some_and(|a| a == "gpu") => bench_gpu::run(&args[2..]),
+        Some("bench") if args.get(1).is_some_and(|a| a == "refine") => bench_refine::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("same-output") => same_output::run(&args[1..]),
         Some("fuzz") => fuzz::run(&args[1..]),
@@ -122,8 +128,7 @@ fn ci() -> Result<(), String> {
 }
 
 /// What each bench measures, for its `key=value` line: (bench target, criterion group).
-const BENCHES: &[(&str, &str)] =
-    &[("topology", "topology"), ("refine", "refine"), ("stencil", "stencil"), ("eval", "eval")];
+const BENCHES: &[(&str, &str)] = &[("topology", "topology"), ("stencil", "stencil"), ("eval", "eval")];
 
 fn bench(only: Option<&str>) -> Result<(), String> {
     let selected: Vec<_> = BENCHES.iter().filter(|(name, _)| only.is_none_or(|o| o == *name)).collect();

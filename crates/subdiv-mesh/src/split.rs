@@ -175,19 +175,17 @@ impl Mesh {
     }
 }
 
-/// Numbers the child edges in the order of their first half-edge (as the build does).
+/// Numbers the child edges in the order of their first half-edge (as the build does), in one
+/// forward pass: a half-edge after its twin takes the twin's edge, numbered already.
 fn number_edges(he_twin: &[u32]) -> (Vec<EdgeId>, Vec<HalfEdgeId>) {
-    let mut he_edge = vec![EdgeId::new(0); he_twin.len()];
+    let mut he_edge: Vec<EdgeId> = Vec::with_capacity(he_twin.len());
     let mut edge_he = Vec::with_capacity(he_twin.len() / 2 + 1);
     for (h, &t) in he_twin.iter().enumerate() {
-        let h = h as u32;
-        if t == NONE || h < t {
-            let e = EdgeId::new(edge_he.len() as u32);
-            edge_he.push(HalfEdgeId::new(h));
-            he_edge[h as usize] = e;
-            if t != NONE {
-                he_edge[t as usize] = e;
-            }
+        if t == NONE || (h as u32) < t {
+            he_edge.push(EdgeId::new(edge_he.len() as u32));
+            edge_he.push(HalfEdgeId::new(h as u32));
+        } else {
+            he_edge.push(he_edge[t as usize]);
         }
     }
     (he_edge, edge_he)
@@ -196,8 +194,9 @@ fn number_edges(he_twin: &[u32]) -> (Vec<EdgeId>, Vec<HalfEdgeId>) {
 fn split_quads(p: &Links, nv: usize, nf: usize) -> Links {
     let nh = p.he_origin.len();
     let (face_base, edge_base) = (nv as u32, (nv + nf) as u32);
-    let mut he_origin = vec![VertexId::new(0); 4 * nh];
-    let mut he_twin = vec![NONE; 4 * nh];
+    // Filled in order: the children of half-edge h are 4h..4h + 4, and h runs through the faces.
+    let mut he_origin = Vec::with_capacity(4 * nh);
+    let mut he_twin = Vec::with_capacity(4 * nh);
     for f in 0..nf {
         let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
         let quad = end - start == 4;
@@ -217,11 +216,13 @@ fn split_quads(p: &Links, nv: usize, nf: usize) -> Links {
             };
             // Local edge k's twin: 0 and 3 cross the parent's edges, 1 and 2 stay inside.
             let twins = [twin(h, 3), quad_child(p, next, 2), quad_child(p, prev, 1), twin(prev, 0)];
-            for k in 0..4u32 {
-                let c = (4 * h + ((k + rotation) & 3)) as usize;
-                he_origin[c] = corners[k as usize];
-                he_twin[c] = twins[k as usize];
+            let (mut origins, mut links) = ([VertexId::new(0); 4], [NONE; 4]);
+            for k in 0..4 {
+                origins[(k + rotation as usize) & 3] = corners[k];
+                links[(k + rotation as usize) & 3] = twins[k];
             }
+            he_origin.extend_from_slice(&origins);
+            he_twin.extend_from_slice(&links);
         }
     }
     let he_face = (0..4 * nh).map(|c| FaceId::new((c / 4) as u32)).collect();
@@ -229,39 +230,30 @@ fn split_quads(p: &Links, nv: usize, nf: usize) -> Links {
     let (he_edge, edge_he) = number_edges(&he_twin);
 
     let child_count = nv + nf + p.edge_he.len();
-    let mut vertex_he = vec![NONE; child_count];
-    let mut valence = vec![0u32; child_count];
+    let mut vertex_he = Vec::with_capacity(child_count);
+    let mut valence = Vec::with_capacity(child_count);
     // Vertex points: the child of the parent's first outgoing half-edge (its boundary one, or
     // its lowest), which stays first: children of `h` are numbered from 4h.
-    for v in 0..nv {
-        let h = p.vertex_he[v];
-        if h != NONE {
-            vertex_he[v] = quad_child(p, h, 0);
-            valence[v] = p.valence[v];
-        }
-    }
+    vertex_he.extend(p.vertex_he.iter().map(|&h| if h == NONE { NONE } else { quad_child(p, h, 0) }));
+    valence.extend_from_slice(&p.valence);
     for f in 0..nf {
         let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
-        vertex_he[nv + f] = quad_child(p, start, 2);
-        valence[nv + f] = end - start;
+        vertex_he.push(quad_child(p, start, 2));
+        valence.push(end - start);
     }
-    for (e, &h) in p.edge_he.iter().enumerate() {
+    for &h in &p.edge_he {
         let h = h.raw();
         let (next, _) = neighbours_in_face(p, h);
         let t = p.he_twin[h as usize];
-        let slot = edge_base as usize + e;
         if t == NONE {
             // The boundary half-edge runs along the parent's boundary, to dest(h).
-            vertex_he[slot] = quad_child(p, next, 3);
-            valence[slot] = 3;
+            vertex_he.push(quad_child(p, next, 3));
+            valence.push(3);
         } else {
             let (t_next, _) = neighbours_in_face(p, t);
-            vertex_he[slot] =
-                [quad_child(p, h, 1), quad_child(p, next, 3), quad_child(p, t, 1), quad_child(p, t_next, 3)]
-                    .into_iter()
-                    .min()
-                    .unwrap_or(NONE);
-            valence[slot] = 4;
+            let around = [quad_child(p, h, 1), quad_child(p, next, 3), quad_child(p, t, 1), quad_child(p, t_next, 3)];
+            vertex_he.push(around.into_iter().min().unwrap_or(NONE));
+            valence.push(4);
         }
     }
     Links { face_offsets, he_origin, he_face, he_twin, he_edge, edge_he, vertex_he, valence }
@@ -278,11 +270,13 @@ fn k_target(p: &Links, t: u32, k: u32) -> u32 {
 fn split_triangles(p: &Links, nv: usize) -> Links {
     let nf = p.face_offsets.len() - 1;
     let edge_base = nv as u32;
-    let mut he_origin = vec![VertexId::new(0); 12 * nf];
-    let mut he_twin = vec![NONE; 12 * nf];
+    // Filled in order, a face's twelve child half-edges at a time.
+    let mut he_origin = Vec::with_capacity(12 * nf);
+    let mut he_twin = Vec::with_capacity(12 * nf);
     let edge_point = |h: u32| VertexId::new(edge_base + p.he_edge[h as usize].raw());
     for f in 0..nf as u32 {
         let middle = 3 * (4 * f + 3);
+        let (mut origins, mut links) = ([VertexId::new(0); 12], [NONE; 12]);
         for j in 0..3u32 {
             let h = 3 * f + j;
             let next = 3 * f + (j + 1) % 3;
@@ -297,37 +291,33 @@ fn split_triangles(p: &Links, nv: usize) -> Links {
                 if tp == NONE { NONE } else { triangle_child(tp, 0) },
             ];
             for k in 0..3u32 {
-                let c = triangle_child(h, k) as usize;
-                he_origin[c] = corners[k as usize];
-                he_twin[c] = twins[k as usize];
+                let c = (triangle_child(h, k) - 12 * f) as usize;
+                origins[c] = corners[k as usize];
+                links[c] = twins[k as usize];
             }
             // The middle child: position j runs from the point of edge j + 1 to that of j + 2.
-            he_origin[(middle + j) as usize] = edge_point(next);
-            he_twin[(middle + j) as usize] = triangle_child(3 * f + (j + 2) % 3, 1);
+            origins[9 + j as usize] = edge_point(next);
+            links[9 + j as usize] = triangle_child(3 * f + (j + 2) % 3, 1);
         }
+        he_origin.extend_from_slice(&origins);
+        he_twin.extend_from_slice(&links);
     }
     let he_face = (0..12 * nf).map(|c| FaceId::new((c / 3) as u32)).collect();
     let face_offsets = (0..=4 * nf as u32).map(|c| 3 * c).collect();
     let (he_edge, edge_he) = number_edges(&he_twin);
 
     let child_count = nv + p.edge_he.len();
-    let mut vertex_he = vec![NONE; child_count];
-    let mut valence = vec![0u32; child_count];
-    for v in 0..nv {
-        let h = p.vertex_he[v];
-        if h != NONE {
-            vertex_he[v] = triangle_child(h, 0);
-            valence[v] = p.valence[v];
-        }
-    }
-    for (e, &h) in p.edge_he.iter().enumerate() {
+    let mut vertex_he = Vec::with_capacity(child_count);
+    let mut valence = Vec::with_capacity(child_count);
+    vertex_he.extend(p.vertex_he.iter().map(|&h| if h == NONE { NONE } else { triangle_child(h, 0) }));
+    valence.extend_from_slice(&p.valence);
+    for &h in &p.edge_he {
         let h = h.raw();
         let next = 3 * (h / 3) + (h % 3 + 1) % 3;
         let t = p.he_twin[h as usize];
-        let slot = nv + e;
         if t == NONE {
-            vertex_he[slot] = triangle_child(next, 2);
-            valence[slot] = 4;
+            vertex_he.push(triangle_child(next, 2));
+            valence.push(4);
         } else {
             // Around the edge point: each side's two corner children and its middle child.
             let side = |x: u32| {
@@ -335,8 +325,8 @@ fn split_triangles(p: &Links, nv: usize) -> Links {
                 let middle = 3 * (4 * (x / 3) + 3) + (x % 3 + 2) % 3;
                 [triangle_child(x, 1), triangle_child(x_next, 2), middle]
             };
-            vertex_he[slot] = side(h).into_iter().chain(side(t)).min().unwrap_or(NONE);
-            valence[slot] = 6;
+            vertex_he.push(side(h).into_iter().chain(side(t)).min().unwrap_or(NONE));
+            valence.push(6);
         }
     }
     Links { face_offsets, he_origin, he_face, he_twin, he_edge, edge_he, vertex_he, valence }

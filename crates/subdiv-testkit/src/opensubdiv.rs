@@ -27,7 +27,7 @@ use subdiv_schemes::{Builtin, RefineOptions, refine_uniform};
 /// The scheme the comparisons refine a corpus file with, from its name's prefix (`loop_`,
 /// `bilinear_`, else Catmull-Clark, and Loop for all-triangle meshes without a prefix), and
 /// `osd_refine`'s name for it.
-pub(crate) fn scheme_of(name: &str, soup: &PolygonSoup) -> (Builtin, &'static str) {
+pub fn scheme_of(name: &str, soup: &PolygonSoup) -> (Builtin, &'static str) {
     if name.starts_with("loop_")
         || (!name.starts_with("catmark_") && !name.starts_with("bilinear_") && soup.faces().all(|f| f.len() == 3))
     {

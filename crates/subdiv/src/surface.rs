@@ -747,7 +747,7 @@ mod tests {
         let mut levels = Vec::new();
         let refined = s.refine_with_progress(2, |l| levels.push(l)).unwrap();
         assert_eq!(levels, [1, 2]);
-        let expected = Refiner::new(s.mesh(), s.scheme(), 2, &RefineOptions::DEFAULT).unwrap().into_mesh();
+        let expected = subdiv_schemes::refine_uniform(s.mesh(), s.scheme(), 2, &RefineOptions::DEFAULT).unwrap();
         assert_eq!(refined.positions(), expected.positions());
         assert_eq!(without_holes(&refined).face_count(), refined.face_count());
     }

@@ -233,6 +233,7 @@ pub(crate) fn refine(
     let face_points = if masks.splits_into_quads() { mesh.face_count() as u32 } else { 0 };
     let numbering = Numbering { face_base: nv, edge_base: nv + face_points };
 
+    let sharp = has_sharpness(mesh);
     let (positions, level_stencils) = if stencils || !values::supports(&masks) {
         let level_stencils = stencil_rows(mesh, &masks, options, &numbering);
         let mut positions = Vec::new();
@@ -240,13 +241,13 @@ pub(crate) fn refine(
         (positions, stencils.then_some(level_stencils))
     } else {
         let mut positions = Vec::new();
-        values::refine(mesh, &masks, options, mesh.positions(), &mut positions);
+        values::refine(mesh, &masks, options, sharp, mesh.positions(), &mut positions);
         (positions, None)
     };
     let mut child = mesh.split(split, positions);
 
     // Sharpness of the child level, where the parent has any.
-    if masks.crease.is_some() && has_sharpness(mesh) {
+    if masks.crease.is_some() && sharp {
         for v in mesh.vertices() {
             child.set_vertex_sharpness(v, f64::from(crease::decrement(sharpness(mesh.vertex_sharpness(v)))));
         }

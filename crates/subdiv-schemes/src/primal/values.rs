@@ -79,8 +79,15 @@ pub(super) fn supports(masks: &Masks) -> bool {
 }
 
 /// The child level's values of `parent` (one per parent vertex) in the child numbering, into
-/// `out` (resized). `masks` must be [`supports`]ed.
-pub(super) fn refine<T: Primvar>(mesh: &Mesh, masks: &Masks, options: Options, parent: &[T], out: &mut Vec<T>) {
+/// `out` (resized). `masks` must be [`supports`]ed; `sharp`: whether `mesh` has any sharpness.
+pub(super) fn refine<T: Primvar>(
+    mesh: &Mesh,
+    masks: &Masks,
+    options: Options,
+    sharp: bool,
+    parent: &[T],
+    out: &mut Vec<T>,
+) {
     let nv = mesh.vertex_count();
     let face_points = if masks.splits_into_quads() { mesh.face_count() } else { 0 };
     out.clear();
@@ -102,9 +109,11 @@ pub(super) fn refine<T: Primvar>(mesh: &Mesh, masks: &Masks, options: Options, p
         *slot = edge_point(mesh, masks, options, parent, faces, EdgeId::new(e as u32));
     }
     let symbolic = FacePoints::Symbolic(nv as u32);
+    // Without sharpness no vertex needs its edges' sharpness looked up.
+    let creases = masks.crease.is_some() && sharp;
     for (v, slot) in vertices.iter_mut().enumerate() {
         let v = VertexId::new(v as u32);
-        *slot = match smooth_vertex_point(mesh, masks, parent, faces, v) {
+        *slot = match smooth_vertex_point(mesh, masks, creases, parent, faces, v) {
             Some(value) => value,
             None => {
                 let row = vertex_row(mesh, masks, symbolic, options.crease_method, v);
@@ -185,13 +194,19 @@ fn smooth_edge_point<T: Primvar>(
 }
 
 /// The smooth rule at an interior vertex without sharpness around it; `None` where the vertex
-/// needs its stencil row (boundary, isolated, sharp, or next to a sharp edge with crease
-/// rules).
-fn smooth_vertex_point<T: Primvar>(mesh: &Mesh, masks: &Masks, parent: &[T], faces: &[T], v: VertexId) -> Option<T> {
+/// needs its stencil row (boundary, isolated, sharp, or next to a sharp edge when `creases`:
+/// the scheme has crease rules and the mesh some sharpness).
+fn smooth_vertex_point<T: Primvar>(
+    mesh: &Mesh,
+    masks: &Masks,
+    creases: bool,
+    parent: &[T],
+    faces: &[T],
+    v: VertexId,
+) -> Option<T> {
     if mesh.is_isolated(v) || mesh.is_boundary_vertex(v) {
         return None;
     }
-    let creases = masks.crease.is_some();
     if creases && crease::is_sharp(sharpness(mesh.vertex_sharpness(v))) {
         return None;
     }
