@@ -143,7 +143,7 @@ fn measure(
                 let mut current = mesh.clone();
                 for _ in 0..levels {
                     let count = split.child_vertex_count(&current);
-                    current = current.split(split, vec![glam::DVec3::ZERO; count]);
+                    current = current.split(split, vec![glam::DVec3::ZERO; count], subdiv::mesh::Parallelism::DEFAULT);
                 }
                 Ok::<_, String>(current.face_count())
             })?,

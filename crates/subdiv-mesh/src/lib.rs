@@ -30,6 +30,7 @@ mod channel;
 mod error;
 mod ids;
 mod mesh;
+pub mod par;
 mod patch;
 mod region;
 pub mod shapes;
@@ -43,6 +44,7 @@ pub use channel::Channel;
 pub use error::MeshError;
 pub use ids::{EdgeId, FaceId, HalfEdgeId, VertexId};
 pub use mesh::{BoundaryLoop, Components, Mesh, OutgoingHalfEdges, RegularValence};
+pub use par::Parallelism;
 pub use patch::Patch;
 pub use region::Region;
 pub use soup::{

@@ -21,7 +21,8 @@ use std::sync::Arc;
 use glam::DVec3;
 
 use crate::mesh::{Links, Mesh, NONE};
-use crate::{EdgeId, FaceId, HalfEdgeId, Tags, VertexId};
+use crate::par::{self, CHUNK};
+use crate::{EdgeId, FaceId, HalfEdgeId, Parallelism, Tags, VertexId};
 
 /// How a primal refinement level splits faces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -120,17 +121,18 @@ fn neighbours_in_face(links: &Links, h: u32) -> (u32, u32) {
 
 impl Mesh {
     /// The split of this mesh's topology by `split`, with the child vertices at `positions`
-    /// (numbered as the [module docs](PrimalSplit) say). Child faces of holes are holes; the
+    /// (numbered as the [module docs](PrimalSplit) say), on rayon's threads if `parallelism`
+    /// says so (the same mesh either way). Child faces of holes are holes; the
     /// child has no sharpness and no channels (the scheme that refines sets them) and the
     /// parent's authored rule tags (boundary, crease method, triangle rule, face-varying
     /// mode), not its per-element tags.
     ///
     /// ```
-    /// use subdiv_mesh::{shapes, DVec3, Mesh, PrimalSplit};
+    /// use subdiv_mesh::{shapes, DVec3, Mesh, Parallelism, PrimalSplit};
     ///
     /// let cube = Mesh::build(shapes::cube())?;
     /// let count = PrimalSplit::Quads.child_vertex_count(&cube);
-    /// let child = cube.split(PrimalSplit::Quads, vec![DVec3::ZERO; count]);
+    /// let child = cube.split(PrimalSplit::Quads, vec![DVec3::ZERO; count], Parallelism::DEFAULT);
     /// assert_eq!((child.vertex_count(), child.edge_count(), child.face_count()), (26, 48, 24));
     /// // The same faces through the validating build give the same mesh.
     /// let rebuilt = Mesh::build(child.to_soup())?;
@@ -141,13 +143,14 @@ impl Mesh {
     /// # Panics
     /// When `positions` does not have [`PrimalSplit::child_vertex_count`] entries, or when
     /// `split` is [`PrimalSplit::Triangles`] and a face is not a triangle.
-    pub fn split(&self, split: PrimalSplit, positions: Vec<DVec3>) -> Mesh {
+    pub fn split(&self, split: PrimalSplit, positions: Vec<DVec3>, parallelism: Parallelism) -> Mesh {
         assert_eq!(positions.len(), split.child_vertex_count(self), "one position per child vertex");
+        let parallel = parallelism.forks();
         let links = match split {
-            PrimalSplit::Quads => split_quads(&self.links, self.vertex_count(), self.face_count()),
+            PrimalSplit::Quads => split_quads(&self.links, self.vertex_count(), self.face_count(), parallel),
             PrimalSplit::Triangles => {
                 assert!(self.links.face_offsets.iter().enumerate().all(|(f, &o)| o as usize == 3 * f));
-                split_triangles(&self.links, self.vertex_count())
+                split_triangles(&self.links, self.vertex_count(), parallel)
             }
         };
         let mut hole = vec![false; links.face_offsets.len() - 1];
@@ -175,160 +178,160 @@ impl Mesh {
     }
 }
 
-/// Numbers the child edges in the order of their first half-edge (as the build does), in one
-/// forward pass: a half-edge after its twin takes the twin's edge, numbered already.
-fn number_edges(he_twin: &[u32]) -> (Vec<EdgeId>, Vec<HalfEdgeId>) {
-    let mut he_edge: Vec<EdgeId> = Vec::with_capacity(he_twin.len());
-    let mut edge_he = Vec::with_capacity(he_twin.len() / 2 + 1);
-    for (h, &t) in he_twin.iter().enumerate() {
-        if t == NONE || (h as u32) < t {
-            he_edge.push(EdgeId::new(edge_he.len() as u32));
-            edge_he.push(HalfEdgeId::new(h as u32));
-        } else {
-            he_edge.push(he_edge[t as usize]);
+/// Numbers the child edges in the order of their first half-edge (as the build does): each
+/// chunk ranks its first half-edges, the chunks' counts are summed in order, and a half-edge
+/// after its twin takes its twin's number.
+fn number_edges(parallel: bool, he_twin: &[u32]) -> (Vec<EdgeId>, Vec<HalfEdgeId>) {
+    let n = he_twin.len();
+    let is_first = |h: usize| he_twin[h] == NONE || (h as u32) < he_twin[h];
+    let mut rank = vec![0u32; n];
+    par::for_each_chunk(parallel, &mut rank, CHUNK, |k, chunk| {
+        let mut r = 0;
+        for (i, slot) in chunk.iter_mut().enumerate() {
+            *slot = r;
+            r += u32::from(is_first(k * CHUNK + i));
         }
+    });
+    let mut base = Vec::with_capacity(n.div_ceil(CHUNK) + 1);
+    base.push(0u32);
+    for k in 0..n.div_ceil(CHUNK) {
+        let last = ((k + 1) * CHUNK).min(n) - 1;
+        base.push(base[k] + rank[last] + u32::from(is_first(last)));
     }
-    (he_edge, edge_he)
+    let id = |h: usize| base[h / CHUNK] + rank[h];
+    let mut he_edge = Vec::with_capacity(n);
+    par::extend_range(parallel, &mut he_edge, 0..n, |h| {
+        EdgeId::new(if is_first(h) { id(h) } else { id(he_twin[h] as usize) })
+    });
+    let parts = par::map(parallel, (0..n.div_ceil(CHUNK)).collect(), |k: usize| {
+        (k * CHUNK..((k + 1) * CHUNK).min(n))
+            .filter(|&h| is_first(h))
+            .map(|h| HalfEdgeId::new(h as u32))
+            .collect::<Vec<_>>()
+    });
+    (he_edge, parts.concat())
 }
 
-fn split_quads(p: &Links, nv: usize, nf: usize) -> Links {
+/// Child half-edge `c` of a quad split: its origin and twin.
+#[inline]
+fn quad_corner(p: &Links, face_base: u32, edge_base: u32, c: usize) -> (VertexId, u32) {
+    let h = (c / 4) as u32;
+    let f = p.he_face[h as usize].index();
+    let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
+    let rotation = if end - start == 4 { h - start } else { 0 };
+    let edge_point = |x: u32| VertexId::new(edge_base + p.he_edge[x as usize].raw());
+    let prev = || if h == start { end - 1 } else { h - 1 };
+    // Local edge k's twin: 0 and 3 cross the parent's edges, 1 and 2 stay inside.
+    match (c as u32 + 4 - rotation) & 3 {
+        0 => {
+            let t = p.he_twin[h as usize];
+            (p.he_origin[h as usize], if t == NONE { NONE } else { quad_child(p, neighbours_in_face(p, t).0, 3) })
+        }
+        1 => (edge_point(h), quad_child(p, if h + 1 == end { start } else { h + 1 }, 2)),
+        2 => (VertexId::new(face_base + f as u32), quad_child(p, prev(), 1)),
+        _ => {
+            let t = p.he_twin[prev() as usize];
+            (edge_point(prev()), if t == NONE { NONE } else { quad_child(p, t, 0) })
+        }
+    }
+}
+
+fn split_quads(p: &Links, nv: usize, nf: usize, parallel: bool) -> Links {
     let nh = p.he_origin.len();
     let (face_base, edge_base) = (nv as u32, (nv + nf) as u32);
-    // Filled in order: the children of half-edge h are 4h..4h + 4, and h runs through the faces.
-    let mut he_origin = Vec::with_capacity(4 * nh);
-    let mut he_twin = Vec::with_capacity(4 * nh);
-    for f in 0..nf {
-        let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
-        let quad = end - start == 4;
-        for h in start..end {
-            let rotation = if quad { h - start } else { 0 };
-            let next = if h + 1 == end { start } else { h + 1 };
-            let prev = if h == start { end - 1 } else { h - 1 };
-            let corners = [
-                p.he_origin[h as usize],
-                VertexId::new(edge_base + p.he_edge[h as usize].raw()),
-                VertexId::new(face_base + f as u32),
-                VertexId::new(edge_base + p.he_edge[prev as usize].raw()),
-            ];
-            let twin = |x: u32, k: u32| -> u32 {
-                let t = p.he_twin[x as usize];
-                if t == NONE { NONE } else { quad_child(p, k_target(p, t, k), k) }
-            };
-            // Local edge k's twin: 0 and 3 cross the parent's edges, 1 and 2 stay inside.
-            let twins = [twin(h, 3), quad_child(p, next, 2), quad_child(p, prev, 1), twin(prev, 0)];
-            let (mut origins, mut links) = ([VertexId::new(0); 4], [NONE; 4]);
-            for k in 0..4 {
-                origins[(k + rotation as usize) & 3] = corners[k];
-                links[(k + rotation as usize) & 3] = twins[k];
-            }
-            he_origin.extend_from_slice(&origins);
-            he_twin.extend_from_slice(&links);
-        }
-    }
-    let he_face = (0..4 * nh).map(|c| FaceId::new((c / 4) as u32)).collect();
+    let (mut he_origin, mut he_twin) = (Vec::new(), Vec::new());
+    par::unzip_range(parallel, &mut he_origin, &mut he_twin, 0..4 * nh, |c| quad_corner(p, face_base, edge_base, c));
+    let mut he_face = Vec::with_capacity(4 * nh);
+    par::extend_range(parallel, &mut he_face, 0..4 * nh, |c| FaceId::new((c / 4) as u32));
     let face_offsets = (0..=nh as u32).map(|c| 4 * c).collect();
-    let (he_edge, edge_he) = number_edges(&he_twin);
+    let (he_edge, edge_he) = number_edges(parallel, &he_twin);
 
-    let child_count = nv + nf + p.edge_he.len();
-    let mut vertex_he = Vec::with_capacity(child_count);
-    let mut valence = Vec::with_capacity(child_count);
     // Vertex points: the child of the parent's first outgoing half-edge (its boundary one, or
     // its lowest), which stays first: children of `h` are numbered from 4h.
-    vertex_he.extend(p.vertex_he.iter().map(|&h| if h == NONE { NONE } else { quad_child(p, h, 0) }));
-    valence.extend_from_slice(&p.valence);
-    for f in 0..nf {
-        let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
-        vertex_he.push(quad_child(p, start, 2));
-        valence.push(end - start);
-    }
-    for &h in &p.edge_he {
-        let h = h.raw();
-        let (next, _) = neighbours_in_face(p, h);
-        let t = p.he_twin[h as usize];
-        if t == NONE {
-            // The boundary half-edge runs along the parent's boundary, to dest(h).
-            vertex_he.push(quad_child(p, next, 3));
-            valence.push(3);
+    let (mut vertex_he, mut valence) = (Vec::new(), Vec::new());
+    par::unzip_range(parallel, &mut vertex_he, &mut valence, 0..nv + nf + p.edge_he.len(), |v| {
+        if v < nv {
+            let h = p.vertex_he[v];
+            (if h == NONE { NONE } else { quad_child(p, h, 0) }, p.valence[v])
+        } else if v < nv + nf {
+            let (start, end) = (p.face_offsets[v - nv], p.face_offsets[v - nv + 1]);
+            (quad_child(p, start, 2), end - start)
         } else {
-            let (t_next, _) = neighbours_in_face(p, t);
-            let around = [quad_child(p, h, 1), quad_child(p, next, 3), quad_child(p, t, 1), quad_child(p, t_next, 3)];
-            vertex_he.push(around.into_iter().min().unwrap_or(NONE));
-            valence.push(4);
+            let h = p.edge_he[v - nv - nf].raw();
+            let (next, _) = neighbours_in_face(p, h);
+            let t = p.he_twin[h as usize];
+            if t == NONE {
+                // The boundary half-edge runs along the parent's boundary, to dest(h).
+                (quad_child(p, next, 3), 3)
+            } else {
+                let (t_next, _) = neighbours_in_face(p, t);
+                let around =
+                    [quad_child(p, h, 1), quad_child(p, next, 3), quad_child(p, t, 1), quad_child(p, t_next, 3)];
+                (around.into_iter().min().unwrap_or(NONE), 4)
+            }
         }
-    }
+    });
     Links { face_offsets, he_origin, he_face, he_twin, he_edge, edge_he, vertex_he, valence }
 }
 
-/// The parent half-edge whose quad child holds the twin of local edge 0 or 3 across the parent
-/// half-edge whose twin is `t`: edge 0's twin is edge 3 of `next(t)`'s child; edge 3's twin is
-/// edge 0 of `t`'s child.
+/// Child half-edge `c` of a triangle split: its origin and twin. Face `f`'s children hold
+/// `12f..12f + 12`: corner child `j` at `12f + 3j` (rotated so that corner `j` starts at position
+/// `j`), the middle child at `12f + 9`.
 #[inline]
-fn k_target(p: &Links, t: u32, k: u32) -> u32 {
-    if k == 3 { neighbours_in_face(p, t).0 } else { t }
+fn triangle_corner(p: &Links, edge_base: u32, c: usize) -> (VertexId, u32) {
+    let (f, local) = ((c / 12) as u32, (c % 12) as u32);
+    let edge_point = |h: u32| VertexId::new(edge_base + p.he_edge[h as usize].raw());
+    let corner = |j: u32| 3 * f + j % 3;
+    if local >= 9 {
+        // The middle child: position j runs from the point of edge j + 1 to that of j + 2.
+        let j = local - 9;
+        return (edge_point(corner(j + 1)), triangle_child(corner(j + 2), 1));
+    }
+    let j = local / 3;
+    let (h, prev) = (corner(j), corner(j + 2));
+    match (local % 3 + 3 - j) % 3 {
+        0 => {
+            let t = p.he_twin[h as usize];
+            (p.he_origin[h as usize], if t == NONE { NONE } else { triangle_child(3 * (t / 3) + (t % 3 + 1) % 3, 2) })
+        }
+        1 => (edge_point(h), 3 * (4 * f + 3) + (j + 1) % 3),
+        _ => {
+            let t = p.he_twin[prev as usize];
+            (edge_point(prev), if t == NONE { NONE } else { triangle_child(t, 0) })
+        }
+    }
 }
 
-fn split_triangles(p: &Links, nv: usize) -> Links {
+fn split_triangles(p: &Links, nv: usize, parallel: bool) -> Links {
     let nf = p.face_offsets.len() - 1;
     let edge_base = nv as u32;
-    // Filled in order, a face's twelve child half-edges at a time.
-    let mut he_origin = Vec::with_capacity(12 * nf);
-    let mut he_twin = Vec::with_capacity(12 * nf);
-    let edge_point = |h: u32| VertexId::new(edge_base + p.he_edge[h as usize].raw());
-    for f in 0..nf as u32 {
-        let middle = 3 * (4 * f + 3);
-        let (mut origins, mut links) = ([VertexId::new(0); 12], [NONE; 12]);
-        for j in 0..3u32 {
-            let h = 3 * f + j;
-            let next = 3 * f + (j + 1) % 3;
-            let prev = 3 * f + (j + 2) % 3;
-            let corners = [p.he_origin[h as usize], edge_point(h), edge_point(prev)];
-            let across = |x: u32| p.he_twin[x as usize];
-            let t = across(h);
-            let tp = across(prev);
-            let twins = [
-                if t == NONE { NONE } else { triangle_child(3 * (t / 3) + (t % 3 + 1) % 3, 2) },
-                middle + (j + 1) % 3,
-                if tp == NONE { NONE } else { triangle_child(tp, 0) },
-            ];
-            for k in 0..3u32 {
-                let c = (triangle_child(h, k) - 12 * f) as usize;
-                origins[c] = corners[k as usize];
-                links[c] = twins[k as usize];
-            }
-            // The middle child: position j runs from the point of edge j + 1 to that of j + 2.
-            origins[9 + j as usize] = edge_point(next);
-            links[9 + j as usize] = triangle_child(3 * f + (j + 2) % 3, 1);
-        }
-        he_origin.extend_from_slice(&origins);
-        he_twin.extend_from_slice(&links);
-    }
-    let he_face = (0..12 * nf).map(|c| FaceId::new((c / 3) as u32)).collect();
+    let (mut he_origin, mut he_twin) = (Vec::new(), Vec::new());
+    par::unzip_range(parallel, &mut he_origin, &mut he_twin, 0..12 * nf, |c| triangle_corner(p, edge_base, c));
+    let mut he_face = Vec::with_capacity(12 * nf);
+    par::extend_range(parallel, &mut he_face, 0..12 * nf, |c| FaceId::new((c / 3) as u32));
     let face_offsets = (0..=4 * nf as u32).map(|c| 3 * c).collect();
-    let (he_edge, edge_he) = number_edges(&he_twin);
+    let (he_edge, edge_he) = number_edges(parallel, &he_twin);
 
-    let child_count = nv + p.edge_he.len();
-    let mut vertex_he = Vec::with_capacity(child_count);
-    let mut valence = Vec::with_capacity(child_count);
-    vertex_he.extend(p.vertex_he.iter().map(|&h| if h == NONE { NONE } else { triangle_child(h, 0) }));
-    valence.extend_from_slice(&p.valence);
-    for &h in &p.edge_he {
-        let h = h.raw();
+    let (mut vertex_he, mut valence) = (Vec::new(), Vec::new());
+    par::unzip_range(parallel, &mut vertex_he, &mut valence, 0..nv + p.edge_he.len(), |v| {
+        if v < nv {
+            let h = p.vertex_he[v];
+            return (if h == NONE { NONE } else { triangle_child(h, 0) }, p.valence[v]);
+        }
+        let h = p.edge_he[v - nv].raw();
         let next = 3 * (h / 3) + (h % 3 + 1) % 3;
         let t = p.he_twin[h as usize];
         if t == NONE {
-            vertex_he.push(triangle_child(next, 2));
-            valence.push(4);
-        } else {
-            // Around the edge point: each side's two corner children and its middle child.
-            let side = |x: u32| {
-                let x_next = 3 * (x / 3) + (x % 3 + 1) % 3;
-                let middle = 3 * (4 * (x / 3) + 3) + (x % 3 + 2) % 3;
-                [triangle_child(x, 1), triangle_child(x_next, 2), middle]
-            };
-            vertex_he.push(side(h).into_iter().chain(side(t)).min().unwrap_or(NONE));
-            valence.push(6);
+            return (triangle_child(next, 2), 4);
         }
-    }
+        // Around the edge point: each side's two corner children and its middle child.
+        let side = |x: u32| {
+            let x_next = 3 * (x / 3) + (x % 3 + 1) % 3;
+            let middle = 3 * (4 * (x / 3) + 3) + (x % 3 + 2) % 3;
+            [triangle_child(x, 1), triangle_child(x_next, 2), middle]
+        };
+        (side(h).into_iter().chain(side(t)).min().unwrap_or(NONE), 6)
+    });
     Links { face_offsets, he_origin, he_face, he_twin, he_edge, edge_he, vertex_he, valence }
 }
 
@@ -341,7 +344,9 @@ mod tests {
     fn assert_split_equals_build(mesh: &Mesh, split: PrimalSplit) {
         let count = split.child_vertex_count(mesh);
         let positions: Vec<DVec3> = (0..count).map(|i| DVec3::new(i as f64, 0.0, 0.0)).collect();
-        let child = mesh.split(split, positions);
+        let child = mesh.split(split, positions.clone(), Parallelism::Rayon);
+        let serial = mesh.split(split, positions, Parallelism::Serial);
+        assert_eq!(format!("{:?}", child.links), format!("{:?}", serial.links), "threads change nothing");
         let mut soup = PolygonSoup::with_capacity(count, child.face_count(), child.half_edge_count());
         for &p in child.positions() {
             soup.push_vertex(p);
@@ -374,7 +379,8 @@ mod tests {
         for soup in soups.into_iter().chain([shapes::ngon_prism(7), shapes::pole(5)]) {
             let mesh = Mesh::build(soup).unwrap();
             assert_split_equals_build(&mesh, PrimalSplit::Quads);
-            let once = mesh.split(PrimalSplit::Quads, vec![DVec3::ZERO; PrimalSplit::Quads.child_vertex_count(&mesh)]);
+            let count = PrimalSplit::Quads.child_vertex_count(&mesh);
+            let once = mesh.split(PrimalSplit::Quads, vec![DVec3::ZERO; count], Parallelism::DEFAULT);
             assert_split_equals_build(&once, PrimalSplit::Quads);
         }
     }
@@ -397,10 +403,21 @@ mod tests {
     }
 
     #[test]
+    fn splits_of_many_chunks_equal_the_build_of_their_faces() {
+        // Past `CHUNK` child half-edges the passes split into several tasks.
+        let quads = Mesh::build(shapes::quad_torus(48, 40)).unwrap();
+        assert!(4 * quads.half_edge_count() > 3 * CHUNK);
+        assert_split_equals_build(&quads, PrimalSplit::Quads);
+        let triangles = Mesh::build(shapes::triangle_torus(40, 30)).unwrap();
+        assert_split_equals_build(&triangles, PrimalSplit::Triangles);
+    }
+
+    #[test]
     fn holes_pass_to_the_children() {
         let mut mesh = Mesh::build(shapes::quad_grid(2, 2)).unwrap();
         mesh.set_hole(FaceId::new(3), true);
-        let child = mesh.split(PrimalSplit::Quads, vec![DVec3::ZERO; PrimalSplit::Quads.child_vertex_count(&mesh)]);
+        let count = PrimalSplit::Quads.child_vertex_count(&mesh);
+        let child = mesh.split(PrimalSplit::Quads, vec![DVec3::ZERO; count], Parallelism::DEFAULT);
         let holes: Vec<u32> = child.face_ids().filter(|&f| child.is_hole(f)).map(|f| f.raw()).collect();
         assert_eq!(holes, vec![12, 13, 14, 15]);
     }

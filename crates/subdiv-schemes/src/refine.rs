@@ -4,7 +4,9 @@
 //! boundaries, creases, corners and holes.
 
 use glam::DVec3;
-use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, FaceVaryingInterpolation, Mesh, TriangleSubdivision};
+use subdiv_mesh::{
+    BoundaryInterpolation, CreaseMethod, FaceVaryingInterpolation, Mesh, Parallelism, TriangleSubdivision,
+};
 
 use crate::crease::INFINITE;
 use crate::primal::{ChannelLevel, ChannelRules};
@@ -39,6 +41,10 @@ pub struct RefineOptions {
     /// with [`SchemeError::ValenceTooLarge`](crate::SchemeError::ValenceTooLarge) before any
     /// matrix is made. Default: [`MAX_PATCH_VALENCE`].
     pub max_patch_valence: usize,
+    /// Whether a level's passes (the split, face, edge and vertex points) may run on rayon's
+    /// threads; the result is the same either way, bit for bit. Default:
+    /// [`Parallelism::Rayon`].
+    pub parallelism: Parallelism,
 }
 
 /// [`RefineOptions::max_patch_valence`]' default: 1024. The sub-patch matrices of valence `n`
@@ -55,7 +61,14 @@ impl RefineOptions {
         triangle_subdivision: None,
         face_varying: None,
         max_patch_valence: MAX_PATCH_VALENCE,
+        parallelism: Parallelism::Rayon,
     };
+
+    /// Sets [`parallelism`](Self::parallelism).
+    pub fn with_parallelism(mut self, parallelism: Parallelism) -> Self {
+        self.parallelism = parallelism;
+        self
+    }
 
     /// Sets [`face_varying`](Self::face_varying).
     pub fn with_face_varying(mut self, mode: FaceVaryingInterpolation) -> Self {
@@ -70,6 +83,7 @@ impl RefineOptions {
     pub(crate) fn rules_for(&self, mesh: &Mesh) -> Options {
         let crease_method = self.crease_method.or(mesh.tags().crease_method).unwrap_or(CreaseMethod::Uniform);
         Options {
+            parallelism: self.parallelism,
             crease_method,
             smooth_triangles: self.triangle_subdivision.or(mesh.tags().triangle_subdivision)
                 == Some(TriangleSubdivision::Smooth),
@@ -88,6 +102,7 @@ impl RefineOptions {
 /// The options that change masks, resolved once for all levels.
 #[derive(Clone, Copy)]
 pub(crate) struct Options {
+    pub(crate) parallelism: Parallelism,
     pub(crate) crease_method: CreaseMethod,
     pub(crate) smooth_triangles: bool,
     pub(crate) channels: ChannelRules,

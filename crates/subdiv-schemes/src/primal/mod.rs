@@ -244,7 +244,7 @@ pub(crate) fn refine(
         values::refine(mesh, &masks, options, sharp, mesh.positions(), &mut positions);
         (positions, None)
     };
-    let mut child = mesh.split(split, positions);
+    let mut child = mesh.split(split, positions, options.parallelism);
 
     // Sharpness of the child level, where the parent has any.
     if masks.crease.is_some() && sharp {

@@ -9,6 +9,7 @@
 //! changes the rule take the stencil row of [`vertex_row`](super::vertex_row), built over the
 //! parent's vertices and the symbolic face points and applied at once: they are few.
 
+use subdiv_mesh::par::{self, CHUNK};
 use subdiv_mesh::{EdgeId, FaceId, HalfEdgeId, Mesh, VertexId};
 
 use super::{EdgeRule, FacePoints, Kind, Masks, edge_rule, sharpness, vertex_row};
@@ -18,7 +19,7 @@ use crate::stencil::Row;
 
 /// A per-vertex value that refinement interpolates: positions, colours, any fixed number of
 /// `f32` or `f64` components (`Far`'s `AddWithWeight`).
-pub(crate) trait Primvar: Copy {
+pub(crate) trait Primvar: Copy + Send + Sync {
     /// The value with every component 0.
     const ZERO: Self;
     /// `self += weight · other`.
@@ -90,37 +91,44 @@ pub(super) fn refine<T: Primvar>(
 ) {
     let nv = mesh.vertex_count();
     let face_points = if masks.splits_into_quads() { mesh.face_count() } else { 0 };
+    let parallel = options.parallelism.forks();
     out.clear();
     out.resize(nv + face_points + mesh.edge_count(), T::ZERO);
     let (vertices, rest) = out.split_at_mut(nv);
     let (faces, edges) = rest.split_at_mut(face_points);
     if let Kind::Quad { corners, .. } = &masks.kind {
-        for (f, slot) in faces.iter_mut().enumerate() {
-            let face = mesh.face_vertices(FaceId::new(f as u32));
-            let mut sum = T::ZERO;
-            for (v, &w) in face.iter().zip(&corners[face.len()]) {
-                sum.add_scaled(parent[v.index()], w);
+        par::for_each_chunk(parallel, faces, CHUNK, |k, chunk| {
+            for (i, slot) in chunk.iter_mut().enumerate() {
+                let face = mesh.face_vertices(FaceId::new((k * CHUNK + i) as u32));
+                let mut sum = T::ZERO;
+                for (v, &w) in face.iter().zip(&corners[face.len()]) {
+                    sum.add_scaled(parent[v.index()], w);
+                }
+                *slot = sum;
             }
-            *slot = sum;
-        }
+        });
     }
     let faces: &[T] = faces;
-    for (e, slot) in edges.iter_mut().enumerate() {
-        *slot = edge_point(mesh, masks, options, parent, faces, EdgeId::new(e as u32));
-    }
+    par::for_each_chunk(parallel, edges, CHUNK, |k, chunk| {
+        for (i, slot) in chunk.iter_mut().enumerate() {
+            *slot = edge_point(mesh, masks, options, parent, faces, EdgeId::new((k * CHUNK + i) as u32));
+        }
+    });
     let symbolic = FacePoints::Symbolic(nv as u32);
     // Without sharpness no vertex needs its edges' sharpness looked up.
     let creases = masks.crease.is_some() && sharp;
-    for (v, slot) in vertices.iter_mut().enumerate() {
-        let v = VertexId::new(v as u32);
-        *slot = match smooth_vertex_point(mesh, masks, creases, parent, faces, v) {
-            Some(value) => value,
-            None => {
-                let row = vertex_row(mesh, masks, symbolic, options.crease_method, v);
-                apply(&row, |i| if i < nv { parent[i] } else { faces[i - nv] })
-            }
-        };
-    }
+    par::for_each_chunk(parallel, vertices, CHUNK, |k, chunk| {
+        for (i, slot) in chunk.iter_mut().enumerate() {
+            let v = VertexId::new((k * CHUNK + i) as u32);
+            *slot = match smooth_vertex_point(mesh, masks, creases, parent, faces, v) {
+                Some(value) => value,
+                None => {
+                    let row = vertex_row(mesh, masks, symbolic, options.crease_method, v);
+                    apply(&row, |i| if i < nv { parent[i] } else { faces[i - nv] })
+                }
+            };
+        }
+    });
 }
 
 fn apply<T: Primvar>(row: &Row, value: impl Fn(usize) -> T) -> T {
