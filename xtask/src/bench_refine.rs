@@ -3,9 +3,11 @@
 //!
 //! Ours, per mesh, level and thread count: `refine` (`refine_uniform`: topology and positions
 //! from the cage, what `subdiv refine` runs), `topology` (the same levels' splits alone: no
-//! positions, no sharpness), `stencils` (`Refiner::new`: every level's
-//! stencil rows, Far's `StencilTableFactory::Create` counterpart) and `stencil_apply`
-//! (`Refiner::interpolate`: positions through the stencils, the animation loop). With
+//! positions, no sharpness), `stencils` (`Refiner::new`: every level's stencil rows),
+//! `stencil_apply` (`Refiner::interpolate`: positions through those, level by level, the
+//! animation loop), `stencil_table` (`Refiner::new` then `stencil_table`: the last level over the
+//! cage, Far's `StencilTableFactory::Create` counterpart — which does not count the topology we
+//! count) and `stencil_table_apply` (`StencilTable::apply`, Far's `UpdateValues`). With
 //! `SUBDIV_OSD_BENCH` naming the peer harness's `osd_bench`, `osd_bench MESH refine K` runs in
 //! the same rounds, alternated with ours, and its lines come out with `peer=osd`.
 //!
@@ -28,7 +30,7 @@ const USAGE: &str =
     "usage: cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R]";
 
 /// Our modes (see the module docs).
-const MODES: [&str; 4] = ["refine", "topology", "stencils", "stencil_apply"];
+const MODES: [&str; 6] = ["refine", "topology", "stencils", "stencil_apply", "stencil_table", "stencil_table_apply"];
 
 /// The default meshes: the peer harness's (`../shared/peers/osd/meshes`) and the corpus'
 /// (`../shared/testdata/meshes`).
@@ -148,6 +150,17 @@ fn measure(
                 Ok::<_, String>(current.face_count())
             })?,
             "stencils" => sample(|| Refiner::new(mesh, scheme, levels, &options).map(|r| r.levels().len()))?,
+            "stencil_table" => {
+                sample(|| Refiner::new(mesh, scheme, levels, &options).map(|r| r.stencil_table().weight_count()))?
+            }
+            "stencil_table_apply" => {
+                let table = Refiner::new(mesh, scheme, levels, &options).map_err(|e| e.to_string())?.stencil_table();
+                let mut values = Vec::new();
+                sample(|| {
+                    table.apply(mesh.positions(), &mut values);
+                    Ok::<_, String>(values.len())
+                })?
+            }
             _ => {
                 let refiner = Refiner::new(mesh, scheme, levels, &options).map_err(|e| e.to_string())?;
                 let (mut values, mut scratch) = (Vec::new(), Vec::new());

@@ -93,6 +93,7 @@ mod primal;
 mod refine;
 mod scheme;
 mod stencil;
+mod stencil_table;
 #[cfg(feature = "proptest")]
 pub mod strategies;
 
@@ -112,6 +113,7 @@ pub use scheme::{
     TriangleEdgeMask, VertexMask,
 };
 pub use stencil::Stencils;
+pub use stencil_table::StencilTable;
 
 pub mod c1_table {
     //! The C1 verdicts of every built-in surface scheme at valences 3 to 16, from

@@ -12,6 +12,7 @@ use crate::crease::INFINITE;
 use crate::primal::{ChannelLevel, ChannelRules};
 use crate::scheme::{Rules, Scheme};
 use crate::stencil::Stencils;
+use crate::stencil_table::StencilTable;
 use crate::{SchemeError, dual, primal};
 
 /// Options of [`refine`] and [`refine_uniform`]. `None` fields take the mesh's tags, and
@@ -201,6 +202,7 @@ fn refine_levels(
 pub struct Refiner {
     levels: Vec<Stencils>,
     mesh: Mesh,
+    parallelism: Parallelism,
 }
 
 impl Refiner {
@@ -225,7 +227,7 @@ impl Refiner {
         progress: impl FnMut(usize),
     ) -> Result<Self, SchemeError> {
         let (mesh, levels) = refine_levels(mesh, scheme, levels, options, true, progress)?;
-        Ok(Self { levels, mesh })
+        Ok(Self { levels, mesh, parallelism: options.parallelism })
     }
 
     /// The refined mesh (topology, sharpness, holes, and the positions refined from the cage's).
@@ -241,6 +243,14 @@ impl Refiner {
     /// Each level's stencils, from the cage down.
     pub fn levels(&self) -> &[Stencils] {
         &self.levels
+    }
+
+    /// The last level as weighted sums of the cage's vertices: the levels' stencils composed
+    /// (Far's `StencilTableFactory::Create` with `generateIntermediateLevels = false`), on
+    /// rayon's threads as the refinement's [`RefineOptions::parallelism`] allowed.
+    pub fn stencil_table(&self) -> StencilTable {
+        let cage = self.levels.first().map_or(self.mesh.vertex_count(), Stencils::parent_count);
+        StencilTable::compose(cage, &self.levels, self.parallelism.forks())
     }
 
     /// Refines `base` (one position per cage vertex) to the last level, into `out`; `scratch`

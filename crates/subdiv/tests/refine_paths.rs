@@ -60,3 +60,26 @@ fn refined_values_equal_the_stencil_rows_on_every_shared_mesh() {
     }
     eprintln!("{compared} refined meshes compared");
 }
+
+#[test]
+fn stencil_tables_reproduce_the_refined_positions_on_every_shared_mesh() {
+    let mut compared = 0;
+    for (path, builtin, mesh) in &shared_meshes() {
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        for levels in [1, 3] {
+            let Ok(refiner) = Refiner::new(mesh, builtin.scheme(), levels, &RefineOptions::DEFAULT) else {
+                panic!("{name}: its own scheme refuses it");
+            };
+            let table = refiner.stencil_table();
+            assert_eq!((table.len(), table.cage_count()), (refiner.mesh().vertex_count(), mesh.vertex_count()));
+            let mut out = Vec::new();
+            table.apply(mesh.positions(), &mut out);
+            let (lo, hi) = refiner.mesh().bounding_box().expect("refined meshes have vertices");
+            for (v, (a, b)) in out.iter().zip(refiner.mesh().positions()).enumerate() {
+                assert!(a.distance(*b) <= 1e-12 * (hi - lo).length(), "{name}, {levels} levels: vertex {v} at {a}, {b}");
+            }
+            compared += 1;
+        }
+    }
+    eprintln!("{compared} stencil tables compared");
+}
