@@ -29,6 +29,12 @@ impl Parallelism {
     /// The default: [`Rayon`](Self::Rayon).
     pub const DEFAULT: Self = Self::Rayon;
 
+    /// Whether a pass over `items` items forks: [`forks`](Self::forks), and at least
+    /// [`MIN_PARALLEL_ITEMS`] of them.
+    pub fn forks_for(self, items: usize) -> bool {
+        self.forks() && items >= MIN_PARALLEL_ITEMS
+    }
+
     /// Whether this call forks: [`Rayon`](Self::Rayon) with the `rayon` feature, and a pool
     /// of more than one thread.
     pub fn forks(self) -> bool {
@@ -42,6 +48,15 @@ impl Parallelism {
         }
     }
 }
+
+/// The fewest items a pass of [`Parallelism::forks_for`] forks for: below it waking a second
+/// thread costs more than it saves. Measured on refinement (`cargo xtask bench refine --mesh M`,
+/// one and two threads, 5 rounds, three alternations of 0, 2¹³ and 2¹⁶): spot's three levels (at
+/// most 47k child half-edges) took 1.24-1.26 ms on one thread, 1.34-1.53 ms on two when every
+/// pass forked, 1.27-1.28 ms with this bound (in an earlier, quieter run 0.72 against 0.91 ms);
+/// catmark_car (403k child half-edges at its third level) took 10.4-13.5 ms on two threads
+/// either way, within the machine's noise.
+pub const MIN_PARALLEL_ITEMS: usize = 1 << 16;
 
 /// Items per task of the chunked passes ([`for_each_chunk`] callers): large enough that a task's
 /// bookkeeping is noise, small enough that two threads share a refinement level of a few

@@ -76,10 +76,38 @@ fn stencil_tables_reproduce_the_refined_positions_on_every_shared_mesh() {
             table.apply(mesh.positions(), &mut out);
             let (lo, hi) = refiner.mesh().bounding_box().expect("refined meshes have vertices");
             for (v, (a, b)) in out.iter().zip(refiner.mesh().positions()).enumerate() {
-                assert!(a.distance(*b) <= 1e-12 * (hi - lo).length(), "{name}, {levels} levels: vertex {v} at {a}, {b}");
+                assert!(
+                    a.distance(*b) <= 1e-12 * (hi - lo).length(),
+                    "{name}, {levels} levels: vertex {v} at {a}, {b}"
+                );
             }
             compared += 1;
         }
     }
     eprintln!("{compared} stencil tables compared");
+}
+
+#[test]
+fn threads_change_no_bit_of_a_refinement() {
+    use subdiv::mesh::{Parallelism, shapes};
+    // Large enough that every pass forks (`MIN_PARALLEL_ITEMS` items and more).
+    let cases = [
+        (Builtin::CatmullClark, shapes::quad_torus(128, 64)),
+        (Builtin::Loop, shapes::triangle_torus(96, 48)),
+        (Builtin::Bilinear, shapes::quad_torus(128, 64)),
+    ];
+    for (builtin, soup) in cases {
+        let mut mesh = Mesh::build(soup).unwrap();
+        // A semi-sharp edge and a corner, so that the crease rules run on the threads too.
+        mesh.set_edge_sharpness(subdiv::mesh::EdgeId::new(5), 2.5);
+        mesh.set_vertex_sharpness(subdiv::mesh::VertexId::new(700), 1.5);
+        let refine = |parallelism| {
+            let options = RefineOptions::DEFAULT.with_parallelism(parallelism);
+            refine_uniform(&mesh, builtin.scheme(), 2, &options).unwrap()
+        };
+        let (serial, threads) = (refine(Parallelism::Serial), refine(Parallelism::Rayon));
+        assert!(serial.faces().eq(threads.faces()), "{builtin:?}: faces");
+        assert_eq!(serial.positions(), threads.positions(), "{builtin:?}: positions");
+        assert!(serial.edges().all(|e| serial.edge_sharpness(e) == threads.edge_sharpness(e)));
+    }
 }

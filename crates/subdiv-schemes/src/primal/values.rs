@@ -91,9 +91,10 @@ pub(super) fn refine<T: Primvar>(
 ) {
     let nv = mesh.vertex_count();
     let face_points = if masks.splits_into_quads() { mesh.face_count() } else { 0 };
-    let parallel = options.parallelism.forks();
+    let parallel = options.parallelism.forks_for(mesh.edge_count());
     out.clear();
-    out.resize(nv + face_points + mesh.edge_count(), T::ZERO);
+    // Zeroed on the threads too: the first touch of a level's pages is a large part of its cost.
+    par::extend_range(parallel, out, 0..nv + face_points + mesh.edge_count(), |_| T::ZERO);
     let (vertices, rest) = out.split_at_mut(nv);
     let (faces, edges) = rest.split_at_mut(face_points);
     if let Kind::Quad { corners, .. } = &masks.kind {
