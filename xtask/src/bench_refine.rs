@@ -23,7 +23,7 @@ use std::process::Command;
 use std::time::Instant;
 
 use subdiv::io::load;
-use subdiv::mesh::{Mesh, PrimalSplit};
+use subdiv::mesh::Mesh;
 use subdiv::schemes::{Builtin, RefineOptions, Refiner, refine_uniform};
 
 const USAGE: &str =
@@ -135,8 +135,7 @@ fn measure(
 ) -> Result<Vec<(&'static str, f64)>, String> {
     let scheme = builtin.scheme();
     let options = RefineOptions::DEFAULT;
-    let split =
-        if scheme.split() == subdiv::schemes::Split::Triangle { PrimalSplit::Triangles } else { PrimalSplit::Quads };
+    let split = scheme.split().primal().ok_or_else(|| format!("{builtin:?} has no primal split"))?;
     let mut out = Vec::new();
     for &mode in modes {
         let seconds = match mode {

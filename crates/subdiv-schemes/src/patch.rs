@@ -663,15 +663,8 @@ fn split_not_supported(scheme: &Scheme, split: Split) -> SchemeError {
 /// # Ok::<(), subdiv_mesh::MeshError>(())
 /// ```
 pub fn child_faces(split: Split, parent: &Mesh, face: FaceId) -> Option<std::ops::Range<usize>> {
-    match split {
-        Split::Triangle => Some(4 * face.index()..4 * face.index() + 4),
-        // Half-edges are numbered face by face too: a face's first child is its first half-edge.
-        Split::Quad => {
-            let first = parent.face_half_edges(face).next().expect("faces have corners").index();
-            Some(first..first + parent.face_size(face))
-        }
-        Split::Dual | Split::Midedge | Split::Sqrt3 => None,
-    }
+    let children = split.primal()?.face_children(parent, face);
+    Some(children.start as usize..children.end as usize)
 }
 
 /// Where the sub-patches of the patch starting at `start` start in `child`, the mesh the engine

@@ -204,6 +204,17 @@ pub enum Split {
     Sqrt3,
 }
 
+impl Split {
+    /// The mesh's primal split this is, if it is one (the dual, mid-edge and √3 splits are not).
+    pub fn primal(self) -> Option<subdiv_mesh::PrimalSplit> {
+        match self {
+            Self::Quad => Some(subdiv_mesh::PrimalSplit::Quads),
+            Self::Triangle => Some(subdiv_mesh::PrimalSplit::Triangles),
+            Self::Dual | Self::Midedge | Self::Sqrt3 => None,
+        }
+    }
+}
+
 /// The built-in schemes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Builtin {

@@ -17,14 +17,14 @@
 
 use smallvec::{SmallVec, smallvec};
 use subdiv_mesh::{
-    Channel, CreaseMethod, EdgeId, FaceId, FaceVaryingInterpolation as Mode, HalfEdgeId, Mesh, PolygonSoup, VertexId,
+    Channel, CreaseMethod, EdgeId, FaceId, FaceVaryingInterpolation as Mode, HalfEdgeId, Mesh, PolygonSoup,
+    PrimalSplit, VertexId,
 };
 
 use super::{sharpness, vertex_edges};
+use crate::SchemeError;
 use crate::crease;
-use crate::patch::child_faces;
 use crate::stencil::Row;
-use crate::{SchemeError, Split};
 
 /// What decides a channel's rules besides its topology.
 #[derive(Clone, Copy, Debug)]
@@ -342,7 +342,7 @@ pub(crate) struct Children<'a> {
     pub(crate) face_base: u32,
     pub(crate) edge_base: u32,
     /// The split: quads (one face point per face) or triangles into four.
-    pub(crate) split: Split,
+    pub(crate) split: PrimalSplit,
     /// The scheme's crease mask `(own, neighbour)`, which a channel's creases follow
     /// (OpenSubdiv writes Catmull-Clark's and Loop's `(3/4, 1/8)` into its face-varying code
     /// and makes the bilinear scheme's channels linear: the bilinear mask `(1, 0)` is that).
@@ -379,7 +379,8 @@ impl Children<'_> {
 
     /// The child faces of parent face `f` (child `j` at its corner `j`).
     fn children(&self, f: FaceId) -> std::ops::Range<usize> {
-        child_faces(self.split, self.parent, f).unwrap_or(0..0)
+        let children = self.split.face_children(self.parent, f);
+        children.start as usize..children.end as usize
     }
 
     /// The half-edge leaving `from` in the child face at corner `corner` of parent face `f`.
@@ -450,9 +451,7 @@ pub(crate) fn refine(
     // Edge tags: both halves of a parent edge inherit its tag.
     let mut edges = vec![EdgeTag::default(); child.edge_count()];
     for e in parent.edges() {
-        let point = at.edge_child(e);
-        for end in parent.edge_vertices(e) {
-            let half = child.find_edge(end, point).ok_or_else(|| internal("a child edge is missing"))?;
+        for half in at.split.edge_children(parent, child, e) {
             edges[half.index()] = level.edges[e.index()];
         }
     }
@@ -610,7 +609,7 @@ fn interpolate(
     };
 
     // Face points (triangle splits have none).
-    for f in parent.face_ids().filter(|_| at.split == Split::Quad) {
+    for f in parent.face_ids().filter(|_| at.split == PrimalSplit::Quads) {
         let value = slot(at.face_child(f));
         let w = 1.0 / parent.face_size(f) as f64;
         for h in parent.face_half_edges(f) {

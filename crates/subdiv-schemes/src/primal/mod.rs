@@ -18,7 +18,7 @@ use crate::crease::{self, Rule};
 use crate::refine::Options;
 use crate::scheme::{CreaseMask, ExtraordinaryEdgeMask, Rules, Scheme, TriangleEdgeMask, extraordinary_spokes};
 use crate::stencil::{Row, Stencils};
-use crate::{Expr, SchemeError, Split};
+use crate::{Expr, SchemeError};
 
 /// A scheme's primal masks, evaluated for the valences and face sizes of one level.
 struct Masks {
@@ -331,7 +331,7 @@ fn refine_channels(
         child,
         face_base: numbering.face_base,
         edge_base: numbering.edge_base,
-        split: if masks.splits_into_quads() { Split::Quad } else { Split::Triangle },
+        split: masks.split(),
         crease,
     };
     let mut refined = Vec::with_capacity(levels.len());
