@@ -1,8 +1,9 @@
 //! Uniform refinement throughput: refined faces per second, one thread.
 //!
-//! Run with `cargo bench -p subdiv-benches --bench refine -- _positions` (or `cargo xtask bench
-//! refine` for `key=value` lines); faces/s = refined faces / median time. The `_positions`
-//! cases time `Refiner::interpolate` alone: what the peers' primvar figures measure.
+//! Run with `cargo bench -p subdiv-benches --bench refine -- _positions`; faces/s = refined faces
+//! / median time. The `_positions` cases time `Refiner::interpolate` alone: what the peers'
+//! primvar figures measure. `cargo xtask bench refine` (its own harness, not criterion) measures
+//! refinement beside OpenSubdiv's Far in the same rounds.
 //!
 //! One session on the 2-core machine (shared and noisy: take the figures to ±20 %), 64 × 32
 //! torus to level 4, f64 positions:
