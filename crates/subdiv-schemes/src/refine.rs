@@ -1,7 +1,8 @@
 //! Uniform refinement: one engine for every [`Scheme`]. Each level is a topology split
-//! (primal quad, primal triangle, dual, mid-edge or √3) and one stencil row per child vertex,
-//! from the scheme's masks; primal schemes with crease rules follow OpenSubdiv's `Sdc` for
-//! boundaries, creases, corners and holes.
+//! (primal quad, primal triangle, dual, mid-edge or √3) and the child vertices from the scheme's
+//! masks — applied to the positions directly ([`refine_uniform`]) or as one stencil row per child
+//! vertex ([`Refiner`], which keeps them); primal schemes with crease rules follow OpenSubdiv's
+//! `Sdc` for boundaries, creases, corners and holes.
 
 use glam::DVec3;
 use subdiv_mesh::{

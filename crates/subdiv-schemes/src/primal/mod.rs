@@ -3,8 +3,9 @@
 //! scheme has crease rules, boundaries, creases and corners follow OpenSubdiv (smooth, dart,
 //! crease, corner, and the fractional blend where a semi-sharp feature fades out).
 //!
-//! Child vertex numbering is Far's: vertex points (parent order), then face points (quad
-//! schemes), then edge points.
+//! The topology is [`Mesh::split`]'s (child vertex numbering as Far's: vertex points in parent
+//! order, then face points for quad schemes, then edge points); the positions come from
+//! `values.rs` (the masks applied to them) or from [`stencil_rows`] when stencils are wanted.
 
 use smallvec::SmallVec;
 use subdiv_mesh::{EdgeId, FaceId, HalfEdgeId, Mesh, PrimalSplit, VertexId};
