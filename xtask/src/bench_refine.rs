@@ -13,7 +13,7 @@
 //!
 //! Default meshes: the peer harness's `torus_big` and `torus_tri_big` (Loop) and the corpus'
 //! `catmark_car` and `spot_control_mesh` (positions only: `osd_bench` drops texture
-//! coordinates, so we drop them too), levels 3, one thread and all. Timing as `osd_bench`: a
+//! coordinates, so we drop them too; `--channels yes` keeps them), levels 3, one thread and all. Timing as `osd_bench`: a
 //! warm-up, then per round one sample that repeats the work until it lasts ≥ 20 ms; the median
 //! over the rounds (default 5). A debug build of xtask hands the work to a release build.
 
@@ -26,8 +26,7 @@ use subdiv::io::load;
 use subdiv::mesh::Mesh;
 use subdiv::schemes::{Builtin, RefineOptions, Refiner, refine_uniform};
 
-const USAGE: &str =
-    "usage: cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R]";
+const USAGE: &str = "usage: cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no]";
 
 /// Our modes (see the module docs).
 const MODES: [&str; 6] = ["refine", "topology", "stencils", "stencil_apply", "stencil_table", "stencil_table_apply"];
@@ -45,6 +44,7 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     }
     let (mut meshes, mut levels, mut threads, mut rounds) = (Vec::new(), Vec::new(), Vec::new(), 5usize);
     let mut modes = Vec::new();
+    let mut channels = false;
     let mut rest = args.iter();
     while let Some(a) = rest.next() {
         let value = rest.next().ok_or_else(|| format!("{a} needs a value; {USAGE}"))?;
@@ -55,6 +55,13 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
             "--levels" => levels.push(count()?),
             "--threads" => threads.push(count()?),
             "--rounds" => rounds = count()?,
+            "--channels" => {
+                channels = match value.as_str() {
+                    "yes" => true,
+                    "no" => false,
+                    _ => return Err(format!("--channels {value}: yes or no; {USAGE}")),
+                }
+            }
             "--mode" => modes.push(
                 MODES
                     .iter()
@@ -87,7 +94,9 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
         let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
         let builtin = subdiv_testkit::opensubdiv::scheme_of(&name, &soup).0;
         let mut mesh = Mesh::build(soup).map_err(|e| format!("{}: {e}", path.display()))?;
-        mesh.clear_channels();
+        if !channels {
+            mesh.clear_channels();
+        }
         for &level in &levels {
             let mut ours: BTreeMap<(usize, &str), Vec<f64>> = BTreeMap::new();
             let mut theirs: BTreeMap<String, Vec<f64>> = BTreeMap::new();
