@@ -4,7 +4,8 @@
 //!   clippy with warnings denied, and the README's test command.
 //! - `cargo xtask bench [NAME]` runs the criterion benches (all, or the one named: `topology`,
 //!   `stencil` or `eval`) and prints one `key=value` line per measurement, in the units of DESIGN.md.
-//! - `cargo xtask bench refine [--mesh M]… [--levels K]… [--threads T]… [--rounds R]` measures
+//! - `cargo xtask bench refine [--mesh M]… [--levels K]… [--threads T]… [--mode MODE]… [--rounds R]
+//!   [--channels yes|no]` measures
 //!   uniform refinement (topology and positions, topology alone, stencils, stencil application)
 //!   beside OpenSubdiv's `Far` when `SUBDIV_OSD_BENCH` names the harness's `osd_bench`,
 //!   alternated in the same rounds.
@@ -47,7 +48,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--rounds R] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
