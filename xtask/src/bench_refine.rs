@@ -20,8 +20,8 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::Instant;
 
+use crate::bench_args::{self, median, one_of, yes_no};
 use subdiv::io::load;
 use subdiv::mesh::Mesh;
 use subdiv::schemes::{Builtin, RefineOptions, Refiner, refine_uniform};
@@ -55,20 +55,8 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
             "--levels" => levels.push(count()?),
             "--threads" => threads.push(count()?),
             "--rounds" => rounds = count()?,
-            "--channels" => {
-                channels = match value.as_str() {
-                    "yes" => true,
-                    "no" => false,
-                    _ => return Err(format!("--channels {value}: yes or no; {USAGE}")),
-                }
-            }
-            "--mode" => modes.push(
-                MODES
-                    .iter()
-                    .copied()
-                    .find(|m| m == value)
-                    .ok_or_else(|| format!("--mode {value}: not one of {MODES:?}"))?,
-            ),
+            "--channels" => channels = yes_no(a, value, USAGE)?,
+            "--mode" => modes.push(one_of(a, value, &MODES)?),
             _ => return Err(format!("unknown option {a:?}; {USAGE}")),
         }
     }
@@ -129,12 +117,6 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-fn median(samples: &[f64]) -> f64 {
-    let mut sorted = samples.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    sorted[sorted.len() / 2]
-}
-
 /// One sample of each of `modes` (see the module docs).
 fn measure(
     mesh: &Mesh,
@@ -183,16 +165,13 @@ fn measure(
     Ok(out)
 }
 
-/// One sample: a warm-up, then `work` repeated until it lasts ≥ 20 ms, per repetition.
+/// One sample of fallible `work`, after a warm-up run (which also reports its error).
 fn sample<T, E: std::fmt::Display>(mut work: impl FnMut() -> Result<T, E>) -> Result<f64, String> {
     std::hint::black_box(work().map_err(|e| e.to_string())?);
-    let start = Instant::now();
-    let mut reps = 0u32;
-    while reps == 0 || start.elapsed().as_secs_f64() < 0.02 {
-        std::hint::black_box(work().map_err(|e| e.to_string())?);
-        reps += 1;
-    }
-    Ok(start.elapsed().as_secs_f64() / f64::from(reps))
+    // The warm-up succeeded, and the work is the same each time.
+    Ok(bench_args::sample(|| {
+        std::hint::black_box(work().ok());
+    }))
 }
 
 /// OpenSubdiv's `Far` through the peer harness: `(mode, seconds)` of each line it prints.

@@ -20,6 +20,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
+use crate::bench_args::{median, one_of, sample, yes_no};
 use subdiv::io::load_mesh;
 use subdiv::mesh::Mesh;
 use subdiv::schemes::Builtin;
@@ -59,18 +60,8 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                     .filter(|&t| t > 0)
                     .ok_or_else(|| format!("--threads {value}: not a count; {USAGE}"))?,
             ),
-            "--mode" => modes.push(
-                MODES
-                    .iter()
-                    .copied()
-                    .find(|m| m == value)
-                    .ok_or_else(|| format!("--mode {value}: not one of {MODES:?}"))?,
-            ),
-            "--channels" => channels.push(match value.as_str() {
-                "yes" => true,
-                "no" => false,
-                _ => return Err(format!("--channels {value}: yes or no; {USAGE}")),
-            }),
+            "--mode" => modes.push(one_of(a, value, &MODES)?),
+            "--channels" => channels.push(yes_no(a, value, USAGE)?),
             _ => return Err(format!("unknown option {a:?}; {USAGE}")),
         }
     }
@@ -183,19 +174,8 @@ fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str], c
 /// per repetition.
 fn median_seconds(mut work: impl FnMut()) -> f64 {
     work();
-    let mut samples: Vec<f64> = (0..5)
-        .map(|_| {
-            let start = Instant::now();
-            let mut reps = 0u32;
-            while reps == 0 || start.elapsed().as_secs_f64() < 0.02 {
-                work();
-                reps += 1;
-            }
-            start.elapsed().as_secs_f64() / f64::from(reps)
-        })
-        .collect();
-    samples.sort_by(f64::total_cmp);
-    samples[2]
+    let samples: Vec<f64> = (0..5).map(|_| sample(&mut work)).collect();
+    median(&samples)
 }
 
 /// OpenSubdiv's Bfr through the peer harness (`osd_bench MESH tess N`), its lines as it prints

@@ -36,6 +36,7 @@
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod adaptive;
+mod bench_args;
 mod bench_gpu;
 mod bench_refine;
 mod bench_tess;

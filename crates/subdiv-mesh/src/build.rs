@@ -136,13 +136,13 @@ impl Mesh {
 }
 
 #[inline]
-fn next_in_face(offsets: &[u32], he_face: &[FaceId], h: u32) -> u32 {
+pub(crate) fn next_in_face(offsets: &[u32], he_face: &[FaceId], h: u32) -> u32 {
     let f = he_face[h as usize].index();
     if h + 1 == offsets[f + 1] { offsets[f] } else { h + 1 }
 }
 
 #[inline]
-fn prev_in_face(offsets: &[u32], he_face: &[FaceId], h: u32) -> u32 {
+pub(crate) fn prev_in_face(offsets: &[u32], he_face: &[FaceId], h: u32) -> u32 {
     let f = he_face[h as usize].index();
     if h == offsets[f] { offsets[f + 1] - 1 } else { h - 1 }
 }

@@ -20,6 +20,7 @@ use std::sync::Arc;
 
 use glam::DVec3;
 
+use crate::build::{next_in_face, prev_in_face};
 use crate::mesh::{Links, Mesh, NONE};
 use crate::par::{self, CHUNK};
 use crate::{EdgeId, FaceId, HalfEdgeId, Parallelism, Tags, VertexId};
@@ -38,19 +39,6 @@ impl PrimalSplit {
     /// The number of vertices of the split of `mesh`.
     pub fn child_vertex_count(self, mesh: &Mesh) -> usize {
         mesh.vertex_count() + self.face_point_count(mesh) + mesh.edge_count()
-    }
-
-    /// The number of faces of the split of `mesh`.
-    pub fn child_face_count(self, mesh: &Mesh) -> usize {
-        match self {
-            Self::Quads => mesh.half_edge_count(),
-            Self::Triangles => 4 * mesh.face_count(),
-        }
-    }
-
-    /// The id of the child vertex of parent face `face` (quad splits; triangle splits have none).
-    pub fn face_point(self, mesh: &Mesh, face: FaceId) -> Option<VertexId> {
-        (self == Self::Quads).then(|| VertexId::new((mesh.vertex_count() + face.index()) as u32))
     }
 
     /// The id of the child vertex of parent edge `edge`.
@@ -107,16 +95,6 @@ fn quad_child(links: &Links, h: u32, k: u32) -> u32 {
 fn triangle_child(h: u32, k: u32) -> u32 {
     let (f, j) = (h / 3, h % 3);
     3 * (4 * f + j) + (k + j) % 3
-}
-
-/// The half-edge after `h` in its face, and the one before.
-#[inline]
-fn neighbours_in_face(links: &Links, h: u32) -> (u32, u32) {
-    let f = links.he_face[h as usize].index();
-    let (start, end) = (links.face_offsets[f], links.face_offsets[f + 1]);
-    let next = if h + 1 == end { start } else { h + 1 };
-    let prev = if h == start { end - 1 } else { h - 1 };
-    (next, prev)
 }
 
 impl Mesh {
@@ -232,6 +210,12 @@ fn number_edges_in_order(he_twin: &[u32]) -> (Vec<EdgeId>, Vec<HalfEdgeId>) {
     (he_edge, edge_he)
 }
 
+/// The half-edge after `h` in its face.
+#[inline]
+fn next_of(p: &Links, h: u32) -> u32 {
+    next_in_face(&p.face_offsets, &p.he_face, h)
+}
+
 /// Child half-edge `c` of a quad split: its origin and twin.
 #[inline]
 fn quad_corner(p: &Links, face_base: u32, edge_base: u32, c: usize) -> (VertexId, u32) {
@@ -240,14 +224,14 @@ fn quad_corner(p: &Links, face_base: u32, edge_base: u32, c: usize) -> (VertexId
     let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
     let rotation = if end - start == 4 { h - start } else { 0 };
     let edge_point = |x: u32| VertexId::new(edge_base + p.he_edge[x as usize].raw());
-    let prev = || if h == start { end - 1 } else { h - 1 };
+    let prev = || prev_in_face(&p.face_offsets, &p.he_face, h);
     // Local edge k's twin: 0 and 3 cross the parent's edges, 1 and 2 stay inside.
     match (c as u32 + 4 - rotation) & 3 {
         0 => {
             let t = p.he_twin[h as usize];
-            (p.he_origin[h as usize], if t == NONE { NONE } else { quad_child(p, neighbours_in_face(p, t).0, 3) })
+            (p.he_origin[h as usize], if t == NONE { NONE } else { quad_child(p, next_of(p, t), 3) })
         }
-        1 => (edge_point(h), quad_child(p, if h + 1 == end { start } else { h + 1 }, 2)),
+        1 => (edge_point(h), quad_child(p, next_of(p, h), 2)),
         2 => (VertexId::new(face_base + f as u32), quad_child(p, prev(), 1)),
         _ => {
             let t = p.he_twin[prev() as usize];
@@ -279,13 +263,13 @@ fn split_quads(p: &Links, nv: usize, nf: usize, parallel: bool) -> Links {
             (quad_child(p, start, 2), end - start)
         } else {
             let h = p.edge_he[v - nv - nf].raw();
-            let (next, _) = neighbours_in_face(p, h);
+            let next = next_of(p, h);
             let t = p.he_twin[h as usize];
             if t == NONE {
                 // The boundary half-edge runs along the parent's boundary, to dest(h).
                 (quad_child(p, next, 3), 3)
             } else {
-                let (t_next, _) = neighbours_in_face(p, t);
+                let t_next = next_of(p, t);
                 let around =
                     [quad_child(p, h, 1), quad_child(p, next, 3), quad_child(p, t, 1), quad_child(p, t_next, 3)];
                 (around.into_iter().min().unwrap_or(NONE), 4)
