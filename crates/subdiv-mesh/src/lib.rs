@@ -51,6 +51,6 @@ pub use soup::{
     BoundaryInterpolation, CornerTag, CreaseMethod, CreaseTag, FaceVaryingInterpolation, PolygonSoup, Sharpness, Tags,
     TriangleSubdivision,
 };
-pub use split::PrimalSplit;
+pub use split::{ChildOrigin, PrimalSplit};
 
 pub use glam::DVec3;

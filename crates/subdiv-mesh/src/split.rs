@@ -70,12 +70,102 @@ impl PrimalSplit {
         [child.edge(HalfEdgeId::new(first)), child.edge(HalfEdgeId::new(second))]
     }
 
+    /// Where the origin of child half-edge `child` (of the split of `parent`) comes from, with
+    /// the parent corner it lies in: what a face-varying channel needs to pick a child corner's
+    /// value without searching the parent's faces.
+    pub fn child_origin(self, parent: &Mesh, child: HalfEdgeId) -> ChildOrigin {
+        let p = &parent.links;
+        let c = child.raw();
+        match self {
+            Self::Quads => {
+                let (h, role) = quad_role(p, c);
+                match role {
+                    0 => ChildOrigin::Vertex(HalfEdgeId::new(h)),
+                    1 => ChildOrigin::Edge(HalfEdgeId::new(h)),
+                    2 => ChildOrigin::Face(p.he_face[h as usize]),
+                    _ => ChildOrigin::Edge(HalfEdgeId::new(prev_in_face(&p.face_offsets, &p.he_face, h))),
+                }
+            }
+            Self::Triangles => match triangle_role(c) {
+                TriangleRole::Middle(h) => ChildOrigin::Edge(HalfEdgeId::new(h)),
+                TriangleRole::Corner { h, role: 0, .. } => ChildOrigin::Vertex(HalfEdgeId::new(h)),
+                TriangleRole::Corner { h, role: 1, .. } => ChildOrigin::Edge(HalfEdgeId::new(h)),
+                TriangleRole::Corner { prev, .. } => ChildOrigin::Edge(HalfEdgeId::new(prev)),
+            },
+        }
+    }
+
+    /// Child half-edge `k` of the child face at parent corner `corner` (the child that holds
+    /// the corner's vertex), counted from the corner: 0 leaves the corner's vertex point, 1 the
+    /// point of `corner`'s edge, the last (3 for quads, 2 for triangles) the point of the
+    /// previous edge, and a quad's 2 the face point.
+    pub fn corner_child(self, parent: &Mesh, corner: HalfEdgeId, k: u32) -> HalfEdgeId {
+        HalfEdgeId::new(match self {
+            Self::Quads => quad_child(&parent.links, corner.raw(), k),
+            Self::Triangles => triangle_child(corner.raw(), k),
+        })
+    }
+
+    /// The number of sides of a child face of a regular split: 4 or 3.
+    pub fn child_face_size(self) -> u32 {
+        match self {
+            Self::Quads => 4,
+            Self::Triangles => 3,
+        }
+    }
+
     fn face_point_count(self, mesh: &Mesh) -> usize {
         match self {
             Self::Quads => mesh.face_count(),
             Self::Triangles => 0,
         }
     }
+}
+
+/// Where a child half-edge's origin comes from in the parent ([`PrimalSplit::child_origin`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ChildOrigin {
+    /// The parent vertex at the origin of this parent half-edge (the child lies in its face).
+    Vertex(HalfEdgeId),
+    /// The point of this parent half-edge's edge, on its side (the child lies in its face).
+    Edge(HalfEdgeId),
+    /// The point of this parent face.
+    Face(FaceId),
+}
+
+/// The parent half-edge of child half-edge `c` of a quad split and the child's role in the
+/// child face, from its corner (0 the corner, 1 `h`'s edge point, 2 the face point, 3 the
+/// previous edge's point): the quad child of an n-gon's half-edge `h` is face `h`, rotated
+/// as `Far` rotates the children of a quad.
+#[inline]
+fn quad_role(p: &Links, c: u32) -> (u32, u32) {
+    let h = c / 4;
+    let f = p.he_face[h as usize].index();
+    let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
+    let rotation = if end - start == 4 { h - start } else { 0 };
+    (h, (c + 4 - rotation) & 3)
+}
+
+/// The role of child half-edge `c` of a triangle split: `12f..12f + 12`, corner child `j` at
+/// `12f + 3j` (rotated so that corner `j` starts at position `j`), the middle child at `12f + 9`.
+#[derive(Clone, Copy)]
+enum TriangleRole {
+    /// Position `j` of the middle child, from the point of edge `h = corner(j + 1)`.
+    Middle(u32),
+    /// In the corner child at parent half-edge `h` (whose previous is `prev`): 0 leaves the
+    /// corner, 1 `h`'s edge point, 2 `prev`'s edge point.
+    Corner { h: u32, prev: u32, role: u32 },
+}
+
+#[inline]
+fn triangle_role(c: u32) -> TriangleRole {
+    let (f, local) = (c / 12, c % 12);
+    let corner = |j: u32| 3 * f + j % 3;
+    if local >= 9 {
+        return TriangleRole::Middle(corner(local - 9 + 1));
+    }
+    let j = local / 3;
+    TriangleRole::Corner { h: corner(j), prev: corner(j + 2), role: (local % 3 + 3 - j) % 3 }
 }
 
 /// Child half-edge `k` of the quad split's child of parent half-edge `h` (unrotated local edge
@@ -219,20 +309,17 @@ fn next_of(p: &Links, h: u32) -> u32 {
 /// Child half-edge `c` of a quad split: its origin and twin.
 #[inline]
 fn quad_corner(p: &Links, face_base: u32, edge_base: u32, c: usize) -> (VertexId, u32) {
-    let h = (c / 4) as u32;
-    let f = p.he_face[h as usize].index();
-    let (start, end) = (p.face_offsets[f], p.face_offsets[f + 1]);
-    let rotation = if end - start == 4 { h - start } else { 0 };
+    let (h, role) = quad_role(p, c as u32);
     let edge_point = |x: u32| VertexId::new(edge_base + p.he_edge[x as usize].raw());
     let prev = || prev_in_face(&p.face_offsets, &p.he_face, h);
     // Local edge k's twin: 0 and 3 cross the parent's edges, 1 and 2 stay inside.
-    match (c as u32 + 4 - rotation) & 3 {
+    match role {
         0 => {
             let t = p.he_twin[h as usize];
             (p.he_origin[h as usize], if t == NONE { NONE } else { quad_child(p, next_of(p, t), 3) })
         }
         1 => (edge_point(h), quad_child(p, next_of(p, h), 2)),
-        2 => (VertexId::new(face_base + f as u32), quad_child(p, prev(), 1)),
+        2 => (VertexId::new(face_base + p.he_face[h as usize].raw()), quad_child(p, prev(), 1)),
         _ => {
             let t = p.he_twin[prev() as usize];
             (edge_point(prev()), if t == NONE { NONE } else { quad_child(p, t, 0) })
@@ -280,27 +367,22 @@ fn split_quads(p: &Links, nv: usize, nf: usize, parallel: bool) -> Links {
 }
 
 /// Child half-edge `c` of a triangle split: its origin and twin. Face `f`'s children hold
-/// `12f..12f + 12`: corner child `j` at `12f + 3j` (rotated so that corner `j` starts at position
-/// `j`), the middle child at `12f + 9`.
+/// Child half-edge `c` of a triangle split: its origin and twin.
 #[inline]
 fn triangle_corner(p: &Links, edge_base: u32, c: usize) -> (VertexId, u32) {
-    let (f, local) = ((c / 12) as u32, (c % 12) as u32);
+    let f = c as u32 / 12;
     let edge_point = |h: u32| VertexId::new(edge_base + p.he_edge[h as usize].raw());
-    let corner = |j: u32| 3 * f + j % 3;
-    if local >= 9 {
-        // The middle child: position j runs from the point of edge j + 1 to that of j + 2.
-        let j = local - 9;
-        return (edge_point(corner(j + 1)), triangle_child(corner(j + 2), 1));
-    }
-    let j = local / 3;
-    let (h, prev) = (corner(j), corner(j + 2));
-    match (local % 3 + 3 - j) % 3 {
-        0 => {
+    match triangle_role(c as u32) {
+        TriangleRole::Middle(h) => {
+            // Position j runs from the point of edge j + 1 to that of j + 2.
+            (edge_point(h), triangle_child(3 * f + (h + 1) % 3, 1))
+        }
+        TriangleRole::Corner { h, role: 0, .. } => {
             let t = p.he_twin[h as usize];
             (p.he_origin[h as usize], if t == NONE { NONE } else { triangle_child(3 * (t / 3) + (t % 3 + 1) % 3, 2) })
         }
-        1 => (edge_point(h), 3 * (4 * f + 3) + (j + 1) % 3),
-        _ => {
+        TriangleRole::Corner { h, role: 1, .. } => (edge_point(h), 3 * (4 * f + 3) + (h % 3 + 1) % 3),
+        TriangleRole::Corner { prev, .. } => {
             let t = p.he_twin[prev as usize];
             (edge_point(prev), if t == NONE { NONE } else { triangle_child(t, 0) })
         }
@@ -413,6 +495,26 @@ mod tests {
             let point = split.edge_point(mesh, e);
             assert_eq!(child.edge_vertices(first), [a, point]);
             assert_eq!(child.edge_vertices(second), [point, b]);
+        }
+        // Every child corner's parent, and back.
+        let face_point = |f: FaceId| VertexId::new(mesh.vertex_count() as u32 + f.raw());
+        for c in (0..child.half_edge_count() as u32).map(HalfEdgeId::new) {
+            let (origin, face) = match split.child_origin(mesh, c) {
+                ChildOrigin::Vertex(h) => {
+                    assert_eq!(split.corner_child(mesh, h, 0), c);
+                    (mesh.origin(h), mesh.face(h))
+                }
+                ChildOrigin::Edge(h) => (split.edge_point(mesh, mesh.edge(h)), mesh.face(h)),
+                ChildOrigin::Face(f) => (face_point(f), f),
+            };
+            assert_eq!(child.origin(c), origin, "child half-edge {c:?}");
+            assert!(split.face_children(mesh, face).contains(&child.face(c).raw()));
+        }
+        for h in (0..mesh.half_edge_count() as u32).map(HalfEdgeId::new) {
+            let last = split.child_face_size() - 1;
+            let point = split.edge_point(mesh, mesh.edge(h));
+            assert_eq!(child.origin(split.corner_child(mesh, h, 1)), point);
+            assert_eq!(child.origin(split.corner_child(mesh, mesh.next(h), last)), point);
         }
     }
 

@@ -17,8 +17,8 @@
 
 use smallvec::{SmallVec, smallvec};
 use subdiv_mesh::{
-    Channel, CreaseMethod, EdgeId, FaceId, FaceVaryingInterpolation as Mode, HalfEdgeId, Mesh, PolygonSoup,
-    PrimalSplit, VertexId,
+    Channel, ChildOrigin, CreaseMethod, EdgeId, FaceId, FaceVaryingInterpolation as Mode, HalfEdgeId, Mesh,
+    PolygonSoup, PrimalSplit, VertexId,
 };
 
 use super::{sharpness, vertex_edges};
@@ -376,23 +376,18 @@ impl Children<'_> {
     fn edge_child(&self, e: EdgeId) -> VertexId {
         VertexId::new(self.edge_base + e.raw())
     }
-
-    /// The child faces of parent face `f` (child `j` at its corner `j`).
-    fn children(&self, f: FaceId) -> std::ops::Range<usize> {
-        let children = self.split.face_children(self.parent, f);
-        children.start as usize..children.end as usize
-    }
-
-    /// The half-edge leaving `from` in the child face at corner `corner` of parent face `f`.
-    fn child_half_edge(&self, f: FaceId, corner: usize, from: VertexId) -> Option<HalfEdgeId> {
-        let face = FaceId::new((self.children(f).start + corner) as u32);
-        self.child.face_half_edges(face).find(|&h| self.child.origin(h) == from)
-    }
 }
 
 /// The half-edge of face `f` that leaves `v`.
 fn half_edge_from(mesh: &Mesh, f: FaceId, v: VertexId) -> Option<HalfEdgeId> {
     mesh.face_half_edges(f).find(|&h| mesh.origin(h) == v)
+}
+
+/// The half-edges of `e` on its sides: its first half-edge, then its twin if it has one (an
+/// edge point's siblings in that order).
+fn edge_sides(mesh: &Mesh, e: EdgeId) -> SmallVec<[HalfEdgeId; 2]> {
+    let h = mesh.edge_half_edge(e);
+    std::iter::once(h).chain(mesh.twin(h)).collect()
 }
 
 fn internal(what: &str) -> SchemeError {
@@ -418,34 +413,26 @@ pub(crate) fn refine(
     for cv in child.vertices() {
         let count = match at.parent_of(cv) {
             Parent::Vertex(v) if !level.is_matched(v) => level.of(v).len(),
-            Parent::Edge(e) if level.edges[e.index()].mismatch => parent.edge_faces(e).len(),
+            Parent::Edge(e) if level.edges[e.index()].mismatch => 1 + usize::from(!parent.is_boundary_edge(e)),
             _ => 1,
         };
         first.push(first[cv.index()] + count as u32);
     }
     let total = first[child.vertex_count()] as usize;
 
-    // Each child corner's sibling, and the child channel's indices.
-    let mut corner_sibling = vec![0u32; child.half_edge_count()];
-    for f in parent.face_ids() {
-        for c in at.children(f) {
-            for h in child.face_half_edges(FaceId::new(c as u32)) {
-                corner_sibling[h.index()] = match at.parent_of(child.origin(h)) {
-                    Parent::Vertex(v) if !level.is_matched(v) => {
-                        let ph = half_edge_from(parent, f, v).ok_or_else(|| internal("a child corner's parent"))?;
-                        level.corner_sibling[ph.index()]
-                    }
-                    Parent::Edge(e) if level.edges[e.index()].mismatch => {
-                        parent.edge_faces(e).iter().position(|&g| g == f).unwrap_or(0) as u32
-                    }
-                    _ => 0,
-                };
+    // Each child corner's sibling, and the child channel's indices. An edge point's siblings
+    // are its edge's sides: 0 in the face of `edge_half_edge`, 1 in its twin's.
+    let corner_sibling: Vec<u32> = (0..child.half_edge_count() as u32)
+        .map(|c| match at.split.child_origin(parent, HalfEdgeId::new(c)) {
+            ChildOrigin::Vertex(h) if !level.is_matched(parent.origin(h)) => level.corner_sibling[h.index()],
+            ChildOrigin::Edge(h) if level.edges[parent.edge(h).index()].mismatch => {
+                u32::from(parent.edge_half_edge(parent.edge(h)) != h)
             }
-        }
-    }
-    let indices: Vec<u32> = (0..child.half_edge_count() as u32)
-        .map(HalfEdgeId::new)
-        .map(|h| first[child.origin(h).index()] + corner_sibling[h.index()])
+            _ => 0,
+        })
+        .collect();
+    let indices: Vec<u32> = (0..child.half_edge_count())
+        .map(|h| first[child.origin(HalfEdgeId::new(h as u32)).index()] + corner_sibling[h])
         .collect();
 
     // Edge tags: both halves of a parent edge inherit its tag.
@@ -465,11 +452,7 @@ pub(crate) fn refine(
         for (sibling, from) in siblings[slots].iter_mut().zip(level.of(v)) {
             sibling.tag = from.tag;
             if let (true, Some([h0, h1])) = (smooth_boundaries && !from.tag.is_inf_sharp(), from.ends) {
-                let map = |h: HalfEdgeId| {
-                    at.child_half_edge(parent.face(h), parent.corner(h), v)
-                        .ok_or_else(|| internal("a crease end's child"))
-                };
-                sibling.ends = Some([map(h0)?, map(h1)?]);
+                sibling.ends = Some([h0, h1].map(|h| at.split.corner_child(parent, h, 0)));
             }
         }
     }
@@ -480,20 +463,15 @@ pub(crate) fn refine(
         }
         let point = at.edge_child(e);
         let slots = first[point.index()] as usize..first[point.index() + 1] as usize;
-        let faces = parent.edge_faces(e);
-        for (j, sibling) in siblings[slots].iter_mut().enumerate() {
+        let sides = edge_sides(parent, e);
+        for (&h, sibling) in sides.iter().zip(&mut siblings[slots]) {
             sibling.tag = ValueTag { mismatch: true, crease: smooth_boundaries, ..ValueTag::default() };
             if smooth_boundaries && tag.mismatch {
-                // The crease runs along the edge's two halves on face j's side.
-                let f = faces[j];
-                let h = parent.face_half_edges(f).find(|&h| parent.edge(h) == e).ok_or_else(|| internal("edge"))?;
-                let (k, n) = (parent.corner(h), parent.face_size(f));
-                let lead = at.child_half_edge(f, (k + 1) % n, point);
-                let trail = at.child_half_edge(f, k, point);
-                let (Some(lead), Some(trail)) = (lead, trail) else {
-                    return Err(internal("an edge point's child faces"));
-                };
-                sibling.ends = Some([lead, trail]);
+                // The crease runs along the edge's two halves on `h`'s side: from the point
+                // in the child at `h`'s next corner to the point in the child at `h`'s corner.
+                let last = at.split.child_face_size() - 1;
+                let lead = at.split.corner_child(parent, parent.next(h), last);
+                sibling.ends = Some([lead, at.split.corner_child(parent, h, 1)]);
             }
         }
     }
@@ -508,15 +486,32 @@ pub(crate) fn refine(
 /// `FVarRefinement::reclassifySemisharpValues`: a semi-sharp value of a child vertex whose
 /// span holds no semi-sharp edge any more becomes a crease.
 fn reclassify_semi_sharp(parent: &Mesh, child: &Mesh, first: &[u32], siblings: &mut [Sibling], rules: ChannelRules) {
-    let semi_edges = |mesh: &Mesh, v: VertexId| {
-        vertex_edges(mesh, v).iter().any(|&(e, _)| crease::is_semi_sharp(sharpness(mesh.edge_sharpness(e))))
+    let semi_sharp = |s: f64| crease::is_semi_sharp(sharpness(s));
+    if !parent.vertices().any(|v| semi_sharp(parent.vertex_sharpness(v)))
+        && !parent.edges().any(|e| semi_sharp(parent.edge_sharpness(e)))
+    {
+        return;
+    }
+    // Which parent vertices have a semi-sharp edge, in the parent and in the child: one pass
+    // over each level's edges.
+    let semi_edge_ends = |mesh: &Mesh| {
+        let mut ends = vec![false; parent.vertex_count()];
+        for e in mesh.edges().filter(|&e| semi_sharp(mesh.edge_sharpness(e))) {
+            for v in mesh.edge_vertices(e) {
+                if let Some(flag) = ends.get_mut(v.index()) {
+                    *flag = true;
+                }
+            }
+        }
+        ends
     };
+    let (parent_semi, child_semi) = (semi_edge_ends(parent), semi_edge_ends(child));
     for v in parent.vertices() {
         let own = &mut siblings[first[v.index()] as usize..first[v.index() + 1] as usize];
         if !own[0].tag.mismatch {
             continue;
         }
-        if !crease::is_semi_sharp(sharpness(parent.vertex_sharpness(v))) && !semi_edges(parent, v) {
+        if !crease::is_semi_sharp(sharpness(parent.vertex_sharpness(v))) && !parent_semi[v.index()] {
             continue;
         }
         if crease::is_sharp(sharpness(child.vertex_sharpness(v))) {
@@ -527,7 +522,7 @@ fn reclassify_semi_sharp(parent: &Mesh, child: &Mesh, first: &[u32], siblings: &
             tag.dep_sharp = false;
             tag.crease = true;
         };
-        if !semi_edges(child, v) {
+        if !child_semi[v.index()] {
             for s in own.iter_mut().filter(|s| s.tag.semi_sharp) {
                 to_crease(&mut s.tag);
             }
@@ -634,24 +629,21 @@ fn interpolate(
     for e in parent.edges() {
         let point = at.edge_child(e);
         let base = slot(point);
-        let faces = parent.edge_faces(e);
-        let ends_in = |f: FaceId| {
-            let h = parent.face_half_edges(f).find(|&h| parent.edge(h) == e)?;
-            Some([channel.corner_value(h), channel.corner_value(parent.next(h))])
+        let sides = edge_sides(parent, e);
+        let midpoint = |out: &mut [f64], value: usize, h: HalfEdgeId| {
+            add(out, value, channel.corner_value(h), 0.5);
+            add(out, value, channel.corner_value(parent.next(h)), 0.5);
         };
         if child_level.of(point)[0].tag.mismatch {
-            for (j, &f) in faces.iter().enumerate() {
-                let [a, b] = ends_in(f).ok_or_else(|| internal("an edge's face"))?;
-                add(&mut out, base + j, a, 0.5);
-                add(&mut out, base + j, b, 0.5);
+            for (j, &h) in sides.iter().enumerate() {
+                midpoint(&mut out, base + j, h);
             }
         } else if rules.is_linear() {
-            let [a, b] = ends_in(faces[0]).ok_or_else(|| internal("an edge's face"))?;
-            add(&mut out, base, a, 0.5);
-            add(&mut out, base, b, 0.5);
+            midpoint(&mut out, base, sides[0]);
         } else {
-            let value_at =
-                |u: VertexId| faces.iter().find_map(|&f| half_edge_from(parent, f, u)).map(|h| channel.corner_value(h));
+            let value_at = |u: VertexId| {
+                sides.iter().find_map(|&h| half_edge_from(parent, parent.face(h), u)).map(|h| channel.corner_value(h))
+            };
             apply_row(&mut out, base, &edge_mask(e), &value_at)?;
         }
     }
