@@ -5,7 +5,7 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use subdiv_mesh::DVec3;
 use subdiv_schemes::PatchMatrices;
-use subdiv_stencil::{Dyadic, StencilError, exact_surface_stencil, surface_stencil};
+use subdiv_stencil::{Dyadic, Rational, StencilError, StencilEvaluator, exact_surface_position};
 
 use crate::EvalError;
 
@@ -111,9 +111,13 @@ const FIT_TOLERANCE: f64 = 1e-11;
 
 impl PowerBasis {
     /// Fits the limit surface of `shape` of `matrices` with the polynomial space of its face
-    /// size, from its stencils at the unisolvent points (exact fractions where the matrices
-    /// are rational, f64 otherwise), and checks the fit (positions and derivatives) at other
-    /// points.
+    /// size, from its position stencils at the unisolvent points (exact fractions where the
+    /// matrices are rational, f64 otherwise), and checks the fit (positions and derivatives)
+    /// at other points, within [`FIT_TOLERANCE`] of their f64 stencils.
+    ///
+    /// The check points have long periods (denominators 7, 9, 10, 13), so their exact
+    /// stencils would multiply fractions of hundreds of digits: a check within a tolerance
+    /// needs none of that, and f64 keeps the fit of a shape to milliseconds.
     pub(crate) fn fit(matrices: &PatchMatrices, shape: usize) -> Result<Self, EvalError> {
         let kind = PolyKind::for_face(matrices.face_size);
         let size = matrices.shapes[shape].size;
@@ -123,21 +127,12 @@ impl PowerBasis {
             patch: format!("{:?}", matrices.patch_type),
             detail,
         };
-        let stencil = |p: Dyadic| -> Result<[Vec<f64>; 3], EvalError> {
-            match exact_surface_stencil(matrices, shape, p) {
-                Ok(s) => {
-                    let f = |w: &[subdiv_stencil::Rational]| w.iter().map(|x| x.to_f64()).collect::<Vec<_>>();
-                    let [du, dv] = s
-                        .derivatives
-                        .as_ref()
-                        .map_or_else(|| [vec![0.0; size], vec![0.0; size]], |d| [f(&d[0]), f(&d[1])]);
-                    Ok([f(&s.position), du, dv])
-                }
+        let mut evaluator = StencilEvaluator::new(matrices);
+        let mut position = |p: Dyadic| -> Result<Vec<f64>, EvalError> {
+            match exact_surface_position(matrices, shape, p) {
+                Ok(w) => Ok(w.iter().map(Rational::to_f64).collect()),
                 // Irrational regular weights (a user's scheme): the f64 stencils fit as well.
-                Err(StencilError::NotRational { .. }) => {
-                    let s = surface_stencil(matrices, shape, p)?;
-                    Ok([s.position, s.du, s.dv])
-                }
+                Err(StencilError::NotRational { .. }) => Ok(evaluator.stencil(shape, p)?.position.clone()),
                 Err(e) => Err(e.into()),
             }
         };
@@ -147,17 +142,18 @@ impl PowerBasis {
             let (u, v) = points[r].to_f64();
             monomials(kind, u, v)[c][0]
         });
-        let stencils = points.iter().map(|&p| stencil(p).map(|[w, ..]| w)).collect::<Result<Vec<_>, _>>()?;
+        let stencils = points.iter().map(|&p| position(p)).collect::<Result<Vec<_>, _>>()?;
         let rhs = Mat::<f64>::from_fn(n, size, |r, c| stencils[r][c]);
         let solution = vandermonde.partial_piv_lu().solve(&rhs);
         let weights: Vec<f64> =
             (0..n).flat_map(|r| (0..size).map(move |c| (r, c))).map(|(r, c)| solution[(r, c)]).collect();
         let basis = Self { kind, size, weights };
+        let mut evaluator = StencilEvaluator::new(matrices);
         for p in kind.check_points() {
-            let exact = stencil(p)?;
+            let s = evaluator.stencil(shape, p)?;
             let (u, v) = p.to_f64();
             let m = monomials(kind, u, v);
-            for (which, want) in exact.iter().enumerate() {
+            for (which, want) in [&s.position, &s.du, &s.dv].into_iter().enumerate() {
                 for (k, &w) in want.iter().enumerate() {
                     let got: f64 = (0..n).map(|i| m[i][which] * basis.weights[i * size + k]).sum();
                     if (got - w).abs() > FIT_TOLERANCE {

@@ -49,6 +49,41 @@ pub fn exact_surface_stencil(
     shape: usize,
     point: Dyadic,
 ) -> Result<ExactSurfaceStencil, StencilError> {
+    exact_stencil(matrices, shape, point, true)
+}
+
+/// The position weights of [`exact_surface_stencil`] alone, without the two eigenvector
+/// problems of the derivatives: what fitting a polynomial patch to its stencils needs.
+///
+/// ```
+/// use subdiv_mesh::BoundaryInterpolation;
+/// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
+/// use subdiv_stencil::{exact_surface_position, exact_surface_stencil, Dyadic};
+///
+/// let cc = Builtin::CatmullClark.scheme();
+/// let m = PatchMatrices::of(cc, PatchType::interior(4), BoundaryInterpolation::EdgeOnly)?;
+/// let p = Dyadic::new(1, 2, 3);
+/// assert_eq!(exact_surface_position(&m, 0, p)?, exact_surface_stencil(&m, 0, p)?.position);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// As [`exact_surface_stencil`].
+pub fn exact_surface_position(
+    matrices: &PatchMatrices,
+    shape: usize,
+    point: Dyadic,
+) -> Result<Vec<Rational>, StencilError> {
+    Ok(exact_stencil(matrices, shape, point, false)?.position)
+}
+
+/// [`exact_surface_stencil`], the derivatives only when `with_derivatives` asks for them.
+fn exact_stencil(
+    matrices: &PatchMatrices,
+    shape: usize,
+    point: Dyadic,
+    with_derivatives: bool,
+) -> Result<ExactSurfaceStencil, StencilError> {
     check_request(matrices, shape, point)?;
     let (walk, end) = address_walk(matrices, shape, point, |_| false, MAX_ADDRESS_STEPS)?;
     let Walked::Cycle(first) = end else { unreachable!("a walk that knows no state ends in a cycle") };
@@ -95,7 +130,7 @@ pub fn exact_surface_stencil(
         Ok(periodic_derivatives(&steps, u, v).map_err(|e| fail("derivatives", e))?.is_some())
     };
     let mut derivatives = match &periodic.parameters {
-        Some([u, v]) if differentiable(u, v)? => {
+        Some([u, v]) if with_derivatives && differentiable(u, v)? => {
             // The parameters come from a least-squares solve: looser.
             let u = on_influence(&exact_vector(matrices, u, 1e-11)?);
             let v = on_influence(&exact_vector(matrices, v, 1e-11)?);
