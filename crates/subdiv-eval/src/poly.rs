@@ -5,7 +5,7 @@ use faer::Mat;
 use faer::linalg::solvers::Solve;
 use subdiv_mesh::DVec3;
 use subdiv_schemes::PatchMatrices;
-use subdiv_stencil::{Dyadic, Rational, StencilError, StencilEvaluator, exact_surface_position};
+use subdiv_stencil::{Dyadic, Rational, StencilError, StencilEvaluator, exact_surface_positions};
 
 use crate::EvalError;
 
@@ -127,22 +127,24 @@ impl PowerBasis {
             patch: format!("{:?}", matrices.patch_type),
             detail,
         };
-        let mut evaluator = StencilEvaluator::new(matrices);
-        let mut position = |p: Dyadic| -> Result<Vec<f64>, EvalError> {
-            match exact_surface_position(matrices, shape, p) {
-                Ok(w) => Ok(w.iter().map(Rational::to_f64).collect()),
-                // Irrational regular weights (a user's scheme): the f64 stencils fit as well.
-                Err(StencilError::NotRational { .. }) => Ok(evaluator.stencil(shape, p)?.position.clone()),
-                Err(e) => Err(e.into()),
-            }
-        };
         let points = kind.fitting_points();
         let n = kind.monomials();
         let vandermonde = Mat::<f64>::from_fn(n, n, |r, c| {
             let (u, v) = points[r].to_f64();
             monomials(kind, u, v)[c][0]
         });
-        let stencils = points.iter().map(|&p| position(p)).collect::<Result<Vec<_>, _>>()?;
+        let stencils: Vec<Vec<f64>> = match exact_surface_positions(matrices, shape, &points) {
+            Ok(exact) => exact.iter().map(|w| w.iter().map(Rational::to_f64).collect()).collect(),
+            // Irrational regular weights (a user's scheme): the f64 stencils fit as well.
+            Err(StencilError::NotRational { .. }) => {
+                let mut evaluator = StencilEvaluator::new(matrices);
+                points
+                    .iter()
+                    .map(|&p| Ok(evaluator.stencil(shape, p)?.position.clone()))
+                    .collect::<Result<_, EvalError>>()?
+            }
+            Err(e) => return Err(e.into()),
+        };
         let rhs = Mat::<f64>::from_fn(n, size, |r, c| stencils[r][c]);
         let solution = vandermonde.partial_piv_lu().solve(&rhs);
         let weights: Vec<f64> =

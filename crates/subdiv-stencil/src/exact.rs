@@ -2,6 +2,8 @@
 //! back as fractions (checked: every row sums to exactly 1), the cycle's eigenvectors solved in
 //! exact rational arithmetic, and carried back through the prefix exactly.
 
+use std::collections::HashMap;
+
 use subdiv_schemes::{PatchMatrices, SubPatch};
 
 use crate::address::{MAX_ADDRESS_STEPS, Walked};
@@ -49,32 +51,44 @@ pub fn exact_surface_stencil(
     shape: usize,
     point: Dyadic,
 ) -> Result<ExactSurfaceStencil, StencilError> {
-    exact_stencil(matrices, shape, point, true)
+    exact_stencil(matrices, shape, point, true, &mut Memo::default())
 }
 
-/// The position weights of [`exact_surface_stencil`] alone, without the two eigenvector
-/// problems of the derivatives: what fitting a polynomial patch to its stencils needs.
+/// The position weights of [`exact_surface_stencil`] at each of `points`, without the two
+/// eigenvector problems of the derivatives: what fitting a polynomial patch to its stencils
+/// needs. The points share the work: each sub-patch matrix is read back as fractions once, and
+/// points whose walks enter a cycle at the same state share its eigenvector.
 ///
 /// ```
 /// use subdiv_mesh::BoundaryInterpolation;
 /// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
-/// use subdiv_stencil::{exact_surface_position, exact_surface_stencil, Dyadic};
+/// use subdiv_stencil::{exact_surface_positions, exact_surface_stencil, Dyadic};
 ///
 /// let cc = Builtin::CatmullClark.scheme();
 /// let m = PatchMatrices::of(cc, PatchType::interior(4), BoundaryInterpolation::EdgeOnly)?;
-/// let p = Dyadic::new(1, 2, 3);
-/// assert_eq!(exact_surface_position(&m, 0, p)?, exact_surface_stencil(&m, 0, p)?.position);
+/// let points = [Dyadic::new(1, 2, 3), Dyadic::new(2, 1, 3)];
+/// let positions = exact_surface_positions(&m, 0, &points)?;
+/// assert_eq!(positions[1], exact_surface_stencil(&m, 0, points[1])?.position);
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 ///
 /// # Errors
-/// As [`exact_surface_stencil`].
-pub fn exact_surface_position(
+/// As [`exact_surface_stencil`], for the first point that fails.
+pub fn exact_surface_positions(
     matrices: &PatchMatrices,
     shape: usize,
-    point: Dyadic,
-) -> Result<Vec<Rational>, StencilError> {
-    Ok(exact_stencil(matrices, shape, point, false)?.position)
+    points: &[Dyadic],
+) -> Result<Vec<Vec<Rational>>, StencilError> {
+    let mut memo = Memo::default();
+    points.iter().map(|&p| Ok(exact_stencil(matrices, shape, p, false, &mut memo)?.position)).collect()
+}
+
+/// Work that the points of one patch share: sub-patch matrices in fractions by (shape, child),
+/// and the position eigenvector of each cycle by the state the walk entered it at.
+#[derive(Default)]
+struct Memo {
+    matrices: HashMap<(usize, u8), Vec<Vec<Rational>>>,
+    cycles: HashMap<State, Vec<Rational>>,
 }
 
 /// [`exact_surface_stencil`], the derivatives only when `with_derivatives` asks for them.
@@ -83,29 +97,36 @@ fn exact_stencil(
     shape: usize,
     point: Dyadic,
     with_derivatives: bool,
+    memo: &mut Memo,
 ) -> Result<ExactSurfaceStencil, StencilError> {
     check_request(matrices, shape, point)?;
     let (walk, end) = address_walk(matrices, shape, point, |_| false, MAX_ADDRESS_STEPS)?;
     let Walked::Cycle(first) = end else { unreachable!("a walk that knows no state ends in a cycle") };
     let sub = |(s, c): (State, u8)| &matrices.shapes[s.shape].children[usize::from(c)];
-    let exact: Vec<Vec<Vec<Rational>>> =
-        walk.iter().map(|&w| exact_matrix(matrices, sub(w))).collect::<Result<_, _>>()?;
+    for &(s, c) in &walk {
+        if let std::collections::hash_map::Entry::Vacant(slot) = memo.matrices.entry((s.shape, c)) {
+            slot.insert(exact_matrix(matrices, sub((s, c)))?);
+        }
+    }
+    let exact: Vec<&Vec<Vec<Rational>>> = walk.iter().map(|&(s, c)| &memo.matrices[&(s.shape, c)]).collect();
 
-    // M_τ over the cycle, applied first to last.
+    // M_τ over the cycle, applied first to last, on the points that influence the face (as the
+    // floating-point route solves it: the others have eigenvalues of their own, and weight 0);
+    // not formed when the cycle's position is known and no derivative is asked for.
     let periodic = &matrices.shapes[walk[first].0.shape];
     let size = periodic.size;
-    let mut m: Vec<Vec<Rational>> =
-        (0..size).map(|i| (0..size).map(|j| Rational::from_integer(i64::from(i == j))).collect()).collect();
-    let mut flips = 0;
-    for (k, w) in walk.iter().enumerate().skip(first) {
-        m = multiply(&exact[k], &m);
-        flips += usize::from(sub(*w).domain.flipped);
-    }
-    // Solved on the points that influence the face, as the floating-point route does: the
-    // others have eigenvalues of their own, and weight 0.
+    let flips: usize = walk[first..].iter().map(|&w| usize::from(sub(w).domain.flipped)).sum();
     let influence: Vec<usize> = periodic.influence.iter().map(|&k| k as usize).collect();
-    let m: Vec<Vec<Rational>> =
-        influence.iter().map(|&i| influence.iter().map(|&j| m[i][j].clone()).collect()).collect();
+    let known = memo.cycles.get(&walk[first].0).cloned();
+    let m: Vec<Vec<Rational>> = if known.is_none() || with_derivatives {
+        let mut m = exact[first].clone();
+        for step in &exact[first + 1..] {
+            m = multiply(step, &m);
+        }
+        influence.iter().map(|&i| influence.iter().map(|&j| m[i][j].clone()).collect()).collect()
+    } else {
+        Vec::new()
+    };
     let on_influence = |w: &[Rational]| -> Vec<Rational> { influence.iter().map(|&k| w[k].clone()).collect() };
     let widen = |w: Vec<Rational>| -> Vec<Rational> {
         let mut out = vec![Rational::zero(); size];
@@ -117,8 +138,17 @@ fn exact_stencil(
         detail: format!("exact {what} at {point:?}: {detail}"),
     };
     let ones = vec![Rational::one(); influence.len()];
-    let mut position =
-        widen(left_eigenvector(&m, &Rational::one(), &[(&ones, Rational::one())]).map_err(|e| fail("positions", e))?);
+    let mut position = match known {
+        Some(known) => known,
+        None => {
+            let solved = widen(
+                left_eigenvector(&m, &Rational::one(), &[(&ones, Rational::one())])
+                    .map_err(|e| fail("positions", e))?,
+            );
+            memo.cycles.insert(walk[first].0, solved.clone());
+            solved
+        }
+    };
     let period = walk.len() - first;
     let lambda = Rational::new(if flips % 2 == 1 { -1 } else { 1 }, num_bigint::BigInt::from(1) << period)
         .expect("a nonzero denominator");
@@ -146,11 +176,11 @@ fn exact_stencil(
     // Back through the prefix, last step first: w ← w · A (derivatives ×±2).
     let two = Rational::from_integer(2);
     for k in (0..first).rev() {
-        position = times(&position, &exact[k]);
+        position = times(&position, exact[k]);
         let scale = if sub(walk[k]).domain.flipped { -&two } else { two.clone() };
         if let Some([du, dv]) = &mut derivatives {
-            *du = times(du, &exact[k]).iter().map(|x| x * &scale).collect();
-            *dv = times(dv, &exact[k]).iter().map(|x| x * &scale).collect();
+            *du = times(du, exact[k]).iter().map(|x| x * &scale).collect();
+            *dv = times(dv, exact[k]).iter().map(|x| x * &scale).collect();
         }
     }
     Ok(ExactSurfaceStencil { position, derivatives })

@@ -40,7 +40,7 @@ pub use rational::Rational;
 pub use address::{Address, Dyadic, MAX_ADDRESS_STEPS, parse_fraction};
 pub use domain::{FaceDomain, GridParameter, MAX_DENOMINATOR_BITS, PatchFrame, dyadic_from_f64};
 pub use error::StencilError;
-pub use exact::{ExactSurfaceStencil, exact_surface_position, exact_surface_stencil};
+pub use exact::{ExactSurfaceStencil, exact_surface_positions, exact_surface_stencil};
 pub use mesh_eval::{LimitEvaluator, LimitPoint};
 pub use patch_levels::{PatchLevels, Resolved};
 pub use surface::{EvaluatorStats, StencilEvaluator, SurfaceStencil, surface_stencil};
