@@ -147,6 +147,9 @@ pub struct EigenBasis {
 
 type CacheKey = (usize, usize);
 
+/// An eigenbasis, or why the shape has none.
+type Computed = Result<Arc<EigenBasis>, EvalError>;
+
 impl EigenBasis {
     /// The eigenbasis of `shape` of `matrices`, computed once per process and shared (the
     /// cache holds the matrices, so their address identifies them).
@@ -157,15 +160,18 @@ impl EigenBasis {
     /// [`EvalError::Valence`] beyond [`MAX_VALENCE`], [`EvalError::Eigen`] when the kept part
     /// of the spectrum is not semisimple or the subdominant eigenvalue is not a real pair.
     pub fn of(matrices: &Arc<PatchMatrices>, shape: usize) -> Result<Arc<Self>, EvalError> {
-        static CACHE: OnceLock<Mutex<HashMap<CacheKey, Arc<EigenBasis>>>> = OnceLock::new();
+        // Refusals are kept too: a mesh asks for the same shape once per face, and a refusal
+        // can come after the costly part (the auto route of a bilinear channel's surface asked
+        // 52 times for eigenbases its spectrum refuses, fitting their children each time).
+        static CACHE: OnceLock<Mutex<HashMap<CacheKey, Computed>>> = OnceLock::new();
         let key = (Arc::as_ptr(matrices) as usize, shape);
         let cache = CACHE.get_or_init(Mutex::default);
         if let Some(found) = cache.lock().unwrap_or_else(PoisonError::into_inner).get(&key) {
-            return Ok(found.clone());
+            return found.clone();
         }
         // Computed outside the lock; a race computes twice and keeps one, both equal.
-        let computed = Arc::new(Self::compute(matrices.clone(), shape)?);
-        Ok(cache.lock().unwrap_or_else(PoisonError::into_inner).entry(key).or_insert(computed).clone())
+        let computed = Self::compute(matrices.clone(), shape).map(Arc::new);
+        cache.lock().unwrap_or_else(PoisonError::into_inner).entry(key).or_insert(computed).clone()
     }
 
     /// The eigenbasis of the interior patch of `scheme` whose corner 0 has `valence` (the
@@ -270,16 +276,17 @@ impl EigenBasis {
         if others.len() != 3 {
             return Err(unsupported("the shape does not have three children besides the one at the vertex"));
         }
-        // Each other child is a polynomial patch (its own shape: its control points hold the
-        // extraordinary vertex at a different place); the fit checks that it is one.
-        let powers = others.iter().map(|c| PowerBasis::fit(&matrices, c.shape)).collect::<Result<Vec<_>, _>>()?;
         let size = this.size;
         if size > crate::surface::MAX_PATCH {
             return Err(unsupported("the patch has more control points than Catmull-Clark's at valence 64"));
         }
+        // The spectrum first: it refuses some schemes (bilinear), and costs less than the fits.
         let a_entries: Vec<f64> = (0..size).flat_map(|r| a.row(r).to_vec()).collect();
         let eigen_error = |detail: String| EvalError::Eigen { scheme: matrices.scheme.clone(), valence, detail };
         let decomposition = Decomposition::new(&a_entries, size).map_err(&eigen_error)?;
+        // Each other child is a polynomial patch (its own shape: its control points hold the
+        // extraordinary vertex at a different place); the fit checks that it is one.
+        let powers = others.iter().map(|c| PowerBasis::fit(&matrices, c.shape)).collect::<Result<Vec<_>, _>>()?;
 
         let power = powers[0].clone();
         let n = power.kind.monomials();
