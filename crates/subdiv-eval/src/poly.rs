@@ -3,8 +3,11 @@
 
 use faer::Mat;
 use faer::linalg::solvers::Solve;
+use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock, PoisonError};
 use subdiv_mesh::DVec3;
-use subdiv_schemes::PatchMatrices;
+
+use subdiv_schemes::{ChildDomain, PatchMatrices};
 use subdiv_stencil::{Dyadic, Rational, StencilError, StencilEvaluator, exact_surface_positions};
 
 use crate::EvalError;
@@ -106,6 +109,47 @@ pub(crate) struct PowerBasis {
     pub(crate) weights: Vec<f64>,
 }
 
+/// Everything a shape's fit reads: the face size, and for each shape its walks reach (in the
+/// order first reached from `shape`) its size, influence set and parameters, and each child's
+/// shape (by that order), domain and matrix, as bits. Two shapes with equal keys have the same
+/// stencils at every point, so the same fit.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+struct FitKey {
+    face_size: usize,
+    words: Vec<u64>,
+}
+
+impl FitKey {
+    fn of(matrices: &PatchMatrices, shape: usize) -> Self {
+        let mut order = vec![shape];
+        let mut words = Vec::new();
+        let mut next = 0;
+        while let Some(&s) = order.get(next) {
+            next += 1;
+            let this = &matrices.shapes[s];
+            words.push(this.size as u64);
+            words.push(this.influence.len() as u64);
+            words.extend(this.influence.iter().map(|&k| u64::from(k)));
+            match &this.parameters {
+                Some([u, v]) => words.extend(u.iter().chain(v).map(|x| x.to_bits())),
+                None => words.push(u64::MAX),
+            }
+            words.push(this.children.len() as u64);
+            for child in &this.children {
+                let local = order.iter().position(|&o| o == child.shape).unwrap_or_else(|| {
+                    order.push(child.shape);
+                    order.len() - 1
+                });
+                words.push(local as u64);
+                let ChildDomain { offset, flipped } = child.domain;
+                words.push(u64::from(offset[0]) | u64::from(offset[1]) << 8 | u64::from(flipped) << 16);
+                words.extend((0..child.rows()).flat_map(|r| child.row(r).iter().map(|x| x.to_bits())));
+            }
+        }
+        Self { face_size: matrices.face_size, words }
+    }
+}
+
 /// Tolerance of the fit's check against the exact stencils, on weights of order 1.
 const FIT_TOLERANCE: f64 = 1e-11;
 
@@ -118,7 +162,24 @@ impl PowerBasis {
     /// The check points have long periods (denominators 7, 9, 10, 13), so their exact
     /// stencils would multiply fractions of hundreds of digits: a check within a tolerance
     /// needs none of that, and f64 keeps the fit of a shape to milliseconds.
+    ///
+    /// Fits are kept for the process by what they depend on ([`FitKey`]), so the polynomial
+    /// children of every valence's extraordinary patch (equal matrices, other signatures) and
+    /// the regular patch are fitted once.
     pub(crate) fn fit(matrices: &PatchMatrices, shape: usize) -> Result<Self, EvalError> {
+        static CACHE: OnceLock<Mutex<HashMap<FitKey, PowerBasis>>> = OnceLock::new();
+        let key = FitKey::of(matrices, shape);
+        let cache = CACHE.get_or_init(Mutex::default);
+        if let Some(found) = cache.lock().unwrap_or_else(PoisonError::into_inner).get(&key) {
+            return Ok(found.clone());
+        }
+        // Refusals are not kept here: their messages name the shape (`EigenBasis::of` keeps them).
+        let fitted = Self::fit_uncached(matrices, shape)?;
+        cache.lock().unwrap_or_else(PoisonError::into_inner).entry(key).or_insert_with(|| fitted.clone());
+        Ok(fitted)
+    }
+
+    fn fit_uncached(matrices: &PatchMatrices, shape: usize) -> Result<Self, EvalError> {
         let kind = PolyKind::for_face(matrices.face_size);
         let size = matrices.shapes[shape].size;
         let not_polynomial = |detail: String| EvalError::NotEigenPatch {
@@ -318,6 +379,36 @@ pub(crate) fn eval2(kind: PolyKind, c: &[DVec3], s: f64, t: f64) -> [DVec3; 6] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use subdiv_mesh::BoundaryInterpolation;
+    use subdiv_schemes::{Builtin, PatchType};
+
+    /// The shared fits are sound: the polynomial children of two valences' extraordinary
+    /// patches have one key, and fitting each on its own gives the same bits; the
+    /// extraordinary shape has another key.
+    #[test]
+    fn equal_fit_keys_have_equal_fits() {
+        for (builtin, valences) in [(Builtin::CatmullClark, [3, 5]), (Builtin::Loop, [4, 8])] {
+            let of = |valence| {
+                PatchMatrices::of(builtin.scheme(), PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)
+                    .unwrap()
+            };
+            let (a, b) = (of(valences[0]), of(valences[1]));
+            let polynomial = |m: &PatchMatrices| -> Vec<usize> {
+                let children = &m.shapes[0].children;
+                children.iter().map(|c| c.shape).filter(|&s| s != 0).collect()
+            };
+            let (pa, pb) = (polynomial(&a), polynomial(&b));
+            assert_eq!(pa.len(), pb.len());
+            for (&sa, &sb) in pa.iter().zip(&pb) {
+                assert_ne!(a.shapes[sa].signature, b.shapes[sb].signature, "{builtin:?}: the valences differ");
+                assert_eq!(FitKey::of(&a, sa), FitKey::of(&b, sb), "{builtin:?}");
+                let (fa, fb) = (PowerBasis::fit_uncached(&a, sa).unwrap(), PowerBasis::fit_uncached(&b, sb).unwrap());
+                assert_eq!(fa, fb, "{builtin:?}");
+            }
+            // The extraordinary shape itself reads other matrices.
+            assert_ne!(FitKey::of(&a, 0), FitKey::of(&a, pa[0]));
+        }
+    }
 
     /// Horner's rule against the monomials, term by term, with derivatives by hand.
     #[test]
