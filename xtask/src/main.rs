@@ -23,6 +23,9 @@
 //! - `cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv]` runs the README's
 //!   commands with both builds on the cube, valence56, spot_control_mesh and the built-in model
 //!   and checks that every file they write is byte-identical.
+//! - `cargo xtask sweep [--seconds S]` runs `subdiv eval MESH --grid 4` and `subdiv tessellate
+//!   MESH --rate 8` on every valid shared mesh, each a fresh process of the release build on one
+//!   thread, and prints the slowest ten of each and every run over S seconds (default 1).
 //! - `cargo xtask paper` prints every number of paper 000 we reproduce beside the paper's.
 //! - `cargo xtask adaptive [--samples N] [--all]` prints paper 002's Table 1 for the quadtree
 //!   tessellator (adaptive against uniform polygons, with the measured worst distance / ε on an
@@ -45,11 +48,12 @@ mod osd;
 mod paper;
 mod rates_table;
 mod same_output;
+mod sweep;
 mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask sweep [--seconds S] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -61,6 +65,7 @@ fn main() -> ExitCode {
         Some("bench") if args.get(1).is_some_and(|a| a == "refine") => bench_refine::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("same-output") => same_output::run(&args[1..]),
+        Some("sweep") => sweep::run(&args[1..]),
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("paper") => paper::run(),
         Some("rates") => rates_table::run(),
@@ -111,6 +116,18 @@ fn root() -> PathBuf {
 /// The shared folder: `SUBDIV_SHARED`, else `../shared` beside the workspace.
 fn shared_dir() -> PathBuf {
     std::env::var_os("SUBDIV_SHARED").map_or_else(|| root().join("../shared"), PathBuf::from)
+}
+
+/// This checkout's release build of `subdiv`, built first (into `CARGO_TARGET_DIR` if set)
+/// and copied into `folder` at once: a target folder shared with other checkouts may get
+/// another build of it while the caller runs it.
+fn release_cli(folder: &Path) -> Result<PathBuf, String> {
+    cargo(&["build", "--release", "--quiet", "-p", "subdiv-cli"])?;
+    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root().join("target"), PathBuf::from);
+    let built = target.join("release/subdiv");
+    let copy = folder.join("subdiv-release");
+    std::fs::copy(&built, &copy).map_err(|e| format!("{}: {e}", built.display()))?;
+    Ok(copy)
 }
 
 fn cargo(args: &[&str]) -> Result<(), String> {

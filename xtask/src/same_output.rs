@@ -43,17 +43,7 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let work = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
     let after = match after {
         Some(after) => after,
-        None => {
-            crate::cargo(&["build", "--release", "--quiet", "-p", "subdiv-cli"])?;
-            // Copied out at once: a target folder shared with other checkouts (CARGO_TARGET_DIR)
-            // may get another build of it while the commands run.
-            let target =
-                std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| crate::root().join("target"), PathBuf::from);
-            let built = target.join("release/subdiv");
-            let copy = work.path().join("subdiv-after");
-            std::fs::copy(&built, &copy).map_err(|e| format!("{}: {e}", built.display()))?;
-            copy
-        }
+        None => crate::release_cli(work.path())?,
     };
     let shared = crate::shared_dir();
     let (mut compared, mut skipped) = (0, 0);
