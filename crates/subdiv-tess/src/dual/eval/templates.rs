@@ -12,6 +12,15 @@ pub(super) struct FacePatch {
     pub(super) len: u32,
 }
 
+/// The cage rows [`Evaluator::cage_rows`] has composed, by (level, vertex): valid for one
+/// evaluator's levels.
+#[derive(Debug, Default)]
+pub(super) struct CageRowMemo {
+    rows: Vec<(u32, f64)>,
+    at: HashMap<(u32, u32), (u32, u32)>,
+    terms: Vec<(u32, f64)>,
+}
+
 /// A quad face's type ([`Evaluator::find_face_types`]): its number, its range of
 /// [`Evaluator::face_patches`], and its range of [`Evaluator::face_cage`] (the cage points its
 /// patches depend on, in the type's canonical order).
@@ -78,6 +87,7 @@ impl Evaluator {
         let (mut signature, mut patches) = (Vec::new(), Vec::new());
         let (mut rows, mut starts, mut columns, mut order) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut support = Vec::new();
+        let mut memo = CageRowMemo::default();
         for f in mesh.face_ids() {
             if !matches!(self.faces[f.index()], FacePlan::General) {
                 continue;
@@ -89,7 +99,7 @@ impl Evaluator {
             {
                 continue;
             }
-            self.cage_rows(&patches, &mut rows, &mut starts);
+            self.cage_rows(&patches, &mut rows, &mut starts, &mut memo);
             // Each cage point's column: (point, weight bits), by point.
             columns.clear();
             for (point, w) in starts.windows(2).enumerate() {
@@ -169,8 +179,15 @@ impl Evaluator {
     /// `rows[starts[k]..starts[k + 1]]`, by vertex. Each entry sums the products of the
     /// refinement weights along the paths down to the cage (multiplied level by level) in the
     /// order of the products' bits, so that it does not depend on how the mesh numbers its
-    /// vertices.
-    pub(super) fn cage_rows(&self, patches: &[FacePatch], rows: &mut Vec<(u32, f64)>, starts: &mut Vec<u32>) {
+    /// vertices. A point's row depends only on its level and vertex, so `memo` keeps each one
+    /// for the next patch that names it (neighbouring patches share most of their points).
+    pub(super) fn cage_rows(
+        &self,
+        patches: &[FacePatch],
+        rows: &mut Vec<(u32, f64)>,
+        starts: &mut Vec<u32>,
+        memo: &mut CageRowMemo,
+    ) {
         fn expand(stencils: &[Stencils], level: usize, id: usize, w: f64, terms: &mut Vec<(u32, f64)>) {
             if level == 0 {
                 terms.push((id as u32, w));
@@ -183,20 +200,30 @@ impl Evaluator {
         rows.clear();
         starts.clear();
         starts.push(0);
-        let mut terms = Vec::new();
         for p in patches {
             let (level, patch) = (p.patch.0, self.listed_patch(p));
             for v in &patch.vertices {
-                terms.clear();
-                expand(self.levels.stencils(), level as usize, v.index(), 1.0, &mut terms);
-                terms.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits())));
-                let start = rows.len();
-                for &(x, w) in &terms {
-                    match rows[start..].last_mut() {
-                        Some(last) if last.0 == x => last.1 += w,
-                        _ => rows.push((x, w)),
+                let key = (level, v.index() as u32);
+                let (a, b) = match memo.at.get(&key) {
+                    Some(&range) => range,
+                    None => {
+                        let terms = &mut memo.terms;
+                        terms.clear();
+                        expand(self.levels.stencils(), level as usize, v.index(), 1.0, terms);
+                        terms.sort_unstable_by(|a, b| a.0.cmp(&b.0).then(a.1.to_bits().cmp(&b.1.to_bits())));
+                        let start = memo.rows.len();
+                        for &(x, w) in terms.iter() {
+                            match memo.rows[start..].last_mut() {
+                                Some(last) if last.0 == x => last.1 += w,
+                                _ => memo.rows.push((x, w)),
+                            }
+                        }
+                        let range = (start as u32, memo.rows.len() as u32);
+                        memo.at.insert(key, range);
+                        range
                     }
-                }
+                };
+                rows.extend_from_slice(&memo.rows[a as usize..b as usize]);
                 starts.push(rows.len() as u32);
             }
         }
@@ -327,7 +354,7 @@ impl Evaluator {
         let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
         let len = cage.len();
         let (mut rows, mut starts) = (Vec::new(), Vec::new());
-        self.cage_rows(patches, &mut rows, &mut starts);
+        self.cage_rows(patches, &mut rows, &mut starts, &mut CageRowMemo::default());
         for entry in &mut rows {
             entry.0 = cage.iter().position(|&c| c == entry.0).expect("a cage point of the face") as u32;
         }

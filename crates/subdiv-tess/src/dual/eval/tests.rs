@@ -212,6 +212,7 @@ fn refined_cage_matches_the_patch_levels() {
 /// pole of valence 7 with its open rim, a creased cube.
 #[test]
 fn cage_support_is_what_the_cage_rows_name() {
+    let bits = |rows: &[(u32, f64)]| rows.iter().map(|&(x, w)| (x, w.to_bits())).collect::<Vec<_>>();
     let mut creased = Mesh::build(shapes::cube()).unwrap();
     let edge = creased.edges().next().unwrap();
     creased.set_edge_sharpness(edge, 2.5);
@@ -224,15 +225,20 @@ fn cage_support_is_what_the_cage_rows_name() {
     let (mut signature, mut patches, mut support) = (Vec::new(), Vec::new(), Vec::new());
     let (mut rows, mut starts) = (Vec::new(), Vec::new());
     let mut levels_seen = [0usize; MAX_TYPED_LEVEL + 1];
+    let (mut shared_rows, mut shared_starts) = (Vec::new(), Vec::new());
     for mesh in &meshes {
         let ev = Evaluator::new(Builtin::CatmullClark.scheme(), mesh).unwrap();
+        // One memo for the mesh's faces gives the bits of a fresh one per face.
+        let mut memo = CageRowMemo::default();
         for f in mesh.face_ids() {
             signature.clear();
             patches.clear();
             if !ev.face_type(0, f, &mut signature, &mut patches) {
                 continue;
             }
-            ev.cage_rows(&patches, &mut rows, &mut starts);
+            ev.cage_rows(&patches, &mut rows, &mut starts, &mut CageRowMemo::default());
+            ev.cage_rows(&patches, &mut shared_rows, &mut shared_starts, &mut memo);
+            assert_eq!((&shared_starts, bits(&shared_rows)), (&starts, bits(&rows)), "{f}");
             let mut named: Vec<u32> = rows.iter().map(|&(x, _)| x).collect();
             named.sort_unstable();
             named.dedup();
