@@ -5,7 +5,10 @@
 //! `--channels yes` carries the meshes' face-varying channels (texture coordinates: exact values,
 //! seams split); the default `no` measures positions and normals alone, as `osd_bench` does.
 //!
-//! `first`: a new tessellator and its first flat output, what a fresh process meets. Then two
+//! `cold` (alone, default meshes the built-in model, spot, blub, the car and the bishop at rate
+//! 8): each sample a fresh process of the release CLI, Bfr's per-face path alternated with it
+//! (see [`cold`]). `first`: a new tessellator and its first flat output in this process (whose
+//! caches are warm after the first sample). Then two
 //! modes, as `osd_bench` has: `full` (topology, stencil records, evaluation and flat
 //! buffers from the cage: `tessellate_flat`, the whole job on a fresh rate set) and `animate`
 //! (`update_cage_flat`: the same rates on a moved cage), both straight into the flat buffers;
@@ -65,14 +68,17 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
             _ => return Err(format!("unknown option {a:?}; {USAGE}")),
         }
     }
-    if meshes.is_empty() {
+    if meshes.is_empty() && modes.contains(&"cold") {
+        let corpus = crate::shared_dir().join("testdata/meshes");
+        meshes = COLD_MESHES.iter().map(|m| corpus.join(m)).collect();
+    } else if meshes.is_empty() {
         let dir = crate::shared_dir().join("peers/osd/meshes");
         meshes = PEER_MESHES.iter().map(|m| dir.join(m)).collect();
         let corpus = crate::shared_dir().join("testdata/meshes");
         meshes.extend(CORPUS_MESHES.iter().map(|m| corpus.join(m)));
     }
     if rates.is_empty() {
-        rates = PEER_RATES.to_vec();
+        rates = if modes.contains(&"cold") { vec![8] } else { PEER_RATES.to_vec() };
     }
     if threads.is_empty() {
         threads = vec![1, std::thread::available_parallelism().map_or(1, usize::from)];
@@ -85,6 +91,9 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
         channels.push(false);
     }
     let peer = std::env::var_os("SUBDIV_OSD_BENCH").map(PathBuf::from);
+    if modes.contains(&"cold") {
+        return cold(&meshes, &rates, peer.as_deref());
+    }
     for path in &meshes {
         let mesh = load_mesh(path, &Default::default()).map_err(|e| format!("{}: {e}", path.display()))?;
         let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
@@ -105,7 +114,79 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
 const USAGE: &str = "usage: cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]...";
 
 /// What is measured (see the module docs).
-const MODES: [&str; 5] = ["first", "full", "animate", "full_mesh", "animate_mesh"];
+const MODES: [&str; 6] = ["first", "full", "animate", "full_mesh", "animate_mesh", "cold"];
+
+/// The meshes of `--mode cold` (`../shared/testdata/meshes`), besides the built-in model.
+const COLD_MESHES: [&str; 4] = [
+    "keenan/spot_control_mesh.obj",
+    "keenan/blub_control_mesh.obj",
+    "opensubdiv/catmark_car.obj",
+    "opensubdiv/catmark_bishop.obj",
+];
+
+/// Rounds of `--mode cold`, each one process of ours and one run of the peer.
+const COLD_ROUNDS: usize = 5;
+
+/// `--mode cold`: what a user's first command meets. Per mesh (the built-in model first,
+/// written to an OBJ file so that the peer reads the same mesh) and rate, [`COLD_ROUNDS`]
+/// rounds of one fresh `subdiv tessellate MESH --rate N` process of the release build on one
+/// thread (its own `in T s`, which starts after the mesh is read) and, with `peer`, one
+/// `osd_bench MESH tess N` (Bfr's `surface_per_face` median); the medians.
+fn cold(meshes: &[PathBuf], rates: &[u32], peer: Option<&Path>) -> Result<(), String> {
+    let work = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
+    let cli = crate::release_cli(work.path())?;
+    let builtin = work.path().join("built-in.obj");
+    subdiv::io::write_obj(&builtin, &subdiv::mesh::shapes::default_model()).map_err(|e| e.to_string())?;
+    let out = work.path().join("out.glb");
+    for path in std::iter::once(&builtin).chain(meshes) {
+        let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
+        for &rate in rates {
+            let (mut ours, mut theirs) = (Vec::new(), Vec::new());
+            for _ in 0..COLD_ROUNDS {
+                let run = Command::new(&cli)
+                    .args(["tessellate"])
+                    .arg(path)
+                    .args(["--rate", &rate.to_string(), "-o"])
+                    .arg(&out)
+                    .env("RAYON_NUM_THREADS", "1")
+                    .output()
+                    .map_err(|e| format!("{}: {e}", cli.display()))?;
+                let stderr = String::from_utf8_lossy(&run.stderr);
+                let seconds = stderr
+                    .split(" in ")
+                    .nth(1)
+                    .and_then(|rest| rest.split(' ').next())
+                    .and_then(|s| s.parse::<f64>().ok())
+                    .filter(|_| run.status.success())
+                    .ok_or_else(|| format!("subdiv tessellate {name}: {stderr}"))?;
+                ours.push(seconds);
+                if let Some(osd) = peer {
+                    let out = Command::new(osd)
+                        .arg(path)
+                        .args(["tess", &rate.to_string()])
+                        .env("OMP_NUM_THREADS", "1")
+                        .output()
+                        .map_err(|e| format!("{}: {e}", osd.display()))?;
+                    let text = String::from_utf8_lossy(&out.stdout);
+                    let per_face = text
+                        .lines()
+                        .filter(|l| l.contains("mode=surface_per_face"))
+                        .find_map(|l| l.split_whitespace().find_map(|kv| kv.strip_prefix("median_s=")))
+                        .and_then(|s| s.parse::<f64>().ok())
+                        .ok_or_else(|| format!("{} on {name}: no surface_per_face line", osd.display()))?;
+                    theirs.push(per_face);
+                }
+            }
+            let theirs =
+                if theirs.is_empty() { String::new() } else { format!(" osd_per_face_s={:.6}", median(&theirs)) };
+            println!(
+                "bench=tess mode=cold mesh={name} rate={rate} threads=1 rounds={COLD_ROUNDS} median_s={:.4}{theirs}",
+                median(&ours)
+            );
+        }
+    }
+    Ok(())
+}
 
 /// Our lines for one mesh, rate and thread count, with or without the mesh's channels.
 fn measure(mesh: &Mesh, name: &str, rate: u32, threads: usize, modes: &[&str], channels: bool) -> Result<(), String> {

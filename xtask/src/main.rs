@@ -13,7 +13,8 @@
 //!   measures dual-grid tessellation into welded flat buffers (default: the peer harness's
 //!   torus_big, cube and valence56 at rates 8, 16, 32, on one thread and on all, without the
 //!   meshes' texture coordinates), beside OpenSubdiv's Bfr when `SUBDIV_OSD_BENCH` names the
-//!   harness's `osd_bench`.
+//!   harness's `osd_bench`; `--mode cold` runs fresh processes of the release CLI instead (the
+//!   built-in model, spot, blub, the car and the bishop at rate 8, Bfr's per-face path beside).
 //! - `cargo xtask bench gpu [--mesh M]… [--rate N]… [--frames K]` measures milliseconds per
 //!   animation frame to re-evaluate a tessellation on the GPU (default: the built-in model and
 //!   a 100 000-face torus at rates 8 and 16), beside the CPU's animation path, with the
