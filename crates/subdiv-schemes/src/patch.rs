@@ -26,9 +26,9 @@ use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, VertexId};
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, Region, VertexId};
 
-use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
+use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split, Stencils};
 
 /// The largest patch radius tried.
 pub(crate) const MAX_RADIUS: usize = 3;
@@ -403,11 +403,21 @@ struct Pending {
 }
 
 /// The canonical mesh refined level by level, and the shapes found so far.
+///
+/// A level refines only the faces of the patches still waiting for their children and the
+/// rings around them that those children's patches and rules reach (as `PatchLevels` does for
+/// real meshes), so a level costs a few dozen faces instead of four times the last: the whole
+/// canonical mesh at the third level was most of a first call's time (the built-in model's
+/// first tessellation spent 13 of its 17 ms deriving two valences' matrices).
 struct Derivation<'a> {
     scheme: &'a Scheme,
     radius: usize,
     meshes: Vec<Mesh>,
-    refiners: Vec<Refiner>,
+    /// Level `l`'s refinement, over level `l`'s vertices: `meshes[l + 1]`'s rows.
+    stencils: Vec<Stencils>,
+    /// The part of level `l` that was refined (`None`: all of it), whose faces and half-edges
+    /// `meshes[l + 1]` is the split of.
+    regions: Vec<Option<Region>>,
     shapes: Vec<PatchShape>,
     by_signature: HashMap<Vec<u32>, usize>,
 }
@@ -418,7 +428,8 @@ impl<'a> Derivation<'a> {
             scheme,
             radius,
             meshes: vec![mesh],
-            refiners: Vec::new(),
+            stencils: Vec::new(),
+            regions: Vec::new(),
             shapes: Vec::new(),
             by_signature: HashMap::new(),
         }
@@ -447,7 +458,18 @@ impl<'a> Derivation<'a> {
                     self.scheme
                 )));
             }
-            self.refine_to(level + 1)?;
+            if self.meshes.len() == level + 1 {
+                // The first patch of its level: every patch of the level is queued by now
+                // (breadth first), and their faces are what the next level refines.
+                let mesh = &self.meshes[level];
+                let mut faces: Vec<FaceId> = std::iter::once(start)
+                    .chain(pending.iter().filter(|p| p.level == level).map(|p| p.start))
+                    .map(|h| mesh.face(h))
+                    .collect();
+                faces.sort_unstable();
+                faces.dedup();
+                self.refine_next(&faces)?;
+            }
             let Some(children) = self.children(level, start, &vertices, &mut pending)? else {
                 return Ok(None);
             };
@@ -471,12 +493,33 @@ impl<'a> Derivation<'a> {
         }))
     }
 
-    fn refine_to(&mut self, level: usize) -> Result<(), SchemeError> {
-        while self.meshes.len() <= level {
-            let refiner = Refiner::new(self.meshes.last().expect("level 0"), self.scheme, 1, &RefineOptions::DEFAULT)?;
-            self.meshes.push(refiner.mesh().clone());
-            self.refiners.push(refiner);
-        }
+    /// Refines the last level's `faces` and the rings around them that their children's
+    /// patches (radius rings of the next level) and those points' rules (one ring more) reach.
+    /// Schemes without crease rules refine the whole level (a region's boundary needs rules).
+    fn refine_next(&mut self, faces: &[FaceId]) -> Result<(), SchemeError> {
+        let current = self.meshes.last().expect("level 0");
+        let region = if self.scheme.has_crease_rules() {
+            let region = current.region(faces, self.radius + 1).map_err(|e| SchemeError::Internal(e.to_string()))?;
+            (region.faces.len() < current.face_count()).then_some(region)
+        } else {
+            None
+        };
+        let (mesh, stencils) = match &region {
+            None => {
+                let refiner = Refiner::new(current, self.scheme, 1, &RefineOptions::DEFAULT)?;
+                let stencils = refiner.levels()[0].clone();
+                (refiner.into_mesh(), stencils)
+            }
+            Some(region) => {
+                let refiner = Refiner::new(&region.mesh, self.scheme, 1, &RefineOptions::DEFAULT)?;
+                let parents: Vec<u32> = region.vertices.iter().map(|v| v.raw()).collect();
+                let stencils = refiner.levels()[0].with_parents(&parents, current.vertex_count());
+                (refiner.into_mesh(), stencils)
+            }
+        };
+        self.meshes.push(mesh);
+        self.stencils.push(stencils);
+        self.regions.push(region);
         Ok(())
     }
 
@@ -517,9 +560,19 @@ impl<'a> Derivation<'a> {
     ) -> Result<Option<Vec<SubPatch>>, SchemeError> {
         let (parent_mesh, child_mesh) = (&self.meshes[level], &self.meshes[level + 1]);
         let column: HashMap<usize, usize> = parent.iter().enumerate().map(|(c, v)| (v.index(), c)).collect();
-        let starts = sub_patch_starts(self.scheme, parent_mesh, start, child_mesh)?;
+        // The split's parent: the refined region, where the face has the same corners.
+        let (split_parent, split_start) = match &self.regions[level] {
+            None => (parent_mesh, start),
+            Some(region) => {
+                let missing = || SchemeError::Internal("a patch's face is outside the refined region".to_string());
+                let face = region.face_of(parent_mesh.face(start)).ok_or_else(missing)?;
+                let corner = region.mesh.face_half_edges(face).nth(parent_mesh.corner(start)).ok_or_else(missing)?;
+                (&region.mesh, corner)
+            }
+        };
+        let starts = sub_patch_starts(self.scheme, split_parent, split_start, child_mesh)?;
         let domains = ChildDomain::of_face(parent_mesh.face_size(parent_mesh.face(start)));
-        let stencils = &self.refiners[level].levels()[0];
+        let stencils = &self.stencils[level];
         let columns = parent.len();
         // The rows first (they borrow the meshes), then the shapes.
         let mut found = Vec::new();
