@@ -161,13 +161,7 @@ fn cold(meshes: &[PathBuf], rates: &[u32], peer: Option<&Path>) -> Result<(), St
                     .ok_or_else(|| format!("subdiv tessellate {name}: {stderr}"))?;
                 ours.push(seconds);
                 if let Some(osd) = peer {
-                    let out = Command::new(osd)
-                        .arg(path)
-                        .args(["tess", &rate.to_string()])
-                        .env("OMP_NUM_THREADS", "1")
-                        .output()
-                        .map_err(|e| format!("{}: {e}", osd.display()))?;
-                    let text = String::from_utf8_lossy(&out.stdout);
+                    let text = osd_tess(osd, path, &name, rate)?;
                     let per_face = text
                         .lines()
                         .filter(|l| l.contains("mode=surface_per_face"))
@@ -262,6 +256,14 @@ fn median_seconds(mut work: impl FnMut()) -> f64 {
 /// OpenSubdiv's Bfr through the peer harness (`osd_bench MESH tess N`), its lines as it prints
 /// them with `peer=osd` in front.
 fn osd_bench(osd: &Path, mesh: &Path, name: &str, rate: u32) -> Result<(), String> {
+    for line in osd_tess(osd, mesh, name, rate)?.lines().filter(|l| l.contains('=')) {
+        println!("bench=tess peer=osd {line}");
+    }
+    Ok(())
+}
+
+/// What `osd_bench MESH tess N` prints, on one thread.
+fn osd_tess(osd: &Path, mesh: &Path, name: &str, rate: u32) -> Result<String, String> {
     let out = Command::new(osd)
         .arg(mesh)
         .args(["tess", &rate.to_string()])
@@ -271,8 +273,5 @@ fn osd_bench(osd: &Path, mesh: &Path, name: &str, rate: u32) -> Result<(), Strin
     if !out.status.success() {
         return Err(format!("{} on {name}: {}", osd.display(), String::from_utf8_lossy(&out.stderr)));
     }
-    for line in String::from_utf8_lossy(&out.stdout).lines().filter(|l| l.contains('=')) {
-        println!("bench=tess peer=osd {line}");
-    }
-    Ok(())
+    Ok(String::from_utf8_lossy(&out.stdout).into_owned())
 }
