@@ -194,16 +194,16 @@ impl PowerBasis {
             let (u, v) = points[r].to_f64();
             monomials(kind, u, v)[c][0]
         });
+        // The f64 stencils of the check points, and of the fitting points when the exact ones
+        // are refused: one evaluator, whose states the two sets share.
+        let mut evaluator = StencilEvaluator::new(matrices);
         let stencils: Vec<Vec<f64>> = match exact_surface_positions(matrices, shape, &points) {
             Ok(exact) => exact.iter().map(|w| w.iter().map(Rational::to_f64).collect()).collect(),
             // Irrational regular weights (a user's scheme): the f64 stencils fit as well.
-            Err(StencilError::NotRational { .. }) => {
-                let mut evaluator = StencilEvaluator::new(matrices);
-                points
-                    .iter()
-                    .map(|&p| Ok(evaluator.stencil(shape, p)?.position.clone()))
-                    .collect::<Result<_, EvalError>>()?
-            }
+            Err(StencilError::NotRational { .. }) => points
+                .iter()
+                .map(|&p| Ok(evaluator.stencil(shape, p)?.position.clone()))
+                .collect::<Result<_, EvalError>>()?,
             Err(e) => return Err(e.into()),
         };
         let rhs = Mat::<f64>::from_fn(n, size, |r, c| stencils[r][c]);
@@ -211,7 +211,6 @@ impl PowerBasis {
         let weights: Vec<f64> =
             (0..n).flat_map(|r| (0..size).map(move |c| (r, c))).map(|(r, c)| solution[(r, c)]).collect();
         let basis = Self { kind, size, weights };
-        let mut evaluator = StencilEvaluator::new(matrices);
         for p in kind.check_points() {
             let s = evaluator.stencil(shape, p)?;
             let (u, v) = p.to_f64();

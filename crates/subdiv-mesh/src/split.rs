@@ -366,8 +366,8 @@ fn split_quads(p: &Links, nv: usize, nf: usize, parallel: bool) -> Links {
     Links { face_offsets, he_origin, he_face, he_twin, he_edge, edge_he, vertex_he, valence }
 }
 
-/// Child half-edge `c` of a triangle split: its origin and twin. Face `f`'s children hold
-/// Child half-edge `c` of a triangle split: its origin and twin.
+/// Child half-edge `c` of a triangle split ([`triangle_role`] says where it lies): its origin
+/// and twin.
 #[inline]
 fn triangle_corner(p: &Links, edge_base: u32, c: usize) -> (VertexId, u32) {
     let f = c as u32 / 12;

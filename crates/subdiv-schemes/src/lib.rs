@@ -107,7 +107,9 @@ pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
     ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces, sub_patch_starts,
 };
-pub use refine::{MAX_PATCH_VALENCE, RefineOptions, Refiner, refine, refine_uniform, refine_uniform_with_progress};
+pub use refine::{
+    LocalRefinement, MAX_PATCH_VALENCE, RefineOptions, Refiner, refine, refine_uniform, refine_uniform_with_progress,
+};
 pub use scheme::{
     Builtin, CreaseMask, ExtraordinaryEdgeMask, FaceMask, MAX_NAME_LENGTH, QuadEdgeMask, Rules, Scheme, Split,
     TriangleEdgeMask, VertexMask,

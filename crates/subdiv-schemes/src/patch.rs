@@ -26,9 +26,9 @@ use faer::Mat;
 use faer::linalg::solvers::SolveLstsq;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, Region, VertexId};
+use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch, VertexId};
 
-use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split, Stencils};
+use crate::{LocalRefinement, RefineOptions, Refiner, Scheme, SchemeError, Split};
 
 /// The largest patch radius tried.
 pub(crate) const MAX_RADIUS: usize = 3;
@@ -412,33 +412,23 @@ struct Pending {
 struct Derivation<'a> {
     scheme: &'a Scheme,
     radius: usize,
-    meshes: Vec<Mesh>,
-    /// Level `l`'s refinement, over level `l`'s vertices: `meshes[l + 1]`'s rows.
-    stencils: Vec<Stencils>,
-    /// The part of level `l` that was refined (`None`: all of it), whose faces and half-edges
-    /// `meshes[l + 1]` is the split of.
-    regions: Vec<Option<Region>>,
+    /// Level 0: the canonical mesh.
+    base: Mesh,
+    /// Level `l + 1`: the part of level `l` refined, with its rows over level `l`.
+    refined: Vec<LocalRefinement>,
     shapes: Vec<PatchShape>,
     by_signature: HashMap<Vec<u32>, usize>,
 }
 
 impl<'a> Derivation<'a> {
     fn new(scheme: &'a Scheme, mesh: Mesh, radius: usize) -> Self {
-        Self {
-            scheme,
-            radius,
-            meshes: vec![mesh],
-            stencils: Vec::new(),
-            regions: Vec::new(),
-            shapes: Vec::new(),
-            by_signature: HashMap::new(),
-        }
+        Self { scheme, radius, base: mesh, refined: Vec::new(), shapes: Vec::new(), by_signature: HashMap::new() }
     }
 
     /// The matrices, or `None` if the radius is too small.
     fn run(mut self, patch_type: PatchType) -> Result<Option<PatchMatrices>, SchemeError> {
         // The patch's face starts at the centre, vertex 0, in sector `index` (see `canonical`).
-        let mesh = &self.meshes[0];
+        let mesh = &self.base;
         let index = match patch_type {
             PatchType::Interior { .. } => 0,
             PatchType::Boundary { index, .. } => index,
@@ -450,7 +440,7 @@ impl<'a> Derivation<'a> {
             .nth(index)
             .expect("the canonical mesh has a face at its centre in every sector");
         let mut pending = VecDeque::new();
-        self.register(self.meshes[0].patch(start, self.radius), 0, start, &mut pending);
+        self.register(self.base.patch(start, self.radius), 0, start, &mut pending);
         while let Some(Pending { shape, level, start, vertices }) = pending.pop_front() {
             if level == MAX_LEVELS {
                 return Err(SchemeError::Internal(format!(
@@ -458,10 +448,10 @@ impl<'a> Derivation<'a> {
                     self.scheme
                 )));
             }
-            if self.meshes.len() == level + 1 {
+            if self.refined.len() == level {
                 // The first patch of its level: every patch of the level is queued by now
                 // (breadth first), and their faces are what the next level refines.
-                let mesh = &self.meshes[level];
+                let mesh = self.mesh(level);
                 let mut faces: Vec<FaceId> = std::iter::once(start)
                     .chain(pending.iter().filter(|p| p.level == level).map(|p| p.start))
                     .map(|h| mesh.face(h))
@@ -497,30 +487,15 @@ impl<'a> Derivation<'a> {
     /// patches (radius rings of the next level) and those points' rules (one ring more) reach.
     /// Schemes without crease rules refine the whole level (a region's boundary needs rules).
     fn refine_next(&mut self, faces: &[FaceId]) -> Result<(), SchemeError> {
-        let current = self.meshes.last().expect("level 0");
-        let region = if self.scheme.has_crease_rules() {
-            let region = current.region(faces, self.radius + 1).map_err(|e| SchemeError::Internal(e.to_string()))?;
-            (region.faces.len() < current.face_count()).then_some(region)
-        } else {
-            None
-        };
-        let (mesh, stencils) = match &region {
-            None => {
-                let refiner = Refiner::new(current, self.scheme, 1, &RefineOptions::DEFAULT)?;
-                let stencils = refiner.levels()[0].clone();
-                (refiner.into_mesh(), stencils)
-            }
-            Some(region) => {
-                let refiner = Refiner::new(&region.mesh, self.scheme, 1, &RefineOptions::DEFAULT)?;
-                let parents: Vec<u32> = region.vertices.iter().map(|v| v.raw()).collect();
-                let stencils = refiner.levels()[0].with_parents(&parents, current.vertex_count());
-                (refiner.into_mesh(), stencils)
-            }
-        };
-        self.meshes.push(mesh);
-        self.stencils.push(stencils);
-        self.regions.push(region);
+        let current = self.mesh(self.refined.len());
+        let next = LocalRefinement::new(self.scheme, current, faces, self.radius + 1, &RefineOptions::DEFAULT)?;
+        self.refined.push(next);
         Ok(())
+    }
+
+    /// The mesh of `level`.
+    fn mesh(&self, level: usize) -> &Mesh {
+        if level == 0 { &self.base } else { &self.refined[level - 1].mesh }
     }
 
     /// The shape of `patch` (starting at `start` on `level`): a known one, or a new one queued
@@ -529,7 +504,7 @@ impl<'a> Derivation<'a> {
         if let Some(&s) = self.by_signature.get(&patch.signature) {
             return s;
         }
-        let mirrored = self.meshes[level].mirrored_patch(start, self.radius);
+        let mirrored = self.mesh(level).mirrored_patch(start, self.radius);
         let mirror = (mirrored.signature == patch.signature).then(|| {
             let place: HashMap<VertexId, u32> =
                 patch.vertices.iter().enumerate().map(|(k, &v)| (v, k as u32)).collect();
@@ -558,21 +533,16 @@ impl<'a> Derivation<'a> {
         parent: &[VertexId],
         pending: &mut VecDeque<Pending>,
     ) -> Result<Option<Vec<SubPatch>>, SchemeError> {
-        let (parent_mesh, child_mesh) = (&self.meshes[level], &self.meshes[level + 1]);
+        let (parent_mesh, next) = (self.mesh(level), &self.refined[level]);
+        let child_mesh = &next.mesh;
         let column: HashMap<usize, usize> = parent.iter().enumerate().map(|(c, v)| (v.index(), c)).collect();
-        // The split's parent: the refined region, where the face has the same corners.
-        let (split_parent, split_start) = match &self.regions[level] {
-            None => (parent_mesh, start),
-            Some(region) => {
-                let missing = || SchemeError::Internal("a patch's face is outside the refined region".to_string());
-                let face = region.face_of(parent_mesh.face(start)).ok_or_else(missing)?;
-                let corner = region.mesh.face_half_edges(face).nth(parent_mesh.corner(start)).ok_or_else(missing)?;
-                (&region.mesh, corner)
-            }
-        };
+        // The split's parent (the refined region), where the face has the same corners.
+        let missing = || SchemeError::Internal("a patch's face is outside the refined region".to_string());
+        let (split_parent, face) = next.split_parent(parent_mesh, parent_mesh.face(start)).ok_or_else(missing)?;
+        let split_start = split_parent.face_half_edges(face).nth(parent_mesh.corner(start)).ok_or_else(missing)?;
         let starts = sub_patch_starts(self.scheme, split_parent, split_start, child_mesh)?;
         let domains = ChildDomain::of_face(parent_mesh.face_size(parent_mesh.face(start)));
-        let stencils = &self.stencils[level];
+        let stencils = &next.stencils;
         let columns = parent.len();
         // The rows first (they borrow the meshes), then the shapes.
         let mut found = Vec::new();

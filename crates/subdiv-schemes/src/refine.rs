@@ -6,7 +6,8 @@
 
 use glam::DVec3;
 use subdiv_mesh::{
-    BoundaryInterpolation, CreaseMethod, FaceVaryingInterpolation, Mesh, Parallelism, TriangleSubdivision,
+    BoundaryInterpolation, CreaseMethod, FaceId, FaceVaryingInterpolation, Mesh, Parallelism, Region,
+    TriangleSubdivision,
 };
 
 use crate::crease::INFINITE;
@@ -265,6 +266,82 @@ impl Refiner {
         for level in &self.levels {
             std::mem::swap(out, scratch);
             level.apply(scratch, out);
+        }
+    }
+}
+
+/// One level of refinement of part of a mesh: some of its faces and `rings` rings of faces
+/// around them (a [`Region`]), or the whole mesh when the region would be all of it or the
+/// scheme has no crease rules (a region's cut edges need boundary rules). Its stencils are over
+/// the whole parent's vertices. Refining level by level only where patches are still missing
+/// (`PatchLevels` on real meshes, the sub-patch derivation on canonical ones) costs what those
+/// faces need, not what the mesh is.
+///
+/// ```
+/// use subdiv_mesh::{shapes, FaceId, Mesh};
+/// use subdiv_schemes::{Builtin, LocalRefinement, RefineOptions};
+///
+/// let grid = Mesh::build(shapes::quad_grid(9, 9))?;
+/// let centre = FaceId::new(40);
+/// let local = LocalRefinement::new(Builtin::CatmullClark.scheme(), &grid, &[centre], 1, &RefineOptions::DEFAULT)?;
+/// // The centre face and a ring around it, 5 × 5 faces, each split in four.
+/// assert_eq!(local.mesh.face_count(), 100);
+/// assert_eq!(local.stencils.parent_count(), grid.vertex_count());
+/// let (split_parent, face) = local.split_parent(&grid, centre).expect("a refined face");
+/// assert_eq!(split_parent.face_count(), 25);
+/// assert_eq!(split_parent.face_vertices(face).len(), 4);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct LocalRefinement {
+    /// The refined part.
+    pub mesh: Mesh,
+    /// [`mesh`](Self::mesh)'s vertices over the parent's.
+    pub stencils: Stencils,
+    /// The part of the parent that was refined; `None`: all of it.
+    pub region: Option<Region>,
+}
+
+impl LocalRefinement {
+    /// Refines `faces` of `parent` and `rings` rings of faces around them with `scheme`.
+    ///
+    /// # Errors
+    /// As [`Refiner::new`].
+    pub fn new(
+        scheme: &Scheme,
+        parent: &Mesh,
+        faces: &[FaceId],
+        rings: usize,
+        options: &RefineOptions,
+    ) -> Result<Self, SchemeError> {
+        let region = if scheme.has_crease_rules() {
+            let region = parent.region(faces, rings).map_err(|e| SchemeError::Internal(e.to_string()))?;
+            (region.faces.len() < parent.face_count()).then_some(region)
+        } else {
+            None
+        };
+        let (mesh, stencils) = match &region {
+            None => {
+                let refiner = Refiner::new(parent, scheme, 1, options)?;
+                let stencils = refiner.levels()[0].clone();
+                (refiner.into_mesh(), stencils)
+            }
+            Some(region) => {
+                let refiner = Refiner::new(&region.mesh, scheme, 1, options)?;
+                let parents: Vec<u32> = region.vertices.iter().map(|v| v.raw()).collect();
+                let stencils = refiner.levels()[0].with_parents(&parents, parent.vertex_count());
+                (refiner.into_mesh(), stencils)
+            }
+        };
+        Ok(Self { mesh, stencils, region })
+    }
+
+    /// The mesh [`mesh`](Self::mesh) is the split of (`parent` itself, or the region) and
+    /// `face`'s number there, with the same corners; `None` if `face` was not refined.
+    pub fn split_parent<'a>(&'a self, parent: &'a Mesh, face: FaceId) -> Option<(&'a Mesh, FaceId)> {
+        match &self.region {
+            None => Some((parent, face)),
+            Some(region) => Some((&region.mesh, region.face_of(face)?)),
         }
     }
 }

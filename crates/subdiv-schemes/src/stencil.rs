@@ -203,32 +203,35 @@ impl Stencils {
     /// # Panics
     /// When `child >= self.child_count()`.
     pub fn row(&self, child: usize) -> impl Iterator<Item = (usize, f64)> + '_ {
-        let r = self.runs.partition_point(|run| run.rows_end as usize <= child);
-        let run = self.runs[r];
-        let first_row = if r == 0 { 0 } else { self.runs[r - 1].rows_end as usize };
-        let pattern = &self.patterns[run.pattern as usize];
-        let len = pattern.len as usize;
-        let start = run.entries_start as usize + (child - first_row) * len;
-        let indices = &self.indices[start..start + len];
-        let weights = &self.weights[pattern.start as usize..][..len];
+        let (indices, weights) = self.row_in_run(self.run_of(child), child);
         indices.iter().map(|&i| i as usize).zip(weights.iter().copied())
     }
 
     /// The rows of `children`, in order, each as its parent indices and their weights (in the
     /// pattern's stored order).
     pub(crate) fn rows_in(&self, children: std::ops::Range<usize>) -> impl Iterator<Item = (&[u32], &[f64])> + '_ {
-        let mut r = self.runs.partition_point(|run| run.rows_end as usize <= children.start);
+        let mut r = self.run_of(children.start);
         children.map(move |child| {
             while self.runs[r].rows_end as usize <= child {
                 r += 1;
             }
-            let run = self.runs[r];
-            let first_row = if r == 0 { 0 } else { self.runs[r - 1].rows_end as usize };
-            let pattern = &self.patterns[run.pattern as usize];
-            let len = pattern.len as usize;
-            let start = run.entries_start as usize + (child - first_row) * len;
-            (&self.indices[start..start + len], &self.weights[pattern.start as usize..][..len])
+            self.row_in_run(r, child)
         })
+    }
+
+    /// The run that holds row `child`.
+    fn run_of(&self, child: usize) -> usize {
+        self.runs.partition_point(|run| run.rows_end as usize <= child)
+    }
+
+    /// Row `child`, which run `r` holds: its parent indices and their weights.
+    fn row_in_run(&self, r: usize, child: usize) -> (&[u32], &[f64]) {
+        let run = self.runs[r];
+        let first_row = if r == 0 { 0 } else { self.runs[r - 1].rows_end as usize };
+        let pattern = &self.patterns[run.pattern as usize];
+        let len = pattern.len as usize;
+        let start = run.entries_start as usize + (child - first_row) * len;
+        (&self.indices[start..start + len], &self.weights[pattern.start as usize..][..len])
     }
 
     /// Applies the stencils to `parent` (one value per parent vertex), writing one value per

@@ -3,7 +3,9 @@
 //! stencils over the level above.
 
 use subdiv_mesh::{FaceId, Mesh};
-use subdiv_schemes::{FoundPatch, MeshPatches, RefineOptions, Refiner, Scheme, Split, Stencils, child_faces};
+use subdiv_schemes::{
+    FoundPatch, LocalRefinement, MeshPatches, RefineOptions, Refiner, Scheme, Split, Stencils, child_faces,
+};
 
 use crate::{Dyadic, FaceDomain, PatchFrame, StencilError};
 
@@ -106,29 +108,16 @@ impl Next {
         rings: usize,
         options: &RefineOptions,
     ) -> Result<Self, StencilError> {
-        let region = if scheme.has_crease_rules() {
-            let region = current.region(refine, rings).map_err(|e| StencilError::Internal(e.to_string()))?;
-            (region.faces.len() < current.face_count()).then_some(region)
-        } else {
-            None
-        };
-        let Some(region) = region else {
-            let refiner = Refiner::new(current, scheme, 1, options)?;
-            let stencils = refiner.levels()[0].clone();
-            let children = refine.iter().map(|&f| children(current, scheme.split(), f)).collect();
-            return Ok(Self { mesh: refiner.into_mesh(), stencils, children });
-        };
-        let refiner = Refiner::new(&region.mesh, scheme, 1, options)?;
-        let parents: Vec<u32> = region.vertices.iter().map(|v| v.index() as u32).collect();
-        let stencils = refiner.levels()[0].with_parents(&parents, current.vertex_count());
+        let local = LocalRefinement::new(scheme, current, refine, rings, options)?;
         let children = refine
             .iter()
             .map(|&f| {
-                let local = region.face_of(f).ok_or_else(|| internal(f, "the region lacks a face it refines"))?;
-                Ok(children(&region.mesh, scheme.split(), local))
+                let (mesh, face) =
+                    local.split_parent(current, f).ok_or_else(|| internal(f, "the region lacks a face it refines"))?;
+                Ok(children(mesh, scheme.split(), face))
             })
             .collect::<Result<_, StencilError>>()?;
-        Ok(Self { mesh: refiner.into_mesh(), stencils, children })
+        Ok(Self { mesh: local.mesh, stencils: local.stencils, children })
     }
 }
 
