@@ -86,6 +86,7 @@ impl Evaluator {
         let mut types: HashMap<Vec<u64>, u32> = HashMap::new();
         let (mut signature, mut patches) = (Vec::new(), Vec::new());
         let (mut rows, mut starts, mut columns, mut order) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut bucket: Vec<usize> = Vec::new();
         let mut support = Vec::new();
         let mut memo = CageRowMemo::default();
         for f in mesh.face_ids() {
@@ -100,34 +101,46 @@ impl Evaluator {
                 continue;
             }
             self.cage_rows(&patches, &mut rows, &mut starts, &mut memo);
-            // Each cage point's column: (point, weight bits), by point.
+            // Each cage point's column: (point, weight bits) by point, bucketed by the cage
+            // point's place in the support (each row names a cage point at most once, and the
+            // points are visited in order, so every column comes out sorted).
+            let cage = &support[0];
+            let place = |x: u32| cage.partition_point(|&c| c < x);
+            bucket.clear();
+            bucket.resize(cage.len() + 1, 0);
+            for &(x, _) in &rows {
+                bucket[place(x) + 1] += 1;
+            }
+            for i in 1..bucket.len() {
+                bucket[i] += bucket[i - 1];
+            }
             columns.clear();
+            columns.resize(rows.len(), (0, 0));
             for (point, w) in starts.windows(2).enumerate() {
-                columns.extend(rows[w[0] as usize..w[1] as usize].iter().map(|&(x, r)| (x, point as u32, r.to_bits())));
+                for &(x, r) in &rows[w[0] as usize..w[1] as usize] {
+                    let at = &mut bucket[place(x)];
+                    columns[*at] = (point as u32, r.to_bits());
+                    *at += 1;
+                }
             }
-            columns.sort_unstable();
+            // `bucket[i]` is now where column `i` ends.
             order.clear();
-            let mut at = 0;
-            while at < columns.len() {
-                let end = at + columns[at..].iter().take_while(|c| c.0 == columns[at].0).count();
-                order.push((at, end));
-                at = end;
-            }
+            order.extend((0..cage.len()).map(|i| (if i == 0 { 0 } else { bucket[i - 1] }, bucket[i], cage[i])));
             // The support counted above is these points.
-            debug_assert!(order.len() <= MAX_TYPED_POINTS);
-            let column = |&(a, b): &(usize, usize)| columns[a..b].iter().map(|c| (c.1, c.2));
-            order.sort_unstable_by(|a, b| column(a).cmp(column(b)).then(columns[a.0].0.cmp(&columns[b.0].0)));
+            debug_assert!(order.len() <= MAX_TYPED_POINTS && order.iter().all(|&(a, b, _)| a < b));
+            let column = |&(a, b, _): &(usize, usize, u32)| &columns[a..b];
+            order.sort_unstable_by(|a, b| column(a).cmp(column(b)).then(a.2.cmp(&b.2)));
             signature.extend([5, order.len() as u64]);
             for range in &order {
                 signature.push((range.1 - range.0) as u64);
-                signature.extend(column(range).flat_map(|(point, bits)| [u64::from(point), bits]));
+                signature.extend(column(range).iter().flat_map(|&(point, bits)| [u64::from(point), bits]));
             }
             let next = types.len() as u32;
             let id = *types.entry_ref(&signature).or_insert(next);
             let first = self.face_patches.len() as u32;
             self.face_patches.extend_from_slice(&patches);
             let cage = self.face_cage.len() as u32;
-            self.face_cage.extend(order.iter().map(|&(a, _)| columns[a].0));
+            self.face_cage.extend(order.iter().map(|&(_, _, x)| x));
             self.face_types[f.index()] = Some(FaceType {
                 id,
                 patches: (first, self.face_patches.len() as u32),
