@@ -1,13 +1,18 @@
-//! `cargo xtask tables [--check]`: the committed default stencil tables.
+//! `cargo xtask tables [--check]`: the committed tables — sub-patch matrices
+//! ([`subdiv::schemes::DEFAULT_PATCH_TABLES`], in `crates/subdiv-schemes/tables`) and the default
+//! stencil tables.
 //!
 //! They are [`subdiv::stencil::DEFAULT_TABLES`]: Catmull-Clark and Loop, interior valences 3 to
 //! 8, rates 1 to 24 (paper 000 §6 ships the same range), in
 //! `crates/subdiv-stencil/tables/<scheme>.stencils`. Without `--check` the files are written
-//! (atomically); with it they are regenerated in memory and compared with the committed ones.
+//! (atomically) where the committed ones are stale (beyond the last bits, see
+//! [`PLATFORM_TOLERANCE`]); with it they are regenerated in memory and compared with the
+//! committed ones.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use subdiv::schemes::{DEFAULT_PATCH_TABLES, PatchTables, Scheme};
 use subdiv::stencil::{DEFAULT_TABLES, Grid, StencilTables};
 
 /// Weights may differ by this much between machines whose floating point rounds the eigen
@@ -15,8 +20,8 @@ use subdiv::stencil::{DEFAULT_TABLES, Grid, StencilTables};
 const PLATFORM_TOLERANCE: f64 = 1e-13;
 
 pub(crate) fn run(check: bool) -> Result<(), String> {
+    let mut stale = patch_tables(check)?;
     let dir = crate::root().join("crates/subdiv-stencil/tables");
-    let mut stale = Vec::new();
     for spec in DEFAULT_TABLES {
         let scheme = spec.scheme.scheme();
         let start = Instant::now();
@@ -35,18 +40,17 @@ pub(crate) fn run(check: bool) -> Result<(), String> {
             stored,
             bytes.len(),
         );
-        if check {
-            if let Some(problem) = compare(&path, &bytes, &tables, scheme) {
-                stale.push(format!("{}: {problem}", path.display()));
-            }
-        } else {
-            write_atomically(&path, &bytes)?;
+        // Written only when stale: a file equal but for the last bits stays as it is.
+        match compare(&path, &bytes, &tables, scheme) {
+            Some(problem) if check => stale.push(format!("{}: {problem}", path.display())),
+            Some(_) => write_atomically(&path, &bytes)?,
+            None => {}
         }
     }
     if stale.is_empty() {
         Ok(())
     } else {
-        Err(format!("stale stencil tables (run `cargo xtask tables`):\n{}", stale.join("\n")))
+        Err(format!("stale tables (run `cargo xtask tables`):\n{}", stale.join("\n")))
     }
 }
 
@@ -94,6 +98,85 @@ fn compare(path: &PathBuf, bytes: &[u8], fresh: &StencilTables, scheme: &subdiv:
          as this machine's floating point rounds differently from the one that wrote them)",
         path.display()
     );
+    None
+}
+
+/// The sub-patch matrix tables: written, or checked (the stale ones' reasons returned).
+fn patch_tables(check: bool) -> Result<Vec<String>, String> {
+    let dir = crate::root().join("crates/subdiv-schemes/tables");
+    let mut stale = Vec::new();
+    for spec in DEFAULT_PATCH_TABLES {
+        let start = Instant::now();
+        let tables = spec.compute().map_err(|e| format!("{}: {e}", spec.scheme.name()))?;
+        let bytes = tables.to_bytes();
+        let path = dir.join(spec.file);
+        println!(
+            "patch_tables scheme={} entries={} bytes={} seconds={:.2}",
+            spec.scheme.name(),
+            tables.entries().len(),
+            bytes.len(),
+            start.elapsed().as_secs_f64()
+        );
+        // What the build embeds is what is committed (the file at build time); written only
+        // when stale.
+        let problem = match std::fs::read(&path) {
+            Err(e) => Some(format!("cannot read it: {e}")),
+            Ok(committed) if committed == bytes => {
+                println!("patch_tables file={} identical", path.display());
+                None
+            }
+            Ok(committed) => compare_patches(&committed, &tables, spec.scheme.scheme(), &path),
+        };
+        match problem {
+            Some(problem) if check => stale.push(format!("{}: {problem}", path.display())),
+            Some(_) => write_atomically(&path, &bytes)?,
+            None => {}
+        }
+    }
+    Ok(stale)
+}
+
+/// Why committed patch tables differ from fresh ones beyond the last bits, if they do.
+fn compare_patches(committed: &[u8], fresh: &PatchTables, scheme: &Scheme, path: &Path) -> Option<String> {
+    let old = match PatchTables::from_bytes(committed, scheme) {
+        Ok(old) => old,
+        Err(e) => return Some(e.to_string()),
+    };
+    if old.entries().len() != fresh.entries().len() {
+        return Some(format!("{} entries committed, {} derived", old.entries().len(), fresh.entries().len()));
+    }
+    let mut worst = 0.0_f64;
+    let mut widen = |a: &[f64], b: &[f64]| a.iter().zip(b).for_each(|(x, y)| worst = worst.max((x - y).abs()));
+    for ((rule_a, a), (rule_b, b)) in old.entries().iter().zip(fresh.entries()) {
+        let what = format!("{:?} ({rule_b:?})", b.patch_type);
+        let same_layout = (rule_a, a.patch_type, a.radius, a.face_size, a.shapes.len())
+            == (rule_b, b.patch_type, b.radius, b.face_size, b.shapes.len());
+        if !same_layout {
+            return Some(format!("{what}: the layout differs"));
+        }
+        for (x, y) in a.shapes.iter().zip(&b.shapes) {
+            let same_shape = (x.size, &x.signature, &x.influence, &x.mirror, x.children.len())
+                == (y.size, &y.signature, &y.influence, &y.mirror, y.children.len())
+                && x.parameters.is_some() == y.parameters.is_some();
+            if !same_shape {
+                return Some(format!("{what}: a shape differs"));
+            }
+            for (c, d) in x.children.iter().zip(&y.children) {
+                if (c.shape, c.domain, c.rows(), c.columns()) != (d.shape, d.domain, d.rows(), d.columns()) {
+                    return Some(format!("{what}: a child differs"));
+                }
+                widen(c.entries(), d.entries());
+            }
+            if let (Some([u, v]), Some([p, q])) = (&x.parameters, &y.parameters) {
+                widen(u, p);
+                widen(v, q);
+            }
+        }
+    }
+    if worst > PLATFORM_TOLERANCE {
+        return Some(format!("entries differ by up to {worst:e}"));
+    }
+    println!("patch_tables file={} equal to {PLATFORM_TOLERANCE:e} (largest difference {worst:e})", path.display());
     None
 }
 

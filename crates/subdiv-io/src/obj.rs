@@ -675,12 +675,7 @@ fn write_records(w: &mut impl Write, soup: &PolygonSoup) -> io::Result<()> {
         writeln!(w)?;
     }
     if let Some(b) = tags.boundary_interpolation {
-        let code = match b {
-            BoundaryInterpolation::None => 0,
-            BoundaryInterpolation::EdgeAndCorner => 1,
-            BoundaryInterpolation::EdgeOnly => 2,
-        };
-        writeln!(w, "t interpolateboundary 1/0/0 {code}")?;
+        writeln!(w, "t interpolateboundary 1/0/0 {}", b.code())?;
     }
     if let Some(k) = tags.face_varying_interpolation {
         writeln!(w, "t facevaryinginterpolateboundary 1/0/0 {}", k.code())?;

@@ -261,6 +261,16 @@ impl BoundaryInterpolation {
             _ => None,
         }
     }
+
+    /// OpenSubdiv's shape-file code ([`from_code`](Self::from_code)'s inverse), which the
+    /// table files use too.
+    pub fn code(self) -> u8 {
+        match self {
+            Self::None => 0,
+            Self::EdgeAndCorner => 1,
+            Self::EdgeOnly => 2,
+        }
+    }
 }
 
 /// Where face-varying channels (texture coordinates) are linear rather than smooth: OpenSubdiv's

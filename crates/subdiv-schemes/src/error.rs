@@ -88,6 +88,10 @@ pub enum SchemeError {
     /// The eigen solver did not converge.
     #[error("the eigen solver did not converge: {0}")]
     Eigen(String),
+    /// A table file (committed sub-patch matrices) that cannot be read: another kind of file,
+    /// version or scheme, or corrupt bytes.
+    #[error("patch table: {0}")]
+    Table(String),
     /// The refined mesh broke a topology rule: a bug, please report it.
     #[error("internal error, please report: {0}")]
     Internal(String),

@@ -78,6 +78,7 @@
 //! ```
 //!
 mod analysis;
+pub mod binary;
 mod canonical;
 mod channel;
 mod crease;
@@ -89,6 +90,7 @@ mod expr;
 mod mesh_patches;
 mod nonuniform;
 mod patch;
+mod patch_table;
 mod primal;
 mod refine;
 mod scheme;
@@ -107,6 +109,7 @@ pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
     ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces, sub_patch_starts,
 };
+pub use patch_table::{DEFAULT_PATCH_TABLES, PATCH_TABLE_MAGIC, PATCH_TABLE_VERSION, PatchTableSpec, PatchTables};
 pub use refine::{
     LocalRefinement, MAX_PATCH_VALENCE, RefineOptions, Refiner, refine, refine_uniform, refine_uniform_with_progress,
 };

@@ -196,6 +196,17 @@ impl SubPatch {
         self.entries[row * self.columns + column]
     }
 
+    /// The entries, row-major.
+    pub fn entries(&self) -> &[f64] {
+        &self.entries
+    }
+
+    /// A child of `shape` at `domain` with `rows` rows of `entries` (row-major).
+    pub(crate) fn from_entries(shape: usize, domain: ChildDomain, rows: usize, entries: Vec<f64>) -> Self {
+        let columns = entries.len().checked_div(rows).unwrap_or(0);
+        Self { shape, domain, rows, columns, entries }
+    }
+
     /// Row `row`, over the parent's control points.
     pub fn row(&self, row: usize) -> &[f64] {
         &self.entries[row * self.columns..(row + 1) * self.columns]
@@ -272,6 +283,8 @@ pub struct PatchMatrices {
     /// The shapes; the first is the patch type's.
     pub shapes: Vec<PatchShape>,
     pub(crate) by_signature: HashMap<Vec<u32>, usize>,
+    /// The scheme's [`Scheme::identity`].
+    identity: u64,
 }
 
 type CacheKey = (String, PatchType, BoundaryInterpolation);
@@ -309,8 +322,11 @@ impl PatchMatrices {
         if let Some(found) = cache.lock().unwrap_or_else(std::sync::PoisonError::into_inner).get(&key) {
             return Ok(found.clone());
         }
-        // Computed outside the lock; a race computes twice and keeps one, both equal.
-        let computed = Arc::new(Self::compute(scheme, patch_type, boundary)?);
+        // Read or computed outside the lock; a race does it twice and keeps one, both equal.
+        let computed = match crate::patch_table::committed(scheme, patch_type, boundary) {
+            Some(read) => Arc::new(read),
+            None => Arc::new(Self::compute(scheme, patch_type, boundary)?),
+        };
         let mut cache = cache.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
         Ok(cache.entry(key).or_insert(computed).clone())
     }
@@ -379,6 +395,32 @@ impl PatchMatrices {
             reason: "the limit surface over a face near this vertex depends on vertices beyond every patch \
                      radius up to 3 (the scheme's rules there reach further than its regular support)",
         })
+    }
+
+    /// Matrices of `scheme` from `shapes` (read from a table).
+    pub(crate) fn from_shapes(
+        scheme: &Scheme,
+        patch_type: PatchType,
+        radius: usize,
+        face_size: usize,
+        shapes: Vec<PatchShape>,
+    ) -> Self {
+        let by_signature = shapes.iter().enumerate().map(|(i, s)| (s.signature.clone(), i)).collect();
+        Self {
+            scheme: scheme.name.clone(),
+            patch_type,
+            radius,
+            face_size,
+            shapes,
+            by_signature,
+            identity: scheme.identity(),
+        }
+    }
+
+    /// The [`Scheme::identity`] of the scheme the matrices are of: with the patch type, what
+    /// tables derived from them (eigenbases) are keyed by.
+    pub fn scheme_identity(&self) -> u64 {
+        self.identity
     }
 
     /// The shape with this signature, if it is among the shapes: how a face of a real mesh
@@ -480,6 +522,7 @@ impl<'a> Derivation<'a> {
             face_size,
             shapes: self.shapes,
             by_signature: self.by_signature,
+            identity: self.scheme.identity(),
         }))
     }
 

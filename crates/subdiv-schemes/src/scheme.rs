@@ -363,6 +363,23 @@ impl Scheme {
         Ok(scheme)
     }
 
+    /// The scheme's identity: FNV-1a of its TOML text ([`to_toml_string`](Self::to_toml_string)),
+    /// so two schemes with the same rules have the same identity whatever their source. Tables
+    /// derived from a scheme carry it, and are read only for a scheme that has it.
+    ///
+    /// ```
+    /// use subdiv_schemes::{Builtin, Scheme};
+    ///
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// let again = Scheme::from_toml_str(&cc.to_toml_string())?;
+    /// assert_eq!(again.identity(), cc.identity());
+    /// assert_ne!(Builtin::Loop.scheme().identity(), cc.identity());
+    /// # Ok::<(), subdiv_schemes::SchemeError>(())
+    /// ```
+    pub fn identity(&self) -> u64 {
+        crate::binary::fnv1a(self.to_toml_string().as_bytes())
+    }
+
     /// The scheme as TOML.
     pub fn to_toml_string(&self) -> String {
         toml::to_string(self).unwrap_or_else(|e| format!("# cannot write this scheme as TOML: {e}\n"))

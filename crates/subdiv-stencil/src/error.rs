@@ -234,3 +234,9 @@ pub enum StencilError {
         detail: String,
     },
 }
+
+impl From<subdiv_schemes::binary::Corrupt> for StencilError {
+    fn from(e: subdiv_schemes::binary::Corrupt) -> Self {
+        Self::TableCorrupt { offset: e.offset, detail: e.detail }
+    }
+}

@@ -7,6 +7,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use glam::DVec3;
 use subdiv_mesh::BoundaryInterpolation;
+use subdiv_schemes::binary::{ByteReader, fnv1a};
 use subdiv_schemes::{Builtin, PatchMatrices, PatchType, Scheme, SharpFeatures};
 
 use crate::parallel::{self, Threads};
@@ -409,7 +410,7 @@ impl StencilTables {
         .collect::<Result<_, _>>()?;
         Ok(Self {
             scheme: scheme.name.clone(),
-            fingerprint: scheme_fingerprint(scheme),
+            fingerprint: scheme.identity(),
             tables: per_type.into_iter().flatten().collect(),
         })
     }
@@ -453,7 +454,7 @@ impl StencilTables {
                 out.extend_from_slice(&sharp.edges.to_le_bytes());
                 out.push(u8::from(sharp.corner));
             }
-            out.push(boundary_code(t.boundary));
+            out.push(t.boundary.code());
             out.extend_from_slice(&t.matrices_fingerprint.to_le_bytes());
             out.push(t.face_size as u8);
             put_u32(&mut out, t.size as u32);
@@ -492,33 +493,37 @@ impl StencilTables {
         if bytes.len() < 12 || bytes[..8] != TABLE_MAGIC {
             return Err(StencilError::TableForeign);
         }
-        let mut r = Reader { bytes, at: 8 };
+        let mut r = ByteReader::new(bytes);
+        r.take(8)?;
         let version = r.u32()?;
         if version != TABLE_VERSION {
             return Err(StencilError::TableVersion { found: version, expected: TABLE_VERSION });
         }
         let (body, tail) = bytes.split_at(bytes.len().saturating_sub(8).max(12));
-        if u64::from_le_bytes(tail.try_into().map_err(|_| r.corrupt("no checksum"))?) != fnv1a(body) {
+        if u64::from_le_bytes(tail.try_into().map_err(|_| StencilError::from(r.corrupt("no checksum")))?) != fnv1a(body)
+        {
             return Err(StencilError::TableCorrupt {
                 offset: body.len(),
                 detail: "the checksum does not match".into(),
             });
         }
-        let mut r = Reader { bytes: body, at: 12 };
+        let mut r = ByteReader::new(body);
+        r.take(12)?;
         let name_len = r.u32()? as usize;
-        let name = std::str::from_utf8(r.take(name_len)?).map_err(|_| r.corrupt("the scheme name is not UTF-8"))?;
+        let name = std::str::from_utf8(r.take(name_len)?)
+            .map_err(|_| StencilError::from(r.corrupt("the scheme name is not UTF-8")))?;
         if name != scheme.name {
             return Err(StencilError::TableStale {
                 detail: format!("the tables are for scheme `{name}`, not `{}`", scheme.name),
             });
         }
         let fingerprint = r.u64()?;
-        if fingerprint != scheme_fingerprint(scheme) {
+        if fingerprint != scheme.identity() {
             return Err(StencilError::TableStale {
                 detail: format!(
                     "the tables were written for another definition of `{name}` (fingerprint {fingerprint:016x}, \
                      now {:016x}); regenerate them",
-                    scheme_fingerprint(scheme)
+                    scheme.identity()
                 ),
             });
         }
@@ -531,23 +536,20 @@ impl StencilTables {
             let sharp = match kind {
                 0 | 1 => SharpFeatures::SMOOTH,
                 2 | 3 => SharpFeatures { edges: r.u64()?, corner: r.u8()? != 0 },
-                _ => return Err(r.corrupt(&format!("unknown patch kind {kind}"))),
+                _ => return Err(StencilError::from(r.corrupt(format!("unknown patch kind {kind}")))),
             };
             let patch_type = match kind {
                 0 | 2 => PatchType::Interior { valence: a, sharp },
                 _ => PatchType::Boundary { faces: a, index: b, sharp },
             };
-            let boundary = match r.u8()? {
-                0 => BoundaryInterpolation::None,
-                1 => BoundaryInterpolation::EdgeAndCorner,
-                2 => BoundaryInterpolation::EdgeOnly,
-                code => return Err(r.corrupt(&format!("unknown boundary rule {code}"))),
-            };
+            let code = r.u8()?;
+            let boundary = BoundaryInterpolation::from_code(code.into())
+                .ok_or_else(|| StencilError::from(r.corrupt(format!("unknown boundary rule {code}"))))?;
             let written_from = r.u64()?;
             let face_size = usize::from(r.u8()?);
             let size = r.u32()? as usize;
             let rate = r.u32()?;
-            check_rate(rate).map_err(|_| r.corrupt(&format!("rate {rate}")))?;
+            check_rate(rate).map_err(|_| StencilError::from(r.corrupt(format!("rate {rate}"))))?;
             let known = match matrices_prints.get(&(patch_type, boundary)) {
                 Some(&known) => known,
                 None => {
@@ -579,21 +581,21 @@ impl StencilTables {
                 1 => {
                     let m = (0..size).map(|_| r.u32()).collect::<Result<Vec<_>, _>>()?;
                     if m.iter().any(|&k| k as usize >= size) {
-                        return Err(r.corrupt("a mirror index is out of range"));
+                        return Err(StencilError::from(r.corrupt("a mirror index is out of range")));
                     }
                     Some(m)
                 }
-                flag => return Err(r.corrupt(&format!("unknown mirror flag {flag}"))),
+                flag => return Err(StencilError::from(r.corrupt(format!("unknown mirror flag {flag}")))),
             };
             let mut grids = Vec::new();
             for grid in Grid::ALL {
                 let (points, slots, stored) = GridStencils::layout(grid, face_size, rate, mirror.is_some());
                 let count = r.u32()? as usize;
                 if count != stored.len() {
-                    return Err(r.corrupt(&format!(
+                    return Err(StencilError::from(r.corrupt(format!(
                         "{patch_type:?} at rate {rate}: {count} stored {grid:?} points, the layout has {}",
                         stored.len()
-                    )));
+                    ))));
                 }
                 let mut exact = Vec::with_capacity(count);
                 let mut weights = Vec::with_capacity(count * 3 * size);
@@ -618,8 +620,8 @@ impl StencilTables {
                 grids: [primal, dual],
             });
         }
-        if r.at != body.len() {
-            return Err(r.corrupt("bytes left over after the last table"));
+        if !r.is_at_end() {
+            return Err(StencilError::from(r.corrupt("bytes left over after the last table")));
         }
         Ok(Self { scheme: name.to_string(), fingerprint, tables })
     }
@@ -657,7 +659,7 @@ impl StencilCache {
     /// # Errors
     /// [`StencilError::TableStale`] if `tables` are another scheme's.
     pub fn with_tables(self, tables: StencilTables) -> Result<Self, StencilError> {
-        if tables.scheme != self.scheme.name || tables.fingerprint != scheme_fingerprint(&self.scheme) {
+        if tables.scheme != self.scheme.name || tables.fingerprint != self.scheme.identity() {
             return Err(StencilError::TableStale {
                 detail: format!("the tables are for `{}`, the cache for `{}`", tables.scheme, self.scheme.name),
             });
@@ -731,14 +733,6 @@ pub const DEFAULT_TABLES: [TableSpec; 2] = [
 ];
 
 /// FNV-1a, 64 bits: a fingerprint that is the same on every platform and build.
-fn fnv1a(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3))
-}
-
-fn scheme_fingerprint(scheme: &Scheme) -> u64 {
-    fnv1a(scheme.to_toml_string().as_bytes())
-}
-
 /// A fingerprint of everything a table's numbers follow from: the shapes, their children and
 /// the matrices' entries (exact bits: the engine's arithmetic is the same everywhere).
 fn matrices_fingerprint(m: &PatchMatrices) -> u64 {
@@ -760,50 +754,8 @@ fn matrices_fingerprint(m: &PatchMatrices) -> u64 {
     fnv1a(&bytes)
 }
 
-fn boundary_code(b: BoundaryInterpolation) -> u8 {
-    match b {
-        BoundaryInterpolation::None => 0,
-        BoundaryInterpolation::EdgeAndCorner => 1,
-        BoundaryInterpolation::EdgeOnly => 2,
-    }
-}
-
 fn put_u32(out: &mut Vec<u8>, x: u32) {
     out.extend_from_slice(&x.to_le_bytes());
-}
-
-struct Reader<'a> {
-    bytes: &'a [u8],
-    at: usize,
-}
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Result<&'a [u8], StencilError> {
-        let end =
-            self.at.checked_add(n).filter(|&e| e <= self.bytes.len()).ok_or_else(|| StencilError::TableCorrupt {
-                offset: self.at,
-                detail: format!("truncated: {n} more bytes expected, {} left", self.bytes.len() - self.at),
-            })?;
-        let taken = &self.bytes[self.at..end];
-        self.at = end;
-        Ok(taken)
-    }
-
-    fn u8(&mut self) -> Result<u8, StencilError> {
-        Ok(self.take(1)?[0])
-    }
-
-    fn u32(&mut self) -> Result<u32, StencilError> {
-        Ok(u32::from_le_bytes(self.take(4)?.try_into().expect("4 bytes")))
-    }
-
-    fn u64(&mut self) -> Result<u64, StencilError> {
-        Ok(u64::from_le_bytes(self.take(8)?.try_into().expect("8 bytes")))
-    }
-
-    fn corrupt(&self, detail: &str) -> StencilError {
-        StencilError::TableCorrupt { offset: self.at, detail: detail.to_string() }
-    }
 }
 
 #[cfg(test)]
