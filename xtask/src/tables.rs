@@ -1,6 +1,7 @@
 //! `cargo xtask tables [--check]`: the committed tables — sub-patch matrices
-//! ([`subdiv::schemes::DEFAULT_PATCH_TABLES`], in `crates/subdiv-schemes/tables`) and the default
-//! stencil tables.
+//! ([`subdiv::schemes::DEFAULT_PATCH_TABLES`], in `crates/subdiv-schemes/tables`), the
+//! eigenbases of their interior types (`crates/subdiv-eval/tables`) and the default stencil
+//! tables.
 //!
 //! They are [`subdiv::stencil::DEFAULT_TABLES`]: Catmull-Clark and Loop, interior valences 3 to
 //! 8, rates 1 to 24 (paper 000 §6 ships the same range), in
@@ -12,6 +13,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use subdiv::eval::{EigenTables, eigen_table_file};
 use subdiv::schemes::{DEFAULT_PATCH_TABLES, PatchTables, Scheme};
 use subdiv::stencil::{DEFAULT_TABLES, Grid, StencilTables};
 
@@ -21,6 +23,7 @@ const PLATFORM_TOLERANCE: f64 = 1e-13;
 
 pub(crate) fn run(check: bool) -> Result<(), String> {
     let mut stale = patch_tables(check)?;
+    stale.extend(eigen_tables(check)?);
     let dir = crate::root().join("crates/subdiv-stencil/tables");
     for spec in DEFAULT_TABLES {
         let scheme = spec.scheme.scheme();
@@ -135,6 +138,57 @@ fn patch_tables(check: bool) -> Result<Vec<String>, String> {
     }
     Ok(stale)
 }
+
+/// The eigenbasis tables (over freshly derived matrices): written, or checked.
+fn eigen_tables(check: bool) -> Result<Vec<String>, String> {
+    let dir = crate::root().join("crates/subdiv-eval/tables");
+    let mut stale = Vec::new();
+    for spec in DEFAULT_PATCH_TABLES {
+        let start = Instant::now();
+        let tables = EigenTables::compute(&spec).map_err(|e| format!("{}: {e}", spec.scheme.name()))?;
+        let bytes = tables.to_bytes();
+        let path = dir.join(eigen_table_file(&spec));
+        println!(
+            "eigen_tables scheme={} entries={} bytes={} seconds={:.2}",
+            spec.scheme.name(),
+            tables.len(),
+            bytes.len(),
+            start.elapsed().as_secs_f64()
+        );
+        let problem = match std::fs::read(&path) {
+            Err(e) => Some(format!("cannot read it: {e}")),
+            Ok(committed) if committed == bytes => {
+                println!("eigen_tables file={} identical", path.display());
+                None
+            }
+            Ok(committed) => match EigenTables::from_bytes(&committed, &spec).map_err(|e| e.to_string()) {
+                Ok(old) => match old.max_difference(&tables) {
+                    Ok(worst) if worst <= EIGEN_TOLERANCE => {
+                        println!(
+                            "eigen_tables file={} equal to {EIGEN_TOLERANCE:e} (largest difference {worst:e})",
+                            path.display()
+                        );
+                        None
+                    }
+                    Ok(worst) => Some(format!("numbers differ by up to {worst:e}")),
+                    Err(e) => Some(e),
+                },
+                Err(e) => Some(e),
+            },
+        };
+        match problem {
+            Some(problem) if check => stale.push(format!("{}: {problem}", path.display())),
+            Some(_) => write_atomically(&path, &bytes)?,
+            None => {}
+        }
+    }
+    Ok(stale)
+}
+
+/// Eigenvectors and the spectrum's diagnostics come from faer's eigen solver, whose rounding
+/// follows the machine's SIMD paths more than the stencils' sums do; a stale table differs by
+/// far more (any change to a rule moves them by its own size).
+const EIGEN_TOLERANCE: f64 = 1e-10;
 
 /// Why committed patch tables differ from fresh ones beyond the last bits, if they do.
 fn compare_patches(committed: &[u8], fresh: &PatchTables, scheme: &Scheme, path: &Path) -> Option<String> {

@@ -139,8 +139,8 @@ pub(crate) enum Kind {
 /// with left and right eigenvectors, and `B · M_b` for the three other children.
 #[derive(Clone, Debug)]
 pub struct EigenBasis {
-    matrices: Arc<PatchMatrices>,
-    shape: usize,
+    pub(crate) matrices: Arc<PatchMatrices>,
+    pub(crate) shape: usize,
     pub(crate) power: PowerBasis,
     pub(crate) kind: Kind,
 }
@@ -169,8 +169,11 @@ impl EigenBasis {
         if let Some(found) = cache.lock().unwrap_or_else(PoisonError::into_inner).get(&key) {
             return found.clone();
         }
-        // Computed outside the lock; a race computes twice and keeps one, both equal.
-        let computed = Self::compute(matrices.clone(), shape).map(Arc::new);
+        // Read or computed outside the lock; a race does it twice and keeps one, both equal.
+        let computed = match crate::basis_table::committed(matrices, shape) {
+            Some(read) => Ok(Arc::new(read)),
+            None => Self::compute(matrices.clone(), shape).map(Arc::new),
+        };
         cache.lock().unwrap_or_else(PoisonError::into_inner).entry(key).or_insert(computed).clone()
     }
 
@@ -236,7 +239,7 @@ impl EigenBasis {
         Ok(PatchSurface::new(self.clone(), points))
     }
 
-    fn compute(matrices: Arc<PatchMatrices>, shape: usize) -> Result<Self, EvalError> {
+    pub(crate) fn compute(matrices: Arc<PatchMatrices>, shape: usize) -> Result<Self, EvalError> {
         let unsupported = |detail: &str| EvalError::NotEigenPatch {
             scheme: matrices.scheme.clone(),
             shape,

@@ -45,6 +45,10 @@ pub enum EvalError {
         /// What went wrong.
         detail: String,
     },
+    /// An eigenbasis table file that cannot be read: another kind of file, version or
+    /// scheme, or corrupt bytes.
+    #[error("eigenbasis table: {0}")]
+    Table(String),
     /// [`Method::Eigen`](crate::Method::Eigen) was asked for a face it cannot evaluate.
     #[error("face {face} cannot be evaluated by eigenbasis: {reason}")]
     FaceNotSupported {

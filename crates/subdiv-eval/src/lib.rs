@@ -50,12 +50,14 @@
 //! ```
 
 mod basis;
+mod basis_table;
 mod error;
 mod mesh;
 mod poly;
 mod surface;
 
 pub use basis::{DIRECT_LEVELS, EigenBasis, EigenBasisSpectrum, KEPT_MODULUS, MAX_VALENCE};
+pub use basis_table::{EIGEN_TABLE_MAGIC, EIGEN_TABLE_VERSION, EigenTables, eigen_table_file};
 pub use error::EvalError;
 pub use mesh::{EigenEvaluator, LimitPoint2, Method};
 pub use poly::PolyKind;
