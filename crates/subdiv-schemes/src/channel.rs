@@ -51,6 +51,7 @@ crease = { own = 1, neighbour = 0 }
 pub struct ChannelSurface {
     mesh: Mesh,
     scheme: Scheme,
+    linear: bool,
 }
 
 impl ChannelSurface {
@@ -83,7 +84,15 @@ impl ChannelSurface {
             (FaceVaryingInterpolation::All, _) => Builtin::Bilinear.scheme().clone(),
             _ => scheme.clone(),
         };
-        Ok(Self { mesh, scheme })
+        Ok(Self { mesh, scheme, linear: rules.mode == FaceVaryingInterpolation::All })
+    }
+
+    /// Whether the channel is linear over every face ([`FaceVaryingInterpolation::All`]): its
+    /// value at a face's `(u, v)` is then the bilinear (quads), linear (triangles under a
+    /// triangle split) or sub-face bilinear (other polygons, over the bilinear split's first
+    /// level) interpolation of the face's corners, which an evaluator may compute directly.
+    pub fn is_linear(&self) -> bool {
+        self.linear
     }
 
     /// The channel's mesh: its vertices are the channel's values (padded to three components

@@ -276,6 +276,25 @@ impl EvaluationPlan {
         self.vertices.get(vertex).map(|&e| self.decode(e))
     }
 
+    /// A plan over `cage_len` points and no refined levels, to which [`push_general`] adds
+    /// exact-stencil vertices.
+    ///
+    /// [`push_general`]: Self::push_general
+    pub(crate) fn over_points(cage_len: u32) -> Self {
+        Self { cage_len, ..Self::default() }
+    }
+
+    /// Adds a vertex that is `Σ weights[0][k] · point[points[k]]`, with the face's derivatives
+    /// from `weights[1]` and `weights[2]`.
+    pub(crate) fn push_general(&mut self, points: &[u32], weights: [&[f64]; 3]) {
+        let (first, len) = (self.points.len() as u32, points.len() as u32);
+        self.points.extend_from_slice(points);
+        let at = self.weights.len() as u32;
+        weights.iter().for_each(|row| self.weights.extend_from_slice(row));
+        self.general.push(PlanGeneral { points: first, len, weights: at, ju: [1.0, 0.0], jv: [0.0, 1.0] });
+        self.vertices.push(pack(PLAN_GENERAL, self.general.len() - 1));
+    }
+
     /// An entry of `vertices` as its record (a valid plan's: see [`validate`](Self::validate)).
     fn decode(&self, entry: u32) -> PlanEntry<'_> {
         let (kind, index) = unpack(entry);
