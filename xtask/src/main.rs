@@ -15,6 +15,10 @@
 //!   meshes' texture coordinates), beside OpenSubdiv's Bfr when `SUBDIV_OSD_BENCH` names the
 //!   harness's `osd_bench`; `--mode cold` runs fresh processes of the release CLI instead (the
 //!   built-in model, spot, blub, the car and the bishop at rate 8, Bfr's per-face path beside).
+//! - `cargo xtask bench eval --mode cold [--mesh M]… [--grid N] [--method M]…` times fresh
+//!   `subdiv eval MESH --grid N` processes (whole and the CLI's own time; default: the built-in
+//!   model, spot, the car and spot_triangulated, grid 4, every method), beside whole
+//!   `osd_limit` processes when `SUBDIV_OSD_LIMIT` names the harness's `osd_limit`.
 //! - `cargo xtask bench gpu [--mesh M]… [--rate N]… [--frames K]` measures milliseconds per
 //!   animation frame to re-evaluate a tessellation on the GPU (default: the built-in model and
 //!   a 100 000-face torus at rates 8 and 16), beside the CPU's animation path, with the
@@ -41,6 +45,7 @@
 
 mod adaptive;
 mod bench_args;
+mod bench_eval;
 mod bench_gpu;
 mod bench_refine;
 mod bench_tess;
@@ -54,7 +59,7 @@ mod tables;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask sweep [--seconds S] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench eval --mode cold [--mesh M]... [--grid N] [--method M]... | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask sweep [--seconds S] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -64,6 +69,7 @@ fn main() -> ExitCode {
         Some("bench") if args.get(1).is_some_and(|a| a == "tess") => bench_tess::run(&args[2..]),
         Some("bench") if args.get(1).is_some_and(|a| a == "gpu") => bench_gpu::run(&args[2..]),
         Some("bench") if args.get(1).is_some_and(|a| a == "refine") => bench_refine::run(&args[2..]),
+        Some("bench") if args.get(1).is_some_and(|a| a == "eval") => bench_eval::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("same-output") => same_output::run(&args[1..]),
         Some("sweep") => sweep::run(&args[1..]),
