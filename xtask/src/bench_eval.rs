@@ -71,12 +71,21 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
         let soup = subdiv::io::load(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let scheme = subdiv_testkit::opensubdiv::scheme_of(&name, &soup).0.name();
         let loop_ = scheme == "loop";
-        for method in &methods {
+        'methods: for method in &methods {
             let (mut wall, mut own, mut theirs) = (Vec::new(), Vec::new(), Vec::new());
             for _ in 0..COLD_ROUNDS {
                 let mut ours = Command::new(&cli);
                 ours.arg("eval").arg(path).args(["--grid", &grid.to_string(), "--method", method, "--scheme", scheme]);
-                let (seconds, stderr) = timed(ours.arg("-o").arg(&out).env("RAYON_NUM_THREADS", "1"), &name)?;
+                // A method may refuse a mesh by design (`eigen` and boundary patches): said, and
+                // the next method.
+                let (seconds, stderr) = match timed(ours.arg("-o").arg(&out).env("RAYON_NUM_THREADS", "1"), &name) {
+                    Ok(run) => run,
+                    Err(refusal) => {
+                        let last = refusal.lines().last().unwrap_or_default().replace('"', "'");
+                        println!("bench=eval mode=cold mesh={name} grid={grid} method={method} refused=\"{last}\"");
+                        continue 'methods;
+                    }
+                };
                 wall.push(seconds);
                 // `… points in T s (…)`.
                 let t = stderr.split(" in ").skip(1).find_map(|rest| rest.split_once(" s ")?.0.parse::<f64>().ok());
