@@ -31,10 +31,14 @@ pub fn eigen_table_file(spec: &PatchTableSpec) -> String {
     format!("{}.eigen", spec.file.trim_end_matches(".patches"))
 }
 
+/// The committed tables, as statics (one copy in the binary; see the patch tables').
+static CATMULL_CLARK: &[u8] = include_bytes!("../tables/catmull-clark.eigen");
+static LOOP: &[u8] = include_bytes!("../tables/loop.eigen");
+
 fn committed_bytes(scheme: Builtin) -> &'static [u8] {
     match scheme {
-        Builtin::CatmullClark => include_bytes!("../tables/catmull-clark.eigen"),
-        Builtin::Loop => include_bytes!("../tables/loop.eigen"),
+        Builtin::CatmullClark => CATMULL_CLARK,
+        Builtin::Loop => LOOP,
         _ => &[],
     }
 }
