@@ -12,7 +12,7 @@
 use std::sync::{Arc, OnceLock};
 
 use subdiv_mesh::BoundaryInterpolation;
-use subdiv_schemes::binary::{ByteReader, ByteWriter, Corrupt, fnv1a};
+use subdiv_schemes::binary::{ByteReader, ByteWriter, Corrupt, TableFile, TableIndex};
 use subdiv_schemes::{Builtin, ChildDomain, PatchMatrices, PatchTableSpec, PatchType};
 
 use crate::EvalError;
@@ -46,11 +46,9 @@ fn committed_bytes(scheme: Builtin) -> &'static [u8] {
 /// The eigenbases of one scheme's smooth interior patch types, by (valence, shape), and their
 /// file format.
 ///
-/// The format (little-endian; lists are a u32 length and their items; complex numbers two f64,
-/// real first): the magic bytes `SUBDIVEB`, the version (u32), the scheme's name (string) and
-/// identity (u64), the entry count (u32); per entry, by valence and shape, its valence and
-/// shape (u32 each), the payload's length (u32) and FNV-1a checksum (u64), and the payload:
-/// the power basis (u8 kind: 0 bicubic, 1 quartic; its size, u32; its weights, an f64 list —
+/// The file is a [`TableFile`] (magic `SUBDIVEB`) keyed by valence and shape (big-endian u32
+/// each); each payload (little-endian; lists are a u32 length and their items; complex numbers
+/// two f64, real first) holds the power basis (u8 kind: 0 bicubic, 1 quartic; its size, u32; its weights, an f64 list —
 /// an extraordinary shape's is its regular children's), then u8 0 for a
 /// polynomial shape, or 1 and the extraordinary part — per non-keeping child its domain (3 ×
 /// u8), power-basis matrix (f64 list) and modes (complex list); the child lookup (4 × u8);
@@ -123,21 +121,9 @@ impl EigenTables {
 
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut w = ByteWriter::default();
-        w.raw(&EIGEN_TABLE_MAGIC);
-        w.u32(EIGEN_TABLE_VERSION);
-        w.str(&self.scheme);
-        w.u64(self.identity);
-        w.len(self.entries.len());
-        for (valence, shape, basis) in &self.entries {
-            w.len(*valence);
-            w.len(*shape);
-            let payload = payload(basis);
-            w.len(payload.len());
-            w.u64(fnv1a(&payload));
-            w.raw(&payload);
-        }
-        w.finish()
+        let entries: Vec<(Vec<u8>, Vec<u8>)> =
+            self.entries.iter().map(|(valence, shape, basis)| (key(*valence, *shape), payload(basis))).collect();
+        FILE.write(&self.scheme, self.identity, &entries)
     }
 
     /// Reads a file written for `spec`'s scheme, every entry (over matrices read from the
@@ -148,20 +134,15 @@ impl EigenTables {
     /// bytes; as [`PatchMatrices::of`].
     pub fn from_bytes(bytes: &[u8], spec: &PatchTableSpec) -> Result<Self, EvalError> {
         let scheme = spec.scheme.scheme();
-        let index = Index::read(bytes, spec.scheme).map_err(table_error)?;
-        let mut entries = Vec::with_capacity(index.entries.len());
-        for &((valence, shape), ref range, sum) in &index.entries {
-            let payload = &bytes[range.clone()];
-            if fnv1a(payload) != sum {
-                return Err(table_error(Corrupt {
-                    offset: range.start,
-                    detail: "an entry's checksum does not match".into(),
-                }));
-            }
+        let index = FILE.index(bytes, scheme.name()).map_err(table_error)?;
+        let mut entries = Vec::with_capacity(index.len());
+        for at in 0..index.len() {
+            let (valence, shape) = read_key(index.key(at));
+            let payload = index.payload(at).map_err(table_error)?;
             let matrices = PatchMatrices::of(scheme, PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)?;
             entries.push((valence, shape, Arc::new(decode(payload, matrices, shape).map_err(table_error)?)));
         }
-        Ok(Self { scheme: scheme.name().to_string(), identity: index.identity, entries })
+        Ok(Self { scheme: scheme.name().to_string(), identity: index.identity(), entries })
     }
 
     /// The largest difference between the numbers of two tables with the same entries and
@@ -200,57 +181,29 @@ pub(crate) fn committed(matrices: &Arc<PatchMatrices>, shape: usize) -> Option<E
         return None;
     }
     let builtin = Builtin::from_name(&matrices.scheme)?;
-    static INDEXES: [OnceLock<Option<Index>>; Builtin::ALL.len()] = [const { OnceLock::new() }; Builtin::ALL.len()];
+    static INDEXES: [OnceLock<Option<TableIndex<'static>>>; Builtin::ALL.len()] =
+        [const { OnceLock::new() }; Builtin::ALL.len()];
     let at = Builtin::ALL.iter().position(|&b| b == builtin)?;
-    let index = INDEXES[at].get_or_init(|| Index::read(committed_bytes(builtin), builtin).ok()).as_ref()?;
-    if matrices.scheme_identity() != index.identity {
+    let index = INDEXES[at].get_or_init(|| FILE.index(committed_bytes(builtin), builtin.name()).ok()).as_ref()?;
+    if matrices.scheme_identity() != index.identity() {
         return None;
     }
-    let at = index.entries.binary_search_by_key(&(valence, shape), |(k, _, _)| *k).ok()?;
-    let (_, range, sum) = &index.entries[at];
-    let payload = &committed_bytes(builtin)[range.clone()];
-    (fnv1a(payload) == *sum).then(|| decode(payload, matrices.clone(), shape).ok()).flatten()
+    let at = index.find(&key(valence, shape))?;
+    decode(index.payload(at).ok()?, matrices.clone(), shape).ok()
 }
 
-/// Where each entry's payload lies and its checksum, by (valence, shape).
-#[derive(Debug)]
-struct Index {
-    identity: u64,
-    entries: Vec<((usize, usize), std::ops::Range<usize>, u64)>,
+/// The layout of an eigenbasis table file.
+const FILE: TableFile =
+    TableFile { what: "an eigenbasis table", magic: EIGEN_TABLE_MAGIC, version: EIGEN_TABLE_VERSION, key_len: 8 };
+
+/// The key of a basis: valence and shape, big-endian.
+fn key(valence: usize, shape: usize) -> Vec<u8> {
+    [valence as u32, shape as u32].iter().flat_map(|x| x.to_be_bytes()).collect()
 }
 
-impl Index {
-    fn read(bytes: &[u8], scheme: Builtin) -> Result<Self, Corrupt> {
-        let mut r = ByteReader::new(bytes);
-        if r.take(8).ok() != Some(&EIGEN_TABLE_MAGIC[..]) {
-            return Err(Corrupt { offset: 0, detail: "not an eigenbasis table file (no SUBDIVEB magic)".into() });
-        }
-        let version = r.u32()?;
-        if version != EIGEN_TABLE_VERSION {
-            return Err(r.corrupt(format!("format version {version}, this build reads {EIGEN_TABLE_VERSION}")));
-        }
-        let name = r.str()?;
-        if name != scheme.name() {
-            return Err(r.corrupt(format!("tables of `{name}`, not of `{}`", scheme.name())));
-        }
-        let identity = r.u64()?;
-        let mut entries = Vec::with_capacity(r.len(20)?);
-        for _ in 0..entries.capacity() {
-            let key = (r.u32()? as usize, r.u32()? as usize);
-            let len = r.len(1)?;
-            let sum = r.u64()?;
-            let start = r.offset();
-            r.take(len)?;
-            entries.push((key, start..start + len, sum));
-        }
-        if !r.is_at_end() {
-            return Err(r.corrupt("bytes after the last entry"));
-        }
-        if entries.windows(2).any(|w| w[0].0 >= w[1].0) {
-            return Err(Corrupt { offset: 0, detail: "entries out of order or repeated".into() });
-        }
-        Ok(Self { identity, entries })
-    }
+fn read_key(k: &[u8]) -> (usize, usize) {
+    let at = |i: usize| u32::from_be_bytes(k[i..i + 4].try_into().expect("4 bytes")) as usize;
+    (at(0), at(4))
 }
 
 fn complexes(w: &mut ByteWriter, xs: &[Complex]) {

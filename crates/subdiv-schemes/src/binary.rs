@@ -215,3 +215,160 @@ impl<'a> ByteReader<'a> {
         (0..n).map(|_| self.f64()).collect()
     }
 }
+
+/// The layout the committed table files share (sub-patch matrices, eigenbases): a header that
+/// names what the file holds, then entries in key order, each a key, a payload and its
+/// checksum, so that a reader finds one entry by binary search and decodes only that one.
+///
+/// The bytes (little-endian but the keys): the magic (8 bytes), the version (u32), the scheme's
+/// name (a string) and identity (u64), the entry count (u32); per entry its key
+/// ([`key_len`](Self::key_len) bytes, compared as bytes: numbers in it are big-endian so that
+/// they sort as numbers), the payload's length (u32) and FNV-1a (u64), and the payload.
+///
+/// ```
+/// use subdiv_schemes::binary::TableFile;
+///
+/// const FILE: TableFile = TableFile { what: "a test table", magic: *b"TESTTABL", version: 1, key_len: 2 };
+/// let bytes = FILE.write("loop", 7, &[(vec![0, 1], vec![10, 20]), (vec![0, 2], vec![30])]);
+/// let index = FILE.index(&bytes, "loop")?;
+/// assert_eq!(index.identity(), 7);
+/// let at = index.find(&[0, 2]).unwrap();
+/// assert_eq!(index.payload(at)?, [30]);
+/// assert!(FILE.index(&bytes, "catmull-clark").is_err());
+/// # Ok::<(), subdiv_schemes::binary::Corrupt>(())
+/// ```
+#[derive(Clone, Copy, Debug)]
+pub struct TableFile {
+    /// What the file is, with its article, for messages (`a patch table`).
+    pub what: &'static str,
+    /// The first bytes.
+    pub magic: [u8; 8],
+    /// The format version this build reads and writes.
+    pub version: u32,
+    /// The length of every key.
+    pub key_len: usize,
+}
+
+impl TableFile {
+    /// The file of `scheme` (name and identity) holding `entries` (key, payload), which are
+    /// sorted by key here.
+    ///
+    /// # Panics
+    /// If a key is not [`key_len`](Self::key_len) long, or two keys are equal (a bug of the
+    /// caller's).
+    pub fn write(&self, scheme: &str, identity: u64, entries: &[(Vec<u8>, Vec<u8>)]) -> Vec<u8> {
+        let mut sorted: Vec<&(Vec<u8>, Vec<u8>)> = entries.iter().collect();
+        sorted.sort_by(|a, b| a.0.cmp(&b.0));
+        assert!(sorted.iter().all(|(k, _)| k.len() == self.key_len), "keys of {} bytes", self.key_len);
+        assert!(sorted.windows(2).all(|w| w[0].0 != w[1].0), "distinct keys");
+        let mut w = ByteWriter::default();
+        w.raw(&self.magic);
+        w.u32(self.version);
+        w.str(scheme);
+        w.u64(identity);
+        w.len(sorted.len());
+        for (key, payload) in sorted {
+            w.raw(key);
+            w.len(payload.len());
+            w.u64(fnv1a(payload));
+            w.raw(payload);
+        }
+        w.finish()
+    }
+
+    /// The header and the entries' places in `bytes`, a file of `scheme` (by name); the
+    /// payloads' checksums are checked when they are read ([`TableIndex::payload`]): hashing a
+    /// whole file cost more than a first tessellation's matrices.
+    ///
+    /// # Errors
+    /// Another kind of file, another version or scheme, entries out of order, and truncated
+    /// bytes, each with its offset.
+    pub fn index<'a>(&self, bytes: &'a [u8], scheme: &str) -> Result<TableIndex<'a>, Corrupt> {
+        let mut r = ByteReader::new(bytes);
+        if r.take(8).ok() != Some(&self.magic[..]) {
+            let magic = String::from_utf8_lossy(&self.magic);
+            return Err(Corrupt { offset: 0, detail: format!("not {} file (no {magic} magic)", self.what) });
+        }
+        let version = r.u32()?;
+        if version != self.version {
+            return Err(r.corrupt(format!("format version {version}, this build reads {}", self.version)));
+        }
+        let name = r.str()?;
+        if name != scheme {
+            return Err(r.corrupt(format!("tables of `{name}`, not of `{scheme}`")));
+        }
+        let identity = r.u64()?;
+        let count = r.len(self.key_len + 12)?;
+        let mut entries = Vec::with_capacity(count);
+        for _ in 0..count {
+            let key = r.take(self.key_len)?;
+            let len = r.len(1)?;
+            let sum = r.u64()?;
+            let offset = r.offset();
+            entries.push(Entry { key, payload: r.take(len)?, offset, sum });
+        }
+        if !r.is_at_end() {
+            return Err(r.corrupt("bytes after the last entry"));
+        }
+        if entries.windows(2).any(|w| w[0].key >= w[1].key) {
+            return Err(Corrupt { offset: 0, detail: "entries out of order or repeated".into() });
+        }
+        Ok(TableIndex { identity, entries })
+    }
+}
+
+/// One entry of a [`TableIndex`].
+#[derive(Clone, Copy, Debug)]
+struct Entry<'a> {
+    key: &'a [u8],
+    payload: &'a [u8],
+    offset: usize,
+    sum: u64,
+}
+
+/// A table file's header and entries ([`TableFile::index`]).
+#[derive(Clone, Debug)]
+pub struct TableIndex<'a> {
+    identity: u64,
+    entries: Vec<Entry<'a>>,
+}
+
+impl<'a> TableIndex<'a> {
+    /// The scheme identity the file was written for.
+    pub fn identity(&self) -> u64 {
+        self.identity
+    }
+
+    /// The number of entries.
+    pub fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.entries.is_empty()
+    }
+
+    /// The entry with `key`, if there is one.
+    pub fn find(&self, key: &[u8]) -> Option<usize> {
+        self.entries.binary_search_by(|e| e.key.cmp(key)).ok()
+    }
+
+    /// Entry `at`'s key.
+    pub fn key(&self, at: usize) -> &'a [u8] {
+        self.entries[at].key
+    }
+
+    /// Entry `at`'s payload, its checksum checked.
+    ///
+    /// # Errors
+    /// A payload whose checksum does not match.
+    pub fn payload(&self, at: usize) -> Result<&'a [u8], Corrupt> {
+        let e = &self.entries[at];
+        if fnv1a(e.payload) == e.sum {
+            Ok(e.payload)
+        } else {
+            Err(Corrupt { offset: e.offset, detail: "an entry's checksum does not match".into() })
+        }
+    }
+}

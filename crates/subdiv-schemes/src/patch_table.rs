@@ -9,12 +9,12 @@
 //! (run by CI) reports. A file that cannot be read is never an error for a user: the matrices
 //! are then derived, as for any type outside the tables.
 
-use std::ops::{Range, RangeInclusive};
+use std::ops::RangeInclusive;
 use std::sync::OnceLock;
 
 use subdiv_mesh::BoundaryInterpolation;
 
-use crate::binary::{ByteReader, ByteWriter, Corrupt, fnv1a};
+use crate::binary::{ByteReader, ByteWriter, Corrupt, TableFile, TableIndex};
 use crate::patch::{ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch};
 use crate::{Builtin, Scheme, SchemeError};
 
@@ -88,7 +88,7 @@ impl PatchTableSpec {
             self.boundary_faces.clone().flat_map(move |f| (0..f).map(move |i| (PatchType::boundary(f, i), rule)))
         });
         let mut keys: Vec<_> = interior.chain(boundary).collect();
-        keys.sort_by_key(|&(t, rule)| sort_key(t, rule));
+        keys.sort_by_cached_key(|&(t, rule)| key(t, rule));
         keys
     }
 
@@ -114,13 +114,11 @@ impl PatchTableSpec {
 
 /// Sub-patch matrices of one scheme by (patch type, boundary rule), and their file format.
 ///
-/// The format (little-endian; lists are a u32 length and their items): the magic bytes
-/// `SUBDIVPM`, the version (u32), the scheme's name (string) and identity (u64), the entry
-/// count (u32); per entry, in the order of the keys (interior, then boundary types by faces,
-/// index and rule), its key — patch type (u8 kind, u32 valence or faces, u32 index, u64
-/// sharp spokes, u8 corner), boundary rule (u8) — the payload's length (u32) and FNV-1a
-/// checksum (u64), and the payload: the distinct nonzero matrix entries (an f64 list), radius,
-/// face size and shape count (u32 each), then per
+/// The file is a [`TableFile`] (magic `SUBDIVPM`): its keys are the patch type (u8 kind, u32
+/// valence or faces, u32 index, u64 sharp spokes, u8 corner) and the boundary rule (u8), in
+/// that order (so interior types come first, then boundary types by faces, index and rule);
+/// each payload (little-endian; lists are a u32 length and their items) holds the distinct
+/// nonzero matrix entries (an f64 list), radius, face size and shape count (u32 each), then per
 /// shape its size (u32), signature (u32 list), children (per child: shape (u32), domain
 /// offsets and flip (3 × u8), rows and columns (u32), the nonzero entries (a u32 count, then
 /// per entry its row-major place less the last one's and its value's place in the payload's
@@ -150,7 +148,7 @@ impl PatchTables {
     /// Tables of `scheme` holding `entries` (kept in the order of their keys: interior, then
     /// boundary types by faces, index and rule).
     pub fn new(scheme: &Scheme, mut entries: Vec<(BoundaryInterpolation, PatchMatrices)>) -> Self {
-        entries.sort_by_key(|(rule, m)| sort_key(m.patch_type, *rule));
+        entries.sort_by_cached_key(|(rule, m)| key(m.patch_type, *rule));
         Self { scheme: scheme.name().to_string(), identity: scheme.identity(), entries }
     }
 
@@ -161,20 +159,9 @@ impl PatchTables {
 
     /// The file's bytes.
     pub fn to_bytes(&self) -> Vec<u8> {
-        let mut w = ByteWriter::default();
-        w.raw(&PATCH_TABLE_MAGIC);
-        w.u32(PATCH_TABLE_VERSION);
-        w.str(&self.scheme);
-        w.u64(self.identity);
-        w.len(self.entries.len());
-        for (rule, m) in &self.entries {
-            write_key(&mut w, m.patch_type, *rule);
-            let payload = payload(m);
-            w.len(payload.len());
-            w.u64(fnv1a(&payload));
-            w.raw(&payload);
-        }
-        w.finish()
+        let entries: Vec<(Vec<u8>, Vec<u8>)> =
+            self.entries.iter().map(|(rule, m)| (key(m.patch_type, *rule), payload(m))).collect();
+        FILE.write(&self.scheme, self.identity, &entries)
     }
 
     /// Reads a file written for `scheme`, every entry.
@@ -183,22 +170,24 @@ impl PatchTables {
     /// [`SchemeError::Table`] for a file of another kind, version or scheme (name or
     /// identity), and for corrupt bytes, with the offset.
     pub fn from_bytes(bytes: &[u8], scheme: &Scheme) -> Result<Self, SchemeError> {
-        let index = Index::read(bytes, scheme).map_err(table_error)?;
-        let entries = index
-            .entries
-            .iter()
-            .map(|&((t, rule), ref range, sum)| {
-                let payload = &bytes[range.clone()];
-                if fnv1a(payload) != sum {
-                    return Err(Corrupt { offset: range.start, detail: "an entry's checksum does not match".into() });
-                }
-                decode(payload, t, scheme).map(|m| (rule, m))
+        let index = FILE.index(bytes, scheme.name()).map_err(table_error)?;
+        let entries = (0..index.len())
+            .map(|at| {
+                let (t, rule) = read_key(index.key(at))?;
+                decode(index.payload(at)?, t, scheme).map(|m| (rule, m))
             })
             .collect::<Result<_, _>>()
             .map_err(table_error)?;
-        Ok(Self { scheme: scheme.name().to_string(), identity: index.identity, entries })
+        Ok(Self { scheme: scheme.name().to_string(), identity: index.identity(), entries })
     }
 }
+
+/// The layout of a patch table file.
+const FILE: TableFile =
+    TableFile { what: "a patch table", magic: PATCH_TABLE_MAGIC, version: PATCH_TABLE_VERSION, key_len: KEY_LEN };
+
+/// A key's bytes: kind, valence or faces, index, sharp spokes, corner, boundary rule.
+const KEY_LEN: usize = 1 + 4 + 4 + 8 + 1 + 1;
 
 fn table_error(e: Corrupt) -> SchemeError {
     SchemeError::Table(e.to_string())
@@ -213,101 +202,45 @@ pub(crate) fn committed(
 ) -> Option<PatchMatrices> {
     let builtin = Builtin::from_name(scheme.name())?;
     // Each built-in's index read at its first use (a Catmull-Clark mesh never reads Loop's).
-    static INDEXES: [OnceLock<Option<Index>>; Builtin::ALL.len()] = [const { OnceLock::new() }; Builtin::ALL.len()];
+    static INDEXES: [OnceLock<Option<TableIndex<'static>>>; Builtin::ALL.len()] =
+        [const { OnceLock::new() }; Builtin::ALL.len()];
     let at = Builtin::ALL.iter().position(|&b| b == builtin)?;
-    let index = INDEXES[at].get_or_init(|| Index::read(committed_bytes(builtin), builtin.scheme()).ok()).as_ref()?;
-    let at =
-        index.entries.binary_search_by_key(&sort_key(patch_type, boundary), |(k, _, _)| sort_key(k.0, k.1)).ok()?;
+    let index = INDEXES[at].get_or_init(|| FILE.index(committed_bytes(builtin), builtin.name()).ok()).as_ref()?;
+    let at = index.find(&key(patch_type, boundary))?;
     // A user's scheme of a built-in's name with other rules: not these tables.
-    if scheme.identity() != index.identity {
+    if scheme.identity() != index.identity() {
         return None;
     }
-    let (_, range, sum) = &index.entries[at];
-    let payload = &committed_bytes(builtin)[range.clone()];
-    if fnv1a(payload) != *sum {
-        return None;
-    }
-    decode(payload, patch_type, scheme).ok()
+    decode(index.payload(at).ok()?, patch_type, scheme).ok()
 }
 
-/// Where each entry's payload lies and its checksum, by key (sorted by [`sort_key`]).
-#[derive(Debug)]
-struct Index {
-    identity: u64,
-    entries: Vec<((PatchType, BoundaryInterpolation), Range<usize>, u64)>,
-}
-
-/// The order of an index's keys.
-fn sort_key(t: PatchType, rule: BoundaryInterpolation) -> (u8, usize, usize, u64, bool, u8) {
-    let rule = rule.code();
-    match t {
-        PatchType::Interior { valence, sharp } => (0, valence, 0, sharp.edges, sharp.corner, rule),
-        PatchType::Boundary { faces, index, sharp } => (1, faces, index, sharp.edges, sharp.corner, rule),
-    }
-}
-
-impl Index {
-    /// The header and the entries' keys of `bytes` (the payloads' checksums are checked when
-    /// they are read: hashing a whole file cost more than a first tessellation's matrices).
-    fn read(bytes: &[u8], scheme: &Scheme) -> Result<Self, Corrupt> {
-        let mut r = ByteReader::new(bytes);
-        if r.take(8).ok() != Some(&PATCH_TABLE_MAGIC[..]) {
-            return Err(Corrupt { offset: 0, detail: "not a patch table file (no SUBDIVPM magic)".into() });
-        }
-        let version = r.u32()?;
-        if version != PATCH_TABLE_VERSION {
-            return Err(r.corrupt(format!("format version {version}, this build reads {PATCH_TABLE_VERSION}")));
-        }
-        let name = r.str()?;
-        if name != scheme.name() {
-            return Err(r.corrupt(format!("tables of `{name}`, not of `{}`", scheme.name())));
-        }
-        let identity = r.u64()?;
-        let count = r.len(16)?;
-        let mut entries = Vec::with_capacity(count);
-        for _ in 0..count {
-            let key = read_key(&mut r)?;
-            let len = r.len(1)?;
-            let sum = r.u64()?;
-            let start = r.offset();
-            r.take(len)?;
-            entries.push((key, start..start + len, sum));
-        }
-        if !r.is_at_end() {
-            return Err(r.corrupt("bytes after the last entry"));
-        }
-        // Written in key order, so a lookup is a binary search.
-        if entries.windows(2).any(|w| sort_key(w[0].0.0, w[0].0.1) >= sort_key(w[1].0.0, w[1].0.1)) {
-            return Err(Corrupt { offset: 0, detail: "entries out of order or repeated".into() });
-        }
-        Ok(Self { identity, entries })
-    }
-}
-
-fn write_key(w: &mut ByteWriter, t: PatchType, rule: BoundaryInterpolation) {
+/// The key of `(t, rule)`: big-endian, so that keys sort as the types do (interior first, then
+/// boundary types by faces and index), then by rule.
+fn key(t: PatchType, rule: BoundaryInterpolation) -> Vec<u8> {
     let (kind, a, b, sharp) = match t {
-        PatchType::Interior { valence, sharp } => (0, valence, 0, sharp),
-        PatchType::Boundary { faces, index, sharp } => (1, faces, index, sharp),
+        PatchType::Interior { valence, sharp } => (0u8, valence, 0, sharp),
+        PatchType::Boundary { faces, index, sharp } => (1u8, faces, index, sharp),
     };
-    w.u8(kind);
-    w.len(a);
-    w.len(b);
-    w.u64(sharp.edges);
-    w.u8(u8::from(sharp.corner));
-    w.u8(rule.code());
+    let mut k = Vec::with_capacity(KEY_LEN);
+    k.push(kind);
+    k.extend_from_slice(&(a as u32).to_be_bytes());
+    k.extend_from_slice(&(b as u32).to_be_bytes());
+    k.extend_from_slice(&sharp.edges.to_be_bytes());
+    k.extend([u8::from(sharp.corner), rule.code()]);
+    k
 }
 
-fn read_key(r: &mut ByteReader<'_>) -> Result<(PatchType, BoundaryInterpolation), Corrupt> {
-    let (kind, a, b) = (r.u8()?, r.u32()? as usize, r.u32()? as usize);
-    let sharp = SharpFeatures { edges: r.u64()?, corner: r.u8()? != 0 };
-    let t = match kind {
+fn read_key(k: &[u8]) -> Result<(PatchType, BoundaryInterpolation), Corrupt> {
+    let bad = |detail: String| Corrupt { offset: 0, detail };
+    let u32_at = |i: usize| u32::from_be_bytes(k[i..i + 4].try_into().expect("4 bytes")) as usize;
+    let (a, b) = (u32_at(1), u32_at(5));
+    let sharp = SharpFeatures { edges: u64::from_be_bytes(k[9..17].try_into().expect("8 bytes")), corner: k[17] != 0 };
+    let t = match k[0] {
         0 => PatchType::Interior { valence: a, sharp },
         1 => PatchType::Boundary { faces: a, index: b, sharp },
-        _ => return Err(r.corrupt(format!("patch type kind {kind}"))),
+        kind => return Err(bad(format!("patch type kind {kind}"))),
     };
-    let code = r.u8()?;
-    let rule =
-        BoundaryInterpolation::from_code(code.into()).ok_or_else(|| r.corrupt(format!("boundary rule {code}")))?;
+    let rule = BoundaryInterpolation::from_code(k[18].into()).ok_or_else(|| bad(format!("boundary rule {}", k[18])))?;
     Ok((t, rule))
 }
 
