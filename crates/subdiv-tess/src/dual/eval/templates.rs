@@ -87,6 +87,9 @@ impl Evaluator {
         let (mut signature, mut patches) = (Vec::new(), Vec::new());
         let (mut rows, mut starts, mut columns, mut order) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut bucket: Vec<usize> = Vec::new();
+        // Per cage vertex, its place in the current face's support (a search per row entry was
+        // half of this pass).
+        let mut places = vec![u32::MAX; mesh.vertex_count()];
         let mut support = Vec::new();
         let mut memo = CageRowMemo::default();
         for f in mesh.face_ids() {
@@ -105,7 +108,10 @@ impl Evaluator {
             // point's place in the support (each row names a cage point at most once, and the
             // points are visited in order, so every column comes out sorted).
             let cage = &support[0];
-            let place = |x: u32| cage.partition_point(|&c| c < x);
+            for (i, &c) in cage.iter().enumerate() {
+                places[c as usize] = i as u32;
+            }
+            let place = |x: u32| places[x as usize] as usize;
             bucket.clear();
             bucket.resize(cage.len() + 1, 0);
             for &(x, _) in &rows {
@@ -122,6 +128,9 @@ impl Evaluator {
                     columns[*at] = (point as u32, r.to_bits());
                     *at += 1;
                 }
+            }
+            for &c in cage {
+                places[c as usize] = u32::MAX;
             }
             // `bucket[i]` is now where column `i` ends.
             order.clear();
