@@ -34,3 +34,9 @@ pub(crate) fn median(samples: &[f64]) -> f64 {
     sorted.sort_by(f64::total_cmp);
     sorted[sorted.len() / 2]
 }
+
+/// The CLI's own time in its summary line `… in T s (…)`: the first ` in ` followed by a
+/// number and ` s` (a path may hold ` in ` too).
+pub(crate) fn cli_seconds(stderr: &str) -> Option<f64> {
+    stderr.split(" in ").skip(1).find_map(|rest| rest.split_once(" s ")?.0.parse::<f64>().ok())
+}

@@ -87,8 +87,7 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                     }
                 };
                 wall.push(seconds);
-                // `… points in T s (…)`.
-                let t = stderr.split(" in ").skip(1).find_map(|rest| rest.split_once(" s ")?.0.parse::<f64>().ok());
+                let t = crate::bench_args::cli_seconds(&stderr);
                 own.push(t.ok_or_else(|| format!("subdiv eval {name}: no `in T s` in {stderr}"))?);
                 if let Some(osd) = &peer {
                     let mut limit = Command::new(osd);

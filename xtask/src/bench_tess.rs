@@ -152,12 +152,7 @@ fn cold(meshes: &[PathBuf], rates: &[u32], peer: Option<&Path>) -> Result<(), St
                     .output()
                     .map_err(|e| format!("{}: {e}", cli.display()))?;
                 let stderr = String::from_utf8_lossy(&run.stderr);
-                // `… in T s (…)`: the first ` in ` followed by a number and ` s` (a path may
-                // hold ` in ` too).
-                let seconds = stderr
-                    .split(" in ")
-                    .skip(1)
-                    .find_map(|rest| rest.split_once(" s ")?.0.parse::<f64>().ok())
+                let seconds = crate::bench_args::cli_seconds(&stderr)
                     .filter(|_| run.status.success())
                     .ok_or_else(|| format!("subdiv tessellate {name}: {stderr}"))?;
                 ours.push(seconds);
