@@ -312,6 +312,32 @@ pub fn twist(positions: &[DVec3], top: f64) -> Vec<DVec3> {
         .collect()
 }
 
+/// `soup` with a texture channel `"uv"` in which every face is its own chart: a corner's
+/// value is its vertex's `(x + 2y + f, z − x)` on face `f`, so every edge is a seam (for tests
+/// of face-varying channels at their hardest).
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+///
+/// let cube = Mesh::build(shapes::face_charts(shapes::cube()))?;
+/// let uv = &cube.channels()[0];
+/// assert_eq!((uv.name(), uv.dimension()), ("uv", 2));
+/// assert!(cube.edges().all(|e| cube.is_seam(uv, e)));
+/// # Ok::<(), subdiv_mesh::MeshError>(())
+/// ```
+pub fn face_charts(mut soup: PolygonSoup) -> PolygonSoup {
+    let mut values = Vec::new();
+    for (f, face) in soup.faces().enumerate() {
+        for v in face {
+            let p = soup.positions()[v.index()];
+            values.extend([p.x + 2.0 * p.y + f as f64, p.z - p.x]);
+        }
+    }
+    let indices = (0..values.len() as u32 / 2).collect();
+    soup.channels.push(crate::Channel::new("uv", 2, values, indices));
+    soup
+}
+
 /// Builds a soup that is valid by construction.
 fn built(soup: PolygonSoup) -> Mesh {
     match Mesh::build(soup) {

@@ -177,6 +177,55 @@ impl FaceDomain {
         }
     }
 
+    /// The limit of the linear split (bilinear for quad splits, linear triangles for triangle
+    /// splits) over a face of this domain at `(u, v)`, as weights of the face's corners, into
+    /// `out`: per corner in order, its weight in the value and in `∂/∂u`, `∂/∂v`. A quad's is
+    /// the bilinear interpolation, a triangle's the linear one; an N-gon's point lies on a `Bfr`
+    /// sub-face, the quad of its corner `s`, the midpoints of its sides `s` and `s − 1` and its
+    /// centroid (the bilinear split's first level), bilinear there. `(u, v)` must be
+    /// [contained](Self::contains_f64).
+    ///
+    /// ```
+    /// use subdiv_stencil::FaceDomain;
+    ///
+    /// let mut w = Vec::new();
+    /// FaceDomain::Quad.linear_weights(0.25, 0.5, &mut w);
+    /// assert_eq!(w.iter().map(|w| w[0]).collect::<Vec<_>>(), [0.375, 0.125, 0.125, 0.375]);
+    /// // A pentagon's centroid: a fifth of each corner.
+    /// FaceDomain::SubFaces { size: 5, columns: 3 }.linear_weights(0.5, 0.5, &mut w);
+    /// assert!(w.iter().all(|w| (w[0] - 0.2).abs() < 1e-15));
+    /// ```
+    pub fn linear_weights(self, u: f64, v: f64, out: &mut Vec<[f64; 3]>) {
+        let bilinear = |u: f64, v: f64| {
+            [
+                [(1.0 - u) * (1.0 - v), v - 1.0, u - 1.0],
+                [u * (1.0 - v), 1.0 - v, -u],
+                [u * v, v, u],
+                [(1.0 - u) * v, -v, 1.0 - u],
+            ]
+        };
+        out.clear();
+        match self {
+            Self::Triangle => out.extend([[1.0 - u - v, -1.0, -1.0], [u, 1.0, 0.0], [v, 0.0, 1.0]]),
+            Self::Quad => out.extend(bilinear(u, v)),
+            Self::SubFaces { size: n, .. } => {
+                let (sub, a, b, scale) = self.child_of_f64(u, v);
+                let [w0, w1, w2, w3] = bilinear(a, b).map(|[p, du, dv]| [p, scale * du, scale * dv]);
+                // The centroid's share, then each corner's.
+                out.extend((0..n).map(|_| w2.map(|x| x / n as f64)));
+                let mut add = |k: usize, w: [f64; 3], f: f64| {
+                    let e = &mut out[k % n];
+                    (0..3).for_each(|r| e[r] += f * w[r]);
+                };
+                add(sub, w0, 1.0);
+                add(sub, w1, 0.5);
+                add(sub + 1, w1, 0.5);
+                add(sub, w3, 0.5);
+                add(sub + n - 1, w3, 0.5);
+            }
+        }
+    }
+
     /// How many points [`grid`](Self::grid) lists for `n`, without listing them (for budgets).
     ///
     /// ```

@@ -1,9 +1,9 @@
 //! Limit evaluation through the facade: [`EvalOptions`], [`Evaluator`] and its grids.
 
-use subdiv_eval::{EigenEvaluator, Method as EvalMethod};
+use subdiv_eval::{EigenEvaluator, EvalError, Method as EvalMethod};
 use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{RefineOptions, Scheme};
-use subdiv_stencil::LimitPoint;
+use subdiv_stencil::{FaceDomain, LimitPoint, LinearEvaluator};
 
 use crate::Error;
 
@@ -96,28 +96,70 @@ pub struct EvalGrid {
 /// ([`Surface::evaluator`](crate::Surface::evaluator)): positions and first derivatives.
 #[derive(Debug)]
 pub struct Evaluator {
-    inner: EigenEvaluator,
+    inner: Inner,
     max_points: u64,
+}
+
+/// How an [`Evaluator`] evaluates.
+#[derive(Debug)]
+enum Inner {
+    /// A surface's patches, by eigenbasis or exact stencils.
+    Patches(EigenEvaluator),
+    /// A linear channel's faces, their corners combined directly (any method: exact up to
+    /// rounding), with the method asked for.
+    Linear(LinearEvaluator, EvalMethod),
 }
 
 impl Evaluator {
     /// Prepares `mesh` under `scheme`.
     pub(crate) fn new(scheme: &Scheme, mesh: &Mesh, options: &EvalOptions) -> Result<Self, Error> {
-        Ok(Self {
-            inner: EigenEvaluator::new(scheme, mesh, &options.refine, options.method)?,
-            max_points: options.max_points,
-        })
+        let inner = Inner::Patches(EigenEvaluator::new(scheme, mesh, &options.refine, options.method)?);
+        Ok(Self { inner, max_points: options.max_points })
+    }
+
+    /// Evaluates a linear channel's surface directly.
+    pub(crate) fn linear(linear: LinearEvaluator, options: &EvalOptions) -> Self {
+        Self { inner: Inner::Linear(linear, options.method), max_points: options.max_points }
     }
 
     /// The method faces were prepared with.
     pub fn method(&self) -> EvalMethod {
-        self.inner.method()
+        match &self.inner {
+            Inner::Patches(eigen) => eigen.method(),
+            Inner::Linear(_, method) => *method,
+        }
     }
 
     /// The evaluator underneath (second derivatives, which face takes which route, the exact
-    /// stencil evaluator).
-    pub fn eigen(&self) -> &EigenEvaluator {
-        &self.inner
+    /// stencil evaluator); `None` for a linear channel's surface
+    /// ([`Surface::channel_evaluator`](crate::Surface::channel_evaluator) in face-varying mode
+    /// `all`), whose faces are their corners' bilinear or linear interpolation.
+    pub fn eigen(&self) -> Option<&EigenEvaluator> {
+        match &self.inner {
+            Inner::Patches(eigen) => Some(eigen),
+            Inner::Linear(..) => None,
+        }
+    }
+
+    fn face_count(&self) -> usize {
+        match &self.inner {
+            Inner::Patches(eigen) => eigen.face_count(),
+            Inner::Linear(linear, _) => linear.face_count(),
+        }
+    }
+
+    fn has_surface(&self, face: FaceId) -> Result<bool, Error> {
+        Ok(match &self.inner {
+            Inner::Patches(eigen) => eigen.stencil().has_surface(face)?,
+            Inner::Linear(linear, _) => linear.has_surface(face)?,
+        })
+    }
+
+    fn domain(&self, face: FaceId) -> Result<FaceDomain, Error> {
+        Ok(match &self.inner {
+            Inner::Patches(eigen) => eigen.stencil().domain(face)?,
+            Inner::Linear(linear, _) => linear.domain(face)?,
+        })
     }
 
     /// The limit point of `face` at `(u, v)` with its first derivatives (at an extraordinary
@@ -128,7 +170,11 @@ impl Evaluator {
     /// ([`Error::is_hole`]), or a face [`EvalMethod::Eigen`] does not take.
     #[inline]
     pub fn evaluate(&self, face: FaceId, u: f64, v: f64) -> Result<LimitPoint, Error> {
-        Ok(self.inner.eval(face, u, v)?)
+        Ok(match &self.inner {
+            Inner::Patches(eigen) => eigen.eval(face, u, v)?,
+            // Wrapped as the patches' errors are: `Error::Eval` for every evaluation.
+            Inner::Linear(linear, _) => linear.eval(face, u, v).map_err(EvalError::Stencil)?,
+        })
     }
 
     /// Every face at the grid `(i/n, j/n)` of `osd_limit --grid n`: quads `(n + 1)²` points,
@@ -156,11 +202,10 @@ impl Evaluator {
         if !(1..=MAX_GRID).contains(&n) {
             return Err(Error::Grid { n, max: MAX_GRID });
         }
-        let exact = self.inner.stencil();
         let mut points = 0u64;
-        for face in (0..self.inner.face_count() as u32).map(FaceId::new) {
-            if exact.has_surface(face)? {
-                points = points.saturating_add(exact.domain(face)?.grid_len(n));
+        for face in (0..self.face_count() as u32).map(FaceId::new) {
+            if self.has_surface(face)? {
+                points = points.saturating_add(self.domain(face)?.grid_len(n));
             }
         }
         Error::check_budget(
@@ -171,18 +216,18 @@ impl Evaluator {
             "use a smaller grid, or raise the limit (EvalOptions::with_max_points, `subdiv eval --max-points`)",
         )?;
         let mut grid = EvalGrid { points: Vec::with_capacity(points as usize), holes: 0 };
-        for face in (0..self.inner.face_count() as u32).map(FaceId::new) {
-            if self.method() == EvalMethod::Stencil {
-                let points = exact.grid(face, n)?;
+        for face in (0..self.face_count() as u32).map(FaceId::new) {
+            if let (Inner::Patches(eigen), EvalMethod::Stencil) = (&self.inner, self.method()) {
+                let points = eigen.stencil().grid(face, n)?;
                 grid.holes += usize::from(points.is_empty());
                 grid.points.extend(points.into_iter().map(|(g, point)| GridPoint { face, u: g.u, v: g.v, point }));
                 continue;
             }
-            if !exact.has_surface(face)? {
+            if !self.has_surface(face)? {
                 grid.holes += 1;
                 continue;
             }
-            for g in exact.domain(face)?.grid(n) {
+            for g in self.domain(face)?.grid(n) {
                 grid.points.push(GridPoint { face, u: g.u, v: g.v, point: self.evaluate(face, g.u, g.v)? });
             }
         }

@@ -5,7 +5,7 @@ use std::sync::OnceLock;
 
 use subdiv_mesh::{BuildOptions, FaceId, Mesh, PolygonSoup};
 use subdiv_schemes::{ChannelSurface, RefineOptions, Scheme, Split, refine_uniform_with_progress};
-use subdiv_stencil::LimitPoint;
+use subdiv_stencil::{LimitPoint, LinearEvaluator};
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
 use subdiv_tess::{
     DualOptions, DualTessellator, FlatMesh, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink,
@@ -269,6 +269,9 @@ impl Surface {
             channels: self.mesh.channels().iter().map(|c| c.name().to_owned()).collect(),
         })?;
         let surface = ChannelSurface::new(&self.mesh, found, &self.scheme, &options.refine)?;
+        if let Some(linear) = LinearEvaluator::new(&surface)? {
+            return Ok(Evaluator::linear(linear, options));
+        }
         let method = match options.method {
             crate::EvalMethod::Eigen => crate::EvalMethod::Auto,
             method => method,

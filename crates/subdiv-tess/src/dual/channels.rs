@@ -10,7 +10,7 @@
 use glam::DVec3;
 use subdiv_mesh::{FaceId, FaceVaryingInterpolation, Mesh};
 use subdiv_schemes::{ChannelSurface, RefineOptions, Scheme};
-use subdiv_stencil::FaceDomain;
+use subdiv_stencil::LinearEvaluator;
 
 use super::eval::Evaluator;
 use super::topology::{Site, Topology};
@@ -44,10 +44,10 @@ enum Route {
     /// A channel linear over every face ([`FaceVaryingInterpolation::All`], the default: the
     /// bilinear or linear-triangle split, whose limit over a face is the bilinear or linear
     /// interpolation of its corners' values, over `Bfr` sub-faces for N-gons): each point is
-    /// its face's corners combined directly ([`linear_row`]). Building a whole evaluator for it
-    /// (patch levels, templates, records) was a quarter of a fresh process's tessellation of a
-    /// textured mesh.
-    Linear(Box<ChannelSurface>),
+    /// its face's corners combined directly ([`LinearEvaluator`]). Building a whole evaluator
+    /// for it (patch levels, templates, records) was a quarter of a fresh process's
+    /// tessellation of a textured mesh.
+    Linear(Box<LinearEvaluator>),
 }
 
 impl Channels {
@@ -72,10 +72,9 @@ impl Channels {
         for channel in mesh.channels() {
             let surface = ChannelSurface::new(mesh, channel, scheme, &options)
                 .map_err(|e| TessError::Scheme { scheme: scheme.name().to_string(), reason: e.to_string() })?;
-            let route = if surface.is_linear() {
-                Route::Linear(Box::new(surface))
-            } else {
-                Route::Evaluated(Box::new(Evaluator::new(surface.scheme(), surface.mesh())?))
+            let route = match LinearEvaluator::new(&surface)? {
+                Some(linear) => Route::Linear(Box::new(linear)),
+                None => Route::Evaluated(Box::new(Evaluator::new(surface.scheme(), surface.mesh())?)),
             };
             channels.surfaces.push(Surface { route, values: Vec::new(), normals: Vec::new() });
             channels.names.push(channel.name().to_owned());
@@ -109,12 +108,12 @@ impl Channels {
                     evaluator.prepare(t, rates, parallel)?;
                     evaluator.evaluate_points(t, parallel, &mut s.values, &mut s.normals);
                 }
-                Route::Linear(surface) => {
+                Route::Linear(linear) => {
                     let mut row = Vec::new();
                     s.values.clear();
                     s.values.extend((0..t.point_count()).map(|k| {
-                        linear_row(surface, t.site(k), &mut row);
-                        let values = surface.mesh().positions();
+                        linear_row(linear, t.site(k), &mut row);
+                        let values = linear.values();
                         row.iter().fold(DVec3::ZERO, |acc, &(c, [w, _, _])| acc + w * values[c as usize])
                     }));
                 }
@@ -142,12 +141,12 @@ impl Channels {
     pub(crate) fn plan(&self, k: usize, t: &Topology) -> (crate::dual::EvaluationPlan, &[DVec3]) {
         match &self.surfaces[k].route {
             Route::Evaluated(evaluator) => (evaluator.plan(t), evaluator.levels().mesh(0).positions()),
-            Route::Linear(surface) => {
-                let values = surface.mesh().positions();
+            Route::Linear(linear) => {
+                let values = linear.values();
                 let mut plan = crate::dual::EvaluationPlan::over_points(values.len() as u32);
                 let (mut row, mut ids, mut weights) = (Vec::new(), Vec::new(), [Vec::new(), Vec::new(), Vec::new()]);
                 for v in 0..t.point_count() {
-                    linear_row(surface, t.site(v), &mut row);
+                    linear_row(linear, t.site(v), &mut row);
                     ids.clear();
                     ids.extend(row.iter().map(|&(c, _)| c));
                     for (r, out) in weights.iter_mut().enumerate() {
@@ -162,49 +161,10 @@ impl Channels {
     }
 }
 
-/// A linear channel's value at `site` as a combination of its face's corners (vertices of
-/// the channel's mesh) into `row`: per corner, its weights in the value and in the two
-/// derivatives of the face's parameters. A quad's is the bilinear interpolation, a
-/// triangle's (triangle split) the linear one; an N-gon's point lies on a `Bfr` sub-face, the
-/// quad of its corner `s`, the midpoints of its sides `s` and `s − 1` and its centroid (the
-/// bilinear split's first level), bilinear there.
-fn linear_row(surface: &ChannelSurface, site: Site, row: &mut Vec<(u32, [f64; 3])>) {
-    let mesh = surface.mesh();
-    let corners = mesh.face_vertices(FaceId::new(site.face));
-    let n = corners.len();
-    let id = |k: usize| corners[k % n].index() as u32;
+/// A linear channel's value at `site` as a combination of its face's corners.
+fn linear_row(linear: &LinearEvaluator, site: Site, row: &mut Vec<(u32, [f64; 3])>) {
     let (u, v) = site.point.to_f64();
-    row.clear();
-    let bilinear = |u: f64, v: f64| {
-        [
-            [(1.0 - u) * (1.0 - v), v - 1.0, u - 1.0],
-            [u * (1.0 - v), 1.0 - v, -u],
-            [u * v, v, u],
-            [(1.0 - u) * v, -v, 1.0 - u],
-        ]
-    };
-    match FaceDomain::of(surface.scheme().split(), n) {
-        Some(FaceDomain::Triangle) => {
-            row.extend([(id(0), [1.0 - u - v, -1.0, -1.0]), (id(1), [u, 1.0, 0.0]), (id(2), [v, 0.0, 1.0])]);
-        }
-        Some(FaceDomain::Quad) => row.extend((0..4).map(id).zip(bilinear(u, v))),
-        Some(domain @ FaceDomain::SubFaces { .. }) => {
-            let (sub, a, b, scale) = domain.child_of_f64(u, v);
-            let [w0, w1, w2, w3] = bilinear(a, b).map(|[p, du, dv]| [p, scale * du, scale * dv]);
-            // The centroid's share, then each corner's.
-            row.extend((0..n).map(|k| (id(k), w2.map(|x| x / n as f64))));
-            let mut add = |k: usize, w: [f64; 3], f: f64| {
-                let e = &mut row[k % n].1;
-                (0..3).for_each(|r| e[r] += f * w[r]);
-            };
-            add(sub, w0, 1.0);
-            add(sub, w1, 0.5);
-            add(sub + 1, w1, 0.5);
-            add(sub, w3, 0.5);
-            add(sub + n - 1, w3, 0.5);
-        }
-        None => unreachable!("channel surfaces are of primal splits"),
-    }
+    linear.corner_weights(FaceId::new(site.face), u, v, row);
 }
 
 /// The texture coordinates of `channels` (if it has them) as f32, two per point, into `out`.
@@ -221,25 +181,14 @@ pub(crate) fn write_texcoords(channels: &TessChannels, out: &mut Vec<f32>) {
 
 #[cfg(test)]
 mod tests {
-    use subdiv_mesh::{Channel, PolygonSoup, shapes};
+    use subdiv_mesh::{PolygonSoup, shapes};
     use subdiv_schemes::Builtin;
 
     use super::*;
     use crate::dual::topology::Builder;
 
-    /// `soup` with a texture channel: per corner, its vertex's `(x + 2y, z − x)` plus a
-    /// per-face offset, so every edge is a seam and every face a component of the channel.
-    fn textured(mut soup: PolygonSoup) -> Mesh {
-        let mut values = Vec::new();
-        for (f, face) in soup.faces().enumerate() {
-            for v in face {
-                let p = soup.positions()[v.index()];
-                values.extend([p.x + 2.0 * p.y + f as f64, p.z - p.x]);
-            }
-        }
-        let indices = (0..values.len() as u32 / 2).collect();
-        soup.channels.push(Channel::new("uv", 2, values, indices));
-        Mesh::build(soup).unwrap()
+    fn textured(soup: PolygonSoup) -> Mesh {
+        Mesh::build(shapes::face_charts(soup)).unwrap()
     }
 
     /// The linear route gives the values (and its plan the values) the general evaluator gives
@@ -266,7 +215,8 @@ mod tests {
             evaluator.prepare(&topo, &rates, false).unwrap();
             let (mut want, mut normals) = (Vec::new(), Vec::new());
             evaluator.evaluate_points(&topo, false, &mut want, &mut normals);
-            let linear = Surface { route: Route::Linear(Box::new(surface)), values: Vec::new(), normals: Vec::new() };
+            let linear = LinearEvaluator::new(&surface).unwrap().unwrap();
+            let linear = Surface { route: Route::Linear(Box::new(linear)), values: Vec::new(), normals: Vec::new() };
             let mut channels = Channels { names: vec!["uv".into()], dimensions: vec![2], surfaces: vec![linear] };
             let mut out = TessChannels::default();
             channels.evaluate(&topo, &rates, false, &mut out).unwrap();
