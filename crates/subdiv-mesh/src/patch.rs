@@ -24,7 +24,10 @@ pub struct Patch {
     /// (infinitely sharp or semi-sharp). Equal signatures mean equal shapes, down to the
     /// valences of the outermost ring. Semi-sharp values are not told apart: the sub-patch
     /// matrices exist for stationary features only (sharpness 0 or infinite), and a patch
-    /// with a semi-sharp feature matches none of them.
+    /// with a semi-sharp feature matches none of them. In a patch of radius 1 only the
+    /// semi-sharp features that can shape the face's surface are listed, at its corners and
+    /// on the edges at them ([`Mesh::near_semi_sharp`] says why); further out the patch has
+    /// the shape it would have without them.
     pub signature: Vec<u32>,
 }
 
@@ -41,9 +44,12 @@ fn sharpness_code(sharpness: f64) -> u32 {
     match Sharpness::of(sharpness) {
         Sharpness::Smooth => 0,
         Sharpness::Infinite => 1,
-        Sharpness::SemiSharp => 2,
+        Sharpness::SemiSharp => SEMI_SHARP,
     }
 }
+
+/// The code of a semi-sharp feature in a signature.
+const SEMI_SHARP: u32 = 2;
 
 impl Mesh {
     /// The rings of faces around `centre`, up to `radius`: ring 0 is `centre`, ring `r` the
@@ -122,9 +128,13 @@ impl Mesh {
         reached
     }
 
-    /// Whether every patch of `face` of radius at least 1 holds a semi-sharp feature: a
-    /// semi-sharp vertex or interior edge on a face that touches one of `face`'s corners. Such
-    /// a patch matches no stationary shape, and this answers it without walking the patch.
+    /// Whether a semi-sharp feature can shape the limit surface over `face`: a semi-sharp
+    /// corner, or a semi-sharp edge at one of its corners. Such a face's patch (radius 1)
+    /// matches no stationary shape, and this answers it without walking the patch. Features
+    /// further out cannot: one refinement's points over the face (its corners' vertex points,
+    /// the edge points of the edges at its corners, the face points around its corners) are
+    /// made by rules that read only those features, and so are the children's, so their
+    /// sharpness never reaches the face's surface (a patch's signature leaves them out).
     ///
     /// ```
     /// use subdiv_mesh::{shapes, CreaseTag, FaceId, Mesh, VertexId};
@@ -134,18 +144,18 @@ impl Mesh {
     /// soup.tags.creases.push(CreaseTag { vertices: [VertexId::new(6), VertexId::new(7)], sharpness: 2.0 });
     /// let grid = Mesh::build(soup)?;
     /// assert!(grid.near_semi_sharp(FaceId::new(0)));
+    /// // Face (1, 2) touches the edge's faces, not the edge: its surface is the smooth one.
+    /// assert!(!grid.near_semi_sharp(FaceId::new(9)));
     /// assert!(!grid.near_semi_sharp(FaceId::new(15)));
     /// # Ok::<(), subdiv_mesh::MeshError>(())
     /// ```
     pub fn near_semi_sharp(&self, face: FaceId) -> bool {
         let semi = |s: f64| Sharpness::of(s) == Sharpness::SemiSharp;
-        self.face_vertices(face).iter().any(|&corner| {
-            self.vertex_faces(corner).any(|f| {
-                self.face_half_edges(f).any(|h| {
-                    semi(self.vertex_sharpness(self.origin(h)))
-                        || (self.twin(h).is_some() && semi(self.edge_sharpness(self.edge(h))))
-                })
-            })
+        self.face_half_edges(face).any(|corner| {
+            semi(self.vertex_sharpness(self.origin(corner)))
+                || self
+                    .outgoing(self.origin(corner))
+                    .any(|h| self.twin(h).is_some() && semi(self.edge_sharpness(self.edge(h))))
         })
     }
 
@@ -316,7 +326,8 @@ impl WalkScratch {
                 }
                 signature.push(*p);
                 let class = sharpness_code(mesh.edge_sharpness(mesh.edge(h)));
-                if class != 0 && mesh.twin(h).is_some() {
+                let at_corner = ring[mesh.origin(h).index()] == 0 || ring[mesh.dest(h).index()] == 0;
+                if class != 0 && mesh.twin(h).is_some() && (class != SEMI_SHARP || at_corner || radius > 1) {
                     sharp.extend([side, class]);
                 }
                 side += 1;
@@ -341,7 +352,8 @@ impl WalkScratch {
         }
         let corners = vertices.iter().enumerate().filter_map(|(p, &v)| {
             let class = sharpness_code(mesh.vertex_sharpness(v));
-            (class != 0).then_some([p as u32, class])
+            let corner = ring[v.index()] == 0;
+            (class != 0 && (class != SEMI_SHARP || corner || radius > 1)).then_some([p as u32, class])
         });
         let mut corners = corners.peekable();
         if !sharp.is_empty() || corners.peek().is_some() {

@@ -181,10 +181,17 @@ impl PatchLevels {
             if levels.len() + 1 == MAX_LEVELS {
                 return Err(StencilError::NoPatch { face: refine[0].index(), levels: MAX_LEVELS });
             }
-            // The children's patches reach `radius` rings of the next level, inside as many rings
-            // of this one, and the rules of those rings' points read one ring more. (A scheme's
-            // patch types share one radius: Catmull-Clark's and Loop's are 1.)
-            let rings = patches.max_radius().unwrap_or(MAX_PATCH_RADIUS) + 1;
+            // The rings of this level whose refinement makes the children's patches right. A
+            // child's patch of radius 1 (Catmull-Clark's, Loop's) holds only the vertex points of
+            // its parent's corners, the edge points of the edges at them and the face points of
+            // the faces around them, whose rules read the faces at the corners: one ring (points
+            // further out, made wrong by the region's border rules, are in no wanted patch).
+            // Wider patches reach `radius` rings of the next level, inside as many of this one,
+            // and those points' rules one ring more.
+            let rings = match patches.max_radius() {
+                Some(1) => 1,
+                radius => radius.unwrap_or(MAX_PATCH_RADIUS) + 1,
+            };
             let next = Next::of(scheme, &current, &refine, rings, options)?;
             let mut next_wanted = Vec::new();
             for (&f, children) in refine.iter().zip(next.children) {
