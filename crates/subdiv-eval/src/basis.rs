@@ -6,7 +6,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
 use faer::Mat;
-use subdiv_mesh::{BoundaryInterpolation, DVec3};
+use subdiv_mesh::{BoundaryInterpolation, DVec3, Patch};
 use subdiv_schemes::{ChildDomain, PatchMatrices, PatchType, Scheme};
 
 use crate::EvalError;
@@ -249,10 +249,19 @@ impl EigenBasis {
         let Some(this) = matrices.shapes.get(shape) else {
             return Err(unsupported("no such shape"));
         };
-        let PatchType::Interior { valence, sharp } = matrices.patch_type else {
-            return Err(unsupported("boundary patches are evaluated by exact stencils"));
+        // A derived configuration (semi-sharp features) has the stationary shapes of the types
+        // among its own: they take the same routes, told by their signatures.
+        let derived = matches!(matrices.patch_type, PatchType::Derived { .. });
+        let corner = Patch::signature_vertices(&this.signature, this.size).next().unwrap_or_default();
+        let (valence, sharp) = match matrices.patch_type {
+            PatchType::Interior { valence, sharp } => (valence, !sharp.is_smooth()),
+            PatchType::Derived { .. } => (corner.0 as usize, Patch::signature_has_sharp_features(&this.signature)),
+            PatchType::Boundary { .. } => return Err(unsupported("boundary patches are evaluated by exact stencils")),
         };
-        if !sharp.is_smooth() {
+        if derived && Patch::signature_vertices(&this.signature, this.size).any(|(_, boundary)| boundary) {
+            return Err(unsupported("boundary patches are evaluated by exact stencils"));
+        }
+        if sharp {
             return Err(unsupported("patches with sharp features are evaluated by exact stencils"));
         }
         // Regular: every child has one shape whose children all have it (a B-spline patch
@@ -263,7 +272,7 @@ impl EigenBasis {
             let power = PowerBasis::fit(&matrices, shape)?;
             return Ok(Self { matrices, shape, power, kind: Kind::Regular });
         }
-        if shape != 0 {
+        if shape != 0 && !derived {
             return Err(unsupported("only the extraordinary shape and polynomial shapes have an eigenbasis"));
         }
         if valence > MAX_VALENCE {

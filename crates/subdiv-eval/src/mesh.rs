@@ -2,8 +2,10 @@
 
 use std::fmt::Write as _;
 
+use std::sync::Arc;
 use subdiv_mesh::{DVec3, FaceId, Mesh};
-use subdiv_schemes::{RefineOptions, Scheme};
+
+use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme};
 use subdiv_stencil::{Dyadic, FaceDomain, LimitEvaluator, LimitPoint, PatchLevels, Resolved, StencilError};
 
 use crate::surface::{PatchPoint, PatchPoint2};
@@ -65,6 +67,11 @@ enum Node {
     Patch { surface: u32, frame: Frame },
     /// Refined: the children are consecutive nodes from `first`.
     Children { first: u32, triangle: bool },
+    /// A patch without an eigenbasis of its own (a derived configuration's shape before its
+    /// semi-sharp features are spent), evaluated through its sub-patches: the face's `(u, v)`
+    /// goes into the patch's frame, then to the sub-patch that holds it, consecutive nodes from
+    /// `first` in the patch's own parameters (their frames are the identity).
+    SubPatches { frame: Frame, first: u32, triangle: bool },
 }
 
 /// The limit surface of a mesh by eigenbasis evaluation (paper 002 §3; Stam '98, '99), at any
@@ -254,11 +261,22 @@ impl EigenEvaluator {
     #[inline(always)]
     fn descend(&self, node: u32, domain: FaceDomain, u: f64, v: f64) -> (&PatchSurface, f64, f64, f64, [[f64; 2]; 2]) {
         let (mut node, mut u, mut v, mut f, mut domain) = (node, u, v, 1.0, domain);
+        // The frame of the patch whose sub-patches the point went into, if it did.
+        let mut rows = None;
         loop {
             match &self.nodes[node as usize] {
                 Node::Patch { surface, frame } => {
                     let (s, t) = frame.patch_point(u, v);
-                    return (&self.surfaces[*surface as usize], s, t, f, frame.derivatives);
+                    return (&self.surfaces[*surface as usize], s, t, f, rows.unwrap_or(frame.derivatives));
+                }
+                Node::SubPatches { frame, first, triangle } => {
+                    (u, v) = frame.patch_point(u, v);
+                    // Sub-patches' own frames are the identity: the first frame is the patch's.
+                    rows.get_or_insert(frame.derivatives);
+                    domain = if *triangle { FaceDomain::Triangle } else { FaceDomain::Quad };
+                    let (child, cu, cv, factor) = domain.child_of_f64(u, v);
+                    node = first + child as u32;
+                    (u, v, f) = (cu, cv, f * factor);
                 }
                 Node::Children { first, triangle } => {
                     let (child, cu, cv, factor) = domain.child_of_f64(u, v);
@@ -281,6 +299,10 @@ struct Frame {
 }
 
 impl Frame {
+    /// The patch's parameters are the face's.
+    const IDENTITY: Self =
+        Self { origin: [0.0, 0.0], to_patch: [[1.0, 0.0], [0.0, 1.0]], derivatives: [[1.0, 0.0], [0.0, 1.0]] };
+
     #[inline(always)]
     fn patch_point(self, u: f64, v: f64) -> (f64, f64) {
         let (x, y, m) = (u - self.origin[0], v - self.origin[1], &self.to_patch);
@@ -319,9 +341,7 @@ impl Tree {
                 Ok(())
             }
             Some(Resolved::Patch { mesh, patch, frame }) => {
-                let basis = EigenBasis::of(&patch.matrices, patch.shape).map_err(|e| e.to_string())?;
                 let points: Vec<DVec3> = patch.vertices.iter().map(|&v| mesh.position(v)).collect();
-                let surface = basis.surface(&points).map_err(|e| e.to_string())?;
                 let at = |u: i64, v: i64| {
                     let p = frame.to_face(Dyadic::new(u, v, 1));
                     [p.u as f64, p.v as f64]
@@ -330,13 +350,48 @@ impl Tree {
                 let (e1, e2) = ([x[0] - o[0], x[1] - o[1]], [y[0] - o[0], y[1] - o[1]]);
                 let det = e1[0] * e2[1] - e2[0] * e1[1];
                 let to_patch = [[e2[1] / det, -e2[0] / det], [-e1[1] / det, e1[0] / det]];
-                self.nodes[slot as usize] = Node::Patch {
-                    surface: self.surfaces.len() as u32,
-                    frame: Frame { origin: o, to_patch, derivatives: frame.derivative_map() },
-                };
+                let frame = Frame { origin: o, to_patch, derivatives: frame.derivative_map() };
+                self.build_shape(&patch.matrices, patch.shape, &points, frame, slot)
+            }
+        }
+    }
+
+    /// Fills node `slot` with the surface of `shape` of `matrices` over `points` in `frame`:
+    /// its eigenbasis, or, for a derived configuration's shape before its semi-sharp features
+    /// are spent (no eigenbasis, no child that keeps it), its sub-patches, recursively.
+    fn build_shape(
+        &mut self,
+        matrices: &Arc<PatchMatrices>,
+        shape: usize,
+        points: &[DVec3],
+        frame: Frame,
+        slot: u32,
+    ) -> Result<(), String> {
+        match EigenBasis::of(matrices, shape) {
+            Ok(basis) => {
+                let surface = basis.surface(points).map_err(|e| e.to_string())?;
+                self.nodes[slot as usize] = Node::Patch { surface: self.surfaces.len() as u32, frame };
                 self.surfaces.push(surface);
                 Ok(())
             }
+            Err(_)
+                if matches!(matrices.patch_type, PatchType::Derived { .. })
+                    && matrices.keeping(shape).is_none()
+                    && !matrices.shapes[shape].children.is_empty() =>
+            {
+                let children = &matrices.shapes[shape].children;
+                let first = self.nodes.len() as u32;
+                for _ in children {
+                    self.push_placeholder();
+                }
+                let triangle = matrices.face_size == 3;
+                self.nodes[slot as usize] = Node::SubPatches { frame, first, triangle };
+                for (k, child) in children.iter().enumerate() {
+                    self.build_shape(matrices, child.shape, &child.apply(points), Frame::IDENTITY, first + k as u32)?;
+                }
+                Ok(())
+            }
+            Err(e) => Err(e.to_string()),
         }
     }
 }

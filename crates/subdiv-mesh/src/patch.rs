@@ -22,13 +22,40 @@ pub struct Patch {
     /// boundary; then, only where the patch has any, its sharp features: every interior side
     /// and every vertex whose sharpness is not 0, by place, with the class of its sharpness
     /// (infinitely sharp or semi-sharp). Equal signatures mean equal shapes, down to the
-    /// valences of the outermost ring. Semi-sharp values are not told apart: the sub-patch
-    /// matrices exist for stationary features only (sharpness 0 or infinite), and a patch
-    /// with a semi-sharp feature matches none of them. In a patch of radius 1 only the
+    /// valences of the outermost ring. A semi-sharp feature carries its sharpness (its bits):
+    /// the committed sub-patch matrices hold stationary features only (sharpness 0 or
+    /// infinite), and a configuration with semi-sharp features has its own matrices, derived
+    /// from a mesh with it, whose shapes are told apart by the sharpness left at each level
+    /// of refinement. In a patch of radius 1 only the
     /// semi-sharp features that can shape the face's surface are listed, at its corners and
     /// on the edges at them ([`Mesh::near_semi_sharp`] says why); further out the patch has
     /// the shape it would have without them.
     pub signature: Vec<u32>,
+}
+
+impl Patch {
+    /// The vertices' records in a signature of a patch of `size` vertices: per vertex, in
+    /// order, its valence and whether it is on a boundary.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, FaceId, Mesh, Patch};
+    ///
+    /// let grid = Mesh::build(shapes::quad_grid(7, 7))?;
+    /// let start = grid.face_half_edges(FaceId::new(24)).next().unwrap();
+    /// let patch = grid.patch(start, 1);
+    /// let vertices: Vec<(u32, bool)> = Patch::signature_vertices(&patch.signature, 16).collect();
+    /// assert!(vertices.iter().all(|&v| v == (4, false)));
+    /// # Ok::<(), subdiv_mesh::MeshError>(())
+    /// ```
+    pub fn signature_vertices(signature: &[u32], size: usize) -> impl Iterator<Item = (u32, bool)> + '_ {
+        let end = signature.iter().position(|&x| x == SHARP_FEATURES).unwrap_or(signature.len());
+        signature[end.saturating_sub(2 * size)..end].chunks_exact(2).map(|v| (v[0], v[1] == 1))
+    }
+
+    /// Whether a signature lists sharp features (infinitely sharp or semi-sharp).
+    pub fn signature_has_sharp_features(signature: &[u32]) -> bool {
+        signature.contains(&SHARP_FEATURES)
+    }
 }
 
 /// Codes in a signature for what lies across a side; faces of the walk follow as `2 + index`.
@@ -48,8 +75,15 @@ fn sharpness_code(sharpness: f64) -> u32 {
     }
 }
 
-/// The code of a semi-sharp feature in a signature.
+/// The code of a semi-sharp feature in a signature; its sharpness's bits follow
+/// ([`bits`]).
 const SEMI_SHARP: u32 = 2;
+
+/// A semi-sharp feature's sharpness in a signature: its bits, high word first.
+fn bits(sharpness: f64) -> [u32; 2] {
+    let b = sharpness.to_bits();
+    [(b >> 32) as u32, b as u32]
+}
 
 impl Mesh {
     /// The rings of faces around `centre`, up to `radius`: ring 0 is `centre`, ring `r` the
@@ -325,10 +359,14 @@ impl WalkScratch {
                     vertices.push(v);
                 }
                 signature.push(*p);
-                let class = sharpness_code(mesh.edge_sharpness(mesh.edge(h)));
+                let sharpness = mesh.edge_sharpness(mesh.edge(h));
+                let class = sharpness_code(sharpness);
                 let at_corner = ring[mesh.origin(h).index()] == 0 || ring[mesh.dest(h).index()] == 0;
                 if class != 0 && mesh.twin(h).is_some() && (class != SEMI_SHARP || at_corner || radius > 1) {
                     sharp.extend([side, class]);
+                    if class == SEMI_SHARP {
+                        sharp.extend(bits(sharpness));
+                    }
                 }
                 side += 1;
                 signature.push(match mesh.twin(h) {
@@ -350,18 +388,22 @@ impl WalkScratch {
             signature.push(mesh.valence(v) as u32);
             signature.push(u32::from(mesh.is_boundary_vertex(v)));
         }
-        let corners = vertices.iter().enumerate().filter_map(|(p, &v)| {
-            let class = sharpness_code(mesh.vertex_sharpness(v));
-            let corner = ring[v.index()] == 0;
-            (class != 0 && (class != SEMI_SHARP || corner || radius > 1)).then_some([p as u32, class])
-        });
-        let mut corners = corners.peekable();
-        if !sharp.is_empty() || corners.peek().is_some() {
-            signature.push(SHARP_FEATURES);
-            signature.extend_from_slice(sharp);
-            // Sides and vertices apart: a side count is never `SHARP_FEATURES`.
-            signature.push(SHARP_FEATURES);
-            signature.extend(corners.flatten());
+        let corners_at = signature.len();
+        for (p, &v) in vertices.iter().enumerate() {
+            let sharpness = mesh.vertex_sharpness(v);
+            let class = sharpness_code(sharpness);
+            if class != 0 && (class != SEMI_SHARP || ring[v.index()] == 0 || radius > 1) {
+                signature.extend([p as u32, class]);
+                if class == SEMI_SHARP {
+                    signature.extend(bits(sharpness));
+                }
+            }
+        }
+        if !sharp.is_empty() || signature.len() > corners_at {
+            // Sides, then vertices, each after a mark: a side count is never `SHARP_FEATURES`.
+            let corners = signature.len() - corners_at;
+            signature.splice(corners_at..corners_at, std::iter::once(SHARP_FEATURES).chain(sharp.iter().copied()));
+            signature.insert(signature.len() - corners, SHARP_FEATURES);
         }
     }
 }

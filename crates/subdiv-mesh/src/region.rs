@@ -57,20 +57,21 @@ impl Mesh {
             }
         }
         // A vertex whose faces inside are not one contiguous fan would be non-manifold in the
-        // region: take its whole fan, until every vertex is fine.
-        let mut changed = true;
-        while changed {
-            changed = false;
-            for v in self.vertices() {
-                if !self.is_isolated(v) && self.fan_is_split(v, &inside) {
-                    for f in self.vertex_faces(v) {
-                        changed |= !inside[f.index()];
-                        inside[f.index()] = true;
+        // region: take its whole fan, until every vertex is fine. Only the corners of faces
+        // inside can be split (a small region of a large level is checked at its own cost).
+        let mut faces: Vec<FaceId> = self.face_ids().filter(|f| inside[f.index()]).collect();
+        let mut check: Vec<VertexId> = faces.iter().flat_map(|&f| self.face_vertices(f).iter().copied()).collect();
+        while let Some(v) = check.pop() {
+            if self.fan_is_split(v, &inside) {
+                for f in self.vertex_faces(v) {
+                    if !std::mem::replace(&mut inside[f.index()], true) {
+                        faces.push(f);
+                        check.extend_from_slice(self.face_vertices(f));
                     }
                 }
             }
         }
-        let faces: Vec<FaceId> = self.face_ids().filter(|f| inside[f.index()]).collect();
+        faces.sort_unstable();
         self.region_of(faces)
     }
 
@@ -111,15 +112,18 @@ impl Mesh {
             holes: std::mem::take(&mut soup.tags.holes),
             ..Tags::default()
         };
-        for e in self.edges() {
-            let [a, b] = self.edge_vertices(e);
-            let sharpness = self.edge_sharpness(e);
-            if let (true, Some(&a), Some(&b)) = (sharpness > 0.0, local.get(&a), local.get(&b)) {
-                // Both ends inside, but the edge may not be: only edges of the region's faces.
-                if self.edge_faces(e).iter().any(|f| faces.binary_search(f).is_ok()) {
-                    tags.creases.push(CreaseTag { vertices: [a, b], sharpness });
-                }
-            }
+        // The region's sharp edges, in the source's order (the edges of its faces: a small
+        // region of a large level is read at its own cost).
+        let mut sharp: Vec<_> = faces
+            .iter()
+            .flat_map(|&f| self.face_half_edges(f).map(|h| self.edge(h)))
+            .filter(|&e| self.edge_sharpness(e) > 0.0)
+            .collect();
+        sharp.sort_unstable();
+        sharp.dedup();
+        for e in sharp {
+            let [a, b] = self.edge_vertices(e).map(|v| local[&v]);
+            tags.creases.push(CreaseTag { vertices: [a, b], sharpness: self.edge_sharpness(e) });
         }
         for (&v, &l) in &local {
             if self.vertex_sharpness(v) > 0.0 {

@@ -1,9 +1,11 @@
 //! A mesh's patches: the patch types its vertices have ([`PatchMatrices`] for each, derived on
 //! demand) and the lookup from a face to its shape.
 
-use std::sync::Arc;
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::{Arc, Mutex, OnceLock, PoisonError};
 
-use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
+use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
 
 use crate::patch::{MAX_RADIUS, PatchMatrices, PatchType, SharpFeatures};
 use crate::{RefineOptions, Scheme, SchemeError};
@@ -16,10 +18,46 @@ pub struct MeshPatches {
     tables: Vec<Arc<PatchMatrices>>,
     /// Per patch radius, every table's shapes by signature.
     lookup: Vec<(usize, ShapeLookup)>,
+    /// What deriving the configurations at semi-sharp features takes.
+    derive: Derive,
+    /// Whether faces at semi-sharp features find derived configurations.
+    derive_semi_sharp: bool,
 }
+
+/// The number of the next [`PatchType::Derived`].
+static NEXT_DERIVED: AtomicU32 = AtomicU32::new(0);
 
 /// Shapes by signature: (table, shape).
 type ShapeLookup = hashbrown::HashMap<Vec<u32>, (usize, usize)>;
+
+/// The scheme and rules a configuration at semi-sharp features is derived under.
+#[derive(Clone, Debug)]
+struct Derive {
+    scheme: Scheme,
+    options: RefineOptions,
+    key: RulesKey,
+}
+
+/// What, besides its signature, makes a configuration's matrices: the scheme (its identity)
+/// and the rules refinement applies there.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+struct RulesKey {
+    scheme: u64,
+    boundary: BoundaryInterpolation,
+    crease_method: CreaseMethod,
+    smooth_triangles: bool,
+}
+
+/// The configurations at semi-sharp features derived in this process, by rules and signature:
+/// the matrices of one and its shape there (every shape of a derivation is listed, so a face
+/// whose configuration is another's after a few levels finds it), or `None` where the
+/// derivation did not close up (such faces descend instead).
+type DerivedShapes = HashMap<(RulesKey, Vec<u32>), Option<(Arc<PatchMatrices>, usize)>>;
+
+fn derived_shapes() -> &'static Mutex<DerivedShapes> {
+    static DERIVED: OnceLock<Mutex<DerivedShapes>> = OnceLock::new();
+    DERIVED.get_or_init(Mutex::default)
+}
 
 /// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
 /// points and its matrices.
@@ -117,7 +155,26 @@ impl MeshPatches {
                 lookup[at].1.entry(signature.clone()).or_insert((t, shape));
             }
         }
-        Ok(Self { tables, lookup })
+        let rules = options.rules_for(mesh);
+        let key = RulesKey {
+            scheme: scheme.identity(),
+            boundary,
+            crease_method: rules.crease_method,
+            smooth_triangles: rules.smooth_triangles,
+        };
+        Ok(Self {
+            tables,
+            lookup,
+            derive: Derive { scheme: scheme.clone(), options: *options, key },
+            derive_semi_sharp: true,
+        })
+    }
+
+    /// Sets whether faces at semi-sharp features find derived configurations (default: they
+    /// do). Deriving pays where configurations repeat: `PatchLevels` asks from its level 2 on.
+    pub fn with_derived(mut self, derive: bool) -> Self {
+        self.derive_semi_sharp = derive;
+        self
     }
 
     /// The largest patch radius of the types found, `None` when there are none.
@@ -126,17 +183,78 @@ impl MeshPatches {
     }
 
     /// The patch of `face` in the first rotation whose shape is known, or `None` (a face whose
-    /// patch holds two irregular vertices, which a further refinement separates, or a
-    /// semi-sharp feature, which refinement spends).
+    /// patch holds two irregular vertices, which a further refinement separates). A face with
+    /// a semi-sharp feature at a corner (or on an edge at one) has its own configuration's
+    /// matrices ([`PatchType::Derived`], derived once per configuration and process) if
+    /// [`with_derived`](Self::with_derived) asks for them, else `None` (refinement spends the
+    /// sharpness).
     pub fn find(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
-        // Every radius is at least 1, so no patch of such a face has a shape: answered without
-        // walking its rotations (most faces near a semi-sharp crease descend).
+        // No table holds a semi-sharp feature: such a face's configuration has matrices of its
+        // own, derived once per process.
         if mesh.near_semi_sharp(face) {
-            return None;
+            return if self.derive_semi_sharp { self.derived(mesh, face) } else { None };
         }
         // One buffer for every rotation and radius tried: most walks are looked up and dropped.
         let mut patch = Patch::default();
         mesh.face_half_edges(face).find_map(|start| self.at_with(mesh, start, &mut patch))
+    }
+
+    /// The patch of `face`, which has semi-sharp features at its corners, from the derived
+    /// configurations: a rotation whose configuration was derived before, else one derived
+    /// now from the face's neighbourhood (rotation 0). `None` for schemes with patches of
+    /// another radius than 1 (the features' reach is shown for radius 1) and where the
+    /// derivation fails: the face then descends until the sharpness is spent.
+    fn derived(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
+        if self.max_radius() != Some(1) {
+            return None;
+        }
+        let known = |signature: &Vec<u32>| {
+            let derived = derived_shapes().lock().unwrap_or_else(PoisonError::into_inner);
+            derived.get(&(self.derive.key, signature.clone())).cloned()
+        };
+        let mut patch = Patch::default();
+        for start in mesh.face_half_edges(face) {
+            mesh.patch_into(start, 1, &mut patch);
+            if let Some(found) = known(&patch.signature) {
+                let (matrices, shape) = found?;
+                return Some(FoundPatch { start, vertices: patch.vertices, matrices, shape });
+            }
+        }
+        // From the corner most likely irregular: a shape's irregular fixed point (an
+        // extraordinary, boundary or sharp vertex) must be its corner 0, where the limit's
+        // tangents are read, as the canonical patches have it.
+        let regular = if mesh.face_size(face) == 3 { 6 } else { 4 };
+        let irregular = |h: HalfEdgeId| {
+            let v = mesh.origin(h);
+            mesh.valence(v) != regular
+                || mesh.is_boundary_vertex(v)
+                || mesh.vertex_sharpness(v) > 0.0
+                || mesh.outgoing(v).any(|o| Sharpness::of(mesh.edge_sharpness(mesh.edge(o))) == Sharpness::Infinite)
+        };
+        let start = mesh.face_half_edges(face).find(|&h| irregular(h)).or(mesh.face_half_edges(face).next())?;
+        mesh.patch_into(start, 1, &mut patch);
+        let id = NEXT_DERIVED.fetch_add(1, Ordering::Relaxed);
+        let Derive { scheme, options, key } = &self.derive;
+        let fixed_points_at_corner_0 =
+            |m: &PatchMatrices| (0..m.shapes.len()).all(|s| m.keeping(s).is_none_or(|(child, _)| child == 0));
+        let derived = PatchMatrices::derive(scheme, mesh, start, 1, options, PatchType::Derived { id })
+            .ok()
+            .flatten()
+            .filter(|m| m.find(&patch.signature) == Some(0) && fixed_points_at_corner_0(m))
+            .map(Arc::new);
+        let mut shapes = derived_shapes().lock().unwrap_or_else(PoisonError::into_inner);
+        match derived {
+            Some(matrices) => {
+                for (s, shape) in matrices.shapes.iter().enumerate() {
+                    shapes.entry((*key, shape.signature.clone())).or_insert_with(|| Some((matrices.clone(), s)));
+                }
+                Some(FoundPatch { start, vertices: patch.vertices, matrices, shape: 0 })
+            }
+            None => {
+                shapes.insert((*key, patch.signature), None);
+                None
+            }
+        }
     }
 
     /// The patch starting at `start`, if its shape is known.

@@ -43,9 +43,9 @@ const ZERO_WEIGHT: f64 = 1e-14;
 /// Which canonical patch to start from: a face whose corner 0 is the only irregular place.
 ///
 /// Corner 0's fan, and its stationary sharp features ([`SharpFeatures`]: infinitely sharp
-/// edges and corners). Semi-sharp features are not stationary and have no patch type: a
-/// face near one is refined until its sharpness is spent (see `subdiv-stencil`'s
-/// `PatchLevels`).
+/// edges and corners). Semi-sharp features are not stationary: a face at one is refined
+/// until its sharpness is spent, or has a configuration of its own derived from its mesh
+/// ([`PatchType::Derived`]; see `subdiv-stencil`'s `PatchLevels`).
 ///
 /// **How many there are.** An interior vertex of valence `k` has `2^k` sets of sharp spokes,
 /// each with or without a corner, and the set is counted from the patch's face (spoke 0 is
@@ -77,6 +77,15 @@ pub enum PatchType {
         /// 0's first side (spokes 0 and `faces` are the boundary, sharp by the boundary rule,
         /// and not in the set).
         sharp: SharpFeatures,
+    },
+    /// A configuration with semi-sharp features at the face's corners, derived from a mesh's
+    /// own neighbourhood of the face ([`MeshPatches`](crate::MeshPatches) does it for such
+    /// faces, once per configuration and process): its shapes run down the levels on which
+    /// the sharpness is spent to stationary ones. Numbered in the order of derivation in this
+    /// process; never in the committed tables.
+    Derived {
+        /// The derivation's number in this process.
+        id: u32,
     },
 }
 
@@ -123,10 +132,12 @@ impl PatchType {
         Self::interior(scheme.regular_valence())
     }
 
-    /// The sharp features.
+    /// The stationary sharp features at corner 0 (none for a derived configuration, which
+    /// has its features in its shapes).
     pub fn sharp(self) -> SharpFeatures {
         match self {
             Self::Interior { sharp, .. } | Self::Boundary { sharp, .. } => sharp,
+            Self::Derived { .. } => SharpFeatures::SMOOTH,
         }
     }
 }
@@ -350,6 +361,12 @@ impl PatchMatrices {
             split @ (Split::Dual | Split::Midedge | Split::Sqrt3) => return Err(split_not_supported(scheme, split)),
         };
         let (valence, invalid) = match patch_type {
+            PatchType::Derived { .. } => {
+                return Err(SchemeError::Internal(
+                    "a derived patch type is made from a mesh's neighbourhood (MeshPatches), not from a canonical patch"
+                        .to_string(),
+                ));
+            }
             PatchType::Interior { valence, .. } if triangles && valence < 3 => {
                 (valence, Some("an interior patch of triangles needs valence 3 or more"))
             }
@@ -379,13 +396,16 @@ impl PatchMatrices {
             let mut soup = match patch_type {
                 PatchType::Interior { valence, sharp } => crate::canonical::pillow(valence, rings, triangles, sharp),
                 PatchType::Boundary { faces, sharp, .. } => crate::canonical::open_fan(faces, rings, triangles, sharp),
+                PatchType::Derived { .. } => unreachable!("refused above"),
             };
             soup.tags.boundary_interpolation = Some(boundary);
             let mesh = Mesh::build(soup).map_err(|e| SchemeError::Internal(e.to_string()))?;
             // With the boundary rule applied, as refinement (and `PatchLevels`) sees a mesh:
             // the corners edge-and-corner makes are in the signatures.
             let mesh = Refiner::new(&mesh, scheme, 0, &RefineOptions::DEFAULT)?.into_mesh();
-            if let Some(found) = Derivation::new(scheme, mesh, radius).run(patch_type)? {
+            let start = canonical_start(&mesh, patch_type);
+            let derivation = Derivation::new(scheme, mesh, radius, MAX_LEVELS, RefineOptions::DEFAULT);
+            if let Some(found) = derivation.run(start, patch_type)? {
                 return Ok(found);
             }
         }
@@ -395,6 +415,34 @@ impl PatchMatrices {
             reason: "the limit surface over a face near this vertex depends on vertices beyond every patch \
                      radius up to 3 (the scheme's rules there reach further than its regular support)",
         })
+    }
+
+    /// The matrices of the configuration of `start`'s face in `mesh` (a level of a real mesh,
+    /// its boundary rule applied), with patches of `radius` rings, derived from the face's
+    /// neighbourhood as the canonical patches are from theirs, over as many more levels as
+    /// its semi-sharp features take to be spent; shape 0 is the face's (from `start`).
+    /// `None` if the shapes do not close up within the neighbourhood.
+    ///
+    /// # Errors
+    /// As refinement, for the neighbourhood.
+    pub(crate) fn derive(
+        scheme: &Scheme,
+        mesh: &Mesh,
+        start: HalfEdgeId,
+        radius: usize,
+        options: &RefineOptions,
+        patch_type: PatchType,
+    ) -> Result<Option<Self>, SchemeError> {
+        let face = mesh.face(start);
+        // As the canonical meshes: the patch and three rings more, so the rim's rules reach
+        // none of the sub-patches.
+        let region = mesh.region(&[face], radius + 3).map_err(|e| SchemeError::Internal(e.to_string()))?;
+        let inside = region.face_of(face).ok_or_else(|| SchemeError::Internal("a face outside its region".into()))?;
+        let start = region.mesh.face_half_edges(inside).nth(mesh.corner(start)).expect("the face keeps its corners");
+        let spent = region.mesh.edges().map(|e| region.mesh.edge_sharpness(e));
+        let spent = spent.chain(region.mesh.vertices().map(|v| region.mesh.vertex_sharpness(v)));
+        let levels = spent.filter(|&s| s < subdiv_mesh::Tags::INFINITELY_SHARP).fold(0.0, f64::max).ceil() as usize;
+        Derivation::new(scheme, region.mesh, radius, MAX_LEVELS + levels, *options).run(start, patch_type)
     }
 
     /// Matrices of `scheme` from `shapes` (read from a table).
@@ -454,6 +502,10 @@ struct Pending {
 struct Derivation<'a> {
     scheme: &'a Scheme,
     radius: usize,
+    /// Levels after which the shapes must have closed up.
+    max_levels: usize,
+    /// The options each level is refined with.
+    options: RefineOptions,
     /// Level 0: the canonical mesh.
     base: Mesh,
     /// Level `l + 1`: the part of level `l` refined, with its rows over level `l`.
@@ -463,31 +515,28 @@ struct Derivation<'a> {
 }
 
 impl<'a> Derivation<'a> {
-    fn new(scheme: &'a Scheme, mesh: Mesh, radius: usize) -> Self {
-        Self { scheme, radius, base: mesh, refined: Vec::new(), shapes: Vec::new(), by_signature: HashMap::new() }
+    fn new(scheme: &'a Scheme, mesh: Mesh, radius: usize, max_levels: usize, options: RefineOptions) -> Self {
+        Self {
+            scheme,
+            radius,
+            max_levels,
+            options,
+            base: mesh,
+            refined: Vec::new(),
+            shapes: Vec::new(),
+            by_signature: HashMap::new(),
+        }
     }
 
-    /// The matrices, or `None` if the radius is too small.
-    fn run(mut self, patch_type: PatchType) -> Result<Option<PatchMatrices>, SchemeError> {
-        // The patch's face starts at the centre, vertex 0, in sector `index` (see `canonical`).
-        let mesh = &self.base;
-        let index = match patch_type {
-            PatchType::Interior { .. } => 0,
-            PatchType::Boundary { index, .. } => index,
-        };
-        let start = mesh
-            .face_ids()
-            .map(|f| mesh.face_half_edges(f).next().expect("faces have corners"))
-            .filter(|&h| mesh.origin(h).index() == 0)
-            .nth(index)
-            .expect("the canonical mesh has a face at its centre in every sector");
+    /// The matrices from the patch at `start` (shape 0), or `None` if the radius is too small.
+    fn run(mut self, start: HalfEdgeId, patch_type: PatchType) -> Result<Option<PatchMatrices>, SchemeError> {
         let mut pending = VecDeque::new();
         self.register(self.base.patch(start, self.radius), 0, start, &mut pending);
         while let Some(Pending { shape, level, start, vertices }) = pending.pop_front() {
-            if level == MAX_LEVELS {
+            if level == self.max_levels {
                 return Err(SchemeError::Internal(format!(
-                    "{}: the sub-patch shapes do not close up within {MAX_LEVELS} levels",
-                    self.scheme
+                    "{}: the sub-patch shapes do not close up within {} levels",
+                    self.scheme, self.max_levels
                 )));
             }
             if self.refined.len() == level {
@@ -512,8 +561,18 @@ impl<'a> Derivation<'a> {
         for (shape, influence) in self.shapes.iter_mut().zip(influence) {
             shape.influence = influence;
         }
-        for s in 0..self.shapes.len() {
-            self.shapes[s].parameters = parameter_coordinates(&self.shapes, s);
+        // A derived configuration's shapes before its features are spent reach every shape
+        // below them: their systems are large, and nothing reads their parameters (a cycle's
+        // shape's, for derivatives at its fixed point, and a bicubic shape's, are those of
+        // stationary shapes). Only the shapes some cycle reaches get them there.
+        let stationary = match patch_type {
+            PatchType::Derived { .. } => reached_from_cycles(&self.shapes),
+            _ => vec![true; self.shapes.len()],
+        };
+        for (s, stationary) in stationary.into_iter().enumerate() {
+            if stationary {
+                self.shapes[s].parameters = parameter_coordinates(&self.shapes, s);
+            }
         }
         Ok(Some(PatchMatrices {
             scheme: self.scheme.name.clone(),
@@ -531,7 +590,7 @@ impl<'a> Derivation<'a> {
     /// Schemes without crease rules refine the whole level (a region's boundary needs rules).
     fn refine_next(&mut self, faces: &[FaceId]) -> Result<(), SchemeError> {
         let current = self.mesh(self.refined.len());
-        let next = LocalRefinement::new(self.scheme, current, faces, self.radius + 1, &RefineOptions::DEFAULT)?;
+        let next = LocalRefinement::new(self.scheme, current, faces, self.radius + 1, &self.options)?;
         self.refined.push(next);
         Ok(())
     }
@@ -611,6 +670,42 @@ impl<'a> Derivation<'a> {
         }
         Ok(Some(children))
     }
+}
+
+/// The canonical patch's start: its face at the centre, vertex 0, in sector `index` (see
+/// `canonical`).
+fn canonical_start(mesh: &Mesh, patch_type: PatchType) -> HalfEdgeId {
+    let index = match patch_type {
+        PatchType::Boundary { index, .. } => index,
+        PatchType::Interior { .. } | PatchType::Derived { .. } => 0,
+    };
+    mesh.face_ids()
+        .map(|f| mesh.face_half_edges(f).next().expect("faces have corners"))
+        .filter(|&h| mesh.origin(h).index() == 0)
+        .nth(index)
+        .expect("the canonical mesh has a face at its centre in every sector")
+}
+
+/// Per shape, whether a shape that reaches itself through its children (a cycle) reaches it.
+fn reached_from_cycles(shapes: &[PatchShape]) -> Vec<bool> {
+    let reach = |from: usize| {
+        let mut seen = vec![false; shapes.len()];
+        let mut stack: Vec<usize> = shapes[from].children.iter().map(|c| c.shape).collect();
+        while let Some(s) = stack.pop() {
+            if !std::mem::replace(&mut seen[s], true) {
+                stack.extend(shapes[s].children.iter().map(|c| c.shape));
+            }
+        }
+        seen
+    };
+    let mut reached = vec![false; shapes.len()];
+    for s in 0..shapes.len() {
+        let from = reach(s);
+        if from[s] {
+            reached.iter_mut().zip(from).for_each(|(r, f)| *r |= f);
+        }
+    }
+    reached
 }
 
 /// Each shape's [`PatchShape::influence`]: the least fixed point of "a face's corners

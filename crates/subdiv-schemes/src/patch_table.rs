@@ -220,6 +220,8 @@ fn key(t: PatchType, rule: BoundaryInterpolation) -> Vec<u8> {
     let (kind, a, b, sharp) = match t {
         PatchType::Interior { valence, sharp } => (0u8, valence, 0, sharp),
         PatchType::Boundary { faces, index, sharp } => (1u8, faces, index, sharp),
+        // Never in a file: a key no entry has.
+        PatchType::Derived { id } => (2u8, id as usize, 0, SharpFeatures::SMOOTH),
     };
     let mut k = Vec::with_capacity(KEY_LEN);
     k.push(kind);

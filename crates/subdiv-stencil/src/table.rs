@@ -445,6 +445,9 @@ impl StencilTables {
             let (kind, a, b) = match t.patch_type {
                 PatchType::Interior { valence, .. } => (0, valence, 0),
                 PatchType::Boundary { faces, index, .. } => (1, faces, index),
+                // `compute` takes its types from `PatchMatrices::of`, which derives none, and
+                // `from_bytes` reads none.
+                PatchType::Derived { .. } => unreachable!("a set of stencil tables holds no derived configuration"),
             };
             let sharp = t.patch_type.sharp();
             out.push(if sharp.is_smooth() { kind } else { kind + 2 });

@@ -221,7 +221,7 @@ impl QuadtreeTessellator {
     /// # Errors
     /// [`TessError::Scheme`] for a scheme other than a primal quad split or whose patches are
     /// not as above; [`TessError::Unsupported`] for boundaries and holes; as
-    /// [`PatchLevels::new`].
+    /// [`PatchLevels::descending`].
     pub fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
         if scheme.split() != Split::Quad {
             return Err(TessError::Scheme {
@@ -236,7 +236,8 @@ impl QuadtreeTessellator {
         if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {
             return Err(TessError::Unsupported { feature: "holes", element: format!("{f}") });
         }
-        let levels = PatchLevels::new(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?;
+        // Semi-sharp features spent by refinement: every piece bicubic or extraordinary.
+        let levels = PatchLevels::descending(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?;
         let mut roots = Vec::new();
         for face in mesh.face_ids() {
             match levels.domain(face)? {
