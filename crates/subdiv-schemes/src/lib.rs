@@ -104,7 +104,7 @@ pub use channel::ChannelSurface;
 pub use curve::{CurveError, CurveMatrix, CurveScheme, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};
-pub use mesh_patches::{FoundPatch, MeshPatches};
+pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches};
 pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
     ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces, sub_patch_starts,

@@ -3,7 +3,7 @@
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::{Arc, Mutex, OnceLock, PoisonError};
+use std::sync::{Arc, Mutex, PoisonError};
 
 use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
 
@@ -20,8 +20,8 @@ pub struct MeshPatches {
     lookup: Vec<(usize, ShapeLookup)>,
     /// What deriving the configurations at semi-sharp features takes.
     derive: Derive,
-    /// Whether faces at semi-sharp features find derived configurations.
-    derive_semi_sharp: bool,
+    /// Where faces at semi-sharp features find derived configurations (`None`: they descend).
+    derived: Option<DerivedConfigurations>,
 }
 
 /// The number of the next [`PatchType::Derived`].
@@ -48,15 +48,31 @@ struct RulesKey {
     smooth_triangles: bool,
 }
 
-/// The configurations at semi-sharp features derived in this process, by rules and signature:
-/// the matrices of one and its shape there (every shape of a derivation is listed, so a face
-/// whose configuration is another's after a few levels finds it), or `None` where the
-/// derivation did not close up (such faces descend instead).
+/// The configurations at semi-sharp features derived so far ([`PatchType::Derived`]), shared
+/// by the [`MeshPatches`] of one preparation (`PatchLevels` keeps one for all its levels), by
+/// rules and signature: the matrices of one and its shape there (every shape of a derivation is
+/// listed, so a face whose configuration is another's after a few levels finds it), or `None`
+/// where the derivation did not close up (such faces descend instead). One per preparation,
+/// not per process: a mesh's bits do not depend on what the process prepared before, and the
+/// memory goes with the preparation. Cloning shares it.
+#[derive(Clone, Debug, Default)]
+pub struct DerivedConfigurations {
+    shapes: Arc<Mutex<DerivedShapes>>,
+}
+
 type DerivedShapes = HashMap<(RulesKey, Vec<u32>), Option<(Arc<PatchMatrices>, usize)>>;
 
-fn derived_shapes() -> &'static Mutex<DerivedShapes> {
-    static DERIVED: OnceLock<Mutex<DerivedShapes>> = OnceLock::new();
-    DERIVED.get_or_init(Mutex::default)
+impl DerivedConfigurations {
+    /// How many configurations were derived (shape 0 of each).
+    pub fn len(&self) -> usize {
+        let shapes = self.shapes.lock().unwrap_or_else(PoisonError::into_inner);
+        shapes.values().filter(|found| matches!(found, Some((_, 0)))).count()
+    }
+
+    /// Whether none was.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
@@ -162,18 +178,14 @@ impl MeshPatches {
             crease_method: rules.crease_method,
             smooth_triangles: rules.smooth_triangles,
         };
-        Ok(Self {
-            tables,
-            lookup,
-            derive: Derive { scheme: scheme.clone(), options: *options, key },
-            derive_semi_sharp: true,
-        })
+        Ok(Self { tables, lookup, derive: Derive { scheme: scheme.clone(), options: *options, key }, derived: None })
     }
 
-    /// Sets whether faces at semi-sharp features find derived configurations (default: they
-    /// do). Deriving pays where configurations repeat: `PatchLevels` asks from its level 2 on.
-    pub fn with_derived(mut self, derive: bool) -> Self {
-        self.derive_semi_sharp = derive;
+    /// Sets where faces at semi-sharp features find (and enter) derived configurations
+    /// (default `None`: they descend). Deriving pays where configurations repeat:
+    /// `PatchLevels` asks from its level 2 on.
+    pub fn with_derived(mut self, derived: Option<DerivedConfigurations>) -> Self {
+        self.derived = derived;
         self
     }
 
@@ -185,14 +197,15 @@ impl MeshPatches {
     /// The patch of `face` in the first rotation whose shape is known, or `None` (a face whose
     /// patch holds two irregular vertices, which a further refinement separates). A face with
     /// a semi-sharp feature at a corner (or on an edge at one) has its own configuration's
-    /// matrices ([`PatchType::Derived`], derived once per configuration and process) if
+    /// matrices ([`PatchType::Derived`], derived once per configuration in a
+    /// [`DerivedConfigurations`]) if
     /// [`with_derived`](Self::with_derived) asks for them, else `None` (refinement spends the
     /// sharpness).
     pub fn find(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
         // No table holds a semi-sharp feature: such a face's configuration has matrices of its
-        // own, derived once per process.
+        // own, derived once per preparation.
         if mesh.near_semi_sharp(face) {
-            return if self.derive_semi_sharp { self.derived(mesh, face) } else { None };
+            return self.derived.as_ref().and_then(|derived| self.derived(derived, mesh, face));
         }
         // One buffer for every rotation and radius tried: most walks are looked up and dropped.
         let mut patch = Patch::default();
@@ -204,13 +217,13 @@ impl MeshPatches {
     /// now from the face's neighbourhood (rotation 0). `None` for schemes with patches of
     /// another radius than 1 (the features' reach is shown for radius 1) and where the
     /// derivation fails: the face then descends until the sharpness is spent.
-    fn derived(&self, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
+    fn derived(&self, derived: &DerivedConfigurations, mesh: &Mesh, face: FaceId) -> Option<FoundPatch> {
         if self.max_radius() != Some(1) {
             return None;
         }
         let known = |signature: &Vec<u32>| {
-            let derived = derived_shapes().lock().unwrap_or_else(PoisonError::into_inner);
-            derived.get(&(self.derive.key, signature.clone())).cloned()
+            let shapes = derived.shapes.lock().unwrap_or_else(PoisonError::into_inner);
+            shapes.get(&(self.derive.key, signature.clone())).cloned()
         };
         let mut patch = Patch::default();
         for start in mesh.face_half_edges(face) {
@@ -237,13 +250,13 @@ impl MeshPatches {
         let Derive { scheme, options, key } = &self.derive;
         let fixed_points_at_corner_0 =
             |m: &PatchMatrices| (0..m.shapes.len()).all(|s| m.keeping(s).is_none_or(|(child, _)| child == 0));
-        let derived = PatchMatrices::derive(scheme, mesh, start, 1, options, PatchType::Derived { id })
+        let made = PatchMatrices::derive(scheme, mesh, start, 1, options, PatchType::Derived { id })
             .ok()
             .flatten()
             .filter(|m| m.find(&patch.signature) == Some(0) && fixed_points_at_corner_0(m))
             .map(Arc::new);
-        let mut shapes = derived_shapes().lock().unwrap_or_else(PoisonError::into_inner);
-        match derived {
+        let mut shapes = derived.shapes.lock().unwrap_or_else(PoisonError::into_inner);
+        match made {
             Some(matrices) => {
                 for (s, shape) in matrices.shapes.iter().enumerate() {
                     shapes.entry((*key, shape.signature.clone())).or_insert_with(|| Some((matrices.clone(), s)));

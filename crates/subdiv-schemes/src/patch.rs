@@ -80,7 +80,7 @@ pub enum PatchType {
     },
     /// A configuration with semi-sharp features at the face's corners, derived from a mesh's
     /// own neighbourhood of the face ([`MeshPatches`](crate::MeshPatches) does it for such
-    /// faces, once per configuration and process): its shapes run down the levels on which
+    /// faces, once per configuration and preparation): its shapes run down the levels on which
     /// the sharpness is spent to stationary ones. Numbered in the order of derivation in this
     /// process; never in the committed tables.
     Derived {

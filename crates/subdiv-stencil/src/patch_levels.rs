@@ -4,7 +4,8 @@
 
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{
-    FoundPatch, LocalRefinement, MeshPatches, RefineOptions, Refiner, Scheme, Split, Stencils, child_faces,
+    DerivedConfigurations, FoundPatch, LocalRefinement, MeshPatches, RefineOptions, Refiner, Scheme, Split, Stencils,
+    child_faces,
 };
 
 use crate::{Dyadic, FaceDomain, PatchFrame, StencilError};
@@ -187,6 +188,7 @@ impl PatchLevels {
         let mut levels = Vec::new();
         let mut stencils = Vec::new();
         let mut wanted: Vec<FaceId> = base.face_ids().collect();
+        let derived = DerivedConfigurations::default();
         let mut current = base;
         loop {
             let patches = if wanted.len() == current.face_count() {
@@ -194,7 +196,8 @@ impl PatchLevels {
             } else {
                 MeshPatches::near(scheme, &current, options, wanted.iter().copied())?
             };
-            let patches = patches.with_derived(derived_from.is_some_and(|from| levels.len() >= from));
+            let patches =
+                patches.with_derived(derived_from.is_some_and(|from| levels.len() >= from).then(|| derived.clone()));
             let mut faces: Vec<Option<Resolution>> = vec![None; current.face_count()];
             let mut refine = Vec::new();
             for &f in &wanted {
