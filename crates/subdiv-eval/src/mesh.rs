@@ -112,7 +112,7 @@ impl EigenEvaluator {
             } else {
                 let (nodes, surfaces) = (tree.nodes.len(), tree.surfaces.len());
                 let node = tree.push_placeholder();
-                match tree.build(stencil.patches(), 0, face, node) {
+                match tree.build(scheme, stencil.patches(), 0, face, node) {
                     Ok(()) => match (&tree.nodes[node as usize], stencil.domain(face)?) {
                         (&Node::Patch { surface, frame }, FaceDomain::Quad | FaceDomain::Triangle) => {
                             tree.nodes.truncate(nodes);
@@ -324,7 +324,14 @@ impl Tree {
     }
 
     /// Fills node `slot` for `face` of `level`, and its children's, recursively.
-    fn build(&mut self, levels: &PatchLevels, level: usize, face: FaceId, slot: u32) -> Result<(), String> {
+    fn build(
+        &mut self,
+        scheme: &Scheme,
+        levels: &PatchLevels,
+        level: usize,
+        face: FaceId,
+        slot: u32,
+    ) -> Result<(), String> {
         match levels.resolve(level, face) {
             None => Err(format!("level {level} face {face} was not prepared (internal)")),
             Some(Resolved::Hole) => Err("part of it is a hole".to_string()),
@@ -336,7 +343,7 @@ impl Tree {
                 }
                 self.nodes[slot as usize] = Node::Children { first, triangle };
                 for (k, child) in children.enumerate() {
-                    self.build(levels, level + 1, FaceId::new(child as u32), first + k as u32)?;
+                    self.build(scheme, levels, level + 1, FaceId::new(child as u32), first + k as u32)?;
                 }
                 Ok(())
             }
@@ -351,7 +358,7 @@ impl Tree {
                 let det = e1[0] * e2[1] - e2[0] * e1[1];
                 let to_patch = [[e2[1] / det, -e2[0] / det], [-e1[1] / det, e1[0] / det]];
                 let frame = Frame { origin: o, to_patch, derivatives: frame.derivative_map() };
-                self.build_shape(&patch.matrices, patch.shape, &points, frame, slot)
+                self.build_shape(scheme, &patch.matrices, patch.shape, &points, frame, slot)
             }
         }
     }
@@ -361,24 +368,29 @@ impl Tree {
     /// are spent (no eigenbasis, no child that keeps it), its sub-patches, recursively.
     fn build_shape(
         &mut self,
+        scheme: &Scheme,
         matrices: &Arc<PatchMatrices>,
         shape: usize,
         points: &[DVec3],
         frame: Frame,
         slot: u32,
     ) -> Result<(), String> {
-        match EigenBasis::of(matrices, shape) {
+        let derived = matches!(matrices.patch_type, PatchType::Derived { .. });
+        // A derived configuration's stationary shape takes its interior type's eigenbasis
+        // (committed, or fitted once for every configuration that has the shape).
+        let this = &matrices.shapes[shape];
+        let basis = match derived.then(|| PatchMatrices::interior_shape(scheme, &this.signature, this.size)).flatten() {
+            Some((canonical, index)) => EigenBasis::of(&canonical, index),
+            None => EigenBasis::of(matrices, shape),
+        };
+        match basis {
             Ok(basis) => {
                 let surface = basis.surface(points).map_err(|e| e.to_string())?;
                 self.nodes[slot as usize] = Node::Patch { surface: self.surfaces.len() as u32, frame };
                 self.surfaces.push(surface);
                 Ok(())
             }
-            Err(_)
-                if matches!(matrices.patch_type, PatchType::Derived { .. })
-                    && matrices.keeping(shape).is_none()
-                    && !matrices.shapes[shape].children.is_empty() =>
-            {
+            Err(_) if derived && matrices.keeping(shape).is_none() && !matrices.shapes[shape].children.is_empty() => {
                 let children = &matrices.shapes[shape].children;
                 let first = self.nodes.len() as u32;
                 for _ in children {
@@ -387,7 +399,8 @@ impl Tree {
                 let triangle = matrices.face_size == 3;
                 self.nodes[slot as usize] = Node::SubPatches { frame, first, triangle };
                 for (k, child) in children.iter().enumerate() {
-                    self.build_shape(matrices, child.shape, &child.apply(points), Frame::IDENTITY, first + k as u32)?;
+                    let points = child.apply(points);
+                    self.build_shape(scheme, matrices, child.shape, &points, Frame::IDENTITY, first + k as u32)?;
                 }
                 Ok(())
             }

@@ -33,6 +33,10 @@ use crate::{LocalRefinement, RefineOptions, Refiner, Scheme, SchemeError, Split}
 /// The largest patch radius tried.
 pub(crate) const MAX_RADIUS: usize = 3;
 
+/// The largest valence whose interior type [`PatchMatrices::interior_shape`] looks in (the
+/// committed tables' largest: beyond it a look-up would derive a type to save a fit).
+const MAX_INTERIOR_LOOKUP: usize = 16;
+
 /// Refinement levels after which the shapes must have closed up.
 const MAX_LEVELS: usize = 5;
 
@@ -445,6 +449,34 @@ impl PatchMatrices {
         Derivation::new(scheme, region.mesh, radius, MAX_LEVELS + levels, *options).run(start, patch_type)
     }
 
+    /// The interior type's shape with this signature (of a patch of `size` control points),
+    /// if one of the interior types of the valences it lists has it (an extraordinary valence
+    /// first, then the regular one): a shape without sharp features or boundary vertices, as
+    /// its matrices and index. Equal signatures have equal matrices, so a derived
+    /// configuration's stationary shapes take what was solved (or committed) for the types:
+    /// parameters, eigenbases.
+    pub fn interior_shape(scheme: &Scheme, signature: &[u32], size: usize) -> Option<(Arc<Self>, usize)> {
+        if Patch::signature_has_sharp_features(signature) {
+            return None;
+        }
+        let mut valences = Vec::with_capacity(size);
+        for (valence, boundary) in Patch::signature_vertices(signature, size) {
+            if boundary {
+                return None;
+            }
+            valences.push(valence as usize);
+        }
+        let regular = scheme.regular_valence();
+        valences.sort_unstable();
+        valences.dedup();
+        valences.sort_by_key(|&v| v == regular);
+        valences.into_iter().filter(|&v| v <= MAX_INTERIOR_LOOKUP).find_map(|v| {
+            let m = PatchMatrices::of(scheme, PatchType::interior(v), BoundaryInterpolation::EdgeOnly).ok()?;
+            let shape = m.find(signature)?;
+            Some((m, shape))
+        })
+    }
+
     /// Matrices of `scheme` from `shapes` (read from a table).
     pub(crate) fn from_shapes(
         scheme: &Scheme,
@@ -570,9 +602,21 @@ impl<'a> Derivation<'a> {
             _ => vec![true; self.shapes.len()],
         };
         for (s, stationary) in stationary.into_iter().enumerate() {
-            if stationary {
-                self.shapes[s].parameters = parameter_coordinates(&self.shapes, s);
+            if !stationary {
+                continue;
             }
+            // A derived configuration's stationary shape that an interior type has (equal
+            // signatures, equal matrices) takes its parameters from there, solved once.
+            let canonical = match patch_type {
+                PatchType::Derived { .. } => {
+                    PatchMatrices::interior_shape(self.scheme, &self.shapes[s].signature, self.shapes[s].size)
+                }
+                _ => None,
+            };
+            self.shapes[s].parameters = match canonical {
+                Some((m, shape)) => m.shapes[shape].parameters.clone(),
+                None => parameter_coordinates(&self.shapes, s),
+            };
         }
         Ok(Some(PatchMatrices {
             scheme: self.scheme.name.clone(),
