@@ -1,5 +1,6 @@
 //! Eigenbasis evaluation of a whole mesh in OpenSubdiv's `Bfr` parameterization.
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 
 use std::sync::Arc;
@@ -315,7 +316,13 @@ impl Frame {
 struct Tree {
     nodes: Vec<Node>,
     surfaces: Vec<PatchSurface>,
+    /// Per derived configuration's shape (by the matrices' address), its interior type's
+    /// shape if it has one: asked once, not per face.
+    interior: HashMap<(usize, usize), Option<InteriorShape>>,
 }
+
+/// An interior type's matrices and one of their shapes.
+type InteriorShape = (Arc<PatchMatrices>, usize);
 
 impl Tree {
     fn push_placeholder(&mut self) -> u32 {
@@ -378,8 +385,13 @@ impl Tree {
         let derived = matches!(matrices.patch_type, PatchType::Derived { .. });
         // A derived configuration's stationary shape takes its interior type's eigenbasis
         // (committed, or fitted once for every configuration that has the shape).
-        let this = &matrices.shapes[shape];
-        let basis = match derived.then(|| PatchMatrices::interior_shape(scheme, &this.signature, this.size)).flatten() {
+        let interior = derived.then(|| {
+            let this = &matrices.shapes[shape];
+            let key = (Arc::as_ptr(matrices) as usize, shape);
+            let found = self.interior.entry(key);
+            found.or_insert_with(|| PatchMatrices::interior_shape(scheme, &this.signature, this.size)).clone()
+        });
+        let basis = match interior.flatten() {
             Some((canonical, index)) => EigenBasis::of(&canonical, index),
             None => EigenBasis::of(matrices, shape),
         };
