@@ -1,0 +1,344 @@
+//! The shape closure: a patch type's shapes and sub-patch matrices, derived by refining a mesh
+//! around a starting patch (a canonical one, or a face's own neighbourhood for a derived
+//! configuration) level by level until no new shape appears.
+
+use std::collections::{HashMap, VecDeque};
+
+use faer::Mat;
+use faer::linalg::solvers::SolveLstsq;
+use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, Patch, VertexId};
+
+use super::{ChildDomain, PatchMatrices, PatchShape, PatchType, SubPatch, ZERO_WEIGHT, sub_patch_starts};
+use crate::{LocalRefinement, RefineOptions, Scheme, SchemeError, Split};
+
+/// A shape whose children are still to be found: where its patch lies.
+struct Pending {
+    shape: usize,
+    level: usize,
+    start: HalfEdgeId,
+    vertices: Vec<VertexId>,
+}
+
+/// The canonical mesh refined level by level, and the shapes found so far.
+///
+/// A level refines only the faces of the patches still waiting for their children and the
+/// rings around them that those children's patches and rules reach (as `PatchLevels` does for
+/// real meshes), so a level costs a few dozen faces instead of four times the last: the whole
+/// canonical mesh at the third level was most of a first call's time (the built-in model's
+/// first tessellation spent 13 of its 17 ms deriving two valences' matrices).
+pub(super) struct Derivation<'a> {
+    scheme: &'a Scheme,
+    radius: usize,
+    /// Levels after which the shapes must have closed up.
+    max_levels: usize,
+    /// The options each level is refined with.
+    options: RefineOptions,
+    /// Level 0: the canonical mesh.
+    base: Mesh,
+    /// Level `l + 1`: the part of level `l` refined, with its rows over level `l`.
+    refined: Vec<LocalRefinement>,
+    shapes: Vec<PatchShape>,
+    by_signature: HashMap<Vec<u32>, usize>,
+}
+
+impl<'a> Derivation<'a> {
+    pub(super) fn new(
+        scheme: &'a Scheme,
+        mesh: Mesh,
+        radius: usize,
+        max_levels: usize,
+        options: RefineOptions,
+    ) -> Self {
+        Self {
+            scheme,
+            radius,
+            max_levels,
+            options,
+            base: mesh,
+            refined: Vec::new(),
+            shapes: Vec::new(),
+            by_signature: HashMap::new(),
+        }
+    }
+
+    /// The matrices from the patch at `start` (shape 0), or `None` if the radius is too small.
+    pub(super) fn run(
+        mut self,
+        start: HalfEdgeId,
+        patch_type: PatchType,
+    ) -> Result<Option<PatchMatrices>, SchemeError> {
+        let mut pending = VecDeque::new();
+        self.register(self.base.patch(start, self.radius), 0, start, &mut pending);
+        while let Some(Pending { shape, level, start, vertices }) = pending.pop_front() {
+            if level == self.max_levels {
+                return Err(SchemeError::Internal(format!(
+                    "{}: the sub-patch shapes do not close up within {} levels",
+                    self.scheme, self.max_levels
+                )));
+            }
+            if self.refined.len() == level {
+                // The first patch of its level: every patch of the level is queued by now
+                // (breadth first), and their faces are what the next level refines.
+                let mesh = self.mesh(level);
+                let mut faces: Vec<FaceId> = std::iter::once(start)
+                    .chain(pending.iter().filter(|p| p.level == level).map(|p| p.start))
+                    .map(|h| mesh.face(h))
+                    .collect();
+                faces.sort_unstable();
+                faces.dedup();
+                self.refine_next(&faces)?;
+            }
+            let Some(children) = self.children(level, start, &vertices, &mut pending)? else {
+                return Ok(None);
+            };
+            self.shapes[shape].children = children;
+        }
+        let face_size = if self.scheme.split() == Split::Triangle { 3 } else { 4 };
+        let influence = influence_sets(&self.shapes, face_size);
+        for (shape, influence) in self.shapes.iter_mut().zip(influence) {
+            shape.influence = influence;
+        }
+        // A derived configuration's shapes before its features are spent reach every shape
+        // below them: their systems are large, and nothing reads their parameters (a cycle's
+        // shape's, for derivatives at its fixed point, and a bicubic shape's, are those of
+        // stationary shapes). Only the shapes some cycle reaches get them there.
+        let stationary = match patch_type {
+            PatchType::Derived { .. } => reached_from_cycles(&self.shapes),
+            _ => vec![true; self.shapes.len()],
+        };
+        for (s, stationary) in stationary.into_iter().enumerate() {
+            if !stationary {
+                continue;
+            }
+            // A derived configuration's stationary shape that an interior type has (equal
+            // signatures, equal matrices) takes its parameters from there, solved once.
+            let canonical = match patch_type {
+                PatchType::Derived { .. } => {
+                    PatchMatrices::interior_shape(self.scheme, &self.shapes[s].signature, self.shapes[s].size)
+                }
+                _ => None,
+            };
+            self.shapes[s].parameters = match canonical {
+                Some((m, shape)) => m.shapes[shape].parameters.clone(),
+                None => parameter_coordinates(&self.shapes, s),
+            };
+        }
+        Ok(Some(PatchMatrices {
+            scheme: self.scheme.name.clone(),
+            patch_type,
+            radius: self.radius,
+            face_size,
+            shapes: self.shapes,
+            by_signature: self.by_signature,
+            identity: self.scheme.identity(),
+        }))
+    }
+
+    /// Refines the last level's `faces` and the rings around them that their children's
+    /// patches (radius rings of the next level) and those points' rules (one ring more) reach.
+    /// Schemes without crease rules refine the whole level (a region's boundary needs rules).
+    fn refine_next(&mut self, faces: &[FaceId]) -> Result<(), SchemeError> {
+        let current = self.mesh(self.refined.len());
+        let next = LocalRefinement::new(self.scheme, current, faces, self.radius + 1, &self.options)?;
+        self.refined.push(next);
+        Ok(())
+    }
+
+    /// The mesh of `level`.
+    fn mesh(&self, level: usize) -> &Mesh {
+        if level == 0 { &self.base } else { &self.refined[level - 1].mesh }
+    }
+
+    /// The shape of `patch` (starting at `start` on `level`): a known one, or a new one queued
+    /// in `pending` for its own children.
+    fn register(&mut self, patch: Patch, level: usize, start: HalfEdgeId, pending: &mut VecDeque<Pending>) -> usize {
+        if let Some(&s) = self.by_signature.get(&patch.signature) {
+            return s;
+        }
+        let mirrored = self.mesh(level).mirrored_patch(start, self.radius);
+        let mirror = (mirrored.signature == patch.signature).then(|| {
+            let place: HashMap<VertexId, u32> =
+                patch.vertices.iter().enumerate().map(|(k, &v)| (v, k as u32)).collect();
+            mirrored.vertices.iter().map(|v| place[v]).collect()
+        });
+        let s = self.shapes.len();
+        self.by_signature.insert(patch.signature.clone(), s);
+        self.shapes.push(PatchShape {
+            size: patch.vertices.len(),
+            signature: patch.signature,
+            children: Vec::new(),
+            influence: Vec::new(),
+            parameters: None,
+            mirror,
+        });
+        pending.push_back(Pending { shape: s, level, start, vertices: patch.vertices });
+        s
+    }
+
+    /// The sub-patches of the patch with vertices `parent` starting at `start` on `level`,
+    /// registering new shapes in `pending`; `None` if a child's row leaves the parent patch.
+    fn children(
+        &mut self,
+        level: usize,
+        start: HalfEdgeId,
+        parent: &[VertexId],
+        pending: &mut VecDeque<Pending>,
+    ) -> Result<Option<Vec<SubPatch>>, SchemeError> {
+        let (parent_mesh, next) = (self.mesh(level), &self.refined[level]);
+        let child_mesh = &next.mesh;
+        let column: HashMap<usize, usize> = parent.iter().enumerate().map(|(c, v)| (v.index(), c)).collect();
+        // The split's parent (the refined region), where the face has the same corners.
+        let missing = || SchemeError::Internal("a patch's face is outside the refined region".to_string());
+        let (split_parent, face) = next.split_parent(parent_mesh, parent_mesh.face(start)).ok_or_else(missing)?;
+        let split_start = split_parent.face_half_edges(face).nth(parent_mesh.corner(start)).ok_or_else(missing)?;
+        let starts = sub_patch_starts(self.scheme, split_parent, split_start, child_mesh)?;
+        let domains = ChildDomain::of_face(parent_mesh.face_size(parent_mesh.face(start)));
+        let stencils = &next.stencils;
+        let columns = parent.len();
+        // The rows first (they borrow the meshes), then the shapes.
+        let mut found = Vec::new();
+        for (&domain, &child_start) in domains.iter().zip(&starts) {
+            let patch = child_mesh.patch(child_start, self.radius);
+            let mut entries = vec![0.0; patch.vertices.len() * columns];
+            for (r, v) in patch.vertices.iter().enumerate() {
+                for (p, w) in stencils.row(v.index()) {
+                    match column.get(&p) {
+                        Some(&c) => entries[r * columns + c] += w,
+                        None if w.abs() > ZERO_WEIGHT => return Ok(None),
+                        None => {}
+                    }
+                }
+            }
+            found.push((domain, child_start, patch, entries));
+        }
+        let mut children = Vec::new();
+        for (domain, child_start, patch, entries) in found {
+            let rows = patch.vertices.len();
+            let shape = self.register(patch, level + 1, child_start, pending);
+            children.push(SubPatch { shape, domain, rows, columns, entries });
+        }
+        Ok(Some(children))
+    }
+}
+
+/// The canonical patch's start: its face at the centre, vertex 0, in sector `index` (see
+/// `canonical`).
+pub(super) fn canonical_start(mesh: &Mesh, patch_type: PatchType) -> HalfEdgeId {
+    let index = match patch_type {
+        PatchType::Boundary { index, .. } => index,
+        PatchType::Interior { .. } | PatchType::Derived { .. } => 0,
+    };
+    mesh.face_ids()
+        .map(|f| mesh.face_half_edges(f).next().expect("faces have corners"))
+        .filter(|&h| mesh.origin(h).index() == 0)
+        .nth(index)
+        .expect("the canonical mesh has a face at its centre in every sector")
+}
+
+/// Per shape, whether a shape that reaches itself through its children (a cycle) reaches it.
+fn reached_from_cycles(shapes: &[PatchShape]) -> Vec<bool> {
+    let reach = |from: usize| {
+        let mut seen = vec![false; shapes.len()];
+        let mut stack: Vec<usize> = shapes[from].children.iter().map(|c| c.shape).collect();
+        while let Some(s) = stack.pop() {
+            if !std::mem::replace(&mut seen[s], true) {
+                stack.extend(shapes[s].children.iter().map(|c| c.shape));
+            }
+        }
+        seen
+    };
+    let mut reached = vec![false; shapes.len()];
+    for s in 0..shapes.len() {
+        let from = reach(s);
+        if from[s] {
+            reached.iter_mut().zip(from).for_each(|(r, f)| *r |= f);
+        }
+    }
+    reached
+}
+
+/// Each shape's [`PatchShape::influence`]: the least fixed point of "a face's corners
+/// influence it, and so does every point that a child's matrix reads (with a weight above
+/// [`ZERO_WEIGHT`]) into a point that influences the child".
+pub(super) fn influence_sets(shapes: &[PatchShape], face_size: usize) -> Vec<Vec<u32>> {
+    let mut inside: Vec<Vec<bool>> = shapes.iter().map(|s| (0..s.size).map(|k| k < face_size).collect()).collect();
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for (s, shape) in shapes.iter().enumerate() {
+            for child in &shape.children {
+                for r in 0..child.rows() {
+                    if !inside[child.shape][r] {
+                        continue;
+                    }
+                    for (c, &w) in child.row(r).iter().enumerate() {
+                        if w.abs() > ZERO_WEIGHT && !inside[s][c] {
+                            inside[s][c] = true;
+                            changed = true;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    inside.iter().map(|set| (0..set.len() as u32).filter(|&k| set[k as usize]).collect()).collect()
+}
+
+/// The parameters `(u, v)` of the control points of `shape` in its face's frame, if the
+/// matrices reproduce linear functions of the parameters from `shape` on: the solution of
+/// `A_c · U_s = (±U_child + o_c) / 2` over every shape reachable from `shape` and each child,
+/// on the points that influence the faces. The others have no weight in any stencil, so their
+/// parameters are free (a point across an infinitely sharp edge, or beyond a bilinear face's
+/// corners, would make the whole system singular): they are given 0. The rows of influencing
+/// points read no other points, so the restricted system is closed.
+/// `None` next to an irregular vertex that is part of the shape's own domain, or where the
+/// influencing points' parameters are not unique.
+pub(super) fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Option<[Vec<f64>; 2]> {
+    // The shapes reachable from `shape`, and where each one's unknowns start.
+    let mut reach = vec![shape];
+    let mut i = 0;
+    while i < reach.len() {
+        for child in &shapes[reach[i]].children {
+            if !reach.contains(&child.shape) {
+                reach.push(child.shape);
+            }
+        }
+        i += 1;
+    }
+    // The unknown of each influencing control point of each reachable shape.
+    let mut unknown: Vec<Vec<Option<usize>>> = shapes.iter().map(|s| vec![None; s.size]).collect();
+    let mut unknowns = 0;
+    for &s in &reach {
+        for &k in &shapes[s].influence {
+            unknown[s][k as usize] = Some(unknowns);
+            unknowns += 1;
+        }
+    }
+    let equations: usize =
+        reach.iter().map(|&s| shapes[s].children.iter().map(|c| shapes[c.shape].influence.len()).sum::<usize>()).sum();
+    let mut a = Mat::<f64>::zeros(equations, unknowns);
+    let mut b = Mat::<f64>::zeros(equations, 2);
+    let mut row = 0;
+    for &s in &reach {
+        for child in &shapes[s].children {
+            let sign = if child.domain.flipped { -1.0 } else { 1.0 };
+            for &r in &shapes[child.shape].influence {
+                let r = r as usize;
+                for &c in &shapes[s].influence {
+                    a[(row, unknown[s][c as usize].expect("an influencing point"))] += child.get(r, c as usize);
+                }
+                a[(row, unknown[child.shape][r].expect("an influencing point"))] -= sign / 2.0;
+                b[(row, 0)] = f64::from(child.domain.offset[0]) / 2.0;
+                b[(row, 1)] = f64::from(child.domain.offset[1]) / 2.0;
+                row += 1;
+            }
+        }
+    }
+    let x = a.qr().solve_lstsq(&b);
+    if (&a * &x - &b).norm_max() > 1e-9 || a.singular_values().ok()?.iter().any(|&s| s < 1e-9) {
+        return None;
+    }
+    let value = |k: usize, axis: usize| unknown[shape][k].map_or(0.0, |i| x[(i, axis)]);
+    let size = shapes[shape].size;
+    Some([(0..size).map(|k| value(k, 0)).collect(), (0..size).map(|k| value(k, 1)).collect()])
+}
