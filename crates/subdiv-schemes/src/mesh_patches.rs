@@ -236,7 +236,7 @@ impl MeshPatches {
         // From the corner most likely irregular: a shape's irregular fixed point (an
         // extraordinary, boundary or sharp vertex) must be its corner 0, where the limit's
         // tangents are read, as the canonical patches have it.
-        let regular = if mesh.face_size(face) == 3 { 6 } else { 4 };
+        let regular = self.derive.scheme.regular_valence();
         let irregular = |h: HalfEdgeId| {
             let v = mesh.origin(h);
             mesh.valence(v) != regular
