@@ -21,8 +21,10 @@ pub enum Method {
     /// The exact stencil route ([`LimitEvaluator`]) for every face.
     Stencil,
     /// Eigenbasis where every patch under the face is an interior patch of a scheme with a
-    /// polynomial regular patch (Catmull-Clark, Loop, bilinear), exact stencils otherwise. The
-    /// default.
+    /// polynomial regular patch (Catmull-Clark, Loop, bilinear), exact stencils otherwise —
+    /// also under a derived configuration's shape whose semi-sharp features are not yet spent
+    /// (its exact stencils are shared per shape, where [`Method::Eigen`] builds the chain's
+    /// sub-patch surfaces per face). The default.
     #[default]
     Auto,
 }
@@ -103,7 +105,10 @@ impl EigenEvaluator {
     /// evaluation (with [`Method::Eigen`]) or not at all (with [`Method::Auto`]).
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions, method: Method) -> Result<Self, EvalError> {
         let stencil = LimitEvaluator::new(scheme, mesh, options)?;
-        let (mut routes, mut tree) = (Vec::new(), Tree::default());
+        // Auto leaves derived chains to the stencils, whose exact stencils are shared per shape
+        // where the chain's sub-patch surfaces are built per face (twice the car's setup).
+        let mut tree = Tree { descend_chains: method == Method::Eigen, ..Tree::default() };
+        let mut routes = Vec::new();
         for f in 0..stencil.face_count() {
             let face = FaceId::new(f as u32);
             let route = if !stencil.has_surface(face)? {
@@ -319,6 +324,9 @@ struct Tree {
     /// Per derived configuration's shape (by the matrices' address), its interior type's
     /// shape if it has one: asked once, not per face.
     interior: HashMap<(usize, usize), Option<InteriorShape>>,
+    /// Whether a derived configuration's shape before its semi-sharp features are spent is
+    /// evaluated through its sub-patches ([`Method::Eigen`]) or refused (to the stencils).
+    descend_chains: bool,
 }
 
 /// An interior type's matrices and one of their shapes.
@@ -401,6 +409,9 @@ impl Tree {
                 self.nodes[slot as usize] = Node::Patch { surface: self.surfaces.len() as u32, frame };
                 self.surfaces.push(surface);
                 Ok(())
+            }
+            Err(_) if derived && !self.descend_chains => {
+                Err("a derived configuration before its semi-sharp features are spent".to_string())
             }
             Err(_) if derived && matrices.keeping(shape).is_none() && !matrices.shapes[shape].children.is_empty() => {
                 let children = &matrices.shapes[shape].children;
