@@ -28,41 +28,60 @@ pub struct GlbMesh<'a> {
     pub indices: &'a [u32],
 }
 
-/// The smallest magnitude, other than 0, of a coordinate the GLB writer accepts: 2^-102.
+/// The smallest extent (largest coordinate magnitude) of a mesh the GLB writer accepts: 2^-102.
 ///
-/// GLB stores f32s. A coordinate below f32's smallest normal number (2^-126) would be written
-/// as a subnormal or, converted from f64, as 0 — the mesh collapses to a point — and GPUs flush
-/// subnormals to zero in any case. 2^-102 = 2^-126 · 2^24 leaves room for f32's 24-bit
-/// significand: the differences between neighbouring coordinates of that size (an edge, a
-/// derivative, one ulp apart) are still normal numbers, so the shape survives the renderer
-/// too. A mesh this small is to be scaled up before it is written.
+/// GLB stores f32s. A mesh whose coordinates all lie below f32's smallest normal number
+/// (2^-126) would be written as subnormals or, converted from f64, as 0 — the mesh collapses to
+/// a point — and GPUs flush subnormals to zero in any case. 2^-102 = 2^-126 · 2^24 leaves room
+/// for f32's 24-bit significand: the differences between neighbouring coordinates of that size
+/// (an edge, a derivative, one ulp apart) are still normal numbers, so the shape survives the
+/// renderer too. A mesh this small is to be scaled up before it is written.
+///
+/// A single coordinate below this size in a larger mesh (rounding noise around 0, such as
+/// `-4.8e-35` on a unit cube) is accepted when it is within f32's resolution of the mesh's
+/// extent (at most `2^-24 ×` it): written as it is, or as 0 after a conversion or a GPU's flush,
+/// it moves its vertex by less than f32 resolves at that scale.
 pub const MIN_GLB_EXTENT: f64 = 1.0 / (1u128 << 102) as f64;
 
-/// Checks that every coordinate of `positions` is representable as a normal f32 that keeps the
-/// shape ([`MIN_GLB_EXTENT`]): finite, at most `f32::MAX` in magnitude, and 0 or at least
-/// `MIN_GLB_EXTENT`. [`encode_glb`] calls it on its f32 input; a caller that converts f64
-/// positions to f32 calls it on the f64s first, where a coordinate that the conversion would
-/// flush to 0 is still seen.
+/// Checks that `positions` survive f32 ([`MIN_GLB_EXTENT`]): every coordinate finite and at
+/// most `f32::MAX` in magnitude; the mesh's extent 0 or at least `MIN_GLB_EXTENT`; and a
+/// coordinate below `MIN_GLB_EXTENT` only where it is within f32's resolution of the extent.
+/// [`encode_glb`] calls it on its f32 input; a caller that converts f64 positions to f32 calls
+/// it on the f64s first, where a coordinate that the conversion would flush to 0 is still seen.
 ///
 /// # Errors
 /// [`IoError::Unwritable`] naming the vertex, the coordinate and what to do (scale the mesh).
 pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> Result<(), IoError> {
+    let refuse = |i: usize, x: f64, rule: &str| {
+        Err(IoError::Unwritable { format: "GLB", rule: format!("vertex {i} coordinate {x:e} {rule}") })
+    };
+    // The largest magnitude, and the smallest non-zero one below the bound, with their places.
+    let (mut largest, mut tiny) = ((0usize, 0.0f64), None::<(usize, f64)>);
     for (i, p) in positions.into_iter().enumerate() {
         for x in p.to_array() {
-            let rule = if !x.is_finite() {
-                "is not finite"
-            } else if x.abs() > f64::from(f32::MAX) {
-                "exceeds f32's range (3.4e38); scale the mesh down before writing GLB"
-            } else if x != 0.0 && x.abs() < MIN_GLB_EXTENT {
-                "is too small for f32 (it would be written as 0 or a subnormal; the smallest \
-                 accepted is 2^-102 ≈ 2.0e-31); scale the mesh up before writing GLB"
-            } else {
-                continue;
-            };
-            return Err(IoError::Unwritable { format: "GLB", rule: format!("vertex {i} coordinate {x:e} {rule}") });
+            if !x.is_finite() {
+                return refuse(i, x, "is not finite");
+            }
+            if x.abs() > f64::from(f32::MAX) {
+                return refuse(i, x, "exceeds f32's range (3.4e38); scale the mesh down before writing GLB");
+            }
+            if x.abs() > largest.1.abs() {
+                largest = (i, x);
+            }
+            if x != 0.0 && x.abs() < MIN_GLB_EXTENT && tiny.is_none_or(|(_, t)| x.abs() > t.abs()) {
+                tiny = (i, x).into();
+            }
         }
     }
-    Ok(())
+    let too_small = "is too small for f32 (it would be written as 0 or a subnormal; the smallest \
+                     mesh extent accepted is 2^-102 ≈ 2.0e-31); scale the mesh up before writing GLB";
+    if largest.1 != 0.0 && largest.1.abs() < MIN_GLB_EXTENT {
+        return refuse(largest.0, largest.1, &format!("is the mesh's largest and {too_small}"));
+    }
+    match tiny {
+        Some((i, x)) if x.abs() > largest.1.abs() * f64::from(f32::EPSILON) / 2.0 => refuse(i, x, too_small),
+        _ => Ok(()),
+    }
 }
 
 /// Encodes `mesh` as a GLB file: one scene, one node, one mesh with one TRIANGLES primitive;
@@ -302,5 +321,20 @@ mod tests {
         let small = MIN_GLB_EXTENT as f32;
         assert_eq!(f64::from(small), MIN_GLB_EXTENT);
         triangle(&[Vec3::ZERO, Vec3::X * small, Vec3::Y * small]).unwrap();
+    }
+
+    /// Rounding noise around 0 in a mesh of ordinary size is no reason to refuse it (a quadtree
+    /// tessellation of a unit cube has `-4.8e-35`); a tiny coordinate that f32 would resolve
+    /// against the mesh's extent still is.
+    #[test]
+    fn noise_around_zero_is_kept_in_a_mesh_of_ordinary_size() {
+        let unit = [glam::DVec3::new(-4.81482486096809e-35, 0.5, 1.0), glam::DVec3::ONE, glam::DVec3::ZERO];
+        check_glb_positions(unit).unwrap();
+        triangle(&[Vec3::new(-4.8e-35, 0.5, 1.0), Vec3::ONE, Vec3::ZERO]).unwrap();
+        // Largest coordinate 2^-90: 2^-115 is below f32's resolution there (2^-114), 2^-105 is not.
+        let extent = glam::DVec3::X * 2f64.powi(-90);
+        check_glb_positions([extent, glam::DVec3::Y * 2f64.powi(-115)]).unwrap();
+        let error = check_glb_positions([extent, glam::DVec3::Y * 2f64.powi(-105)]).unwrap_err().to_string();
+        assert!(error.contains("vertex 1") && error.contains("scale the mesh up"), "{error}");
     }
 }

@@ -10,7 +10,7 @@
 //!   device or FIFO, read past a buffer's `byteLength`, mistake an index of 2^32 for 0, or
 //!   allocate more than [`GltfOptions::max_vertices`] / [`GltfOptions::max_indices`] allow (all
 //!   checked before anything is read). [`write_glb`] writes a triangle mesh (positions, normals,
-//!   indices) as GLB, refusing coordinates that are no normal f32 ([`MIN_GLB_EXTENT`]).
+//!   indices) as GLB, refusing meshes that f32 cannot hold ([`MIN_GLB_EXTENT`]).
 //! - [`load`] and [`load_mesh`] pick the format from the file extension; [`load_mesh`] also builds
 //!   the half-edge [`Mesh`] and reports a [`MeshError`](subdiv_mesh::MeshError) at the OBJ line
 //!   of the face, vertex or tag it is about.
