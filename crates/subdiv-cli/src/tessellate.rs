@@ -41,7 +41,8 @@ pub(crate) struct TessellateArgs {
     rate: Option<u32>,
     /// Every limit point within this distance of the output (model units, or a fraction of the
     /// bounding-box diagonal with --relative): the rates (dual) or leaves (quadtree) that prove
-    /// it. Dual: closed Catmull-Clark meshes.
+    /// it. Catmull-Clark meshes; the dual method not yet at extraordinary border vertices (the
+    /// quadtree takes them).
     #[arg(long, value_name = "E", allow_negative_numbers = true, conflicts_with = "pixels")]
     tolerance: Option<f64>,
     /// Read --tolerance as a fraction of the control mesh's bounding-box diagonal.

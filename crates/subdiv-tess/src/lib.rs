@@ -16,7 +16,7 @@
 //!   butterfly), closed and open meshes and holes, and re-evaluates a moved cage without any
 //!   topology work ([`DualTessellator::update_cage`]): the animation path.
 //! - The [`quadtree`] tessellator ([`QuadtreeTessellator`], paper 002, Lai and Cheng) refines each
-//!   closed Catmull-Clark face's parameter domain by midpoint splits until every piece is flat,
+//!   Catmull-Clark face's parameter domain by midpoint splits until every piece is flat,
 //!   with **global vertex ids** (one vertex per parameter point, shared across faces) and
 //!   **polyline replacement** (a polygon lists the vertices its finer neighbours put on its
 //!   edges), so the output is watertight by construction. Its tolerance model ([`flatness`]):

@@ -182,7 +182,12 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 ///
 /// A `rounding_slack` of `1e−12 ×` the model's size is kept from `ε` for the f64 arithmetic.
 /// The bounds come from the quadtree tessellator's pieces, so this policy takes what it takes:
-/// closed Catmull-Clark meshes.
+/// Catmull-Clark meshes, open ones and holes too. At a border (a boundary, or the edge of a
+/// hole) the strips close against border points at the parameters of the row beside them, and a
+/// border vertex's polygon is fanned around its limit point, all within `√2 / n` in the chart of
+/// one face or of the two faces at a regular border vertex; an *extraordinary* border vertex
+/// (a smooth corner, a boundary vertex of three or more faces, a vertex next to a hole, which
+/// keeps the interior rules) has no rings yet, so the policy refuses it.
 ///
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
@@ -307,14 +312,30 @@ impl ErrorRates {
             cache.insert((f, d), c);
             Ok(c)
         };
-        let faces: Vec<FaceId> = mesh.face_ids().collect();
-        let extraordinary: Vec<bool> =
-            faces.iter().map(|&f| curvature(f, 1).map(|c| c.corner_hull > 0.0)).collect::<Result<_, _>>()?;
+        // Holes have no surface: no rate of theirs matters, and they bound nothing.
+        let faces: Vec<FaceId> = mesh.face_ids().filter(|&f| !mesh.is_hole(f)).collect();
+        let mut extraordinary = vec![false; mesh.face_count()];
+        for &f in &faces {
+            extraordinary[f.index()] = curvature(f, 1)?.corner_hull > 0.0;
+        }
+        // The polygon at a border vertex is fanned around its limit point without rings: no
+        // bound covers it where the surface there is an extraordinary piece.
+        let on_border =
+            |v: subdiv_mesh::VertexId| mesh.is_boundary_vertex(v) || mesh.vertex_faces(v).any(|f| mesh.is_hole(f));
+        for &f in faces.iter().filter(|f| extraordinary[f.index()]) {
+            if let Some(v) = bounds.extraordinary_corners(f)?.into_iter().find(|&v| on_border(v)) {
+                return Err(TessError::Unsupported {
+                    feature: "tolerance rates at an extraordinary border vertex (the dual method has no rings there \
+                              yet; --method quadtree takes it)",
+                    element: format!("{v}"),
+                });
+            }
+        }
         // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the depth
         // of the first ring for the finest rate around each of its vertices (no triangle outside
         // the rings comes closer); finer rates push d deeper, where M grows like (4λ)^d, slower
         // than n², so the rates settle.
-        let mut rates = vec![round(1); faces.len()];
+        let mut rates = vec![round(1); mesh.face_count()];
         let depth_of = |rates: &[u32], f: FaceId| -> u32 {
             let finest = mesh
                 .face_vertices(f)
@@ -324,10 +345,11 @@ impl ErrorRates {
             first_ring_depth(finest.max().unwrap_or(1))
         };
         loop {
-            let depths: Vec<u32> =
-                faces.iter().map(|&f| if extraordinary[f.index()] { depth_of(&rates, f) } else { 1 }).collect();
-            let second: Vec<f64> =
-                faces.iter().map(|&f| curvature(f, depths[f.index()]).map(|c| c.second)).collect::<Result<_, _>>()?;
+            let mut second = vec![0.0; mesh.face_count()];
+            for &f in &faces {
+                let depth = if extraordinary[f.index()] { depth_of(&rates, f) } else { 1 };
+                second[f.index()] = curvature(f, depth)?.second;
+            }
             let mut changed = false;
             for &f in &faces {
                 let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
@@ -382,11 +404,11 @@ impl ErrorRates {
         };
         let mut vertices = vec![0u32; mesh.vertex_count()];
         for v in mesh.vertices() {
-            if mesh.vertex_faces(v).any(|f| extraordinary[f.index()]) && mesh.valence(v) != 4 {
+            if mesh.vertex_faces(v).any(|f| extraordinary[f.index()]) && mesh.valence(v) != 4 && !on_border(v) {
                 vertices[v.index()] = ring_depth(&mut mesh.vertex_faces(v), &mut curvature)?;
             }
         }
-        let mut centres = vec![0u32; faces.len()];
+        let mut centres = vec![0u32; mesh.face_count()];
         for &f in &faces {
             if mesh.face_size(f) != 4 {
                 centres[f.index()] = ring_depth(&mut std::iter::once(f), &mut curvature)?;

@@ -20,15 +20,38 @@ fn tessellate(mesh: &Mesh, relative: f64) -> TessMesh {
 
 /// Every triangle edge has exactly one opposite; no two vertices share a position.
 fn assert_watertight(out: &TessMesh) {
-    let mut directed: HashMap<(u32, u32), usize> = HashMap::new();
-    for t in &out.triangles {
+    assert_watertight_inside(out, None);
+}
+
+/// [`assert_watertight`] of an open mesh's output: a triangle edge without an opposite must
+/// lie on a side of a quad of `mesh` that is a boundary edge or borders a hole.
+fn assert_watertight_inside(out: &TessMesh, mesh: Option<&Mesh>) {
+    // Per directed edge, its uses and the triangle and corner of the last.
+    let mut directed: HashMap<(u32, u32), (usize, usize, usize)> = HashMap::new();
+    for (i, t) in out.triangles.iter().enumerate() {
         for k in 0..3 {
-            *directed.entry((t[k], t[(k + 1) % 3])).or_default() += 1;
+            directed.entry((t[k], t[(k + 1) % 3])).or_insert((0, i, k)).0 += 1;
         }
     }
-    for (&(a, b), &n) in &directed {
+    // The sides of a quad (Bfr: side 0 is v = 0, 1 is u = 1, 2 is v = 1, 3 is u = 0) a point lies on.
+    let sides = |[u, v]: [f64; 2]| -> Vec<usize> {
+        [v == 0.0, u == 1.0, v == 1.0, u == 0.0].iter().enumerate().filter(|&(_, &on)| on).map(|(k, _)| k).collect()
+    };
+    for (&(a, b), &(n, i, k)) in &directed {
         assert_eq!(n, 1, "edge {a}-{b} used {n} times in one direction");
-        assert_eq!(directed.get(&(b, a)), Some(&1), "edge {a}-{b} has no opposite (crack or flip)");
+        if directed.get(&(b, a)).map(|e| e.0) == Some(1) {
+            continue;
+        }
+        let mesh = mesh.unwrap_or_else(|| panic!("edge {a}-{b} has no opposite (crack or flip)"));
+        let (face, params) = (out.triangle_faces[i], out.triangle_parameters[i]);
+        let (pa, pb) = (params[k], params[(k + 1) % 3]);
+        let on_border = mesh.face_size(face) == 4
+            && sides(pa).iter().filter(|k| sides(pb).contains(k)).any(|&k| {
+                let h = mesh.face_half_edges(face).nth(k).expect("a quad has four sides");
+                let e = mesh.edge(h);
+                mesh.is_boundary_edge(e) || mesh.edge_faces(e).iter().any(|&f| mesh.is_hole(f))
+            });
+        assert!(on_border, "edge {a}-{b} ({face}: {pa:?} to {pb:?}) has no opposite and is not on the mesh's border");
     }
     let mut seen: HashMap<[u64; 3], usize> = HashMap::new();
     for (i, p) in out.positions.iter().enumerate() {
@@ -37,7 +60,7 @@ fn assert_watertight(out: &TessMesh) {
             panic!("vertices {j} and {i} share the position {p}");
         }
     }
-    // Polygons share their edges too.
+    // Polygons share their edges too, but for the border's, which are triangle edges there.
     let mut polygon_edges: HashMap<(u32, u32), usize> = HashMap::new();
     for k in 0..out.polygon_count() {
         let p = out.polygon(k);
@@ -46,12 +69,18 @@ fn assert_watertight(out: &TessMesh) {
         }
     }
     for &(a, b) in polygon_edges.keys() {
-        assert_eq!(polygon_edges.get(&(b, a)), Some(&1), "polygon edge {a}-{b} has no opposite");
+        let border = !directed.contains_key(&(b, a)) && directed.contains_key(&(a, b));
+        assert!(polygon_edges.get(&(b, a)) == Some(&1) || border, "polygon edge {a}-{b} has no opposite");
     }
 }
 
 fn euler(out: &TessMesh) -> i64 {
-    out.positions.len() as i64 - (out.triangles.len() * 3 / 2) as i64 + out.triangles.len() as i64
+    let edges: std::collections::HashSet<(u32, u32)> = out
+        .triangles
+        .iter()
+        .flat_map(|t| (0..3).map(|k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]))))
+        .collect();
+    out.positions.len() as i64 - edges.len() as i64 + out.triangles.len() as i64
 }
 
 /// Grids should have odd `n`: dyadic samples `i/2^k` are quadtree vertices (error 0).
@@ -71,8 +100,9 @@ fn guarantee(mesh: &Mesh, n: u32, tolerances: &[f64]) -> f64 {
         assert_eq!(m.uncovered, 0, "samples outside every triangle");
         // The vertices and the samples come from two routes that agree to ~1e-14 × size.
         assert!(m.worst <= epsilon + 1e-11 * tess.diagonal(), "worst {} > ε {epsilon} at r = {r}", m.worst);
-        assert_watertight(&out);
-        assert_eq!(euler(&out), mesh.euler_characteristic());
+        assert_watertight_inside(&out, Some(mesh));
+        let holes = mesh.face_ids().filter(|&f| mesh.is_hole(f)).count() as i64;
+        assert_eq!(euler(&out), mesh.euler_characteristic() - holes);
         worst_ratio = worst_ratio.max(m.worst / epsilon);
         eprintln!(
             "r = {r:e}: {} polygons, {} triangles, worst distance / ε = {:.3}",
@@ -185,8 +215,47 @@ fn bad_input_gives_typed_errors() {
         let on_side = (0..3).any(|k| (p[k] - lo[k]).abs() < 1e-12 || (p[k] - hi[k]).abs() < 1e-12);
         assert!(on_side, "bilinear cube: {p} is off the cube");
     }
-    let grid = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &Mesh::build(shapes::quad_grid(2, 2)).unwrap());
-    assert!(matches!(grid, Err(TessError::Unsupported { .. })));
+}
+
+/// Open meshes: boundaries (regular, corners of one face, boundary vertices of three and
+/// more faces) and holes keep the bound and close up everywhere but along the border.
+#[test]
+fn open_meshes_are_within_tolerance_of_the_limit_surface() {
+    // A bent 3 × 3 grid: corner, regular boundary and interior vertices; its corners sharp
+    // (edge-and-corner), so that no border vertex is extraordinary.
+    let mut grid = shapes::quad_grid(3, 3);
+    grid.tags.boundary_interpolation = Some(subdiv_mesh::BoundaryInterpolation::EdgeAndCorner);
+    grid.positions_mut().iter_mut().for_each(|p| p.z = 0.3 * (p.x * 2.0).sin() * (p.y * 1.5).cos());
+    let grid = Mesh::build(grid).unwrap();
+    let ratio = guarantee(&grid, 9, &[1e-2, 1e-3]);
+    assert!(ratio > 0.1, "worst distance / ε = {ratio}");
+    // Its border vertices are regular (corners take the corner rule): the dual rates hold too.
+    let dual = dual_guarantee(&grid, 9, 1e-3).unwrap();
+    eprintln!("bent grid, dual at 1e-3: worst sampled distance / ε {dual:.3}");
+    // The cube less a face (its rim vertices bound two faces), and with a hole instead.
+    let cube = shapes::cube();
+    let open_box = PolygonSoup::from_indices(
+        cube.positions().to_vec(),
+        cube.faces().skip(1).map(|f| f.iter().map(|v| v.index() as u32).collect::<Vec<_>>()),
+    );
+    guarantee(&Mesh::build(open_box).unwrap(), 9, &[1e-2, 1e-3]);
+    let mut holed = shapes::cube();
+    holed.tags.holes.push(FaceId::new(0));
+    guarantee(&Mesh::build(holed).unwrap(), 9, &[1e-2, 1e-3]);
+    // Boundary vertices of three faces: the default model with a face's ring open.
+    let mut model = shapes::default_model();
+    model.tags.holes.extend([FaceId::new(3), FaceId::new(17)]);
+    let model = Mesh::build(model).unwrap();
+    guarantee(&model, 7, &[1e-2]);
+    // Next to a hole the vertices keep the interior rules, and some are extraordinary, as are
+    // smooth corners (edge-only, the default): the dual rates have no rings at a border vertex,
+    // so they refuse, naming it.
+    let mut smooth_corners = shapes::quad_grid(2, 2);
+    smooth_corners.tags.boundary_interpolation = Some(subdiv_mesh::BoundaryInterpolation::EdgeOnly);
+    let refused = dual_guarantee(&Mesh::build(smooth_corners).unwrap(), 3, 1e-2);
+    assert!(matches!(&refused, Err(TessError::Unsupported { element, .. }) if element.starts_with('v')), "{refused:?}");
+    let refused = dual_guarantee(&model, 3, 1e-2);
+    assert!(matches!(&refused, Err(TessError::Unsupported { element, .. }) if element.starts_with('v')), "{refused:?}");
 }
 
 #[test]

@@ -32,8 +32,8 @@ pub enum Error {
     #[error(transparent)]
     Tess(#[from] TessError),
     /// [`Rates::Tolerance`](crate::Rates::Tolerance) for the dual method needs the quadtree's
-    /// curvature bounds, which do not take this mesh or scheme (closed Catmull-Clark meshes
-    /// only).
+    /// curvature bounds, which do not take this mesh or scheme (Catmull-Clark meshes whose
+    /// border vertices are not extraordinary).
     #[error("rates to a tolerance: {0}")]
     ToleranceBounds(#[source] TessError),
     /// [`Method::Quadtree`](crate::Method::Quadtree) was asked for with rates other than

@@ -294,7 +294,7 @@ impl Surface {
     ///
     /// # Errors
     /// [`Error::ToleranceBounds`] for a tolerance policy on a mesh the quadtree's bounds do not
-    /// take (boundaries, holes, creases, schemes other than Catmull-Clark); [`Error::Tess`] for
+    /// take (extraordinary border vertices, schemes other than Catmull-Clark); [`Error::Tess`] for
     /// a face needing more than `max_rate`, a bad tolerance, camera or viewport;
     /// [`Error::Budget`] for rates that would make more than [`TessOptions::max_vertices`]
     /// vertices.
@@ -316,7 +316,10 @@ impl Surface {
                     e => e,
                 })?;
                 let policy = ErrorRates { tolerance: *tolerance, max_rate: options.max_rate };
-                let DualRates { faces, rings } = policy.rates(bounds, &self.mesh)?;
+                let DualRates { faces, rings } = policy.rates(bounds, &self.mesh).map_err(|e| match e {
+                    subdiv_tess::TessError::Unsupported { .. } => Error::ToleranceBounds(e),
+                    e => Error::Tess(e),
+                })?;
                 let epsilon = tolerance.absolute(bounds.diagonal())?;
                 FaceRates { faces, rings: Some(rings), epsilon: Some(epsilon) }
             }
@@ -337,7 +340,7 @@ impl Surface {
     /// # Errors
     /// [`Error::QuadtreeRates`] for [`Method::Quadtree`] without [`Rates::Tolerance`]; as
     /// [`face_rates`](Self::face_rates); [`Error::Tess`] for a mesh or scheme the tessellator
-    /// does not take (the quadtree: closed Catmull-Clark meshes; the dual: primal schemes
+    /// does not take (the quadtree: Catmull-Clark meshes; the dual: primal schemes
     /// with sub-patch matrices), rates outside `1..=128`, or a
     /// tolerance the quadtree cannot meet within its depth and polygon limits.
     pub fn tessellate(&mut self, options: &TessOptions) -> Result<Tessellation, Error> {
@@ -608,7 +611,7 @@ mod tests {
                     assert_eq!(flat, written, "{rates:?}");
                 }
             }
-            if closed {
+            {
                 let quadtree = QuadtreeTessellator::new(cc, &mesh).unwrap();
                 let tolerance = Tolerance::Relative(1e-2);
                 let (expected, stats) =
@@ -659,10 +662,11 @@ mod tests {
         let mut s = surface(shapes::quad_grid(2, 2));
         let quadtree = TessOptions::DEFAULT.with_method(Method::Quadtree);
         assert!(matches!(s.tessellate(&quadtree), Err(Error::QuadtreeRates { given: "uniform" })));
-        // The quadtree's bounds take no boundaries, and the dual tessellator no rate 0.
+        // The dual rates to a tolerance take no extraordinary border vertex (the grid's smooth
+        // corners), the quadtree does; the dual tessellator takes no rate 0.
         let tolerance = TessOptions::DEFAULT.with_rates(Rates::Tolerance(Tolerance::Relative(1e-2)));
         assert!(matches!(s.tessellate(&tolerance), Err(Error::ToleranceBounds(_))));
-        assert!(matches!(s.tessellate(&quadtree.with_rates(tolerance.rates.clone())), Err(Error::Tess(_))));
+        assert!(s.tessellate(&quadtree.with_rates(tolerance.rates.clone())).is_ok());
         assert!(matches!(s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::Uniform(0))), Err(Error::Tess(_))));
         assert!(matches!(
             s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::PerFace(vec![2; 3]))),

@@ -56,7 +56,7 @@ pub enum Method {
     #[default]
     Dual,
     /// The error-driven quadtree with global vertex ids and polyline replacement (Lai-Cheng,
-    /// paper 002): closed Catmull-Clark meshes, [`Rates::Tolerance`] only.
+    /// paper 002): Catmull-Clark meshes, open ones and holes too, [`Rates::Tolerance`] only.
     Quadtree,
 }
 

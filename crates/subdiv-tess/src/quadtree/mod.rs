@@ -216,12 +216,13 @@ impl QuadtreeTessellator {
     /// Prepares `mesh` under `scheme`, a primal quad split whose patches the bounds hold for
     /// (checked on its matrices: every patch away from an extraordinary corner is a bicubic,
     /// every sub-patch matrix at one a convex combination): Catmull-Clark, with its creases,
-    /// corners and semi-sharp features, and bilinear.
+    /// corners and semi-sharp features, and bilinear; closed and open meshes and holes (a
+    /// border's pieces are bicubics, or convex sub-patches at an extraordinary border vertex, as
+    /// inside; a hole's faces have no roots, so its neighbours end at it as at a boundary).
     ///
     /// # Errors
     /// [`TessError::Scheme`] for a scheme other than a primal quad split or whose patches are
-    /// not as above; [`TessError::Unsupported`] for boundaries and holes; as
-    /// [`PatchLevels::descending`].
+    /// not as above; as [`PatchLevels::descending`].
     pub fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
         if scheme.split() != Split::Quad {
             return Err(TessError::Scheme {
@@ -229,17 +230,11 @@ impl QuadtreeTessellator {
                 reason: "the quadtree tessellator needs a primal quad split (Catmull-Clark)".into(),
             });
         }
-        if let Some(e) = mesh.edges().find(|&e| mesh.is_boundary_edge(e)) {
-            let [a, b] = mesh.edge_vertices(e);
-            return Err(TessError::Unsupported { feature: "boundaries", element: format!("edge {a}-{b}") });
-        }
-        if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {
-            return Err(TessError::Unsupported { feature: "holes", element: format!("{f}") });
-        }
         // Semi-sharp features spent by refinement: every piece bicubic or extraordinary.
         let levels = PatchLevels::descending(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?;
         let mut roots = Vec::new();
-        for face in mesh.face_ids() {
+        // A hole has no surface, so no root: its neighbours end at their edges, as at a boundary.
+        for face in mesh.face_ids().filter(|&f| !mesh.is_hole(f)) {
             match levels.domain(face)? {
                 FaceDomain::SubFaces { size, columns } => {
                     roots.extend((0..size).map(|s| Root { face, sub: Some((s, size, columns)) }));
@@ -291,6 +286,54 @@ impl QuadtreeTessellator {
             }
         }
         Ok(())
+    }
+
+    /// The vertices of `face` at which its surface is an extraordinary piece (a sub-patch with
+    /// an extraordinary corner there, not a polynomial), in corner order; none for a hole.
+    ///
+    /// # Errors
+    /// [`TessError::Internal`] for a face whose pieces are missing.
+    pub fn extraordinary_corners(&self, face: FaceId) -> Result<Vec<subdiv_mesh::VertexId>, TessError> {
+        let first = self.roots.partition_point(|r| r.face < face);
+        let roots = &self.roots[first..self.roots.partition_point(|r| r.face <= face)];
+        let mesh = self.levels.mesh(0);
+        let mut out = Vec::new();
+        for &root in roots {
+            // A root's corner (0, 0) is its face's corner (an N-gon's sub-face `s`: corner `s`);
+            // a quad's other corners too.
+            let corners: &[(usize, (i64, i64))] = match root.sub {
+                Some((s, ..)) => &[(s, (0, 0))],
+                None => &[(0, (0, 0)), (1, (FULL, 0)), (2, (FULL, FULL)), (3, (0, FULL))],
+            };
+            for &(k, corner) in corners {
+                if self.corner_is_extraordinary(root, corner)? {
+                    out.push(mesh.origin(self.corners[face.index()][k]));
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Whether the pieces of `root` at its corner `(x, y)` end in an extraordinary piece whose
+    /// extraordinary point is that corner.
+    fn corner_is_extraordinary(&self, root: Root, (x, y): (i64, i64)) -> Result<bool, TessError> {
+        let mut piece = self.root_piece(root)?;
+        let (qx, qy) = (usize::from(x == FULL), usize::from(y == FULL));
+        // A piece of depth d keeps its corner at the root's: quarters at the same corner.
+        for _ in 0..=DEPTH_LIMIT + 40 {
+            match &piece {
+                Piece::Regular(_) => return Ok(false),
+                Piece::Extraordinary { frame, .. } => {
+                    let c = frame.to_face(Dyadic::new(0, 0, 1));
+                    if (c.u * FULL, c.v * FULL) == (x, y) {
+                        return Ok(true);
+                    }
+                }
+                Piece::Face { .. } => {}
+            }
+            piece = self.quarter(&piece, qx, qy)?;
+        }
+        Err(TessError::Internal(format!("{}: no piece at a corner after {} levels", root.face, DEPTH_LIMIT + 40)))
     }
 
     /// Bounds of `face`'s surface from its polynomial pieces, for choosing dual-grid rates to a
