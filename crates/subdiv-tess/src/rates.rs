@@ -312,16 +312,17 @@ impl ErrorRates {
             cache.insert((f, d), c);
             Ok(c)
         };
-        // Holes have no surface: no rate of theirs matters, and they bound nothing.
-        let faces: Vec<FaceId> = mesh.face_ids().filter(|&f| !mesh.is_hole(f)).collect();
+        // Faces without a surface (holes): no rate of theirs matters, and they bound nothing.
+        let faces: Vec<FaceId> = mesh.face_ids().filter(|&f| bounds.has_surface(f)).collect();
         let mut extraordinary = vec![false; mesh.face_count()];
         for &f in &faces {
             extraordinary[f.index()] = curvature(f, 1)?.corner_hull > 0.0;
         }
         // The polygon at a border vertex is fanned around its limit point without rings: no
         // bound covers it where the surface there is an extraordinary piece.
-        let on_border =
-            |v: subdiv_mesh::VertexId| mesh.is_boundary_vertex(v) || mesh.vertex_faces(v).any(|f| mesh.is_hole(f));
+        let on_border = |v: subdiv_mesh::VertexId| {
+            mesh.is_boundary_vertex(v) || mesh.vertex_faces(v).any(|f| !bounds.has_surface(f))
+        };
         for &f in faces.iter().filter(|f| extraordinary[f.index()]) {
             if let Some(v) = bounds.extraordinary_corners(f)?.into_iter().find(|&v| on_border(v)) {
                 return Err(TessError::Unsupported {

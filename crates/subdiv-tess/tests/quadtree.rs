@@ -247,6 +247,14 @@ fn open_meshes_are_within_tolerance_of_the_limit_surface() {
     model.tags.holes.extend([FaceId::new(3), FaceId::new(17)]);
     let model = Mesh::build(model).unwrap();
     guarantee(&model, 7, &[1e-2]);
+    // Without boundary interpolation the border faces have no surface: only the inner 2 × 2
+    // faces of a 4 × 4 grid are tessellated.
+    let mut unbounded = shapes::quad_grid(4, 4);
+    unbounded.tags.boundary_interpolation = Some(subdiv_mesh::BoundaryInterpolation::None);
+    let unbounded = Mesh::build(unbounded).unwrap();
+    let out = tessellate(&unbounded, 1e-2);
+    let faces: std::collections::BTreeSet<usize> = out.triangle_faces.iter().map(|f| f.index()).collect();
+    assert_eq!(faces.into_iter().collect::<Vec<_>>(), [5, 6, 9, 10]);
     // Next to a hole the vertices keep the interior rules, and some are extraordinary, as are
     // smooth corners (edge-only, the default): the dual rates have no rings at a border vertex,
     // so they refuse, naming it.

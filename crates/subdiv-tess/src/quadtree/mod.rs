@@ -218,7 +218,8 @@ impl QuadtreeTessellator {
     /// every sub-patch matrix at one a convex combination): Catmull-Clark, with its creases,
     /// corners and semi-sharp features, and bilinear; closed and open meshes and holes (a
     /// border's pieces are bicubics, or convex sub-patches at an extraordinary border vertex, as
-    /// inside; a hole's faces have no roots, so its neighbours end at it as at a boundary).
+    /// inside; a face without a surface has no root, so its neighbours end at it as at a
+    /// boundary).
     ///
     /// # Errors
     /// [`TessError::Scheme`] for a scheme other than a primal quad split or whose patches are
@@ -233,8 +234,12 @@ impl QuadtreeTessellator {
         // Semi-sharp features spent by refinement: every piece bicubic or extraordinary.
         let levels = PatchLevels::descending(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?;
         let mut roots = Vec::new();
-        // A hole has no surface, so no root: its neighbours end at their edges, as at a boundary.
-        for face in mesh.face_ids().filter(|&f| !mesh.is_hole(f)) {
+        // A face without a surface (a hole, or a boundary face without boundary interpolation)
+        // has no root: its neighbours end at their edges, as at a boundary.
+        for face in mesh.face_ids() {
+            if !levels.has_surface(face)? {
+                continue;
+            }
             match levels.domain(face)? {
                 FaceDomain::SubFaces { size, columns } => {
                     roots.extend((0..size).map(|s| Root { face, sub: Some((s, size, columns)) }));
@@ -286,6 +291,13 @@ impl QuadtreeTessellator {
             }
         }
         Ok(())
+    }
+
+    /// Whether `face` has a surface (not a hole, nor a boundary face that boundary
+    /// interpolation `none` leaves out), so that it is tessellated.
+    pub fn has_surface(&self, face: FaceId) -> bool {
+        let first = self.roots.partition_point(|r| r.face < face);
+        self.roots.get(first).is_some_and(|r| r.face == face)
     }
 
     /// The vertices of `face` at which its surface is an extraordinary piece (a sub-patch with
