@@ -191,6 +191,18 @@ fn vertex_parameters_map_to_their_positions() {
     }
 }
 
+/// Two triangles folded back to back (OpenSubdiv's `catmark_val2_back2back`): the limit
+/// tangents are parallel at its valence-2 vertices, and every vertex still gets a unit normal.
+#[test]
+fn folded_faces_get_unit_normals() {
+    let soup = PolygonSoup::from_indices(
+        vec![glam::DVec3::new(-0.9, 0.0, 0.1), glam::DVec3::new(-0.1, 0.0, 0.1), glam::DVec3::new(-0.5, 0.0, 0.9)],
+        [[0u32, 1, 2], [2, 1, 0]],
+    );
+    let out = tessellate(&Mesh::build(soup).unwrap(), 1e-2);
+    assert!(out.normals.iter().all(|n| (n.length() - 1.0).abs() < 1e-12), "a normal without a direction");
+}
+
 #[test]
 fn bad_input_gives_typed_errors() {
     let cube = Mesh::build(shapes::cube()).unwrap();

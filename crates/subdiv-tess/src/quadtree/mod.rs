@@ -515,7 +515,10 @@ impl QuadtreeTessellator {
         // Every vertex evaluated once, exactly.
         let evaluated: Vec<TessVertex<'_>> = crate::par::try_map(parallel, creators, |&(r, x, y)| {
             let root = self.roots[r];
-            let (position, normal) = self.eval(root, x, y)?;
+            let (position, mut normal) = self.eval(root, x, y)?;
+            if normal == DVec3::ZERO {
+                normal = self.fallback_normal(root, x, y)?;
+            }
             let (u, v) = bfr(root, x, y);
             Ok::<_, TessError>(TessVertex {
                 position,
@@ -679,6 +682,23 @@ impl QuadtreeTessellator {
             y = 2 * y - qy as i64 * FULL;
             piece = self.quarter(&piece, qx, qy)?;
         }
+    }
+
+    /// A normal where the limit tangents are parallel (a valence-2 vertex between two faces
+    /// folded back to back, where no normal exists): the limit normal a little way into the
+    /// root, toward its centre (`2^-20` of the way; deterministic), else the root face's
+    /// control-polygon normal (Newell's), so that every vertex has a direction.
+    fn fallback_normal(&self, root: Root, x: i64, y: i64) -> Result<DVec3, TessError> {
+        let inward = |t: i64| t + ((FULL / 2 - t) >> 20);
+        let (_, normal) = self.eval(root, inward(x), inward(y))?;
+        if normal != DVec3::ZERO {
+            return Ok(normal);
+        }
+        let mesh = self.levels.mesh(0);
+        let corners: Vec<DVec3> = mesh.face_vertices(root.face).iter().map(|&v| mesh.position(v)).collect();
+        let newell = (0..corners.len()).map(|k| corners[k].cross(corners[(k + 1) % corners.len()])).sum::<DVec3>();
+        let normal = crate::unit_normal(newell);
+        Ok(if normal == DVec3::ZERO { DVec3::Z } else { normal })
     }
 
     /// The canonical key of root point `(x, y)`.
