@@ -84,8 +84,8 @@ pub(crate) struct TessellateArgs {
     params: Option<PathBuf>,
     /// How texture coordinates are interpolated (none, corners-only, corners-plus1,
     /// corners-plus2, boundaries, all); default: the mesh's `facevaryinginterpolateboundary`
-    /// tag, else all. The dual method carries them (exact at every vertex, seams split; GLB
-    /// `TEXCOORD_0`, OBJ `vt`); the quadtree does not.
+    /// tag, else all. Both methods carry them (exact at every vertex, seams split; GLB
+    /// `TEXCOORD_0`, OBJ `vt`).
     #[arg(long, value_name = "MODE", value_parser = crate::refine::parse_face_varying)]
     fvar_interpolation: Option<subdiv::mesh::FaceVaryingInterpolation>,
     /// Dual: evaluate the vertices on the GPU (wgpu, any Vulkan adapter) in f32 instead of on
@@ -183,8 +183,6 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     // Said, not silent: the output has no texture coordinates although the input has some.
     let dropped = if surface.mesh().channels().is_empty() {
         ""
-    } else if args.method == Method::Quadtree {
-        "; the quadtree does not carry texture coordinates (the dual method does)"
     } else if !surface.scheme().has_crease_rules() {
         "; texture coordinates not carried (the scheme has no face-varying rules)"
     } else {

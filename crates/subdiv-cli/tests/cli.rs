@@ -634,23 +634,22 @@ fn a_glb_of_a_mesh_too_small_for_f32_is_refused_naming_input_and_output() {
 
 /// `subdiv tessellate --params` lists every GLB vertex (the seams' split copies included) with
 /// its texture coordinates; `subdiv eval --samples` at those parameters gives the same `s,t`
-/// to 1e-12, and the GLB's `TEXCOORD_0` holds them (f32), on spot and `catmark_fvar_bound1`.
+/// to 1e-12, and the GLB's `TEXCOORD_0` holds them (f32), on spot and `catmark_fvar_bound1`,
+/// with both methods.
 #[test]
 fn tessellated_texture_coordinates_are_evals_at_their_params() {
-    for file in ["keenan/spot_control_mesh.obj", "opensubdiv/catmark_fvar_bound1.obj"] {
+    let methods: [&[&str]; 2] = [&["--rate", "3"], &["--method", "quadtree", "--tolerance", "3e-2", "--relative"]];
+    for (file, method) in ["keenan/spot_control_mesh.obj", "opensubdiv/catmark_fvar_bound1.obj"]
+        .into_iter()
+        .flat_map(|f| methods.iter().map(move |m| (f, *m)))
+    {
         let Some(mesh) = shared_mesh(file) else { return };
         let dir = tempfile::tempdir().unwrap();
         let (glb, csv, samples) = (dir.path().join("s.glb"), dir.path().join("p.csv"), dir.path().join("s.txt"));
-        let out = subdiv(&[
-            "tessellate",
-            mesh.to_str().unwrap(),
-            "--rate",
-            "3",
-            "--params",
-            csv.to_str().unwrap(),
-            "-o",
-            glb.to_str().unwrap(),
-        ]);
+        let mut args = vec!["tessellate", mesh.to_str().unwrap()];
+        args.extend_from_slice(method);
+        args.extend(["--params", csv.to_str().unwrap(), "-o", glb.to_str().unwrap()]);
+        let out = subdiv(&args);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         let text = std::fs::read_to_string(&csv).unwrap();
         let mut lines = text.lines();

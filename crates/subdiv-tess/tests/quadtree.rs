@@ -391,3 +391,49 @@ proptest! {
         prop_assert_eq!(euler(&out), mesh.euler_characteristic());
     }
 }
+
+/// Every triangle corner's channel values, against the channel's own surface evaluated at the
+/// corner's parameter in the triangle's face; returns the number of split entries.
+fn assert_channels_exact(mesh: &Mesh, mode: Option<subdiv_mesh::FaceVaryingInterpolation>) -> usize {
+    let cc = Builtin::CatmullClark.scheme();
+    let tess = QuadtreeTessellator::new(cc, mesh).unwrap().with_channels(cc, mesh, mode).unwrap();
+    let out = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2))).unwrap();
+    assert_eq!(out.channels.names, ["uv"]);
+    assert_eq!(out.channels.values.len(), 2 * (out.positions.len() + out.normal_vertices.len()));
+    let options = RefineOptions { face_varying: mode, ..RefineOptions::DEFAULT };
+    let surface = subdiv_schemes::ChannelSurface::new(mesh, &mesh.channels()[0], cc, &options).unwrap();
+    let linear = subdiv_stencil::LinearEvaluator::new(&surface).unwrap();
+    let exact = LimitEvaluator::new(surface.scheme(), surface.mesh(), &RefineOptions::DEFAULT).unwrap();
+    for ((normals, &face), parameters) in
+        out.triangle_normals.iter().zip(&out.triangle_faces).zip(&out.triangle_parameters)
+    {
+        for (&n, &[u, v]) in normals.iter().zip(parameters) {
+            let want = match &linear {
+                Some(linear) => linear.eval(face, u, v).unwrap().position,
+                None => exact.eval(face, u, v).unwrap().position,
+            };
+            let got = &out.channels.values[2 * n as usize..2 * n as usize + 2];
+            assert!(
+                (got[0] - want.x).abs() < 1e-12 && (got[1] - want.y).abs() < 1e-12,
+                "{face} ({u}, {v}): {got:?} ≠ {want}"
+            );
+        }
+    }
+    out.normal_vertices.len()
+}
+
+/// The quadtree carries texture coordinates: exact at every corner, split along seams only.
+#[test]
+fn channels_are_exact_and_split_at_seams() {
+    // One chart per face: every cube edge is a seam, so its points are split.
+    let charts = Mesh::build(shapes::face_charts(shapes::cube())).unwrap();
+    assert!(assert_channels_exact(&charts, None) > 0);
+    // A continuous chart (the vertices' own x, y): nothing to split, linear or smooth.
+    let mut grid = shapes::quad_grid(3, 3);
+    let values = grid.positions().iter().flat_map(|p| [p.x, p.y]).collect();
+    let indices = grid.faces().flatten().map(|v| v.index() as u32).collect();
+    grid.channels.push(subdiv_mesh::Channel::new("uv", 2, values, indices));
+    let grid = Mesh::build(grid).unwrap();
+    assert_eq!(assert_channels_exact(&grid, None), 0);
+    assert_eq!(assert_channels_exact(&grid, Some(subdiv_mesh::FaceVaryingInterpolation::None)), 0);
+}

@@ -311,7 +311,8 @@ impl Surface {
             Rates::Uniform(rate) => FaceRates { faces: vec![*rate; faces], rings: None, epsilon: None },
             Rates::PerFace(rates) => FaceRates { faces: rates.clone(), rings: None, epsilon: None },
             Rates::Tolerance(tolerance) => {
-                let bounds = quadtree(&mut self.quadtree, &self.scheme, &self.mesh).map_err(|e| match e {
+                let mode = self.refine_options.face_varying;
+                let bounds = quadtree(&mut self.quadtree, &self.scheme, &self.mesh, mode).map_err(|e| match e {
                     Error::Tess(e) => Error::ToleranceBounds(e),
                     e => e,
                 })?;
@@ -355,6 +356,10 @@ impl Surface {
         }
         let mut mesh = TessMesh::default();
         let info = self.tessellate_into(options, &mut mesh)?;
+        // A sink gets the channels' values, not their names.
+        let (names, dimensions) = self.quadtree_mut()?.channels();
+        mesh.channels.names = names.to_vec();
+        mesh.channels.dimensions = dimensions.to_vec();
         Ok(Tessellation { mesh, info })
     }
 
@@ -487,7 +492,7 @@ impl Surface {
 
     /// The quadtree tessellator, made on first use.
     fn quadtree_mut(&mut self) -> Result<&mut QuadtreeTessellator, Error> {
-        quadtree(&mut self.quadtree, &self.scheme, &self.mesh)
+        quadtree(&mut self.quadtree, &self.scheme, &self.mesh, self.refine_options.face_varying)
     }
 }
 
@@ -496,14 +501,19 @@ impl Surface {
 /// 1e-5). [`TessOptions::max_vertices`] allows the quadtree this many times fewer polygons.
 const QUADTREE_VERTICES_PER_POLYGON: usize = 2;
 
-/// The quadtree tessellator in `slot`, made there on first use.
+/// The quadtree tessellator in `slot`, made there on first use, carrying the mesh's channels in
+/// face-varying mode `mode` where the scheme has rules for them (as the dual tessellator does).
 fn quadtree<'a>(
     slot: &'a mut Option<QuadtreeTessellator>,
     scheme: &Scheme,
     mesh: &Mesh,
+    mode: Option<subdiv_mesh::FaceVaryingInterpolation>,
 ) -> Result<&'a mut QuadtreeTessellator, Error> {
     let tess = match slot.take() {
         Some(tess) => tess,
+        None if scheme.has_crease_rules() => {
+            QuadtreeTessellator::new(scheme, mesh)?.with_channels(scheme, mesh, mode)?
+        }
         None => QuadtreeTessellator::new(scheme, mesh)?,
     };
     Ok(slot.insert(tess))
@@ -520,6 +530,10 @@ impl<S: TessSink + ?Sized> TessSink for WithoutPolygons<'_, S> {
     #[inline]
     fn vertex(&mut self, index: u32, vertex: &TessVertex<'_>) {
         self.0.vertex(index, vertex);
+    }
+
+    fn normal(&mut self, index: u32, vertex: u32, split: &TessVertex<'_>) {
+        self.0.normal(index, vertex, split);
     }
 
     #[inline]

@@ -18,6 +18,7 @@
 //! exactly: no T-junctions, no cracks. Triangles are fans around the leaf's centre point, the
 //! triangulation [`flatness`] bounds.
 
+mod channels;
 mod pieces;
 
 use std::sync::Arc;
@@ -29,6 +30,7 @@ use subdiv_mesh::{FaceId, HalfEdgeId, Mesh};
 use subdiv_schemes::{PatchMatrices, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, StencilEvaluator};
 
+use self::channels::{Channels, Side};
 use self::pieces::*;
 pub(crate) use self::pieces::{check_bicubic, regular_grid};
 use crate::Parallelism;
@@ -161,6 +163,9 @@ pub struct QuadtreeTessellator {
     /// Per input face, its corners' half-edges.
     corners: Vec<Vec<HalfEdgeId>>,
     diagonal: f64,
+    /// The face-varying channels carried ([`with_channels`](Self::with_channels)); none by
+    /// default.
+    channels: Channels,
     /// [`tessellate_into`](Self::tessellate_into)'s buffers, kept between calls.
     scratch: Scratch,
 }
@@ -249,9 +254,66 @@ impl QuadtreeTessellator {
         }
         let corners = mesh.face_ids().map(|f| mesh.face_half_edges(f).collect()).collect();
         let diagonal = mesh.bounding_box().map_or(0.0, |(lo, hi)| lo.distance(hi));
-        let mut tess = Self { levels, shapes: HashMap::new(), roots, corners, diagonal, scratch: Scratch::default() };
+        let mut tess = Self {
+            levels,
+            shapes: HashMap::new(),
+            roots,
+            corners,
+            diagonal,
+            channels: Channels::default(),
+            scratch: Scratch::default(),
+        };
         tess.classify_shapes(scheme)?;
         Ok(tess)
+    }
+
+    /// The tessellator carrying `mesh`'s face-varying channels (texture coordinates; `mesh` is
+    /// the mesh it was made for) in face-varying mode `mode` (`None`: the mesh's tag, else
+    /// `all`): every output vertex gets
+    /// their exact values at its parameter, and a vertex on a seam is split into one entry per
+    /// side (the sinks' extra entries, as an infinitely sharp crease splits normals in the dual
+    /// tessellator), so the values never blend across a seam.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::{QuadtreeOptions, QuadtreeTessellator, Tolerance};
+    ///
+    /// let cube = Mesh::build(shapes::face_charts(shapes::cube()))?; // one uv chart per face
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// let tess = QuadtreeTessellator::new(cc, &cube)?.with_channels(cc, &cube, None)?;
+    /// let out = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2)))?;
+    /// assert_eq!(out.channels.names, ["uv"]);
+    /// // Every vertex on a cube edge is split: one entry per side of the seam.
+    /// assert!(!out.normal_vertices.is_empty());
+    /// assert_eq!(out.channels.values.len(), 2 * (out.positions.len() + out.normal_vertices.len()));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`TessError::Scheme`] for a scheme without face-varying rules (a mesh with channels);
+    /// [`TessError::Surface`] if a channel's surface has no patches; [`TessError::Internal`]
+    /// for a mesh of another topology than the tessellator's.
+    pub fn with_channels(
+        mut self,
+        scheme: &Scheme,
+        mesh: &Mesh,
+        mode: Option<subdiv_mesh::FaceVaryingInterpolation>,
+    ) -> Result<Self, TessError> {
+        let own = self.levels.mesh(0);
+        if (mesh.face_count(), mesh.edge_count(), mesh.vertex_count())
+            != (own.face_count(), own.edge_count(), own.vertex_count())
+        {
+            return Err(TessError::Internal("channels of another mesh than the tessellator's".into()));
+        }
+        self.channels = Channels::new(scheme, mesh, mode)?;
+        Ok(self)
+    }
+
+    /// The names of the channels carried ([`with_channels`](Self::with_channels)), in the
+    /// mesh's order, and their numbers of components.
+    pub fn channels(&self) -> (&[String], &[usize]) {
+        (&self.channels.names, &self.channels.dimensions)
     }
 
     /// The diagonal of the control mesh's bounding box (what relative tolerances scale).
@@ -416,6 +478,8 @@ impl QuadtreeTessellator {
     pub fn tessellate_with_stats(&self, options: &QuadtreeOptions) -> Result<(TessMesh, QuadtreeStats), TessError> {
         let mut out = TessMesh::default();
         let stats = self.write(options, &mut Scratch::default(), &mut out)?;
+        out.channels.names.clone_from(&self.channels.names);
+        out.channels.dimensions.clone_from(&self.channels.dimensions);
         Ok((out, stats))
     }
 
@@ -540,26 +604,81 @@ impl QuadtreeTessellator {
             return Err(TessError::TooManyPolygons { limit: options.max_polygons, epsilon });
         }
 
+        // Channels: each vertex's values at its creator's parameter, and an extra entry for
+        // each further side of a seam through it, which that side's triangle corners index.
+        let stride = self.channels.stride();
+        let (mut own, mut split_values) = (Vec::new(), Vec::new());
+        let mut splits: Vec<(u32, SurfaceParameter)> = Vec::new();
+        let mut ring_entries: Vec<Vec<Vec<u32>>> = Vec::new();
+        if !self.channels.is_empty() {
+            let values = crate::par::try_map(parallel, &evaluated, |vertex| {
+                let mut out = Vec::with_capacity(stride);
+                let p = vertex.parameter;
+                self.channels.eval(p.face, p.u, p.v, &mut out)?;
+                Ok::<_, TessError>(out)
+            })?;
+            own = values.concat();
+            let mut sides: HashMap<(u32, Side), u32> = HashMap::new();
+            let first = evaluated.len() as u32;
+            for (root, root_rings) in self.roots.iter().zip(&rings) {
+                let mut entries = Vec::with_capacity(root_rings.len());
+                for (ring, params) in root_rings {
+                    let entry = ring.iter().zip(params).map(|(&id, &(x, y))| {
+                        let key = self.key(*root, x, y);
+                        let Some(side) = self.channels.side(key, root.face) else { return id };
+                        let (r, cx, cy) = creators[id as usize];
+                        let creator = self.roots[r];
+                        if self.channels.side(self.key(creator, cx, cy), creator.face).as_ref() == Some(&side) {
+                            return id;
+                        }
+                        *sides.entry((id, side)).or_insert_with(|| {
+                            let (u, v) = bfr(*root, x, y);
+                            splits.push((id, SurfaceParameter { face: root.face, u, v }));
+                            first + splits.len() as u32 - 1
+                        })
+                    });
+                    entries.push(entry.collect());
+                }
+                ring_entries.push(entries);
+            }
+            let values = crate::par::try_map(parallel, &splits, |(_, p)| {
+                let mut out = Vec::with_capacity(stride);
+                self.channels.eval(p.face, p.u, p.v, &mut out)?;
+                Ok::<_, TessError>(out)
+            })?;
+            split_values = values.concat();
+        }
+        let uv = self.channels.texcoords();
+        let texcoords = |values: &[f64]| uv.map(|s| [values[s], values[s + 1]]);
+
         let polygons = sink.wants_polygons();
         sink.begin(&TessCounts {
             vertices: evaluated.len(),
-            // Infinitely sharp creases are refused: one normal per vertex.
-            extra_normals: 0,
+            // One normal per vertex; the extra entries are the seams' further sides.
+            extra_normals: splits.len(),
             triangles: corners,
             polygons: if polygons { centres.len() } else { 0 },
             polygon_vertices: if polygons { corners } else { 0 },
-            // Face-varying channels are the dual tessellator's (ARCHITECTURE.md).
-            channels: 0,
-            texcoords: false,
+            channels: stride,
+            texcoords: uv.is_some(),
         });
         for (k, vertex) in evaluated.iter().enumerate() {
-            sink.vertex(k as u32, vertex);
+            let channels = own.get(k * stride..(k + 1) * stride).unwrap_or_default();
+            sink.vertex(k as u32, &TessVertex { channels, texcoords: texcoords(channels), ..*vertex });
+        }
+        for (j, &(id, parameter)) in splits.iter().enumerate() {
+            let channels = &split_values[j * stride..(j + 1) * stride];
+            let split = TessVertex { parameter, channels, texcoords: texcoords(channels), ..evaluated[id as usize] };
+            sink.normal(evaluated.len() as u32 + j as u32, id, &split);
         }
         let (mut triangle, mut leaf_centres) = (0, centres.iter());
-        for (root, (root_rings, leaves)) in self.roots.iter().zip(rings.iter().zip(&forest)) {
-            for ((ring, params), (&centre, leaf)) in root_rings.iter().zip(leaf_centres.by_ref().zip(leaves)) {
+        for (r, (root, (root_rings, leaves))) in self.roots.iter().zip(rings.iter().zip(&forest)).enumerate() {
+            for (i, ((ring, params), (&centre, leaf))) in
+                root_rings.iter().zip(leaf_centres.by_ref().zip(leaves)).enumerate()
+            {
                 let h = FULL >> leaf.depth;
                 let c = bfr(*root, leaf.x + h / 2, leaf.y + h / 2);
+                let entries = ring_entries.get(r).map_or(ring, |e| &e[i]);
                 for k in 0..ring.len() {
                     let l = (k + 1) % ring.len();
                     let (a, b) = (bfr(*root, params[k].0, params[k].1), bfr(*root, params[l].0, params[l].1));
@@ -567,7 +686,7 @@ impl QuadtreeTessellator {
                         triangle,
                         &TessTriangle {
                             vertices: [centre, ring[k], ring[l]],
-                            normals: [centre, ring[k], ring[l]],
+                            normals: [centre, entries[k], entries[l]],
                             face: root.face,
                             parameters: [[c.0, c.1], [a.0, a.1], [b.0, b.1]],
                         },

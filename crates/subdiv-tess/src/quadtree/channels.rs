@@ -1,0 +1,135 @@
+//! Face-varying channels (texture coordinates) through the quadtree: each channel is a
+//! subdivision surface over its own topology ([`ChannelSurface`]), evaluated exactly at every
+//! output vertex's parameter.
+//!
+//! A quadtree vertex on a mesh vertex or edge is shared by the faces around it. Where a channel
+//! is cut there (a seam), the faces on either side want different values at the same point:
+//! the vertex is then split, as the dual tessellator splits a seam's points, by the sinks'
+//! extra-normal mechanism — one extra entry (same position and normal, the other side's
+//! values and parameter) per further value, which the triangles of that side index. Which
+//! faces share a value follows the channels' own topology, not a comparison of numbers: at a
+//! mesh vertex the faces whose corners there use the same value of every channel, along an
+//! edge the two faces unless the edge is a seam of a channel.
+
+use glam::DVec3;
+use subdiv_mesh::{FaceId, FaceVaryingInterpolation, Mesh};
+use subdiv_schemes::{ChannelSurface, RefineOptions, Scheme};
+use subdiv_stencil::{LimitEvaluator, LinearEvaluator};
+
+use super::VertexKey;
+use crate::TessError;
+
+/// The channels of one mesh, as the quadtree evaluates them.
+#[derive(Debug, Default)]
+pub(super) struct Channels {
+    pub(super) names: Vec<String>,
+    pub(super) dimensions: Vec<usize>,
+    evaluators: Vec<ChannelEvaluator>,
+    /// Per mesh edge, whether it is a seam of some channel.
+    seams: Vec<bool>,
+    /// The mesh with its channels (the patch levels keep the topology without them), whose
+    /// corners' value indices say which faces share a value at a vertex.
+    mesh: Option<Box<Mesh>>,
+}
+
+/// How a channel's surface is evaluated at a point.
+#[derive(Debug)]
+enum ChannelEvaluator {
+    /// Linear over every face (face-varying mode `all`, the default): its corners combined.
+    Linear(Box<LinearEvaluator>),
+    /// Any other mode: exact stencils over the channel's own patches.
+    Limit(Box<LimitEvaluator>),
+}
+
+/// Which of a shared vertex's values a face takes: the vertex's own (its creator's side), or
+/// that of a side found by the channels' topology.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(super) enum Side {
+    /// At a mesh vertex: every channel's value index at the face's corner there.
+    Corner(Vec<u32>),
+    /// Along a seam edge: the face.
+    Face(u32),
+}
+
+impl Channels {
+    /// The channels of `mesh` under `scheme` in face-varying mode `mode` (`None`: the mesh's
+    /// tag, else `all`); none for a mesh without channels.
+    ///
+    /// # Errors
+    /// [`TessError::Scheme`] for a scheme without face-varying rules; [`TessError::Surface`] if
+    /// a channel's surface has no patches.
+    pub(super) fn new(scheme: &Scheme, mesh: &Mesh, mode: Option<FaceVaryingInterpolation>) -> Result<Self, TessError> {
+        let mut channels = Self::default();
+        if mesh.channels().is_empty() {
+            return Ok(channels);
+        }
+        let options = RefineOptions { face_varying: mode, ..RefineOptions::DEFAULT };
+        channels.seams = vec![false; mesh.edge_count()];
+        for channel in mesh.channels() {
+            let surface = ChannelSurface::new(mesh, channel, scheme, &options)
+                .map_err(|e| TessError::Scheme { scheme: scheme.name().to_string(), reason: e.to_string() })?;
+            let evaluator = match LinearEvaluator::new(&surface)? {
+                Some(linear) => ChannelEvaluator::Linear(Box::new(linear)),
+                None => ChannelEvaluator::Limit(Box::new(LimitEvaluator::new(
+                    surface.scheme(),
+                    surface.mesh(),
+                    &RefineOptions::DEFAULT,
+                )?)),
+            };
+            channels.evaluators.push(evaluator);
+            channels.names.push(channel.name().to_owned());
+            channels.dimensions.push(channel.dimension());
+            for (e, seam) in mesh.edges().zip(&mut channels.seams) {
+                *seam |= mesh.is_seam(channel, e);
+            }
+        }
+        channels.mesh = Some(Box::new(mesh.clone()));
+        Ok(channels)
+    }
+
+    /// Whether there are none.
+    pub(super) fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// The number of values per point: the sum of the dimensions.
+    pub(super) fn stride(&self) -> usize {
+        self.dimensions.iter().sum()
+    }
+
+    /// Where the texture coordinates (the `"uv"` channel's first two components) lie within a
+    /// point's values, if there are some.
+    pub(super) fn texcoords(&self) -> Option<usize> {
+        let k = self.names.iter().position(|n| n == subdiv_mesh::Channel::UV)?;
+        (self.dimensions[k] >= 2).then(|| self.dimensions[..k].iter().sum())
+    }
+
+    /// Every channel's values at `face`'s `(u, v)`, appended to `out`.
+    ///
+    /// # Errors
+    /// [`TessError::Surface`] if a channel's stencil fails.
+    pub(super) fn eval(&self, face: FaceId, u: f64, v: f64, out: &mut Vec<f64>) -> Result<(), TessError> {
+        for (evaluator, &dimension) in self.evaluators.iter().zip(&self.dimensions) {
+            let value: DVec3 = match evaluator {
+                ChannelEvaluator::Linear(linear) => linear.eval(face, u, v)?.position,
+                ChannelEvaluator::Limit(limit) => limit.eval(face, u, v)?.position,
+            };
+            out.extend_from_slice(&value.to_array()[..dimension]);
+        }
+        Ok(())
+    }
+
+    /// The side of the vertex keyed `key` that `face` takes: `None` where every face around it
+    /// takes one value (a point inside a face, an edge that is no seam).
+    pub(super) fn side(&self, key: VertexKey, face: FaceId) -> Option<Side> {
+        let mesh = self.mesh.as_deref()?;
+        match key {
+            VertexKey::Vertex(v) => {
+                let h = mesh.face_half_edges(face).find(|&h| mesh.origin(h).index() == v as usize)?;
+                Some(Side::Corner(mesh.channels().iter().map(|c| c.corner_value(h)).collect()))
+            }
+            VertexKey::Edge { edge, .. } if self.seams[edge as usize] => Some(Side::Face(face.index() as u32)),
+            _ => None,
+        }
+    }
+}
