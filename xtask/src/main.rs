@@ -35,6 +35,10 @@
 //! - `cargo xtask adaptive [--samples N] [--all]` prints paper 002's Table 1 for the quadtree
 //!   tessellator (adaptive against uniform polygons, with the measured worst distance / ε on an
 //!   N × N grid per face, default 67; 0 skips it). Run it in release.
+//! - `cargo xtask tolerance [--mesh M]... [--relative R]` tessellates to a relative tolerance
+//!   (default 1e-3) by both methods and prints, per mesh and method, the worst distance from
+//!   `osd_limit --grid 16`'s points (`SUBDIV_OSD_LIMIT`) over ε, the triangles, the time and the
+//!   uniform tessellation the same bound asks for — or the refusal.
 //! - `cargo xtask rates` prints rational against dyadic rates (paper 000 §6): triangles of the
 //!   cheapest dual-grid tessellations whose per-face rates provably meet ε, rates free or powers
 //!   of two, on closed Catmull-Clark meshes of the shared corpus.
@@ -56,10 +60,11 @@ mod rates_table;
 mod same_output;
 mod sweep;
 mod tables;
+mod tolerance;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench eval --mode cold [--mesh M]... [--grid N] [--method M]... | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask sweep [--seconds S] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench eval --mode cold [--mesh M]... [--grid N] [--method M]... | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask sweep [--seconds S] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask tolerance [--mesh M]... [--relative R] | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -76,6 +81,7 @@ fn main() -> ExitCode {
         Some("fuzz") => fuzz::run(&args[1..]),
         Some("paper") => paper::run(),
         Some("rates") => rates_table::run(),
+        Some("tolerance") => tolerance::run(&args[1..]),
         Some("adaptive") => {
             let mut samples = 67;
             let mut all = false;
