@@ -32,10 +32,12 @@ pub(crate) struct TessellateArgs {
     #[command(flatten)]
     scheme: SchemeArgs,
     /// How the surface is cut: dual-grid stitching at per-face rates (any primal scheme with
-    /// sub-patch matrices, open meshes and holes too), or the error-driven quadtree (closed
-    /// Catmull-Clark meshes, --tolerance).
-    #[arg(long, value_enum, default_value_t = Method::Dual)]
-    method: Method,
+    /// sub-patch matrices, open meshes and holes too), or the error-driven quadtree
+    /// (Catmull-Clark meshes, --tolerance). Default: the quadtree with --tolerance (it adapts
+    /// inside each face, where the dual method's one rate per face must be as fine as the
+    /// finest spot needs) unless --gpu is given, the dual method otherwise.
+    #[arg(long, value_enum)]
+    method: Option<Method>,
     /// Every face at this rate (dual): n × n samples per quad. The default policy, at 8.
     #[arg(long, value_name = "N", conflicts_with_all = ["tolerance", "pixels"])]
     rate: Option<u32>,
@@ -111,6 +113,14 @@ enum Format {
     Obj,
 }
 
+impl TessellateArgs {
+    /// `--method`, or its default: the quadtree for `--tolerance` without `--gpu`, else dual.
+    fn method(&self) -> Method {
+        let default = if self.tolerance.is_some() && !self.gpu { Method::Quadtree } else { Method::Dual };
+        self.method.unwrap_or(default)
+    }
+}
+
 pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), UserError> {
     let format = match args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
         Some("glb") => Format::Glb,
@@ -120,12 +130,12 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     if args.polygons && format == Format::Glb {
         return Err(UserError("--polygons needs an .obj output (GLB holds triangles)".to_string()));
     }
-    if args.gpu && args.method == Method::Quadtree {
+    if args.gpu && args.method() == Method::Quadtree {
         return Err(UserError(
             "--gpu evaluates the dual method's vertices; --method quadtree has no GPU path".to_string(),
         ));
     }
-    if args.method == Method::Quadtree && (args.rate.is_some() || args.pixels.is_some()) {
+    if args.method() == Method::Quadtree && (args.rate.is_some() || args.pixels.is_some()) {
         return Err(UserError("--method quadtree takes --tolerance, not --rate or --pixels".to_string()));
     }
     let inputs: Vec<&std::path::Path> = args.mesh.as_deref().into_iter().collect();
@@ -152,7 +162,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         let (result, detail) = gpu_tessellate(&mut surface, &options, args.fvar_interpolation, &bar, located)?;
         (Output::Mesh(Box::new(result)), detail)
     } else {
-        bar.say(if args.method == Method::Quadtree { "quadtree" } else { "dual-grid stitching" });
+        bar.say(if args.method() == Method::Quadtree { "quadtree" } else { "dual-grid stitching" });
         if lean {
             // The check the f64 writer makes on the output, made on the cage: f32 buffers can no
             // longer tell a coordinate flushed to 0 from a 0.
@@ -207,7 +217,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         "subdiv tessellate: {} with {scheme} ({:?}, {detail}): {} faces, {vertices} vertices, {triangles} triangles in \
          {seconds:.3} s ({:.2} M triangles/s) -> {}",
         input_name,
-        args.method,
+        args.method(),
         surface.mesh().face_count(),
         triangles as f64 / seconds.max(1e-9) / 1e6,
         args.output.display(),
@@ -249,12 +259,12 @@ fn options(args: &TessellateArgs) -> Result<TessOptions, UserError> {
         let camera = parse_camera(args.camera.as_deref().unwrap_or_default())?;
         let viewport = parse_size(&args.viewport, "--viewport", u32::MAX)?;
         Rates::Screen { camera, viewport, pixels_per_edge }
-    } else if args.method == Method::Quadtree {
+    } else if args.method() == Method::Quadtree {
         return Err(UserError("--method quadtree needs --tolerance".to_string()));
     } else {
         Rates::Uniform(args.rate.unwrap_or(DEFAULT_RATE))
     };
-    let method = match args.method {
+    let method = match args.method() {
         Method::Dual => subdiv::Method::Dual,
         Method::Quadtree => subdiv::Method::Quadtree,
     };

@@ -383,6 +383,27 @@ fn tessellate_defaults_params_and_policies() {
     assert!(rows[1].starts_with("0,"), "{}", rows[1]);
 }
 
+/// `--tolerance` takes the quadtree unless told otherwise: an open mesh with holes and texture
+/// coordinates goes through, where the dual method's rates, which have no rings at an
+/// extraordinary border vertex, refuse it by name.
+#[test]
+fn tolerance_takes_the_quadtree_by_default() {
+    let Some(mesh) = shared_mesh("opensubdiv/catmark_hole_test1.obj") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("holes.glb");
+    let args = ["tessellate", mesh.to_str().unwrap(), "--tolerance", "1e-2", "--relative", "-o", glb.to_str().unwrap()];
+    let out = subdiv(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("(Quadtree, ε ="),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(subdiv::io::load_mesh(&glb, &Default::default()).unwrap().face_count() > 0);
+    let out = subdiv(&[&args[..], &["--method", "dual"]].concat());
+    fails_with_one_line(&out, &["extraordinary border vertex", "--method quadtree"]);
+}
+
 #[test]
 fn tessellate_rejects_bad_tolerances_and_schemes() {
     for t in ["0", "-1", "NaN", "inf"] {
