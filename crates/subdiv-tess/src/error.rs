@@ -64,7 +64,7 @@ pub enum TessError {
     },
     /// A face needs a finer rate than allowed to meet a tolerance.
     #[error(
-        "face {face}: the tolerance needs rate {needed}, above the largest allowed ({max_rate}); raise the tolerance or the largest rate"
+        "face {face}: the tolerance needs rate {needed}, above the largest allowed ({max_rate}); raise the tolerance or the largest rate, or take the quadtree (it adapts within faces)"
     )]
     RateLimit {
         /// The input face.
