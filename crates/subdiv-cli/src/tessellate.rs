@@ -53,17 +53,22 @@ pub(crate) struct TessellateArgs {
     /// Screen-space rates (dual): output edges about P pixels long on the screen (needs --camera).
     #[arg(long, value_name = "P", allow_negative_numbers = true, requires = "camera")]
     pixels: Option<f64>,
-    /// The camera for --pixels: eye, target and up, and optionally the vertical field of view
-    /// in degrees (default 45).
+    /// Quadtree: every limit point within P pixels of the output on the screen (a screen-space
+    /// error bound, each piece of surface to its own ε; needs --camera).
     #[arg(
         long,
-        value_name = "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ[,FOVY_DEG]",
+        value_name = "P",
         allow_negative_numbers = true,
-        requires = "pixels"
+        requires = "camera",
+        conflicts_with_all = ["rate", "tolerance", "pixels"]
     )]
+    pixel_error: Option<f64>,
+    /// The camera for --pixels and --pixel-error: eye, target and up, and optionally the
+    /// vertical field of view in degrees (default 45).
+    #[arg(long, value_name = "EX,EY,EZ,TX,TY,TZ,UX,UY,UZ[,FOVY_DEG]", allow_negative_numbers = true)]
     camera: Option<String>,
-    /// The image size for --pixels.
-    #[arg(long, value_name = "W,H", default_value = "1920,1080", requires = "pixels")]
+    /// The image size for --pixels and --pixel-error.
+    #[arg(long, value_name = "W,H", default_value = "1920,1080")]
     viewport: String,
     /// The largest rate --tolerance and --pixels may give a face.
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_RATE)]
@@ -114,9 +119,11 @@ enum Format {
 }
 
 impl TessellateArgs {
-    /// `--method`, or its default: the quadtree for `--tolerance` without `--gpu`, else dual.
+    /// `--method`, or its default: the quadtree for `--pixel-error`, and for `--tolerance`
+    /// without `--gpu`; else dual.
     fn method(&self) -> Method {
-        let default = if self.tolerance.is_some() && !self.gpu { Method::Quadtree } else { Method::Dual };
+        let quadtree = self.pixel_error.is_some() || (self.tolerance.is_some() && !self.gpu);
+        let default = if quadtree { Method::Quadtree } else { Method::Dual };
         self.method.unwrap_or(default)
     }
 }
@@ -136,7 +143,18 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         ));
     }
     if args.method() == Method::Quadtree && (args.rate.is_some() || args.pixels.is_some()) {
-        return Err(UserError("--method quadtree takes --tolerance, not --rate or --pixels".to_string()));
+        return Err(UserError(
+            "--method quadtree takes --tolerance or --pixel-error, not --rate or --pixels".to_string(),
+        ));
+    }
+    if args.method() == Method::Dual && args.pixel_error.is_some() {
+        return Err(UserError(
+            "--pixel-error bounds the quadtree's pieces; the dual method takes --pixels (edge length) or --tolerance"
+                .to_string(),
+        ));
+    }
+    if args.camera.is_some() && args.pixels.is_none() && args.pixel_error.is_none() {
+        return Err(UserError("--camera goes with --pixels or --pixel-error".to_string()));
     }
     let inputs: Vec<&std::path::Path> = args.mesh.as_deref().into_iter().collect();
     check_output(&inputs, &args.output)?;
@@ -176,8 +194,11 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         }
     };
     let info = result.info();
-    let detail = match (&info.quadtree, info.epsilon) {
-        (Some(stats), Some(epsilon)) => format!("ε = {epsilon:.3e}, depth ≤ {}", stats.max_depth),
+    let detail = match (&info.quadtree, info.epsilon, &options.rates) {
+        (Some(stats), Some(epsilon), _) => format!("ε = {epsilon:.3e}, depth ≤ {}", stats.max_depth),
+        (Some(stats), None, Rates::ScreenError { pixels, .. }) => {
+            format!("{pixels} pixels of error on the screen, depth ≤ {}", stats.max_depth)
+        }
         _ => {
             let policy = match (info.epsilon, &options.rates) {
                 (Some(epsilon), _) => format!("ε = {epsilon:.3e}"),
@@ -259,8 +280,12 @@ fn options(args: &TessellateArgs) -> Result<TessOptions, UserError> {
         let camera = parse_camera(args.camera.as_deref().unwrap_or_default())?;
         let viewport = parse_size(&args.viewport, "--viewport", u32::MAX)?;
         Rates::Screen { camera, viewport, pixels_per_edge }
+    } else if let Some(pixels) = args.pixel_error {
+        let camera = parse_camera(args.camera.as_deref().unwrap_or_default())?;
+        let viewport = parse_size(&args.viewport, "--viewport", u32::MAX)?;
+        Rates::ScreenError { camera, viewport, pixels }
     } else if args.method() == Method::Quadtree {
-        return Err(UserError("--method quadtree needs --tolerance".to_string()));
+        return Err(UserError("--method quadtree needs --tolerance or --pixel-error".to_string()));
     } else {
         Rates::Uniform(args.rate.unwrap_or(DEFAULT_RATE))
     };

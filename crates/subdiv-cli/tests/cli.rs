@@ -404,6 +404,29 @@ fn tolerance_takes_the_quadtree_by_default() {
     fails_with_one_line(&out, &["extraordinary border vertex", "--method quadtree"]);
 }
 
+/// `--pixel-error P`: the quadtree to a screen-space error bound; a farther camera needs fewer
+/// triangles; the dual method and a camera without a screen policy are refused.
+#[test]
+fn pixel_error_bounds_the_quadtree_on_the_screen() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("screen.glb");
+    let triangles = |camera: &str| {
+        let out = subdiv(&["tessellate", "--pixel-error", "0.5", "--camera", camera, "-o", glb.to_str().unwrap()]);
+        let summary = String::from_utf8_lossy(&out.stderr).to_string();
+        assert!(out.status.success() && summary.contains("0.5 pixels of error on the screen"), "{summary}");
+        let counted = summary.split(" triangles in").next().and_then(|s| s.rsplit(' ').next());
+        counted.and_then(|n| n.parse::<usize>().ok()).unwrap_or_else(|| panic!("{summary}"))
+    };
+    assert!(triangles("0,-4,1,0,0,0,0,0,1") > triangles("0,-12,3,0,0,0,0,0,1"));
+    let camera = ["--camera", "0,-4,1,0,0,0,0,0,1", "-o", glb.to_str().unwrap()];
+    let out = subdiv(&[&["tessellate", "--pixel-error", "0.5", "--method", "dual"][..], &camera].concat());
+    fails_with_one_line(&out, &["--pixel-error", "--pixels"]);
+    let out = subdiv(&[&["tessellate"][..], &camera].concat());
+    fails_with_one_line(&out, &["--camera goes with"]);
+    let out = subdiv(&["tessellate", "--pixel-error", "0.5", "-o", glb.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+}
+
 #[test]
 fn tessellate_rejects_bad_tolerances_and_schemes() {
     for t in ["0", "-1", "NaN", "inf"] {

@@ -149,6 +149,103 @@ impl ScreenSpace {
     }
 }
 
+/// A screen-space error bound: every limit point within `pixels` pixels, on a `viewport` seen by
+/// `camera`, of the output (the quadtree's leaves, [`QuadtreeOptions::screen`](crate::QuadtreeOptions)).
+///
+/// Each piece of surface gets its own `ε`: a 3D error `e` between two points of the piece's
+/// control hull projects to at most `f · √(1 + r²) / z · ‖e‖` pixels — `f` the focal length in
+/// pixels, `z` the least depth and `r` the largest `‖(x, y)‖ / z` over the hull (the Jacobian of
+/// the projection `f (x/z, y/z)` is `f/z [I | −(x/z, y/z)]`, of norm `f/z · √(1 + r²)`; depth is
+/// linear and `r` quasi-convex, so both extremes lie at the hull's vertices). A leaf's output and
+/// the surface it stands for both lie in that hull, so `ε = pixels · z / (f √(1 + r²))` bounds
+/// the error on the screen. Geometry nearer than the near plane, at [`NEAR_PLANE`] `×` the
+/// eye–target distance, is clipped by a renderer and gets no bound: a piece wholly in front of the eye's
+/// near plane is bounded as above, one that crosses it takes `z` at the plane, one wholly
+/// behind it is flat at once.
+///
+/// ```
+/// use glam::DVec3;
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::rates::{Camera, ScreenError};
+/// use subdiv_tess::{QuadtreeOptions, QuadtreeTessellator};
+///
+/// let mesh = Mesh::build(shapes::cube())?;
+/// let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &mesh)?;
+/// let near = Camera::look_at(DVec3::new(0.0, -4.0, 1.0), DVec3::ZERO, DVec3::Z);
+/// let far = Camera { eye: 4.0 * near.eye, ..near };
+/// let leaves = |camera| {
+///     let screen = ScreenError { camera, viewport: [1920, 1080], pixels: 0.5 };
+///     tess.tessellate(&QuadtreeOptions::DEFAULT.with_screen(Some(screen))).map(|m| m.polygon_count())
+/// };
+/// assert!(leaves(near)? > leaves(far)?);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScreenError {
+    /// The camera.
+    pub camera: Camera,
+    /// The image size in pixels, `[width, height]`.
+    pub viewport: [u32; 2],
+    /// The largest error on the screen, in pixels (> 0).
+    pub pixels: f64,
+}
+
+/// Where [`ScreenError`]'s near plane lies, as a fraction of the eye–target distance: `1e−2`, a
+/// renderer's usual near/far ratio. Pieces just in front of it need an `ε` of `pixels · near /
+/// f`, so a nearer plane makes a camera inside a model cut very finely along it.
+pub const NEAR_PLANE: f64 = 1e-2;
+
+/// [`ScreenError`] prepared: the view frame and the focal length.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ScreenBound {
+    eye: DVec3,
+    frame: [DVec3; 3],
+    focal: f64,
+    near: f64,
+    pixels: f64,
+}
+
+impl ScreenError {
+    /// The bound, checked.
+    ///
+    /// # Errors
+    /// [`TessError::Camera`] for a degenerate camera or viewport (as [`ScreenSpace`]) or
+    /// `pixels` not a positive finite number.
+    pub(crate) fn bound(&self) -> Result<ScreenBound, TessError> {
+        let [width, height] = self.viewport;
+        if width == 0 || height == 0 {
+            return Err(TessError::Camera { reason: format!("the viewport {width}×{height} is empty") });
+        }
+        if !(self.pixels.is_finite() && self.pixels > 0.0) {
+            return Err(TessError::Camera {
+                reason: format!("a screen error of {} pixels is not a positive finite number", self.pixels),
+            });
+        }
+        let (frame, focal) = self.camera.frame(height)?;
+        let near = NEAR_PLANE * (self.camera.target - self.camera.eye).length();
+        Ok(ScreenBound { eye: self.camera.eye, frame, focal, near, pixels: self.pixels })
+    }
+}
+
+impl ScreenBound {
+    /// The `ε` of a piece whose control hull has the vertices `points` (see [`ScreenError`]);
+    /// `None` for a piece wholly behind the near plane.
+    pub(crate) fn epsilon(&self, points: &[DVec3]) -> Option<f64> {
+        let [right, up, forward] = self.frame;
+        let (mut depth, mut spread, mut in_front) = (f64::INFINITY, 0.0f64, false);
+        for &p in points {
+            let d = p - self.eye;
+            let z = d.dot(forward);
+            in_front |= z > self.near;
+            let z = z.max(self.near);
+            depth = depth.min(z);
+            spread = spread.max(glam::DVec2::new(d.dot(right), d.dot(up)).length() / z);
+        }
+        in_front.then(|| self.pixels * depth / (self.focal * (1.0 + spread * spread).sqrt()))
+    }
+}
+
 /// The largest rate the policies give unless told otherwise.
 pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 

@@ -437,3 +437,46 @@ fn channels_are_exact_and_split_at_seams() {
     assert_eq!(assert_channels_exact(&grid, None), 0);
     assert_eq!(assert_channels_exact(&grid, Some(subdiv_mesh::FaceVaryingInterpolation::None)), 0);
 }
+
+/// A screen-space error bound: at the centroid and edge midpoints of every output triangle, the
+/// limit point and the output point project at most `pixels` apart, and a farther camera cuts
+/// more coarsely.
+#[test]
+fn screen_error_bounds_the_projected_distance() {
+    use glam::{DVec2, DVec3};
+    use subdiv_tess::rates::{Camera, ScreenError};
+    let mesh = Mesh::build(shapes::default_model()).unwrap();
+    let cc = Builtin::CatmullClark.scheme();
+    let tess = QuadtreeTessellator::new(cc, &mesh).unwrap();
+    let evaluator = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap();
+    let near = Camera::look_at(DVec3::new(0.5, -3.0, 1.5), DVec3::ZERO, DVec3::Z);
+    let (viewport, pixels) = ([640u32, 480u32], 0.75);
+    let mut counts = Vec::new();
+    for camera in [near, Camera { eye: 3.0 * near.eye, ..near }] {
+        // The projection of a pinhole camera of that field of view on that image.
+        let forward = (camera.target - camera.eye).normalize();
+        let right = forward.cross(camera.up).normalize();
+        let up = right.cross(forward);
+        let focal = 0.5 * f64::from(viewport[1]) / (0.5 * camera.fovy_degrees.to_radians()).tan();
+        let project = |p: DVec3| {
+            let d = p - camera.eye;
+            assert!(d.dot(forward) > 0.5, "the model lies in front of the camera");
+            DVec2::new(d.dot(right), d.dot(up)) * (focal / d.dot(forward))
+        };
+        let screen = ScreenError { camera, viewport, pixels };
+        let out = tess.tessellate(&QuadtreeOptions::DEFAULT.with_screen(Some(screen))).unwrap();
+        counts.push(out.triangles.len());
+        let mut worst: f64 = 0.0;
+        for ((t, &face), params) in out.triangles.iter().zip(&out.triangle_faces).zip(&out.triangle_parameters) {
+            for w in [[1.0 / 3.0; 3], [0.5, 0.5, 0.0], [0.0, 0.5, 0.5], [0.5, 0.0, 0.5]] {
+                let (u, v) = (0..3).fold((0.0, 0.0), |(u, v), k| (u + w[k] * params[k][0], v + w[k] * params[k][1]));
+                let ours: DVec3 = (0..3).map(|k| w[k] * out.positions[t[k] as usize]).sum();
+                let exact = evaluator.eval(face, u, v).unwrap().position;
+                worst = worst.max(project(ours).distance(project(exact)));
+            }
+        }
+        assert!(worst <= pixels * (1.0 + 1e-9), "{worst} pixels > {pixels}");
+        assert!(worst > 0.05 * pixels, "the bound is vacuous: {worst} pixels");
+    }
+    assert!(counts[0] > counts[1], "{counts:?}");
+}

@@ -37,12 +37,20 @@ pub enum Error {
     #[error("rates to a tolerance: {0}")]
     ToleranceBounds(#[source] TessError),
     /// [`Method::Quadtree`](crate::Method::Quadtree) was asked for with rates other than
-    /// [`Rates::Tolerance`](crate::Rates::Tolerance).
-    #[error("the quadtree tessellator takes a tolerance (Rates::Tolerance), not {given} rates")]
+    /// [`Rates::Tolerance`](crate::Rates::Tolerance) or [`Rates::ScreenError`](crate::Rates::ScreenError).
+    #[error(
+        "the quadtree tessellator takes a tolerance (Rates::Tolerance) or a screen error (Rates::ScreenError), not {given} rates"
+    )]
     QuadtreeRates {
         /// The rates given, in words.
         given: &'static str,
     },
+    /// [`Method::Dual`](crate::Method::Dual) was asked for with
+    /// [`Rates::ScreenError`](crate::Rates::ScreenError), which only the quadtree bounds.
+    #[error(
+        "the dual tessellator takes screen-space rates by edge length (Rates::Screen), not a screen-space error bound (the quadtree's)"
+    )]
+    DualScreenError,
     /// A face-varying channel asked for by a name the mesh has no channel of.
     #[error("the mesh has no channel {channel:?} (its channels: {channels:?})")]
     NoChannel {

@@ -6,7 +6,7 @@ use std::sync::OnceLock;
 use subdiv_mesh::{BuildOptions, FaceId, Mesh, PolygonSoup};
 use subdiv_schemes::{ChannelSurface, RefineOptions, Scheme, Split, refine_uniform_with_progress};
 use subdiv_stencil::{LimitPoint, LinearEvaluator};
-use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenSpace};
+use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenError, ScreenSpace};
 use subdiv_tess::{
     DualOptions, DualTessellator, FlatMesh, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink,
     TessTriangle, TessVertex,
@@ -324,6 +324,7 @@ impl Surface {
                 let epsilon = tolerance.absolute(bounds.diagonal())?;
                 FaceRates { faces, rings: Some(rings), epsilon: Some(epsilon) }
             }
+            Rates::ScreenError { .. } => return Err(Error::DualScreenError),
             Rates::Screen { camera, viewport, pixels_per_edge } => {
                 let policy = ScreenSpace {
                     max_rate: options.max_rate,
@@ -429,13 +430,18 @@ impl Surface {
                 Ok(info)
             }
             Method::Quadtree => {
-                let Rates::Tolerance(tolerance) = options.rates else {
-                    return Err(Error::QuadtreeRates { given: options.rates.name() });
+                let (tolerance, screen) = match options.rates {
+                    Rates::Tolerance(tolerance) => (tolerance, None),
+                    Rates::ScreenError { camera, viewport, pixels } => {
+                        (QuadtreeOptions::DEFAULT.tolerance, Some(ScreenError { camera, viewport, pixels }))
+                    }
+                    _ => return Err(Error::QuadtreeRates { given: options.rates.name() }),
                 };
                 let tess = self.quadtree_mut()?;
                 let epsilon = tolerance.absolute(tess.diagonal())?;
                 let quadtree_options = QuadtreeOptions::DEFAULT
                     .with_tolerance(tolerance)
+                    .with_screen(screen)
                     .with_parallelism(options.parallelism)
                     .with_max_polygons(options.max_vertices / QUADTREE_VERTICES_PER_POLYGON);
                 let stats = if options.polygons {
@@ -446,7 +452,7 @@ impl Surface {
                 Ok(TessInfo {
                     method: Method::Quadtree,
                     rates: Vec::new(),
-                    epsilon: Some(epsilon),
+                    epsilon: screen.is_none().then_some(epsilon),
                     quadtree: Some(stats),
                 })
             }
@@ -613,6 +619,7 @@ mod tests {
                             let r = ErrorRates { tolerance: *t, max_rate: 32 }.rates(&bounds, &mesh).unwrap();
                             tess.tessellate_with_rings(&r.faces, &r.rings).unwrap().clone()
                         }
+                        Rates::ScreenError { .. } => unreachable!("not a policy of the dual method"),
                     };
                     let out = s.tessellate(&options).unwrap();
                     assert_eq!(out.mesh, expected, "{rates:?}");
@@ -676,6 +683,12 @@ mod tests {
         let mut s = surface(shapes::quad_grid(2, 2));
         let quadtree = TessOptions::DEFAULT.with_method(Method::Quadtree);
         assert!(matches!(s.tessellate(&quadtree), Err(Error::QuadtreeRates { given: "uniform" })));
+        // A screen-space error bound is the quadtree's.
+        let camera = Camera::look_at(DVec3::new(0.0, -5.0, 2.0), DVec3::ZERO, DVec3::Z);
+        let screen = TessOptions::DEFAULT.with_rates(Rates::ScreenError { camera, viewport: [640, 480], pixels: 1.0 });
+        assert!(matches!(s.tessellate(&screen), Err(Error::DualScreenError)));
+        let on_screen = s.tessellate(&screen.clone().with_method(Method::Quadtree)).unwrap();
+        assert!(on_screen.info.epsilon.is_none() && !on_screen.mesh.triangles.is_empty());
         // The dual rates to a tolerance take no extraordinary border vertex (the grid's smooth
         // corners), the quadtree does; the dual tessellator takes no rate 0.
         let tolerance = TessOptions::DEFAULT.with_rates(Rates::Tolerance(Tolerance::Relative(1e-2)));

@@ -21,8 +21,21 @@ pub enum Rates {
     /// One rate per face, in face order.
     PerFace(Vec<u32>),
     /// The rates (dual) or leaves (quadtree) that prove every limit point within the
-    /// tolerance of the output. Closed Catmull-Clark meshes (creases included).
+    /// tolerance of the output. Catmull-Clark meshes (creases included; the dual method not
+    /// yet at extraordinary border vertices).
     Tolerance(Tolerance),
+    /// The quadtree's leaves that prove every limit point within `pixels` pixels, on the
+    /// screen of a `viewport` seen by `camera`, of the output (each piece to its own
+    /// [`ScreenError`](subdiv_tess::rates::ScreenError) bound): a renderer's "at most P pixels
+    /// of geometric error". [`Method::Quadtree`] only.
+    ScreenError {
+        /// The camera.
+        camera: Camera,
+        /// The image size in pixels, `[width, height]`.
+        viewport: [u32; 2],
+        /// The largest error on the screen, in pixels (> 0).
+        pixels: f64,
+    },
     /// Screen-space rates (paper 000 §6): each face cut so that its output edges are about
     /// `pixels_per_edge` pixels long in a `viewport` seen by `camera`.
     Screen {
@@ -43,6 +56,7 @@ impl Rates {
             Self::PerFace(_) => "per-face",
             Self::Tolerance(_) => "tolerance",
             Self::Screen { .. } => "screen-space",
+            Self::ScreenError { .. } => "screen-error",
         }
     }
 }

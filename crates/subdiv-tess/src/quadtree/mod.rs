@@ -51,6 +51,10 @@ pub const DEPTH_LIMIT: u32 = 30;
 pub struct QuadtreeOptions {
     /// The flatness every output triangle meets. Default: `Relative(1e-3)`.
     pub tolerance: Tolerance,
+    /// A screen-space error bound instead of the tolerance: each piece flat to its own `ε`,
+    /// at most so many pixels on the screen ([`ScreenError`](crate::rates::ScreenError)).
+    /// Default: `None` (the tolerance).
+    pub screen: Option<crate::rates::ScreenError>,
     /// The deepest level a node may reach, counted from the input face (an N-gon's sub-faces
     /// are level 1); at most [`DEPTH_LIMIT`]. Default: 24 (leaves next to extraordinary vertices
     /// go deep: the parametric distance there shrinks only like λ^d).
@@ -66,6 +70,7 @@ impl QuadtreeOptions {
     /// The defaults.
     pub const DEFAULT: Self = Self {
         tolerance: Tolerance::Relative(1e-3),
+        screen: None,
         max_depth: 24,
         max_polygons: 20_000_000,
         parallelism: Parallelism::DEFAULT,
@@ -75,6 +80,12 @@ impl QuadtreeOptions {
     #[must_use]
     pub const fn with_tolerance(self, tolerance: Tolerance) -> Self {
         Self { tolerance, ..self }
+    }
+
+    /// These options with [`screen`](Self::screen).
+    #[must_use]
+    pub const fn with_screen(self, screen: Option<crate::rates::ScreenError>) -> Self {
+        Self { screen, ..self }
     }
 
     /// These options with [`max_depth`](Self::max_depth).
@@ -538,13 +549,15 @@ impl QuadtreeTessellator {
         sink: &mut S,
     ) -> Result<QuadtreeStats, TessError> {
         let epsilon = options.tolerance.absolute(self.diagonal)?;
+        let screen = options.screen.as_ref().map(crate::rates::ScreenError::bound).transpose()?;
         let max_depth = options.max_depth.min(DEPTH_LIMIT);
         let count = AtomicUsize::new(0);
         let parallel = options.parallelism.forks();
         let grown: Vec<(Vec<Leaf>, Corners)> = crate::par::try_map(parallel, &self.roots, |&root| {
             let (mut leaves, mut corners) = (Vec::new(), Corners::new());
             let piece = self.root_piece(root)?;
-            let budget = Budget { epsilon, max_depth: max_depth.saturating_sub(root.depth()), count: &count, options };
+            let max_depth = max_depth.saturating_sub(root.depth());
+            let budget = Budget { epsilon, screen, max_depth, count: &count, options };
             let node = Leaf { depth: 0, x: 0, y: 0, extraordinary: false };
             self.build(root, piece, node, &budget, &mut leaves, &mut corners)?;
             Ok::<_, TessError>((leaves, corners))
@@ -728,24 +741,28 @@ impl QuadtreeTessellator {
         leaves: &mut Vec<Leaf>,
         corners: &mut Corners,
     ) -> Result<(), TessError> {
-        let flat = match &piece {
-            Piece::Face { .. } => false,
-            Piece::Extraordinary { points, .. } => flatness::extraordinary_is_flat(points, budget.epsilon),
-            Piece::Regular(b) => flatness::regular_is_flat(b, budget.epsilon),
+        // The piece's own ε on the screen (none: wholly behind the near plane, flat at once).
+        let epsilon = match (&budget.screen, &piece) {
+            (None, _) | (_, Piece::Face { .. }) => Some(budget.epsilon),
+            (Some(screen), Piece::Extraordinary { points, .. }) => screen.epsilon(points),
+            (Some(screen), Piece::Regular(b)) => screen.epsilon(b.net.as_flattened()),
         };
+        let flat = match (&piece, epsilon) {
+            (Piece::Face { .. }, _) => false,
+            (_, None) => true,
+            (Piece::Extraordinary { points, .. }, Some(e)) => flatness::extraordinary_is_flat(points, e),
+            (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
+        };
+        let epsilon = epsilon.unwrap_or(budget.epsilon);
         if flat {
             if budget.count.fetch_add(1, Ordering::Relaxed) >= budget.options.max_polygons {
-                return Err(TessError::TooManyPolygons { limit: budget.options.max_polygons, epsilon: budget.epsilon });
+                return Err(TessError::TooManyPolygons { limit: budget.options.max_polygons, epsilon });
             }
             leaves.push(Leaf { extraordinary: matches!(piece, Piece::Extraordinary { .. }), ..node });
             return Ok(());
         }
         if node.depth >= budget.max_depth {
-            return Err(TessError::DepthLimit {
-                face: root.face.index(),
-                depth: node.depth + root.depth(),
-                epsilon: budget.epsilon,
-            });
+            return Err(TessError::DepthLimit { face: root.face.index(), depth: node.depth + root.depth(), epsilon });
         }
         let h = FULL >> (node.depth + 1);
         // Counter-clockwise order of the quarters keeps leaf order (and ids) deterministic.
@@ -913,6 +930,7 @@ type Ring = (Vec<u32>, Vec<(i64, i64)>);
 /// What a root's recursion may spend.
 struct Budget<'a> {
     epsilon: f64,
+    screen: Option<crate::rates::ScreenBound>,
     max_depth: u32,
     count: &'a AtomicUsize,
     options: &'a QuadtreeOptions,
