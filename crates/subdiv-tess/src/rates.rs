@@ -61,6 +61,18 @@ impl Camera {
     }
 }
 
+/// The viewport's height, after checking that it has no zero side and that `pixels` (what
+/// `what` names) is a positive finite number.
+fn check_screen([width, height]: [u32; 2], pixels: f64, what: &str) -> Result<u32, TessError> {
+    if width == 0 || height == 0 {
+        return Err(TessError::Camera { reason: format!("the viewport {width}×{height} is empty") });
+    }
+    if !(pixels.is_finite() && pixels > 0.0) {
+        return Err(TessError::Camera { reason: format!("{what} {pixels} is not a positive finite number") });
+    }
+    Ok(height)
+}
+
 /// Screen-space rates: each face cut so that its output edges are about `pixels_per_edge`
 /// pixels long on the screen.
 ///
@@ -110,15 +122,7 @@ impl ScreenSpace {
     /// field of view outside `(0°, 180°)`, non-finite values) or viewport (a zero side), a
     /// `pixels_per_edge` that is not a positive finite number, or a `max_rate` of 0.
     pub fn face_rates(&self, mesh: &Mesh) -> Result<Vec<u32>, TessError> {
-        let [width, height] = self.viewport;
-        if width == 0 || height == 0 {
-            return Err(TessError::Camera { reason: format!("the viewport {width}×{height} is empty") });
-        }
-        if !(self.pixels_per_edge.is_finite() && self.pixels_per_edge > 0.0) {
-            return Err(TessError::Camera {
-                reason: format!("pixels per edge {} is not a positive finite number", self.pixels_per_edge),
-            });
-        }
+        let height = check_screen(self.viewport, self.pixels_per_edge, "pixels per edge")?;
         if self.max_rate == 0 {
             return Err(TessError::Camera { reason: "the largest rate must be at least 1".to_string() });
         }
@@ -213,15 +217,7 @@ impl ScreenError {
     /// [`TessError::Camera`] for a degenerate camera or viewport (as [`ScreenSpace`]) or
     /// `pixels` not a positive finite number.
     pub(crate) fn bound(&self) -> Result<ScreenBound, TessError> {
-        let [width, height] = self.viewport;
-        if width == 0 || height == 0 {
-            return Err(TessError::Camera { reason: format!("the viewport {width}×{height} is empty") });
-        }
-        if !(self.pixels.is_finite() && self.pixels > 0.0) {
-            return Err(TessError::Camera {
-                reason: format!("a screen error of {} pixels is not a positive finite number", self.pixels),
-            });
-        }
+        let height = check_screen(self.viewport, self.pixels, "a screen error in pixels of")?;
         let (frame, focal) = self.camera.frame(height)?;
         let near = NEAR_PLANE * (self.camera.target - self.camera.eye).length();
         Ok(ScreenBound { eye: self.camera.eye, frame, focal, near, pixels: self.pixels })
