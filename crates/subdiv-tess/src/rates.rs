@@ -278,9 +278,12 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// Catmull-Clark meshes, open ones and holes too. At a border (a boundary, or the edge of a
 /// hole) the strips close against border points at the parameters of the row beside them, and a
 /// border vertex's polygon is fanned around its limit point, all within `√2 / n` in the chart of
-/// one face or of the two faces at a regular border vertex; an *extraordinary* border vertex
-/// (a smooth corner, a boundary vertex of three or more faces, a vertex next to a hole, which
-/// keeps the interior rules) has no rings yet, so the policy refuses it.
+/// one face or of the two faces at a regular border vertex. The tessellator cuts the polygon
+/// around a vertex the same way along infinitely sharp edges and the seams of the channels it
+/// carries, one fan per run between cuts. At an *extraordinary* vertex so cut (a smooth corner,
+/// a boundary vertex of three or more faces, a vertex next to a hole, which keeps the interior
+/// rules, one on a sharp crease or a texture seam) the runs have no rings yet, so the policy
+/// refuses it.
 ///
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
@@ -301,12 +304,17 @@ pub struct ErrorRates {
     pub tolerance: Tolerance,
     /// The largest rate allowed: a face that needs more is an error.
     pub max_rate: u32,
+    /// Whether the tessellation carries the mesh's face-varying channels
+    /// ([`DualOptions::channels`](crate::DualOptions)), which cuts the polygons around vertices
+    /// at their seams (see [`rates`](Self::rates)). Default: `true`, as the tessellator's.
+    pub channels: bool,
 }
 
 impl ErrorRates {
-    /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`].
+    /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`], for a tessellation that carries the
+    /// mesh's channels.
     pub fn new(tolerance: Tolerance) -> Self {
-        Self { tolerance, max_rate: DEFAULT_MAX_RATE }
+        Self { tolerance, max_rate: DEFAULT_MAX_RATE, channels: true }
     }
 }
 
@@ -328,7 +336,8 @@ pub struct DualRates {
 /// [`DualTessellator::tessellate_with_rings`](crate::DualTessellator::tessellate_with_rings).
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct RingDepths {
-    /// Per mesh vertex (used at interior vertices of valence ≠ 4 under a quad split).
+    /// Per mesh vertex (used at interior vertices of valence ≠ 4 under a quad split, and at
+    /// infinitely sharp corners, where the polygon around the vertex is not cut).
     pub vertices: Vec<u32>,
     /// Per face (used at the centres of N-gons, N ≠ 4, under a quad split).
     pub centres: Vec<u32>,
@@ -411,19 +420,34 @@ impl ErrorRates {
         for &f in &faces {
             extraordinary[f.index()] = curvature(f, 1)?.corner_hull > 0.0;
         }
-        // The polygon at a border vertex is fanned around its limit point without rings: no
-        // bound covers it where the surface there is an extraordinary piece.
-        let on_border = |v: subdiv_mesh::VertexId| {
-            mesh.is_boundary_vertex(v) || mesh.vertex_faces(v).any(|f| !bounds.has_surface(f))
+        // Where the dual tessellation cuts the polygon around a vertex into runs (a boundary, a
+        // hole, an infinitely sharp edge, a seam of a channel: the tessellator carries channels
+        // by default), each run is fanned around the vertex's limit point without rings: no
+        // bound covers that fan where the surface there is an extraordinary piece.
+        let cut = |h: subdiv_mesh::HalfEdgeId| {
+            let e = mesh.edge(h);
+            mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP
+                || (self.channels && mesh.channels().iter().any(|c| mesh.is_seam(c, e)))
         };
+        let on_border = |v: subdiv_mesh::VertexId| {
+            mesh.is_boundary_vertex(v)
+                || mesh.vertex_faces(v).any(|f| !bounds.has_surface(f))
+                || mesh.outgoing(v).any(cut)
+        };
+        // The vertices at which some face's surface is an extraordinary piece: every valence
+        // other than the regular one, and sharp corners and darts of any valence.
+        let mut corner_of = vec![false; mesh.vertex_count()];
         for &f in faces.iter().filter(|f| extraordinary[f.index()]) {
-            if let Some(v) = bounds.extraordinary_corners(f)?.into_iter().find(|&v| on_border(v)) {
-                return Err(TessError::Unsupported {
-                    feature: "tolerance rates at an extraordinary border vertex (the dual method has no rings there \
-                              yet; --method quadtree takes it)",
-                    element: format!("{v}"),
-                });
+            for v in bounds.extraordinary_corners(f)? {
+                corner_of[v.index()] = true;
             }
+        }
+        if let Some(v) = mesh.vertices().find(|&v| corner_of[v.index()] && on_border(v)) {
+            return Err(TessError::Unsupported {
+                feature: "tolerance rates at an extraordinary vertex where the dual tessellation is cut (a boundary, \
+                          hole, infinitely sharp edge or texture seam: no rings there yet; --method quadtree takes it)",
+                element: format!("{v}"),
+            });
         }
         // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the depth
         // of the first ring for the finest rate around each of its vertices (no triangle outside
@@ -498,7 +522,7 @@ impl ErrorRates {
         };
         let mut vertices = vec![0u32; mesh.vertex_count()];
         for v in mesh.vertices() {
-            if mesh.vertex_faces(v).any(|f| extraordinary[f.index()]) && mesh.valence(v) != 4 && !on_border(v) {
+            if corner_of[v.index()] {
                 vertices[v.index()] = ring_depth(&mut mesh.vertex_faces(v), &mut curvature)?;
             }
         }

@@ -316,7 +316,9 @@ impl Surface {
                     Error::Tess(e) => Error::ToleranceBounds(e),
                     e => e,
                 })?;
-                let policy = ErrorRates { tolerance: *tolerance, max_rate: options.max_rate };
+                // The dual tessellator carries channels where the scheme has rules for them.
+                let channels = self.scheme.has_crease_rules();
+                let policy = ErrorRates { tolerance: *tolerance, max_rate: options.max_rate, channels };
                 let DualRates { faces, rings } = policy.rates(bounds, &self.mesh).map_err(|e| match e {
                     subdiv_tess::TessError::Unsupported { .. } => Error::ToleranceBounds(e),
                     e => Error::Tess(e),
@@ -616,7 +618,7 @@ mod tests {
                         }
                         Rates::Tolerance(t) => {
                             let bounds = QuadtreeTessellator::new(cc, &mesh).unwrap();
-                            let r = ErrorRates { tolerance: *t, max_rate: 32 }.rates(&bounds, &mesh).unwrap();
+                            let r = ErrorRates { max_rate: 32, ..ErrorRates::new(*t) }.rates(&bounds, &mesh).unwrap();
                             tess.tessellate_with_rings(&r.faces, &r.rings).unwrap().clone()
                         }
                         Rates::ScreenError { .. } => unreachable!("not a policy of the dual method"),

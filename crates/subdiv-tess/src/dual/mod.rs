@@ -24,7 +24,8 @@
 //!   through the limit points of the input's boundary vertices, in order.
 //!
 //! **Rings** ([`DualTessellator::tessellate_with_rings`]): the polygon at an
-//! extraordinary point (an interior vertex of valence ≠ 4, or an N-gon's centre) stands for a
+//! extraordinary point (an interior vertex of valence ≠ 4 or an infinitely sharp corner, or an
+//! N-gon's centre) stands for a
 //! piece of surface as coarse as its faces' rates, which the tolerance policy's hull bound may
 //! not accept. With a ring depth `d > 0` for the point
 //! ([`ErrorRates::rates`](crate::rates::ErrorRates::rates) computes them), the polygon is
@@ -312,7 +313,8 @@ impl DualTessellator {
     /// As [`tessellate`](Self::tessellate), with rings of exact points around extraordinary
     /// points down to the depths of `rings` (see the module docs; [`ErrorRates::rates`]
     /// computes them with the rates, for Catmull-Clark): `rings.vertices[v]` around interior mesh
-    /// vertices of valence ≠ 4 (≠ 6 under a triangle split), `rings.centres[f]` around the
+    /// vertices of valence ≠ 4 (≠ 6 under a triangle split) or tagged infinitely sharp corners,
+    /// whose polygon no sharp edge, seam or border cuts, `rings.centres[f]` around the
     /// centres of N-gons (N ≠ 4, quad splits); depth 0, and the entries of other vertices and
     /// faces, change nothing.
     ///

@@ -19,6 +19,17 @@ pub(super) fn face_reach(mesh: &Mesh, triangle: bool, f: FaceId, rate: u32) -> u
     if triangle { rate } else { reach(mesh, f, rate) }
 }
 
+/// The number of faces around a regular interior vertex.
+pub(super) fn regular(triangle: bool) -> usize {
+    if triangle { 6 } else { 4 }
+}
+
+/// Whether `v` is tagged an infinitely sharp corner: its surface is no polynomial at any
+/// valence, so it takes rings like an extraordinary vertex.
+pub(super) fn sharp_corner(mesh: &Mesh, v: VertexId) -> bool {
+    mesh.vertex_sharpness(v) >= subdiv_mesh::Tags::INFINITELY_SHARP
+}
+
 /// The depth `d1` of the first ring around a point whose finest face reach is `finest`: under a
 /// quad split [`first_ring_depth`] (`2^−d1` the largest power of two below the nearest dual
 /// points' `½ / finest`); under a triangle split the largest power of two below `1 / (3 finest)`,
@@ -673,11 +684,12 @@ impl<'a> Builder<'a> {
                     break;
                 }
             }
-            // An extraordinary interior vertex (quad split) with a ring depth: rings down to it,
-            // fanned around its limit point, in place of the polygon.
+            // An extraordinary interior point (a valence other than the regular one, or an
+            // infinitely sharp corner) with a ring depth: rings down to it, fanned around its
+            // limit point, in place of the polygon.
             let depth = self.buf.ring_vertices.get(v.index()).copied().unwrap_or(0);
-            let regular = if self.triangle { 6 } else { 4 };
-            if closed && depth > 0 && ring.len() >= 3 && ring.len() != regular {
+            if closed && depth > 0 && ring.len() >= 3 && (ring.len() != regular(self.triangle) || sharp_corner(mesh, v))
+            {
                 let point = self.corner_point(f0, self.mesh.corner(start));
                 self.rings(&corners, &ring, depth, (f0, point));
                 continue;

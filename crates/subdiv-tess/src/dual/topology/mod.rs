@@ -435,8 +435,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)) || cut(h))
                 || mesh.is_boundary_vertex(v);
         let depth = rings.map_or(0, |r| r.vertices[v.index()]);
-        let regular = if triangle { 6 } else { 4 };
-        if !border && depth > 0 && faces.len() >= 3 && faces.len() != regular {
+        if !border && depth > 0 && faces.len() >= 3 && (faces.len() != regular(triangle) || sharp_corner(mesh, v)) {
             // Two points per face per ring (its edge's and its inner one), and the limit point.
             let finest = faces.iter().map(|&f| face_reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
             count += 2 * faces.len() * ring_count(first_depth(triangle, finest), depth) as usize + 1;
