@@ -33,13 +33,16 @@ pub(crate) fn run() -> Result<(), String> {
             subdiv_testkit::shared_mesh(model).ok_or("the shared corpus is missing (set SUBDIV_SHARED)")?;
         let mesh = load_mesh(&path, &Default::default()).map_err(|e| format!("{model}: {e}"))?;
         let bounds = QuadtreeTessellator::new(cc, &mesh).map_err(|e| format!("{model}: {e}"))?;
-        let mut dual = DualTessellator::new(cc, &mesh, &DualOptions { quads: false, ..DualOptions::default() })
-            .map_err(|e| format!("{model}: {e}"))?;
+        // Positions only: the rates and their triangles, not the texture seams (which cut the
+        // polygons at extraordinary vertices, refused by the rates).
+        let options = DualOptions { quads: false, channels: false, ..DualOptions::default() };
+        let mut dual = DualTessellator::new(cc, &mesh, &options).map_err(|e| format!("{model}: {e}"))?;
         let samples: Vec<DVec3> =
             crate::adaptive::limit_grids(&mesh, 24)?.into_iter().flatten().map(|(.., p)| p).collect();
         for r in TOLERANCES {
             let epsilon = Tolerance::Relative(r).absolute(bounds.diagonal()).map_err(|e| e.to_string())?;
-            let (rational, rings) = match ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &mesh) {
+            let policy = ErrorRates { channels: false, ..ErrorRates::new(Tolerance::Relative(r)) };
+            let (rational, rings) = match policy.rates(&bounds, &mesh) {
                 Ok(rates) => (rates.faces, rates.rings),
                 Err(e) => {
                     println!("| {model} | {} | {r:e} | {e} | | | | |", mesh.face_count());
@@ -54,14 +57,13 @@ pub(crate) fn run() -> Result<(), String> {
                 Ok((out.triangles.len(), worst / epsilon))
             };
             let (a, worst_a) = run(&rational, &rings)?;
-            let dyadic =
-                match ErrorRates::new(Tolerance::Relative(r)).rates_rounded(&bounds, &mesh, u32::next_power_of_two) {
-                    Ok(d) => {
-                        let (b, _) = run(&d.faces, &d.rings)?;
-                        format!("{}, {b} | {:.2}", span(&d.faces), b as f64 / a as f64)
-                    }
-                    Err(e) => format!("{e} | "),
-                };
+            let dyadic = match policy.rates_rounded(&bounds, &mesh, u32::next_power_of_two) {
+                Ok(d) => {
+                    let (b, _) = run(&d.faces, &d.rings)?;
+                    format!("{}, {b} | {:.2}", span(&d.faces), b as f64 / a as f64)
+                }
+                Err(e) => format!("{e} | "),
+            };
             let rounded: Vec<u32> = rational.iter().map(|n| n.next_power_of_two()).collect();
             let (c, worst_c) = run(&rounded, &rings)?;
             println!(
