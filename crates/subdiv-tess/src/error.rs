@@ -35,7 +35,9 @@ pub enum TessError {
     #[error(transparent)]
     Surface(#[from] StencilError),
     /// A face needed more levels than allowed ([`QuadtreeOptions::max_depth`](crate::QuadtreeOptions)).
-    #[error("face {face}: not flat to ε = {epsilon:e} at depth {depth} (the limit); raise the tolerance")]
+    #[error(
+        "face {face}: not flat to ε = {epsilon:e} at depth {depth} (the limit); raise the tolerance (or the screen error)"
+    )]
     DepthLimit {
         /// The input face.
         face: usize,
