@@ -385,7 +385,7 @@ fn tessellate_defaults_params_and_policies() {
 
 /// `--tolerance` takes the quadtree unless told otherwise: an open mesh with holes and texture
 /// coordinates goes through, where the dual method's rates, which have no rings at an
-/// extraordinary vertex where the tessellation is cut (a border), refuse it by name.
+/// extraordinary vertex on a texture seam, refuse it by name.
 #[test]
 fn tolerance_takes_the_quadtree_by_default() {
     let Some(mesh) = shared_mesh("opensubdiv/catmark_hole_test1.obj") else { return };
@@ -401,7 +401,10 @@ fn tolerance_takes_the_quadtree_by_default() {
     );
     assert!(subdiv::io::load_mesh(&glb, &Default::default()).unwrap().face_count() > 0);
     let out = subdiv(&[&args[..], &["--method", "dual"]].concat());
-    fails_with_one_line(&out, &["extraordinary vertex where the dual tessellation is cut", "--method quadtree"]);
+    fails_with_one_line(
+        &out,
+        &["extraordinary vertex on an infinitely sharp edge or a texture seam", "--method quadtree"],
+    );
 }
 
 /// `--pixel-error P`: the quadtree to a screen-space error bound; a farther camera needs fewer

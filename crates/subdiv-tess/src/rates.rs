@@ -278,12 +278,14 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// Catmull-Clark meshes, open ones and holes too. At a border (a boundary, or the edge of a
 /// hole) the strips close against border points at the parameters of the row beside them, and a
 /// border vertex's polygon is fanned around its limit point, all within `√2 / n` in the chart of
-/// one face or of the two faces at a regular border vertex. The tessellator cuts the polygon
-/// around a vertex the same way along infinitely sharp edges and the seams of the channels it
-/// carries, one fan per run between cuts. At an *extraordinary* vertex so cut (a smooth corner,
-/// a boundary vertex of three or more faces, a vertex next to a hole, which keeps the interior
-/// rules, one on a sharp crease or a texture seam) the runs have no rings yet, so the policy
-/// refuses it.
+/// one face or of the two faces at a regular border vertex. An *extraordinary* border vertex (a
+/// smooth corner, a boundary vertex of three or more faces, a vertex next to a hole, which keeps
+/// the interior rules) takes rings in its open runs of faces, bounded as the closed rings below
+/// (each band in one face, from the first border point a triangle in the first face). The
+/// tessellator also cuts the polygon around a vertex along infinitely sharp edges and the seams
+/// of the channels it carries ([`channels`](Self::channels)); the runs on either side of such an
+/// edge would have to share their ring points on it, which they do not yet, so the policy
+/// refuses an extraordinary vertex on one.
 ///
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
@@ -420,19 +422,17 @@ impl ErrorRates {
         for &f in &faces {
             extraordinary[f.index()] = curvature(f, 1)?.corner_hull > 0.0;
         }
-        // Where the dual tessellation cuts the polygon around a vertex into runs (a boundary, a
-        // hole, an infinitely sharp edge, a seam of a channel: the tessellator carries channels
-        // by default), each run is fanned around the vertex's limit point without rings: no
-        // bound covers that fan where the surface there is an extraordinary piece.
+        // Where the dual tessellation cuts the polygon around a vertex between two faces (an
+        // infinitely sharp edge, a seam of a carried channel), its runs have no rings: no bound
+        // covers their fans where the surface there is an extraordinary piece. (Runs that end
+        // at borders with nothing across take open rings.)
         let cut = |h: subdiv_mesh::HalfEdgeId| {
             let e = mesh.edge(h);
-            mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP
-                || (self.channels && mesh.channels().iter().any(|c| mesh.is_seam(c, e)))
-        };
-        let on_border = |v: subdiv_mesh::VertexId| {
-            mesh.is_boundary_vertex(v)
-                || mesh.vertex_faces(v).any(|f| !bounds.has_surface(f))
-                || mesh.outgoing(v).any(cut)
+            let between =
+                bounds.has_surface(mesh.face(h)) && mesh.twin(h).is_some_and(|t| bounds.has_surface(mesh.face(t)));
+            between
+                && (mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP
+                    || (self.channels && mesh.channels().iter().any(|c| mesh.is_seam(c, e))))
         };
         // The vertices at which some face's surface is an extraordinary piece: every valence
         // other than the regular one, and sharp corners and darts of any valence.
@@ -442,10 +442,10 @@ impl ErrorRates {
                 corner_of[v.index()] = true;
             }
         }
-        if let Some(v) = mesh.vertices().find(|&v| corner_of[v.index()] && on_border(v)) {
+        if let Some(v) = mesh.vertices().find(|&v| corner_of[v.index()] && mesh.outgoing(v).any(cut)) {
             return Err(TessError::Unsupported {
-                feature: "tolerance rates at an extraordinary vertex where the dual tessellation is cut (a boundary, \
-                          hole, infinitely sharp edge or texture seam: no rings there yet; --method quadtree takes it)",
+                feature: "tolerance rates at an extraordinary vertex on an infinitely sharp edge or a texture seam \
+                          (the dual tessellation's runs there share no rings yet; --method quadtree takes it)",
                 element: format!("{v}"),
             });
         }
@@ -523,7 +523,8 @@ impl ErrorRates {
         let mut vertices = vec![0u32; mesh.vertex_count()];
         for v in mesh.vertices() {
             if corner_of[v.index()] {
-                vertices[v.index()] = ring_depth(&mut mesh.vertex_faces(v), &mut curvature)?;
+                let mut around = mesh.vertex_faces(v).filter(|&f| bounds.has_surface(f));
+                vertices[v.index()] = ring_depth(&mut around, &mut curvature)?;
             }
         }
         let mut centres = vec![0u32; mesh.face_count()];

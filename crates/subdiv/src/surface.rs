@@ -691,11 +691,18 @@ mod tests {
         assert!(matches!(s.tessellate(&screen), Err(Error::DualScreenError)));
         let on_screen = s.tessellate(&screen.clone().with_method(Method::Quadtree)).unwrap();
         assert!(on_screen.info.epsilon.is_none() && !on_screen.mesh.triangles.is_empty());
-        // The dual rates to a tolerance take no extraordinary border vertex (the grid's smooth
-        // corners), the quadtree does; the dual tessellator takes no rate 0.
+        // Both methods take the grid to a tolerance (its smooth corners ringed in open runs);
+        // the dual rates take no extraordinary vertex on an infinitely sharp edge, the quadtree
+        // does; the dual tessellator takes no rate 0.
         let tolerance = TessOptions::DEFAULT.with_rates(Rates::Tolerance(Tolerance::Relative(1e-2)));
-        assert!(matches!(s.tessellate(&tolerance), Err(Error::ToleranceBounds(_))));
-        assert!(s.tessellate(&quadtree.with_rates(tolerance.rates.clone())).is_ok());
+        assert!(s.tessellate(&tolerance).is_ok());
+        assert!(s.tessellate(&quadtree.clone().with_rates(tolerance.rates.clone())).is_ok());
+        let mut creased = shapes::cube();
+        let [a, b] = [creased.face(FaceId::new(0))[0], creased.face(FaceId::new(0))[1]];
+        creased.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 10.0 });
+        let mut creased = surface(creased);
+        assert!(matches!(creased.tessellate(&tolerance), Err(Error::ToleranceBounds(_))));
+        assert!(creased.tessellate(&quadtree.with_rates(tolerance.rates.clone())).is_ok());
         assert!(matches!(s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::Uniform(0))), Err(Error::Tess(_))));
         assert!(matches!(
             s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::PerFace(vec![2; 3]))),

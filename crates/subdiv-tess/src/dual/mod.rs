@@ -41,7 +41,12 @@
 //! `[0, r_j]² \ [0, r_{j+1})²`; inside the last ring a fan around the point's limit point. The
 //! ring points are ordinary output vertices (evaluated by exact stencils, re-evaluated by
 //! [`DualTessellator::update_cage`]); below about `2^−50` face units they are no longer apart
-//! in f64 positions, which the tolerances that need rings never reach.
+//! in f64 positions, which the tolerances that need rings never reach. At a border vertex (quad
+//! split) whose polygon only borders with nothing across cut (a boundary, a hole), each run of
+//! faces between two borders takes **open rings**: the same points, the last edge's made in the
+//! run's last face, the same bands without the wrap, and one triangle from the border point on
+//! the first edge; the limit point is shared by the runs (an extra normal for each after the
+//! first). The border then runs through the ring points on its edges too.
 //! Triangle splits take rings too (around interior vertices of valence ≠ 6), in the
 //! triangles' corner frames: the first ring below the corner centroids' `1 / (3n)`, per face a
 //! point on its edge at `r_j` and one at `(r_j/2, r_j/2)`, the bands between rings trapezoids;
@@ -314,7 +319,9 @@ impl DualTessellator {
     /// points down to the depths of `rings` (see the module docs; [`ErrorRates::rates`]
     /// computes them with the rates, for Catmull-Clark): `rings.vertices[v]` around interior mesh
     /// vertices of valence ≠ 4 (≠ 6 under a triangle split) or tagged infinitely sharp corners,
-    /// whose polygon no sharp edge, seam or border cuts, `rings.centres[f]` around the
+    /// whose polygon no sharp edge, seam or border cuts, and (quad split) in the runs of faces
+    /// around a border vertex when its only cuts are borders with nothing across (open rings),
+    /// `rings.centres[f]` around the
     /// centres of N-gons (N ≠ 4, quad splits); depth 0, and the entries of other vertices and
     /// faces, change nothing.
     ///

@@ -311,7 +311,8 @@ impl<'a> Builder<'a> {
                     let mut corners = std::mem::take(&mut self.buf.ring_corners);
                     corners.clear();
                     corners.extend((0..size as u32).map(|sub| RingCorner::Centre { face: f as u32, sub }));
-                    self.rings(&corners, &ring, depth, (f, centre_point));
+                    let finest = face_reach(self.mesh, false, FaceId::new(f as u32), n);
+                    self.rings(&corners, &ring, depth, finest, (f, centre_point));
                     self.buf.ring_corners = corners;
                 } else {
                     let centre = (size >= 5).then(|| self.push_site(f, centre_point));
@@ -656,6 +657,17 @@ impl<'a> Builder<'a> {
         let mut centre = None;
         let mut ring = std::mem::take(&mut self.buf.ring);
         let mut corners = std::mem::take(&mut self.buf.ring_corners);
+        let depth = self.buf.ring_vertices.get(v.index()).copied().unwrap_or(0);
+        // Rings need the finest reach around the vertex (every run's first ring where the rates
+        // put it), and, in open runs, borders with nothing across: a sharp edge or a seam between
+        // two faces would have to share its ring points between the runs on its sides.
+        let finest = mesh
+            .outgoing(v)
+            .filter(|&h| has_surface(h))
+            .map(|h| face_reach(mesh, self.triangle, mesh.face(h), self.buf.rates[mesh.face(h).index()]))
+            .max()
+            .unwrap_or(1);
+        let plain = !self.triangle && mesh.outgoing(v).all(|h| self.across(h).is_none() || !self.is_border(h));
         for &start in &starts {
             ring.clear();
             corners.clear();
@@ -687,11 +699,16 @@ impl<'a> Builder<'a> {
             // An extraordinary interior point (a valence other than the regular one, or an
             // infinitely sharp corner) with a ring depth: rings down to it, fanned around its
             // limit point, in place of the polygon.
-            let depth = self.buf.ring_vertices.get(v.index()).copied().unwrap_or(0);
             if closed && depth > 0 && ring.len() >= 3 && (ring.len() != regular(self.triangle) || sharp_corner(mesh, v))
             {
                 let point = self.corner_point(f0, self.mesh.corner(start));
-                self.rings(&corners, &ring, depth, (f0, point));
+                self.rings(&corners, &ring, depth, finest, (f0, point));
+                continue;
+            }
+            // An open run at a border vertex with a ring depth, its borders plain: open rings.
+            if !closed && depth > 0 && plain {
+                let point = self.corner_point(f0, self.mesh.corner(start));
+                self.open_rings(&corners, &ring, depth, finest, (f0, point), &mut centre);
                 continue;
             }
             // Closed rings of 3 (and 4 under a quad split) are polygons of their own; rings of
@@ -785,13 +802,15 @@ impl<'a> Builder<'a> {
     /// last. Under a triangle split (no tolerance policy yet) the same with a triangle's frames:
     /// `d1` from [`first_depth`], the inner point at `(r_j/2, r_j/2)`, and the quads in the
     /// trapezoid `r_{j+1} ≤ s + t ≤ r_j`.
-    pub(super) fn rings(&mut self, corners: &[RingCorner], outer: &[u32], depth: u32, centre: (usize, Dyadic)) {
+    pub(super) fn rings(
+        &mut self,
+        corners: &[RingCorner],
+        outer: &[u32],
+        depth: u32,
+        finest: u32,
+        centre: (usize, Dyadic),
+    ) {
         let n = corners.len() as u32;
-        let finest = corners
-            .iter()
-            .map(|c| face_reach(self.mesh, self.triangle, FaceId::new(c.face() as u32), self.buf.rates[c.face()]))
-            .max()
-            .unwrap_or(1);
         let first = first_depth(self.triangle, finest);
         let count = ring_count(first, depth);
         let base = self.out.vertex_count;
@@ -827,6 +846,70 @@ impl<'a> Builder<'a> {
         }
         for k in 0..2 * n {
             self.triangle([p, at(count - 1, k), at(count - 1, k + 1)], face(k / 2));
+        }
+    }
+
+    /// [`rings`](Self::rings) in an open run of faces around a border vertex (quad split; its
+    /// borders have nothing across): `outer` is the run's polygon, the border point on its first
+    /// edge, each face's nearest dual point, the border point on its last edge; `corners` one
+    /// per face. Each ring has a point on every edge of the run at `r_j` (the last edge's made in
+    /// the last face, on its `t` axis) and one per face at `(r_j, r_j)`, so the bands are the
+    /// closed case's without the wrap, plus a triangle from the first border point. The limit
+    /// point is `centre`'s vertex if an earlier run made it (this run's normal an extra one),
+    /// else made here.
+    pub(super) fn open_rings(
+        &mut self,
+        corners: &[RingCorner],
+        outer: &[u32],
+        depth: u32,
+        finest: u32,
+        point: (usize, Dyadic),
+        centre: &mut Option<u32>,
+    ) {
+        let n = corners.len() as u32;
+        let first = first_depth(false, finest);
+        let count = ring_count(first, depth);
+        let base = self.out.vertex_count;
+        for j in 0..count {
+            for &c in corners {
+                let on_edge = self.ring_point(c, 1, 0, first + j);
+                self.push_site(c.face(), on_edge);
+                let diagonal = self.ring_point(c, 1, 1, first + j);
+                self.push_site(c.face(), diagonal);
+            }
+            let last = corners[corners.len() - 1];
+            let on_last = self.ring_point(last, 0, 1, first + j);
+            self.push_site(last.face(), on_last);
+        }
+        let p = match *centre {
+            Some(c) => Corner { vertex: c, extra: Some(self.push_extra(c, point.0, point.1)) },
+            None => {
+                let c = self.push_site(point.0, point.1);
+                *centre = Some(c);
+                Corner::from(c)
+            }
+        };
+        // Point k of ring j (from 0): edge points at even k, diagonal points at odd, 2n + 1.
+        let at = |j: u32, k: u32| base + j * (2 * n + 1) + k;
+        let face = |k: u32| corners[k.min(n - 1) as usize].face() as u32;
+        let d = |k: u32| outer[k as usize + 1];
+        self.triangle([outer[0], d(0), at(0, 0)], face(0));
+        for k in 0..n {
+            let (e, q, e_next) = (at(0, 2 * k), at(0, 2 * k + 1), at(0, 2 * k + 2));
+            self.triangle([d(k), q, e], face(k));
+            self.triangle([d(k), e_next, q], face(k));
+            self.triangle([d(k), outer[k as usize + 2], e_next], face(k));
+        }
+        for j in 0..count - 1 {
+            for k in 0..n {
+                let (e, q, e_next) = (2 * k, 2 * k + 1, 2 * k + 2);
+                self.quad([at(j + 1, e), at(j, e), at(j, q), at(j + 1, q)], face(k));
+                self.quad([at(j + 1, q), at(j, q), at(j, e_next), at(j + 1, e_next)], face(k));
+            }
+        }
+        for k in 0..2 * n {
+            let t = [p, Corner::from(at(count - 1, k)), Corner::from(at(count - 1, k + 1))];
+            self.triangle_at(t, face(k / 2));
         }
     }
 }
