@@ -65,12 +65,14 @@ impl Rates {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Method {
     /// Dual-grid stitching at per-face rates (Schaefer-Warren, paper 000 §5.5): any primal
-    /// scheme with sub-patch matrices, open meshes and holes; every [`Rates`] policy. The
+    /// scheme with sub-patch matrices, open meshes and holes; every [`Rates`] policy but
+    /// [`Rates::ScreenError`]. The
     /// default.
     #[default]
     Dual,
     /// The error-driven quadtree with global vertex ids and polyline replacement (Lai-Cheng,
-    /// paper 002): Catmull-Clark meshes, open ones and holes too, [`Rates::Tolerance`] only.
+    /// paper 002): Catmull-Clark meshes, open ones and holes too, texture coordinates carried;
+    /// [`Rates::Tolerance`] and [`Rates::ScreenError`] only.
     Quadtree,
 }
 
