@@ -66,8 +66,7 @@ impl Rates {
 pub enum Method {
     /// Dual-grid stitching at per-face rates (Schaefer-Warren, paper 000 §5.5): any primal
     /// scheme with sub-patch matrices, open meshes and holes; every [`Rates`] policy but
-    /// [`Rates::ScreenError`]. The
-    /// default.
+    /// [`Rates::ScreenError`]. The default.
     #[default]
     Dual,
     /// The error-driven quadtree with global vertex ids and polyline replacement (Lai-Cheng,
