@@ -16,8 +16,10 @@ use subdiv_mesh::{FaceId, FaceVaryingInterpolation, Mesh};
 use subdiv_schemes::{ChannelSurface, RefineOptions, Scheme};
 use subdiv_stencil::{LimitEvaluator, LinearEvaluator};
 
-use super::VertexKey;
-use crate::TessError;
+use hashbrown::HashMap;
+
+use super::{QuadtreeTessellator, Ring, VertexKey, bfr};
+use crate::{SurfaceParameter, TessError, TessVertex};
 
 /// The channels of one mesh, as the quadtree evaluates them.
 #[derive(Debug, Default)]
@@ -131,5 +133,71 @@ impl Channels {
             VertexKey::Edge { edge, .. } if self.seams[edge as usize] => Some(Side::Face(face.index() as u32)),
             _ => None,
         }
+    }
+}
+
+/// What a tessellation's sinks get of the channels: per vertex its values (at its creator's
+/// parameter), and an extra entry per further side of a seam through a vertex, with that
+/// side's parameter and values, which that side's triangle corners index.
+#[derive(Debug, Default)]
+pub(super) struct ChannelEntries {
+    /// `stride` values per vertex, in vertex order.
+    pub(super) own: Vec<f64>,
+    /// Per extra entry, its vertex and the parameter its side evaluates at.
+    pub(super) splits: Vec<(u32, SurfaceParameter)>,
+    /// `stride` values per extra entry.
+    pub(super) split_values: Vec<f64>,
+    /// Per root, per leaf, per ring vertex: the vertex, or the extra entry its face takes.
+    pub(super) ring_entries: Vec<Vec<Vec<u32>>>,
+}
+
+impl QuadtreeTessellator {
+    /// The channels' entries of a tessellation whose vertices are `evaluated` (made at
+    /// `creators`' root points) and whose leaves' polygons are `rings` (per root); empty
+    /// without channels.
+    ///
+    /// # Errors
+    /// [`TessError::Surface`] if a channel's stencil fails.
+    pub(super) fn channel_entries(
+        &self,
+        parallel: bool,
+        evaluated: &[TessVertex<'_>],
+        rings: &[Vec<Ring>],
+        creators: &[(usize, i64, i64)],
+    ) -> Result<ChannelEntries, TessError> {
+        let mut out = ChannelEntries::default();
+        if self.channels.is_empty() {
+            return Ok(out);
+        }
+        let at = |p: &SurfaceParameter| {
+            let mut values = Vec::with_capacity(self.channels.stride());
+            self.channels.eval(p.face, p.u, p.v, &mut values)?;
+            Ok::<_, TessError>(values)
+        };
+        out.own = crate::par::try_map(parallel, evaluated, |vertex| at(&vertex.parameter))?.concat();
+        let mut sides: HashMap<(u32, Side), u32> = HashMap::new();
+        let first = evaluated.len() as u32;
+        for (root, root_rings) in self.roots.iter().zip(rings) {
+            let mut entries = Vec::with_capacity(root_rings.len());
+            for (ring, params) in root_rings {
+                let entry = ring.iter().zip(params).map(|(&id, &(x, y))| {
+                    let Some(side) = self.channels.side(self.key(*root, x, y), root.face) else { return id };
+                    let (r, cx, cy) = creators[id as usize];
+                    let creator = self.roots[r];
+                    if self.channels.side(self.key(creator, cx, cy), creator.face).as_ref() == Some(&side) {
+                        return id;
+                    }
+                    *sides.entry((id, side)).or_insert_with(|| {
+                        let (u, v) = bfr(*root, x, y);
+                        out.splits.push((id, SurfaceParameter { face: root.face, u, v }));
+                        first + out.splits.len() as u32 - 1
+                    })
+                });
+                entries.push(entry.collect());
+            }
+            out.ring_entries.push(entries);
+        }
+        out.split_values = crate::par::try_map(parallel, &out.splits, |(_, p)| at(p))?.concat();
+        Ok(out)
     }
 }

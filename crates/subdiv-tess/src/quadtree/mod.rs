@@ -30,7 +30,7 @@ use subdiv_mesh::{FaceId, HalfEdgeId, Mesh};
 use subdiv_schemes::{PatchMatrices, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, StencilEvaluator};
 
-use self::channels::{Channels, Side};
+use self::channels::{ChannelEntries, Channels};
 use self::pieces::*;
 pub(crate) use self::pieces::{check_bicubic, regular_grid};
 use crate::Parallelism;
@@ -626,50 +626,10 @@ impl QuadtreeTessellator {
             return Err(TessError::TooManyPolygons { limit: options.max_polygons, epsilon });
         }
 
-        // Channels: each vertex's values at its creator's parameter, and an extra entry for
-        // each further side of a seam through it, which that side's triangle corners index.
+        // Channels: each vertex's values, and the seams' further sides (see `channels.rs`).
         let stride = self.channels.stride();
-        let (mut own, mut split_values) = (Vec::new(), Vec::new());
-        let mut splits: Vec<(u32, SurfaceParameter)> = Vec::new();
-        let mut ring_entries: Vec<Vec<Vec<u32>>> = Vec::new();
-        if !self.channels.is_empty() {
-            let values = crate::par::try_map(parallel, &evaluated, |vertex| {
-                let mut out = Vec::with_capacity(stride);
-                let p = vertex.parameter;
-                self.channels.eval(p.face, p.u, p.v, &mut out)?;
-                Ok::<_, TessError>(out)
-            })?;
-            own = values.concat();
-            let mut sides: HashMap<(u32, Side), u32> = HashMap::new();
-            let first = evaluated.len() as u32;
-            for (root, root_rings) in self.roots.iter().zip(&rings) {
-                let mut entries = Vec::with_capacity(root_rings.len());
-                for (ring, params) in root_rings {
-                    let entry = ring.iter().zip(params).map(|(&id, &(x, y))| {
-                        let key = self.key(*root, x, y);
-                        let Some(side) = self.channels.side(key, root.face) else { return id };
-                        let (r, cx, cy) = creators[id as usize];
-                        let creator = self.roots[r];
-                        if self.channels.side(self.key(creator, cx, cy), creator.face).as_ref() == Some(&side) {
-                            return id;
-                        }
-                        *sides.entry((id, side)).or_insert_with(|| {
-                            let (u, v) = bfr(*root, x, y);
-                            splits.push((id, SurfaceParameter { face: root.face, u, v }));
-                            first + splits.len() as u32 - 1
-                        })
-                    });
-                    entries.push(entry.collect());
-                }
-                ring_entries.push(entries);
-            }
-            let values = crate::par::try_map(parallel, &splits, |(_, p)| {
-                let mut out = Vec::with_capacity(stride);
-                self.channels.eval(p.face, p.u, p.v, &mut out)?;
-                Ok::<_, TessError>(out)
-            })?;
-            split_values = values.concat();
-        }
+        let ChannelEntries { own, splits, split_values, ring_entries } =
+            self.channel_entries(parallel, &evaluated, &rings, creators)?;
         let uv = self.channels.texcoords();
         let texcoords = |values: &[f64]| uv.map(|s| [values[s], values[s + 1]]);
 
