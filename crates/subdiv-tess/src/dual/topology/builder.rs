@@ -837,15 +837,22 @@ impl<'a> Builder<'a> {
             self.triangle([d, e_next, q], face(k));
             self.triangle([d, next, e_next], face(k));
         }
+        self.ring_bands(count, n, at, face);
+        for k in 0..2 * n {
+            self.triangle([p, at(count - 1, k), at(count - 1, k + 1)], face(k / 2));
+        }
+    }
+
+    /// The bands between `count` rings of `n` faces: two quads per face in its L-shaped region
+    /// between ring `j` and `j + 1`, `at(j, k)` point `k` of ring `j` (edge points at even `k`,
+    /// diagonal points at odd).
+    fn ring_bands(&mut self, count: u32, n: u32, at: impl Fn(u32, u32) -> u32, face: impl Fn(u32) -> u32) {
         for j in 0..count - 1 {
             for k in 0..n {
                 let (e, q, e_next) = (2 * k, 2 * k + 1, 2 * k + 2);
                 self.quad([at(j + 1, e), at(j, e), at(j, q), at(j + 1, q)], face(k));
                 self.quad([at(j + 1, q), at(j, q), at(j, e_next), at(j + 1, e_next)], face(k));
             }
-        }
-        for k in 0..2 * n {
-            self.triangle([p, at(count - 1, k), at(count - 1, k + 1)], face(k / 2));
         }
     }
 
@@ -900,13 +907,7 @@ impl<'a> Builder<'a> {
             self.triangle([d(k), e_next, q], face(k));
             self.triangle([d(k), outer[k as usize + 2], e_next], face(k));
         }
-        for j in 0..count - 1 {
-            for k in 0..n {
-                let (e, q, e_next) = (2 * k, 2 * k + 1, 2 * k + 2);
-                self.quad([at(j + 1, e), at(j, e), at(j, q), at(j + 1, q)], face(k));
-                self.quad([at(j + 1, q), at(j, q), at(j, e_next), at(j + 1, e_next)], face(k));
-            }
-        }
+        self.ring_bands(count, n, at, face);
         for k in 0..2 * n {
             let t = [p, Corner::from(at(count - 1, k)), Corner::from(at(count - 1, k + 1))];
             self.triangle_at(t, face(k / 2));
