@@ -66,12 +66,12 @@ pub enum TessError {
     },
     /// A face needs a finer rate than allowed to meet a tolerance.
     #[error(
-        "face {face}: the tolerance needs rate {needed}, above the largest allowed ({max_rate}); raise the tolerance or the largest rate, or take the quadtree (it adapts within faces)"
+        "face {face}: the tolerance needs {needed}, beyond the largest rate allowed ({max_rate}); raise the tolerance or the largest rate, or take the quadtree (it adapts within faces)"
     )]
     RateLimit {
         /// The input face.
         face: usize,
-        /// The rate it needs (or a description when it is beyond any allowed one).
+        /// What it needs, in words: `rate N`, or why no allowed rate serves.
         needed: String,
         /// The largest rate allowed.
         max_rate: u32,

@@ -475,7 +475,7 @@ impl ErrorRates {
                 let needed = (m / budget).sqrt().ceil().max(1.0);
                 let needed = if needed > f64::from(max_rate) { needed } else { f64::from(round(needed as u32)) };
                 if needed > f64::from(max_rate) {
-                    return Err(limit(f, format!("{needed}")));
+                    return Err(limit(f, format!("rate {needed}")));
                 }
                 if needed as u32 > rates[f.index()] {
                     rates[f.index()] = needed as u32;
@@ -503,7 +503,8 @@ impl ErrorRates {
                         // The band between 2^−(d−1) and 2^−d: triangles of side ≤ √5/2 · 2^−(d−1).
                         let r = 0.5f64.powi(d as i32 - 1);
                         if 0.5 * c.second * 1.25 * r * r > budget {
-                            return Err(limit(g, format!("rings whose bands fail the bound at depth {d}")));
+                            let why = format!("finer rates around it (its rings' bands fail the bound at depth {d})");
+                            return Err(limit(g, why));
                         }
                     }
                     within &= c.corner_hull <= budget;
