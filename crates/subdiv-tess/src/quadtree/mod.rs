@@ -20,6 +20,7 @@
 
 mod channels;
 mod pieces;
+mod vertices;
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -33,6 +34,7 @@ use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, Sten
 use self::channels::{ChannelEntries, Channels};
 use self::pieces::*;
 pub(crate) use self::pieces::{check_bicubic, regular_grid};
+use self::vertices::{Ring, bfr};
 use crate::Parallelism;
 use crate::bezier::Bicubic;
 use crate::flatness::{self, Tolerance};
@@ -740,152 +742,7 @@ impl QuadtreeTessellator {
         }
         Ok(())
     }
-
-    /// The limit position and unit normal at root point `(x, y)` (over [`FULL`]), descending
-    /// through `corners`' extraordinary pieces where the root has them.
-    fn eval(&self, root: Root, x: i64, y: i64, corners: Option<&Corners>) -> Result<(DVec3, DVec3), TessError> {
-        let mut piece = self.root_piece(root)?;
-        let (mut x, mut y) = (x, y);
-        // The node of `piece`: depth and corner in root coordinates.
-        let (mut depth, mut nx, mut ny) = (0u32, 0i64, 0i64);
-        loop {
-            let (qx, qy) = match &piece {
-                Piece::Regular(b) => {
-                    let (p, du, dv) = b.eval_with_derivatives(x as f64 / FULL as f64, y as f64 / FULL as f64);
-                    return Ok((p, crate::unit_normal(du.cross(dv))));
-                }
-                Piece::Face { .. } => (usize::from(2 * x >= FULL), usize::from(2 * y >= FULL)),
-                Piece::Extraordinary { matrices, shape, points, frame } => {
-                    let corner = frame.to_face(Dyadic::new(0, 0, 1));
-                    let (cx, cy) = (corner.u * FULL, corner.v * FULL);
-                    if (x, y) == (cx, cy) {
-                        let key = (Arc::as_ptr(matrices) as usize, *shape);
-                        let Some(ShapeKind::Extraordinary { position, du, dv }) = self.shapes.get(&key) else {
-                            return Err(TessError::Internal("extraordinary shape not classified".into()));
-                        };
-                        let apply = |w: &[f64]| -> DVec3 { w.iter().zip(points).map(|(&w, &p)| w * p).sum() };
-                        // The patch frame keeps the face's orientation (determinant 1).
-                        return Ok((apply(position), crate::unit_normal(apply(du).cross(apply(dv)))));
-                    }
-                    // On a border between quarters, take the one away from the corner: the point
-                    // then reaches a polynomial piece.
-                    let pick = |t: i64, c: i64| match (2 * t).cmp(&FULL) {
-                        std::cmp::Ordering::Less => 0,
-                        std::cmp::Ordering::Greater => 1,
-                        std::cmp::Ordering::Equal => usize::from(c == 0),
-                    };
-                    (pick(x, cx), pick(y, cy))
-                }
-            };
-            x = 2 * x - qx as i64 * FULL;
-            y = 2 * y - qy as i64 * FULL;
-            let h = FULL >> (depth + 1);
-            (depth, nx, ny) = (depth + 1, nx + qx as i64 * h, ny + qy as i64 * h);
-            piece = match corners.and_then(|c| c.get(&(depth, nx, ny))) {
-                Some(kept) => kept.clone(),
-                None => self.quarter(&piece, qx, qy)?,
-            };
-        }
-    }
-
-    /// A normal where the limit tangents are parallel (a valence-2 vertex between two faces
-    /// folded back to back, where no normal exists): the limit normal a little way into the
-    /// root, toward its centre (`2^-20` of the way; deterministic), else the root face's
-    /// control-polygon normal (Newell's), so that every vertex has a direction.
-    fn fallback_normal(&self, root: Root, x: i64, y: i64) -> Result<DVec3, TessError> {
-        let inward = |t: i64| t + ((FULL / 2 - t) >> 20);
-        let (_, normal) = self.eval(root, inward(x), inward(y), None)?;
-        if normal != DVec3::ZERO {
-            return Ok(normal);
-        }
-        let mesh = self.levels.mesh(0);
-        let corners: Vec<DVec3> = mesh.face_vertices(root.face).iter().map(|&v| mesh.position(v)).collect();
-        let newell = (0..corners.len()).map(|k| corners[k].cross(corners[(k + 1) % corners.len()])).sum::<DVec3>();
-        let normal = crate::unit_normal(newell);
-        Ok(if normal == DVec3::ZERO { DVec3::Z } else { normal })
-    }
-
-    /// The canonical key of root point `(x, y)`.
-    fn key(&self, root: Root, x: i64, y: i64) -> VertexKey {
-        let face = root.face;
-        let mesh = self.levels.mesh(0);
-        let corners = &self.corners[face.index()];
-        let n = corners.len();
-        let vertex = |k: usize| VertexKey::Vertex(mesh.origin(corners[k % n]).index() as u32);
-        // A point of side k (corner k to k + 1) at t / FULL from corner k.
-        let on_side = |k: usize, t: i64| {
-            let h = corners[k % n];
-            let e = mesh.edge(h);
-            let forward = mesh.edge_vertices(e)[0] == mesh.origin(h);
-            VertexKey::Edge { edge: e.index() as u32, t: if forward { t } else { FULL - t } }
-        };
-        let inner = |sub: usize| VertexKey::Inner { face: face.index() as u32, sub: sub as u32, x, y };
-        match root.sub {
-            None => match (x, y) {
-                (0, 0) => vertex(0),
-                (FULL, 0) => vertex(1),
-                (FULL, FULL) => vertex(2),
-                (0, FULL) => vertex(3),
-                (_, 0) => on_side(0, x),
-                (FULL, _) => on_side(1, y),
-                (_, FULL) => on_side(2, FULL - x),
-                (0, _) => on_side(3, FULL - y),
-                _ => inner(0),
-            },
-            Some((s, ..)) => match (x, y) {
-                (0, 0) => vertex(s),
-                (_, 0) => on_side(s, x / 2),
-                (0, _) => on_side(s + n - 1, FULL - y / 2),
-                (FULL, FULL) => VertexKey::Centre(face.index() as u32),
-                (FULL, _) => VertexKey::Spoke { face: face.index() as u32, spoke: s as u32, t: y },
-                (_, FULL) => VertexKey::Spoke { face: face.index() as u32, spoke: ((s + n - 1) % n) as u32, t: x },
-                _ => inner(s),
-            },
-        }
-    }
-
-    /// A leaf's polygon: its corners and the hanging vertices on its edges, counter-clockwise,
-    /// with their root coordinates.
-    fn ring(&self, root: Root, leaf: &Leaf, ids: &HashMap<VertexKey, u32>) -> Ring {
-        let h = FULL >> leaf.depth;
-        let c = [(leaf.x, leaf.y), (leaf.x + h, leaf.y), (leaf.x + h, leaf.y + h), (leaf.x, leaf.y + h)];
-        let mut ring = Vec::with_capacity(8);
-        let mut params = Vec::with_capacity(8);
-        for k in 0..4 {
-            let (a, b) = (c[k], c[(k + 1) % 4]);
-            ring.push(ids[&self.key(root, a.0, a.1)]);
-            params.push(a);
-            self.hanging(root, a, b, ids, &mut ring, &mut params);
-        }
-        (ring, params)
-    }
-
-    /// The vertices strictly inside segment `a → b`, in order: its midpoint is one iff some
-    /// vertex is (see the module docs).
-    fn hanging(
-        &self,
-        root: Root,
-        a: (i64, i64),
-        b: (i64, i64),
-        ids: &HashMap<VertexKey, u32>,
-        ring: &mut Vec<u32>,
-        params: &mut Vec<(i64, i64)>,
-    ) {
-        if (a.0 - b.0).abs() + (a.1 - b.1).abs() < 2 {
-            return;
-        }
-        let m = ((a.0 + b.0) / 2, (a.1 + b.1) / 2);
-        if let Some(&id) = ids.get(&self.key(root, m.0, m.1)) {
-            self.hanging(root, a, m, ids, ring, params);
-            ring.push(id);
-            params.push(m);
-            self.hanging(root, m, b, ids, ring, params);
-        }
-    }
 }
-
-/// A leaf's polygon: vertex ids and their root coordinates.
-type Ring = (Vec<u32>, Vec<(i64, i64)>);
 
 /// What a root's recursion may spend.
 struct Budget<'a> {
@@ -894,15 +751,4 @@ struct Budget<'a> {
     max_depth: u32,
     count: &'a AtomicUsize,
     options: &'a QuadtreeOptions,
-}
-
-/// The `Bfr` parameters of root point `(x, y)`, laid out by [`FaceDomain`] (exact in f64: the
-/// denominators are powers of two).
-fn bfr(root: Root, x: i64, y: i64) -> (f64, f64) {
-    let p = Dyadic::new(x, y, FULL);
-    match root.sub {
-        None => p,
-        Some((s, size, columns)) => FaceDomain::SubFaces { size, columns }.from_sub_face(s, p),
-    }
-    .to_f64()
 }

@@ -5,6 +5,10 @@ use hashbrown::HashMap;
 
 use super::*;
 
+mod rings;
+
+pub(super) use self::rings::{first_depth, ring_count};
+
 impl RingCorner {
     pub(super) fn face(self) -> usize {
         match self {
@@ -28,21 +32,6 @@ pub(super) fn regular(triangle: bool) -> usize {
 /// valence, so it takes rings like an extraordinary vertex.
 pub(super) fn sharp_corner(mesh: &Mesh, v: VertexId) -> bool {
     mesh.vertex_sharpness(v) >= subdiv_mesh::Tags::INFINITELY_SHARP
-}
-
-/// The depth `d1` of the first ring around a point whose finest face reach is `finest`: under a
-/// quad split [`first_ring_depth`] (`2^−d1` the largest power of two below the nearest dual
-/// points' `½ / finest`); under a triangle split the largest power of two below `1 / (3 finest)`,
-/// the corner centroids' distance from each side, so that the first ring's points on the edges
-/// and at `(r/2, r/2)` lie inside the polygon through the centroids.
-pub(super) fn first_depth(triangle: bool, finest: u32) -> u32 {
-    if triangle { (3 * finest + 1).next_power_of_two().trailing_zeros() } else { first_ring_depth(finest) }
-}
-
-/// The number of rings around a point at `depth` (> 0) whose first ring is at depth `first`:
-/// from `2^−first` down to `2^−max(depth, first)`, one ring per halving (at least one).
-pub(super) fn ring_count(first: u32, depth: u32) -> u32 {
-    depth.saturating_sub(first) + 1
 }
 
 /// The row of a quad cell's `m × m` points (from `base`, row by row) nearest its side `c`, in
@@ -210,7 +199,7 @@ impl<'a> Builder<'a> {
     }
 
     /// A triangle whose corners may take extra normals.
-    fn triangle_at(&mut self, t: [Corner; 3], face: u32) {
+    pub(super) fn triangle_at(&mut self, t: [Corner; 3], face: u32) {
         let triangle = self.out.triangles.len() as u32;
         for (corner, c) in t.iter().enumerate() {
             if let Some(extra) = c.extra {
@@ -747,170 +736,5 @@ impl<'a> Builder<'a> {
         self.buf.ring = ring;
         self.buf.ring_corners = corners;
         self.buf.starts = starts;
-    }
-
-    /// The point `(a, b) · 2^−e` (face units, `a, b ≤ 2`, `e ≥ 2`) of `corner`'s frame, as its
-    /// face's parameter: a quad's own coordinates turned to the corner; an N-gon's sub-face
-    /// coordinates, which are twice the face units (a sub-face is a quarter of the face); a
-    /// triangle's turned to the corner (`s` along side `c`, `t` along side `c − 1` reversed).
-    pub(super) fn ring_point(&self, corner: RingCorner, a: i64, b: i64, e: u32) -> Dyadic {
-        let domain = self.buf.faces[corner.face()].expect("a face with a surface").domain;
-        match corner {
-            RingCorner::Vertex { corner: c, .. } => match domain {
-                FaceDomain::SubFaces { .. } => domain.from_sub_face(c as usize, Dyadic::new(a, b, 1 << (e - 1))),
-                FaceDomain::Triangle => {
-                    let d = 1i64 << e;
-                    let (u, v) = match c {
-                        0 => (a, b),
-                        1 => (d - a - b, a),
-                        _ => (b, d - a - b),
-                    };
-                    Dyadic::new(u, v, d)
-                }
-                FaceDomain::Quad => {
-                    let d = 1i64 << e;
-                    let (u, v) = match c {
-                        0 => (a, b),
-                        1 => (d - b, a),
-                        2 => (d - a, d - b),
-                        _ => (b, d - a),
-                    };
-                    Dyadic::new(u, v, d)
-                }
-            },
-            // The inner corner (1, 1) of the sub-face, its frame turned half a turn.
-            RingCorner::Centre { sub, .. } => {
-                let d = 1i64 << (e - 1);
-                domain.from_sub_face(sub as usize, Dyadic::new(d - a, d - b, d))
-            }
-        }
-        .reduced()
-    }
-
-    /// Rings around an extraordinary point, in place of its polygon `outer` (the faces' nearest
-    /// dual points, counter-clockwise, one per corner of `corners`), down to `depth`, fanned at
-    /// the end around the point's limit point `centre` (face, parameter).
-    ///
-    /// Ring `j` (radius `r_j = 2^−(d1 + j − 1)`, `d1` the first depth inside the nearest dual
-    /// points, [`first_ring_depth`]) has a point on every edge (or spoke) at `r_j` from the
-    /// point, made once in the face whose `s` axis the edge is, and one per face at
-    /// `(r_j, r_j)`; its points run `edge_0, diagonal_0, edge_1, diagonal_1, …`, counter-
-    /// clockwise. Every triangle lies in one face's region or across one edge, as the bound of
-    /// [`ErrorRates::rates`](crate::rates::ErrorRates::rates) assumes: from the polygon's corners
-    /// to ring 1 two triangles per face and one across each edge; between rings `j` and `j + 1`
-    /// two quads per face in its L-shaped region `[0, r_j]² \ [0, r_{j+1})²`; a fan inside the
-    /// last. Under a triangle split (no tolerance policy yet) the same with a triangle's frames:
-    /// `d1` from [`first_depth`], the inner point at `(r_j/2, r_j/2)`, and the quads in the
-    /// trapezoid `r_{j+1} ≤ s + t ≤ r_j`.
-    pub(super) fn rings(
-        &mut self,
-        corners: &[RingCorner],
-        outer: &[u32],
-        depth: u32,
-        finest: u32,
-        centre: (usize, Dyadic),
-    ) {
-        let n = corners.len() as u32;
-        let first = first_depth(self.triangle, finest);
-        let count = ring_count(first, depth);
-        let base = self.out.vertex_count;
-        // Per face: the point on its first edge at r, and the inner one: the diagonal point
-        // (r, r) of a quad corner; (r/2, r/2) of a triangle corner, on the segment between the
-        // corner's two edge points (the triangle's region between rings is a trapezoid).
-        let ((edge, inner), shift) = if self.triangle { (((2, 0), (1, 1)), 1) } else { (((1, 0), (1, 1)), 0) };
-        for j in 0..count {
-            for &c in corners {
-                let on_edge = self.ring_point(c, edge.0, edge.1, first + j + shift);
-                self.push_site(c.face(), on_edge);
-                let diagonal = self.ring_point(c, inner.0, inner.1, first + j + shift);
-                self.push_site(c.face(), diagonal);
-            }
-        }
-        let p = self.push_site(centre.0, centre.1);
-        // Point k (cyclic) of ring j (from 0): edge points at even k, diagonal points at odd.
-        let at = |j: u32, k: u32| base + j * 2 * n + k % (2 * n);
-        let face = |k: u32| corners[k as usize].face() as u32;
-        for k in 0..n {
-            let (d, next) = (outer[k as usize], outer[((k + 1) % n) as usize]);
-            let (e, q, e_next) = (at(0, 2 * k), at(0, 2 * k + 1), at(0, 2 * k + 2));
-            self.triangle([d, q, e], face(k));
-            self.triangle([d, e_next, q], face(k));
-            self.triangle([d, next, e_next], face(k));
-        }
-        self.ring_bands(count, n, at, face);
-        for k in 0..2 * n {
-            self.triangle([p, at(count - 1, k), at(count - 1, k + 1)], face(k / 2));
-        }
-    }
-
-    /// The bands between `count` rings of `n` faces: two quads per face in its L-shaped region
-    /// between ring `j` and `j + 1`, `at(j, k)` point `k` of ring `j` (edge points at even `k`,
-    /// diagonal points at odd).
-    fn ring_bands(&mut self, count: u32, n: u32, at: impl Fn(u32, u32) -> u32, face: impl Fn(u32) -> u32) {
-        for j in 0..count - 1 {
-            for k in 0..n {
-                let (e, q, e_next) = (2 * k, 2 * k + 1, 2 * k + 2);
-                self.quad([at(j + 1, e), at(j, e), at(j, q), at(j + 1, q)], face(k));
-                self.quad([at(j + 1, q), at(j, q), at(j, e_next), at(j + 1, e_next)], face(k));
-            }
-        }
-    }
-
-    /// [`rings`](Self::rings) in an open run of faces around a border vertex (quad split; its
-    /// borders have nothing across): `outer` is the run's polygon, the border point on its first
-    /// edge, each face's nearest dual point, the border point on its last edge; `corners` one
-    /// per face. Each ring has a point on every edge of the run at `r_j` (the last edge's made in
-    /// the last face, on its `t` axis) and one per face at `(r_j, r_j)`, so the bands are the
-    /// closed case's without the wrap, plus a triangle from the first border point. The limit
-    /// point is `centre`'s vertex if an earlier run made it (this run's normal an extra one),
-    /// else made here.
-    pub(super) fn open_rings(
-        &mut self,
-        corners: &[RingCorner],
-        outer: &[u32],
-        depth: u32,
-        finest: u32,
-        point: (usize, Dyadic),
-        centre: &mut Option<u32>,
-    ) {
-        let n = corners.len() as u32;
-        let first = first_depth(false, finest);
-        let count = ring_count(first, depth);
-        let base = self.out.vertex_count;
-        for j in 0..count {
-            for &c in corners {
-                let on_edge = self.ring_point(c, 1, 0, first + j);
-                self.push_site(c.face(), on_edge);
-                let diagonal = self.ring_point(c, 1, 1, first + j);
-                self.push_site(c.face(), diagonal);
-            }
-            let last = corners[corners.len() - 1];
-            let on_last = self.ring_point(last, 0, 1, first + j);
-            self.push_site(last.face(), on_last);
-        }
-        let p = match *centre {
-            Some(c) => Corner { vertex: c, extra: Some(self.push_extra(c, point.0, point.1)) },
-            None => {
-                let c = self.push_site(point.0, point.1);
-                *centre = Some(c);
-                Corner::from(c)
-            }
-        };
-        // Point k of ring j (from 0): edge points at even k, diagonal points at odd, 2n + 1.
-        let at = |j: u32, k: u32| base + j * (2 * n + 1) + k;
-        let face = |k: u32| corners[k.min(n - 1) as usize].face() as u32;
-        let d = |k: u32| outer[k as usize + 1];
-        self.triangle([outer[0], d(0), at(0, 0)], face(0));
-        for k in 0..n {
-            let (e, q, e_next) = (at(0, 2 * k), at(0, 2 * k + 1), at(0, 2 * k + 2));
-            self.triangle([d(k), q, e], face(k));
-            self.triangle([d(k), e_next, q], face(k));
-            self.triangle([d(k), outer[k as usize + 2], e_next], face(k));
-        }
-        self.ring_bands(count, n, at, face);
-        for k in 0..2 * n {
-            let t = [p, Corner::from(at(count - 1, k)), Corner::from(at(count - 1, k + 1))];
-            self.triangle_at(t, face(k / 2));
-        }
     }
 }
