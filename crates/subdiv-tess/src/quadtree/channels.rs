@@ -29,9 +29,10 @@ pub(super) struct Channels {
     evaluators: Vec<ChannelEvaluator>,
     /// Per mesh edge, whether it is a seam of some channel.
     seams: Vec<bool>,
-    /// The mesh with its channels (the patch levels keep the topology without them), whose
-    /// corners' value indices say which faces share a value at a vertex.
-    mesh: Option<Box<Mesh>>,
+    /// The channels' corner value indices (by half-edge: the patch levels' level 0 is the mesh
+    /// with its channels cleared, the same half-edges), which say which faces share a value at
+    /// a vertex.
+    corners: Vec<subdiv_mesh::Channel>,
 }
 
 /// How a channel's surface is evaluated at a point.
@@ -85,7 +86,7 @@ impl Channels {
                 *seam |= mesh.is_seam(channel, e);
             }
         }
-        channels.mesh = Some(Box::new(mesh.clone()));
+        channels.corners = mesh.channels().to_vec();
         Ok(channels)
     }
 
@@ -123,12 +124,11 @@ impl Channels {
 
     /// The side of the vertex keyed `key` that `face` takes: `None` where every face around it
     /// takes one value (a point inside a face, an edge that is no seam).
-    pub(super) fn side(&self, key: VertexKey, face: FaceId) -> Option<Side> {
-        let mesh = self.mesh.as_deref()?;
+    pub(super) fn side(&self, mesh: &Mesh, key: VertexKey, face: FaceId) -> Option<Side> {
         match key {
             VertexKey::Vertex(v) => {
                 let h = mesh.face_half_edges(face).find(|&h| mesh.origin(h).index() == v as usize)?;
-                Some(Side::Corner(mesh.channels().iter().map(|c| c.corner_value(h)).collect()))
+                Some(Side::Corner(self.corners.iter().map(|c| c.corner_value(h)).collect()))
             }
             VertexKey::Edge { edge, .. } if self.seams[edge as usize] => Some(Side::Face(face.index() as u32)),
             _ => None,
@@ -175,16 +175,17 @@ impl QuadtreeTessellator {
             Ok::<_, TessError>(values)
         };
         out.own = crate::par::try_map(parallel, evaluated, |vertex| at(&vertex.parameter))?.concat();
+        let mesh = self.levels.mesh(0);
         let mut sides: HashMap<(u32, Side), u32> = HashMap::new();
         let first = evaluated.len() as u32;
         for (root, root_rings) in self.roots.iter().zip(rings) {
             let mut entries = Vec::with_capacity(root_rings.len());
             for (ring, params) in root_rings {
                 let entry = ring.iter().zip(params).map(|(&id, &(x, y))| {
-                    let Some(side) = self.channels.side(self.key(*root, x, y), root.face) else { return id };
+                    let Some(side) = self.channels.side(mesh, self.key(*root, x, y), root.face) else { return id };
                     let (r, cx, cy) = creators[id as usize];
                     let creator = self.roots[r];
-                    if self.channels.side(self.key(creator, cx, cy), creator.face).as_ref() == Some(&side) {
+                    if self.channels.side(mesh, self.key(creator, cx, cy), creator.face).as_ref() == Some(&side) {
                         return id;
                     }
                     *sides.entry((id, side)).or_insert_with(|| {
