@@ -3,7 +3,8 @@
 //! from `osd_limit --grid 16`'s limit points (`SUBDIV_OSD_LIMIT`) to the output, over `ε`, with
 //! the output's triangles, the time, and the triangles of the uniform tessellation that the
 //! same bound asks for (the dual method's largest rate on every face; the quadtree's deepest
-//! leaf away from extraordinary corners, everywhere) — or the refusal, said.
+//! leaf away from extraordinary corners, everywhere) — or the refusal, said. Meshes named
+//! `loop_*` (all triangles) are read under Loop, on both sides; the others under Catmull-Clark.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -55,15 +56,15 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     println!("|---|---|---|---|---|---|---|---|");
     for path in &meshes {
         let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
-        let cc = Builtin::CatmullClark.scheme();
-        let mut surface = match Surface::load(path, cc) {
+        let scheme = if name.starts_with("loop_") { Builtin::Loop } else { Builtin::CatmullClark };
+        let mut surface = match Surface::load(path, scheme.scheme()) {
             Ok(surface) => surface,
             Err(e) => {
                 println!("| {name} | both | | refused on reading: {} | | | | |", one_line(&e.to_string()));
                 continue;
             }
         };
-        let points = osd_points(&osd, path)?;
+        let points = osd_points(&osd, path, scheme)?;
         for method in [Method::Dual, Method::Quadtree] {
             let options = TessOptions::DEFAULT
                 .with_method(method)
@@ -85,8 +86,9 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
             let uniform = match (&out.info.quadtree, method) {
                 // A uniform quadtree as deep as the deepest leaf away from extraordinary corners
                 // (paper 002's U'; the corner leaves go deeper only because the bound is
-                // parametric), fanned like the adaptive ones: four triangles a square.
-                (Some(stats), _) => 4 * uniform_squares(&surface, stats.max_regular_depth),
+                // parametric), fanned like the adaptive ones: four triangles a square, three a
+                // triangle.
+                (Some(stats), _) => uniform_fans(&surface, scheme, stats.max_regular_depth),
                 // The dual tessellation at the largest rate on every face, counted by the tessellator.
                 (None, _) => {
                     let n = out.info.rates.iter().copied().max().unwrap_or(1);
@@ -104,23 +106,24 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     Ok(())
 }
 
-/// The leaves of a uniform quadtree `depth` levels below the input faces (an N-gon's
-/// sub-faces are level 1).
-fn uniform_squares(surface: &Surface, depth: u32) -> u64 {
+/// The fan triangles of a uniform quadtree `depth` levels below the input faces (an N-gon's
+/// sub-faces are level 1; Loop's triangles split in four triangles, fanned in three).
+fn uniform_fans(surface: &Surface, scheme: Builtin, depth: u32) -> u64 {
     let mesh = surface.mesh();
     mesh.face_ids()
-        .map(|f| {
-            let n = mesh.face_size(f);
-            if n == 4 { 4u64.saturating_pow(depth) } else { n as u64 * 4u64.saturating_pow(depth.saturating_sub(1)) }
+        .map(|f| match (scheme, mesh.face_size(f)) {
+            (Builtin::Loop, _) => 3 * 4u64.saturating_pow(depth),
+            (_, 4) => 4 * 4u64.saturating_pow(depth),
+            (_, n) => 4 * n as u64 * 4u64.saturating_pow(depth.saturating_sub(1)),
         })
         .sum()
 }
 
-/// `osd_limit MESH --grid 16`'s positions.
-fn osd_points(osd: &Path, mesh: &Path) -> Result<Vec<DVec3>, String> {
+/// `osd_limit MESH --scheme S --grid 16`'s positions.
+fn osd_points(osd: &Path, mesh: &Path, scheme: Builtin) -> Result<Vec<DVec3>, String> {
     let run = Command::new(osd)
         .arg(mesh)
-        .args(["--scheme", "catmark", "--grid", &GRID.to_string()])
+        .args(["--scheme", if scheme == Builtin::Loop { "loop" } else { "catmark" }, "--grid", &GRID.to_string()])
         .output()
         .map_err(|e| format!("{}: {e}", osd.display()))?;
     if !run.status.success() {

@@ -39,8 +39,12 @@
 //! these few hundred operations and of the vertices' own evaluation (each relative error is a
 //! few units of 2⁻⁵³ times the small norms of the collocation inverses).
 //!
+//! *Triangles* (Loop): a quartic node's leaf polygon is fanned around its centroid, and the same
+//! two bounds hold with bidegree (4, 4) for the cone (`p` is bilinear in `(s, t)`, `S` has total
+//! degree 4) and a quartic side for the chord ([`quartic_is_flat`]).
+//!
 //! # The node at the extraordinary corner
-//! Every sub-patch matrix of Catmull-Clark has non-negative entries with rows summing to 1
+//! Every sub-patch matrix of Catmull-Clark and of Loop has non-negative entries with rows summing to 1
 //! (checked when the tessellator is built). So the limit surface over the node at the corner of
 //! depth `d` is a limit of convex combinations of its control points `C_d = A^d C`: it lies in
 //! their convex hull. Every vertex of a triangle of that leaf lies on the node's surface, hence
@@ -61,6 +65,7 @@ use glam::DVec3;
 
 use crate::TessError;
 use crate::bezier::Bicubic;
+use crate::quartic::Quartic;
 
 /// How flat the output must be.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -125,29 +130,30 @@ const CORNERS: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
 /// How often an undecided Bernstein bound is split before the node counts as not flat.
 const REFINEMENTS: usize = 6;
 
-/// The inverse collocation matrices of degrees 6 and 3.
-type Inverses = ([[f64; 7]; 7], [[f64; 4]; 4]);
+/// The inverse collocation matrices of degrees 6, 3 and 4.
+type Inverses = ([[f64; 7]; 7], [[f64; 4]; 4], [[f64; 5]; 5]);
 
-/// `(B^n_k(i/n))_{ik}⁻¹` for n = 6 and n = 3, computed once.
+/// `(B^n_k(i/n))_{ik}⁻¹` for n = 6, 3 and 4, computed once.
 fn collocation_inverses() -> &'static Inverses {
     static INVERSES: OnceLock<Inverses> = OnceLock::new();
-    INVERSES.get_or_init(|| (invert::<7>(), invert::<4>()))
+    INVERSES.get_or_init(|| (invert::<7>(), invert::<4>(), invert::<5>()))
 }
 
-/// The inverse of the Bernstein collocation matrix of degree `N − 1` at `i/(N − 1)`
-/// (Gauss-Jordan with partial pivoting; the matrix is totally positive and well conditioned).
+/// The inverse of the Bernstein collocation matrix of degree `N − 1` at `i/(N − 1)` (the matrix
+/// is totally positive and well conditioned).
 fn invert<const N: usize>() -> [[f64; N]; N] {
     let n = N - 1;
     let binomial = |k: usize| (0..k).fold(1.0, |acc, m| acc * (n - m) as f64 / (m + 1) as f64);
-    let mut a = [[0.0; N]; N];
-    let mut inv = [[0.0; N]; N];
-    for (i, (row, inv_row)) in a.iter_mut().zip(&mut inv).enumerate() {
+    let a = std::array::from_fn(|i| {
         let t = i as f64 / n as f64;
-        for (k, entry) in row.iter_mut().enumerate() {
-            *entry = binomial(k) * t.powi(k as i32) * (1.0 - t).powi((n - k) as i32);
-        }
-        inv_row[i] = 1.0;
-    }
+        std::array::from_fn(|k| binomial(k) * t.powi(k as i32) * (1.0 - t).powi((n - k) as i32))
+    });
+    gauss_jordan(a)
+}
+
+/// The inverse of a non-singular matrix, by Gauss-Jordan elimination with partial pivoting.
+pub(crate) fn gauss_jordan<const N: usize>(mut a: [[f64; N]; N]) -> [[f64; N]; N] {
+    let mut inv: [[f64; N]; N] = std::array::from_fn(|i| std::array::from_fn(|k| f64::from(u8::from(i == k))));
     for col in 0..N {
         let pivot = (col..N).max_by(|&x, &y| a[x][col].abs().total_cmp(&a[y][col].abs())).unwrap_or(col);
         a.swap(col, pivot);
@@ -170,24 +176,25 @@ fn invert<const N: usize>() -> [[f64; N]; N] {
     inv
 }
 
-/// A polynomial of bidegree (6, 3) in tensor Bernstein form, `c[i][j]` for `s`-index `i`.
+/// A polynomial of bidegree `(M − 1, N − 1)` in tensor Bernstein form, `c[i][j]` for `s`-index
+/// `i`.
 #[derive(Clone, Copy)]
-struct Bernstein63 {
-    c: [[DVec3; 4]; 7],
+struct Bernstein<const M: usize, const N: usize> {
+    c: [[DVec3; N]; M],
 }
 
-impl Bernstein63 {
+impl<const M: usize, const N: usize> Bernstein<M, N> {
     /// The largest Bernstein coefficient of `‖c‖ + χ·s` on an `s`-range `[s0, s1]`.
     fn upper(&self, chord: f64, s0: f64, s1: f64) -> f64 {
-        (0..7)
-            .flat_map(|i| (0..4).map(move |j| (i, j)))
-            .map(|(i, j)| self.c[i][j].length() + chord * (s0 + (s1 - s0) * i as f64 / 6.0))
+        (0..M)
+            .flat_map(|i| (0..N).map(move |j| (i, j)))
+            .map(|(i, j)| self.c[i][j].length() + chord * (s0 + (s1 - s0) * i as f64 / (M - 1) as f64))
             .fold(0.0, f64::max)
     }
 
     /// The largest known value of `‖c‖ + χ·s`: the corner coefficients are values.
     fn lower(&self, chord: f64, s0: f64, s1: f64) -> f64 {
-        [(0, 0, s0), (6, 0, s1), (0, 3, s0), (6, 3, s1)]
+        [(0, 0, s0), (M - 1, 0, s1), (0, N - 1, s0), (M - 1, N - 1, s1)]
             .iter()
             .map(|&(i, j, s)| self.c[i][j].length() + chord * s)
             .fold(0.0, f64::max)
@@ -198,15 +205,15 @@ impl Bernstein63 {
         let mut lo = *self;
         let mut hi = *self;
         if along_s {
-            for j in 0..4 {
+            for j in 0..N {
                 let (l, h) = casteljau(&self.c.map(|row| row[j]));
-                for i in 0..7 {
+                for i in 0..M {
                     lo.c[i][j] = l[i];
                     hi.c[i][j] = h[i];
                 }
             }
         } else {
-            for i in 0..7 {
+            for i in 0..M {
                 let (l, h) = casteljau(&self.c[i]);
                 lo.c[i] = l;
                 hi.c[i] = h;
@@ -231,36 +238,57 @@ fn casteljau<const N: usize>(p: &[DVec3; N]) -> ([DVec3; N], [DVec3; N]) {
     (lo, hi)
 }
 
-/// The cone error `S(c + s(q(t) − c)) − (1 − s)S(c) − s S(q(t))` of fan triangle `edge` of the
-/// unit square, in Bernstein form.
-fn cone_error(patch: &Bicubic, edge: usize) -> Bernstein63 {
-    let (inv6, inv3) = collocation_inverses();
-    let [ax, ay] = CORNERS[edge];
-    let [bx, by] = CORNERS[(edge + 1) % 4];
-    let centre = patch.eval(0.5, 0.5);
-    let mut values = [[DVec3::ZERO; 4]; 7];
-    for (j, t) in (0..4).map(|j| (j, j as f64 / 3.0)) {
-        let (qx, qy) = (ax + t * (bx - ax), ay + t * (by - ay));
-        let on_edge = patch.eval(qx, qy);
+/// The cone error `S(c + s(q(t) − c)) − (1 − s)S(c) − s S(q(t))`, `q(t) = a + t(b − a)`, of the
+/// fan triangle `(c, a, b)` of a polynomial `eval` whose restriction to it has bidegree
+/// `(M − 1, N − 1)` in `(s, t)`, in Bernstein form (values on the grid `(i/(M−1), j/(N−1))`
+/// times the inverse collocation matrices).
+fn cone_error<const M: usize, const N: usize>(
+    eval: impl Fn(f64, f64) -> DVec3,
+    [c, a, b]: [[f64; 2]; 3],
+    (inv_s, inv_t): (&[[f64; M]; M], &[[f64; N]; N]),
+) -> Bernstein<M, N> {
+    let centre = eval(c[0], c[1]);
+    let mut values = [[DVec3::ZERO; N]; M];
+    for j in 0..N {
+        let t = j as f64 / (N - 1) as f64;
+        let q = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+        let on_edge = eval(q[0], q[1]);
         for (i, row) in values.iter_mut().enumerate() {
-            let s = i as f64 / 6.0;
-            let p = patch.eval(0.5 + s * (qx - 0.5), 0.5 + s * (qy - 0.5));
+            let s = i as f64 / (M - 1) as f64;
+            let p = eval(c[0] + s * (q[0] - c[0]), c[1] + s * (q[1] - c[1]));
             row[j] = p - (1.0 - s) * centre - s * on_edge;
         }
     }
-    let mut c = [[DVec3::ZERO; 4]; 7];
-    for i in 0..7 {
-        for j in 0..4 {
-            c[i][j] = (0..7)
-                .flat_map(|a| (0..4).map(move |b| (a, b)))
-                .map(|(a, b)| inv6[i][a] * inv3[j][b] * values[a][b])
+    let mut out = [[DVec3::ZERO; N]; M];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, entry) in row.iter_mut().enumerate() {
+            *entry = (0..M)
+                .flat_map(|x| (0..N).map(move |y| (x, y)))
+                .map(|(x, y)| inv_s[i][x] * inv_t[j][y] * values[x][y])
                 .sum();
         }
     }
-    Bernstein63 { c }
+    Bernstein { c: out }
 }
 
-/// The chord bound of edge `edge`: `max‖C''‖ / 8` for the edge's cubic `C`.
+/// The cone error of fan triangle `edge` of the unit square around its centre: bidegree (6, 3)
+/// (`p` is bilinear in `(s, t)` with no `t` in the coordinate that stays constant along the
+/// edge, and `S` is bicubic).
+fn bicubic_cone_error(patch: &Bicubic, edge: usize) -> Bernstein<7, 4> {
+    let (inv6, inv3, _) = collocation_inverses();
+    let fan = [[0.5, 0.5], CORNERS[edge], CORNERS[(edge + 1) % 4]];
+    cone_error(|x, y| patch.eval(x, y), fan, (inv6, inv3))
+}
+
+/// The chord bound of a side whose curve has Bézier points `p`: `max‖C''‖ / 8`, `C''` bounded
+/// by its own Bézier coefficients `n(n − 1) Δ²p`.
+fn side_chord_bound<const N: usize>(p: &[DVec3; N]) -> f64 {
+    let n = (N - 1) as f64;
+    p.windows(3).map(|w| (n * (n - 1.0) * (w[0] - 2.0 * w[1] + w[2])).length()).fold(0.0, f64::max) / 8.0
+}
+
+/// The chord bound of edge `edge`: `max‖C''‖ / 8` for the edge's cubic `C` (`C''` is linear, so
+/// its largest norm is at an end).
 fn chord_bound(patch: &Bicubic, edge: usize) -> f64 {
     let n = &patch.net;
     let p = match edge {
@@ -269,8 +297,7 @@ fn chord_bound(patch: &Bicubic, edge: usize) -> f64 {
         2 => n[3],
         _ => [n[0][0], n[1][0], n[2][0], n[3][0]],
     };
-    let second = |a: DVec3, b: DVec3, c: DVec3| (6.0 * (a - 2.0 * b + c)).length();
-    second(p[0], p[1], p[2]).max(second(p[1], p[2], p[3])) / 8.0
+    side_chord_bound(&p)
 }
 
 /// The unrefined bounds of a regular node's four fan triangles (edge order: `y = 0`, `x = 1`,
@@ -293,7 +320,7 @@ impl FanBound {
 /// The cone and chord bounds of a regular node (see the module docs), without refinement.
 pub fn fan_bound(patch: &Bicubic) -> FanBound {
     FanBound {
-        cone: std::array::from_fn(|e| cone_error(patch, e).upper(0.0, 0.0, 1.0)),
+        cone: std::array::from_fn(|e| bicubic_cone_error(patch, e).upper(0.0, 0.0, 1.0)),
         chord: std::array::from_fn(|e| chord_bound(patch, e)),
     }
 }
@@ -304,11 +331,43 @@ pub fn fan_bound(patch: &Bicubic) -> FanBound {
 pub fn regular_is_flat(patch: &Bicubic, epsilon: f64) -> bool {
     let slack = rounding_slack(patch.magnitude());
     let budget = epsilon - slack;
-    budget >= 0.0 && (0..4).all(|edge| bounded_by(cone_error(patch, edge), chord_bound(patch, edge), budget))
+    budget >= 0.0 && (0..4).all(|edge| bounded_by(bicubic_cone_error(patch, edge), chord_bound(patch, edge), budget))
+}
+
+/// Whether a quartic triangle node's three fan triangles around its centroid `(⅓, ⅓)`, with any
+/// hanging points on its sides, are within `epsilon` of the surface: the cone and chord bounds
+/// of the regular nodes (see the module docs), with bidegree (4, 4) (`p` is bilinear in
+/// `(s, t)` and `S` has total degree 4) and quartic sides ([`quartic_chord_bound`]).
+pub fn quartic_is_flat(patch: &Quartic, epsilon: f64) -> bool {
+    let (.., inv4) = collocation_inverses();
+    let budget = epsilon - rounding_slack(patch.magnitude());
+    const CORNERS: [[f64; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    budget >= 0.0
+        && (0..3).all(|side| {
+            let fan = [[1.0 / 3.0, 1.0 / 3.0], CORNERS[side], CORNERS[(side + 1) % 3]];
+            let cone = cone_error(|u, v| patch.eval(u, v), fan, (inv4, inv4));
+            bounded_by(cone, quartic_chord_bound(&patch.side(side)), budget)
+        })
+}
+
+/// The chord bound of a quartic side with Bézier points `p`, for chords between dyadic hanging
+/// points: over the whole side the chord error `C − L` is a quartic whose Bézier coefficients
+/// are `p_k − L(k/4)`, bounded by their largest norm after three halvings (eight pieces, whose
+/// coefficients bound it piecewise); with any hanging point, every chord spans
+/// at most half the side, where `max‖C''‖ h² / 8 ≤ max‖C''‖ / 32`. (`max‖C''‖ / 8` alone is three
+/// times the sampled error on a sine-like side.)
+fn quartic_chord_bound(p: &[DVec3; 5]) -> f64 {
+    let error: [DVec3; 5] = std::array::from_fn(|k| p[k] - p[0].lerp(p[4], k as f64 / 4.0));
+    let mut pieces = vec![error];
+    for _ in 0..3 {
+        pieces = pieces.iter().flat_map(|c| <[[DVec3; 5]; 2]>::from(casteljau(c))).collect();
+    }
+    let whole = pieces.iter().flatten().map(|d| d.length()).fold(0.0, f64::max);
+    whole.max(side_chord_bound(p) / 4.0)
 }
 
 /// Whether `‖poly‖ + chord·s` stays within `budget` on the whole box `[0, 1]²`.
-fn bounded_by(poly: Bernstein63, chord: f64, budget: f64) -> bool {
+fn bounded_by<const M: usize, const N: usize>(poly: Bernstein<M, N>, chord: f64, budget: f64) -> bool {
     let mut stack = vec![(poly, 0.0, 1.0, 0)];
     while let Some((p, s0, s1, depth)) = stack.pop() {
         if p.upper(chord, s0, s1) <= budget {
@@ -317,8 +376,8 @@ fn bounded_by(poly: Bernstein63, chord: f64, budget: f64) -> bool {
         if p.lower(chord, s0, s1) > budget || depth == REFINEMENTS {
             return false;
         }
-        // s carries degree 6, t degree 3: split s twice as often.
-        let along_s = depth % 3 != 2;
+        // Split the higher degree more often: s twice as often as t for (6, 3).
+        let along_s = if M > N { depth % 3 != 2 } else { depth % 2 == 0 };
         let (a, b) = p.split(along_s);
         let mid = 0.5 * (s0 + s1);
         if along_s {
@@ -422,24 +481,21 @@ mod tests {
         Bicubic { net }
     }
 
-    /// The largest parametric distance of the fan triangles (with a hanging point at every
-    /// edge's `t`) to the patch, sampled densely.
-    fn sampled_fan_error(patch: &Bicubic, hanging: f64) -> f64 {
-        let c = [0.5, 0.5];
+    /// The largest parametric distance of the fan triangles around `c` of the polygon `corners`
+    /// (with a hanging point at every side's `hanging`) to the patch `eval`, sampled densely.
+    fn sampled_fan_error_of(eval: impl Fn(f64, f64) -> DVec3, c: [f64; 2], corners: &[[f64; 2]], hanging: f64) -> f64 {
         let mut worst: f64 = 0.0;
-        for edge in 0..4 {
-            let [ax, ay] = CORNERS[edge];
-            let [bx, by] = CORNERS[(edge + 1) % 4];
+        for side in 0..corners.len() {
+            let ([ax, ay], [bx, by]) = (corners[side], corners[(side + 1) % corners.len()]);
             let h = [ax + hanging * (bx - ax), ay + hanging * (by - ay)];
             for (a, b) in [([ax, ay], h), (h, [bx, by])] {
-                let (sc, sa, sb) = (patch.eval(c[0], c[1]), patch.eval(a[0], a[1]), patch.eval(b[0], b[1]));
+                let (sc, sa, sb) = (eval(c[0], c[1]), eval(a[0], a[1]), eval(b[0], b[1]));
                 for i in 0..=20 {
                     for j in 0..=(20 - i) {
                         let (la, lb) = (f64::from(i) / 20.0, f64::from(j) / 20.0);
                         let lc = 1.0 - la - lb;
-                        let x = lc * c[0] + la * a[0] + lb * b[0];
-                        let y = lc * c[1] + la * a[1] + lb * b[1];
-                        worst = worst.max((patch.eval(x, y) - (lc * sc + la * sa + lb * sb)).length());
+                        let (x, y) = (lc * c[0] + la * a[0] + lb * b[0], lc * c[1] + la * a[1] + lb * b[1]);
+                        worst = worst.max((eval(x, y) - (lc * sc + la * sa + lb * sb)).length());
                     }
                 }
             }
@@ -447,12 +503,18 @@ mod tests {
         worst
     }
 
+    /// The bicubic's four fan triangles around its centre.
+    fn sampled_fan_error(patch: &Bicubic, hanging: f64) -> f64 {
+        sampled_fan_error_of(|x, y| patch.eval(x, y), [0.5, 0.5], &CORNERS, hanging)
+    }
+
     #[test]
     fn collocation_inverses_invert() {
-        let (inv6, _) = collocation_inverses();
+        let (inv6, inv3, inv4) = collocation_inverses();
         // The Bernstein coefficients of the constant 1 are all 1.
-        for row in inv6 {
-            assert!((row.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+        let rows = inv6.iter().map(|r| r.iter().sum::<f64>());
+        for sum in rows.chain(inv3.iter().map(|r| r.iter().sum())).chain(inv4.iter().map(|r| r.iter().sum())) {
+            assert!((sum - 1.0).abs() < 1e-12);
         }
     }
 
@@ -477,6 +539,49 @@ mod tests {
             }
             assert!(hi < 1.25 * sampled, "scale {scale}: refined bound {hi} loose against {sampled} (coarse {bound})");
         }
+    }
+
+    /// A wavy quartic triangle: the quartic interpolating a smooth function at the domain points.
+    fn wavy_quartic(scale: f64) -> Quartic {
+        let values = std::array::from_fn(|a| {
+            let (i, j) = crate::quartic::domain_point(a);
+            let (x, y) = (i as f64 / 4.0, j as f64 / 4.0);
+            DVec3::new(x, y, scale * ((3.0 * x).sin() * (2.0 * y).cos() + x * y))
+        });
+        Quartic::from_values(&values)
+    }
+
+    /// A quartic's three fan triangles around `(⅓, ⅓)`.
+    fn sampled_quartic_fan_error(patch: &Quartic, hanging: f64) -> f64 {
+        let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+        sampled_fan_error_of(|u, v| patch.eval(u, v), [1.0 / 3.0, 1.0 / 3.0], &corners, hanging)
+    }
+
+    #[test]
+    fn quartic_bound_is_never_below_the_sampled_error_and_not_loose() {
+        for scale in [0.01, 0.1, 1.0] {
+            let patch = wavy_quartic(scale);
+            let sampled = [1.0, 0.5, 0.25, 0.8125].map(|h| sampled_quartic_fan_error(&patch, h));
+            let worst = sampled.into_iter().fold(0.0, f64::max);
+            // The smallest ε the test accepts, by bisection: never below any sampled error.
+            let (mut lo, mut hi) = (0.0, 10.0);
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                if quartic_is_flat(&patch, mid) { hi = mid } else { lo = mid }
+            }
+            assert!(hi >= worst * (1.0 - 1e-9), "scale {scale}: accepted {hi} below the sampled {worst}");
+            assert!(hi < 1.5 * worst, "scale {scale}: bound {hi} loose against {worst}");
+        }
+        // A linear triangle is flat at any tolerance.
+        let flat = Quartic::from_values(&std::array::from_fn(|a| DVec3::new(a as f64, 0.5, 0.0)));
+        let linear = Quartic {
+            net: std::array::from_fn(|a| {
+                let (i, j) = crate::quartic::domain_point(a);
+                DVec3::new(i as f64, j as f64, 0.5 * i as f64 - j as f64)
+            }),
+        };
+        assert!(quartic_is_flat(&linear, 1e-9));
+        assert!(!quartic_is_flat(&flat, 1e-9), "values not on a plane are not flat");
     }
 
     #[test]

@@ -61,6 +61,7 @@ mod error;
 pub mod flatness;
 mod mesh;
 mod normal;
+pub mod quartic;
 use subdiv_mesh::par;
 pub mod plan;
 pub mod quadtree;

@@ -33,9 +33,15 @@ fn assert_watertight_inside(out: &TessMesh, mesh: Option<&Mesh>) {
             directed.entry((t[k], t[(k + 1) % 3])).or_insert((0, i, k)).0 += 1;
         }
     }
-    // The sides of a quad (Bfr: side 0 is v = 0, 1 is u = 1, 2 is v = 1, 3 is u = 0) a point lies on.
-    let sides = |[u, v]: [f64; 2]| -> Vec<usize> {
-        [v == 0.0, u == 1.0, v == 1.0, u == 0.0].iter().enumerate().filter(|&(_, &on)| on).map(|(k, _)| k).collect()
+    // The sides of a quad (Bfr: side 0 is v = 0, 1 is u = 1, 2 is v = 1, 3 is u = 0) or of a
+    // triangle (0: v = 0, 1: u + v = 1, 2: u = 0) a point lies on.
+    let sides = |[u, v]: [f64; 2], size: usize| -> Vec<usize> {
+        let on = if size == 3 {
+            vec![v == 0.0, u + v == 1.0, u == 0.0]
+        } else {
+            vec![v == 0.0, u == 1.0, v == 1.0, u == 0.0]
+        };
+        on.iter().enumerate().filter(|&(_, &on)| on).map(|(k, _)| k).collect()
     };
     for (&(a, b), &(n, i, k)) in &directed {
         assert_eq!(n, 1, "edge {a}-{b} used {n} times in one direction");
@@ -45,9 +51,10 @@ fn assert_watertight_inside(out: &TessMesh, mesh: Option<&Mesh>) {
         let mesh = mesh.unwrap_or_else(|| panic!("edge {a}-{b} has no opposite (crack or flip)"));
         let (face, params) = (out.triangle_faces[i], out.triangle_parameters[i]);
         let (pa, pb) = (params[k], params[(k + 1) % 3]);
-        let on_border = mesh.face_size(face) == 4
-            && sides(pa).iter().filter(|k| sides(pb).contains(k)).any(|&k| {
-                let h = mesh.face_half_edges(face).nth(k).expect("a quad has four sides");
+        let size = mesh.face_size(face);
+        let on_border = matches!(size, 3 | 4)
+            && sides(pa, size).iter().filter(|k| sides(pb, size).contains(k)).any(|&k| {
+                let h = mesh.face_half_edges(face).nth(k).expect("a face has its sides");
                 let e = mesh.edge(h);
                 mesh.is_boundary_edge(e) || mesh.edge_faces(e).iter().any(|&f| mesh.is_hole(f))
             });
@@ -88,7 +95,12 @@ fn euler(out: &TessMesh) -> i64 {
 /// Tessellates at each relative tolerance and measures the worst parametric distance on an
 /// `n × n` grid per face against `LimitEvaluator`; returns the worst distance / ε.
 fn guarantee(mesh: &Mesh, n: u32, tolerances: &[f64]) -> f64 {
-    let scheme = Builtin::CatmullClark.scheme();
+    guarantee_under(Builtin::CatmullClark, mesh, n, tolerances)
+}
+
+/// [`guarantee`] under `scheme`.
+fn guarantee_under(scheme: Builtin, mesh: &Mesh, n: u32, tolerances: &[f64]) -> f64 {
+    let scheme = scheme.scheme();
     let tess = QuadtreeTessellator::new(scheme, mesh).unwrap();
     let evaluator = LimitEvaluator::new(scheme, mesh, &RefineOptions::DEFAULT).unwrap();
     let samples = LimitSamples::new(&evaluator, mesh, n).unwrap();
@@ -217,8 +229,13 @@ fn bad_input_gives_typed_errors() {
     let shallow =
         QuadtreeOptions { max_depth: 3, ..QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)) };
     assert!(matches!(tess.tessellate(&shallow), Err(TessError::DepthLimit { .. })));
-    let loop_scheme = QuadtreeTessellator::new(Builtin::Loop.scheme(), &Mesh::build(shapes::icosahedron()).unwrap());
-    assert!(matches!(loop_scheme, Err(TessError::Scheme { .. })));
+    // A dual split has no faces to split; an interpolating triangle scheme's sub-patch matrices
+    // are no convex combinations (no hull bound).
+    let icosahedron = Mesh::build(shapes::icosahedron()).unwrap();
+    for scheme in [Builtin::DooSabin, Builtin::Butterfly] {
+        let refused = QuadtreeTessellator::new(scheme.scheme(), &icosahedron);
+        assert!(matches!(refused, Err(TessError::Scheme { .. })), "{scheme:?}: {refused:?}");
+    }
     // Bilinear patches are bicubics too: the bilinear cube's limit is the cube itself.
     let bilinear = QuadtreeTessellator::new(Builtin::Bilinear.scheme(), &cube).unwrap();
     let out = bilinear.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2))).unwrap();
@@ -407,7 +424,16 @@ proptest! {
 /// Every triangle corner's channel values, against the channel's own surface evaluated at the
 /// corner's parameter in the triangle's face; returns the number of split entries.
 fn assert_channels_exact(mesh: &Mesh, mode: Option<subdiv_mesh::FaceVaryingInterpolation>) -> usize {
-    let cc = Builtin::CatmullClark.scheme();
+    assert_channels_exact_under(Builtin::CatmullClark, mesh, mode)
+}
+
+/// [`assert_channels_exact`] under `scheme`.
+fn assert_channels_exact_under(
+    scheme: Builtin,
+    mesh: &Mesh,
+    mode: Option<subdiv_mesh::FaceVaryingInterpolation>,
+) -> usize {
+    let cc = scheme.scheme();
     let tess = QuadtreeTessellator::new(cc, mesh).unwrap().with_channels(cc, mesh, mode).unwrap();
     let out = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-2))).unwrap();
     assert_eq!(out.channels.names, ["uv"]);
@@ -448,6 +474,44 @@ fn channels_are_exact_and_split_at_seams() {
     let grid = Mesh::build(grid).unwrap();
     assert_eq!(assert_channels_exact(&grid, None), 0);
     assert_eq!(assert_channels_exact(&grid, Some(subdiv_mesh::FaceVaryingInterpolation::None)), 0);
+}
+
+/// Loop: the quadtree of triangles (quartic pieces, the extraordinary corners' hulls) keeps the
+/// bound on closed and open meshes, with creases, semi-sharp features and holes, closes up, and
+/// carries texture coordinates exactly.
+#[test]
+fn loop_meshes_are_within_tolerance_of_the_limit_surface() {
+    // Valences 4 and 5 (extraordinary under Loop), and 3 to 6 on the octahedron-like tetrahedron.
+    let ratio = guarantee_under(Builtin::Loop, &Mesh::build(shapes::icosahedron()).unwrap(), 9, &[1e-2, 1e-3]);
+    assert!(ratio > 0.1, "worst distance / ε = {ratio}");
+    guarantee_under(Builtin::Loop, &Mesh::build(shapes::tetrahedron()).unwrap(), 9, &[1e-2, 1e-3]);
+    // A torus of regular valence-6 vertices: every piece a quartic.
+    let torus = Mesh::build(shapes::triangle_torus(6, 4)).unwrap();
+    guarantee_under(Builtin::Loop, &torus, 9, &[1e-2]);
+    // An open octahedron (a face removed: border vertices of three and four faces), a hole, and
+    // a sharp edge with a semi-sharp corner.
+    let octahedron = shapes::octahedron();
+    let open = PolygonSoup::from_indices(
+        octahedron.positions().to_vec(),
+        octahedron.faces().skip(1).map(|f| f.iter().map(|v| v.index() as u32).collect::<Vec<_>>()),
+    );
+    guarantee_under(Builtin::Loop, &Mesh::build(open).unwrap(), 9, &[1e-2, 1e-3]);
+    let mut holed = shapes::icosahedron();
+    holed.tags.holes.push(FaceId::new(0));
+    guarantee_under(Builtin::Loop, &Mesh::build(holed).unwrap(), 9, &[1e-2]);
+    let mut creased = shapes::icosahedron();
+    let [a, b] = [creased.face(FaceId::new(0))[0], creased.face(FaceId::new(0))[1]];
+    creased.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 10.0 });
+    creased.tags.corners.push(subdiv_mesh::CornerTag { vertex: a, sharpness: 1.5 });
+    guarantee_under(Builtin::Loop, &Mesh::build(creased).unwrap(), 9, &[1e-2, 1e-3]);
+    // Texture coordinates: one chart per face, split along every edge.
+    let charts = Mesh::build(shapes::face_charts(shapes::icosahedron())).unwrap();
+    assert!(assert_channels_exact_under(Builtin::Loop, &charts, None) > 0);
+    // The dual method's rates need second-derivative bounds of the quartics: refused by name.
+    let mesh = Mesh::build(shapes::icosahedron()).unwrap();
+    let bounds = QuadtreeTessellator::new(Builtin::Loop.scheme(), &mesh).unwrap();
+    let refused = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&bounds, &mesh);
+    assert!(matches!(&refused, Err(TessError::Unsupported { .. })), "{refused:?}");
 }
 
 /// A screen-space error bound: at the centroid and edge midpoints of every output triangle, the

@@ -344,7 +344,7 @@ impl Surface {
     /// # Errors
     /// [`Error::QuadtreeRates`] for [`Method::Quadtree`] without [`Rates::Tolerance`]; as
     /// [`face_rates`](Self::face_rates); [`Error::Tess`] for a mesh or scheme the tessellator
-    /// does not take (the quadtree: Catmull-Clark meshes; the dual: primal schemes
+    /// does not take (the quadtree: Catmull-Clark and Loop meshes; the dual: primal schemes
     /// with sub-patch matrices), rates outside `1..=128`, or a
     /// tolerance the quadtree cannot meet within its depth and polygon limits.
     pub fn tessellate(&mut self, options: &TessOptions) -> Result<Tessellation, Error> {

@@ -1,4 +1,4 @@
-//! Error-driven quadtree tessellation of Catmull-Clark surfaces (paper 002 §2, §5).
+//! Error-driven quadtree tessellation of Catmull-Clark and Loop surfaces (paper 002 §2, §5).
 //!
 //! Each input face is a quadtree root (an N-gon: one root per `Bfr` quad sub-face). A node is a
 //! dyadic square of its root's domain and holds the surface over it as one of three *pieces*:
@@ -17,6 +17,11 @@
 //! that stops at the first missing midpoint finds them all. Polygons therefore share their edges
 //! exactly: no T-junctions, no cracks. Triangles are fans around the leaf's centre point, the
 //! triangulation [`flatness`] bounds.
+//!
+//! Under a triangle split (Loop) the tree is one of triangles: a root is a triangle face, a node
+//! a sub-triangle with four children in the engine's order (the middle one turned half a turn),
+//! its polynomial pieces quartic Bézier triangles ([`Quartic`]); its fan's apex is the centroid,
+//! an integer point because triangle roots count in thirds ([`Root::full`]).
 
 mod channels;
 mod pieces;
@@ -28,7 +33,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use glam::DVec3;
 use hashbrown::HashMap;
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh};
-use subdiv_schemes::{PatchMatrices, Scheme, Split};
+use subdiv_schemes::{ChildDomain, PatchMatrices, Scheme, Split};
 use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, StencilEvaluator};
 
 use self::channels::{ChannelEntries, Channels};
@@ -38,6 +43,7 @@ use self::vertices::{Ring, bfr};
 use crate::Parallelism;
 use crate::bezier::Bicubic;
 use crate::flatness::{self, Tolerance};
+use crate::quartic::{self, Quartic};
 use crate::{SurfaceParameter, TessCounts, TessError, TessMesh, TessSink, TessTriangle, TessVertex};
 
 /// Bits of the fixed denominator of root coordinates: a node of depth `d` has corners at
@@ -121,6 +127,9 @@ struct Root {
     face: FaceId,
     /// `(sub-face, size, columns)` of an N-gon.
     sub: Option<(usize, usize, usize)>,
+    /// Whether the root is a triangle (`u, v ≥ 0, u + v ≤ 1`) of a triangle split (Loop), whose
+    /// nodes are triangles split in four.
+    triangle: bool,
 }
 
 impl Root {
@@ -128,9 +137,22 @@ impl Root {
     fn depth(self) -> u32 {
         u32::from(self.sub.is_some())
     }
+
+    /// The root's side in root coordinates: [`FULL`], or `3 · FULL` for a triangle, so that its
+    /// nodes' centroids are integers too.
+    fn full(self) -> i64 {
+        if self.triangle { 3 * FULL } else { FULL }
+    }
+
+    /// The children of a node, in the engine's order (`subdiv_schemes::ChildDomain`).
+    fn child_domains(self) -> &'static [ChildDomain] {
+        ChildDomain::of_face(if self.triangle { 3 } else { 4 })
+    }
 }
 
-/// A leaf: the square `[x, x + 2^−depth] × [y, …]` of its root, `x, y` over [`FULL`].
+/// A leaf: the square `[x, x + h] × [y, y + h]` of its root (`h = full >> depth`, coordinates
+/// over [`Root::full`]); in a triangle root the triangle `(x, y) + σ h (s, t)`, `s, t ≥ 0,
+/// s + t ≤ 1`, with `σ = −1` when `flipped` (a middle child, turned half a turn).
 #[derive(Clone, Copy, Debug)]
 struct Leaf {
     depth: u32,
@@ -138,6 +160,39 @@ struct Leaf {
     y: i64,
     /// Whether its piece is the extraordinary corner's.
     extraordinary: bool,
+    /// Whether the node is a triangle turned half a turn.
+    flipped: bool,
+}
+
+impl Leaf {
+    /// The root's node at the top.
+    const ROOT: Self = Self { depth: 0, x: 0, y: 0, extraordinary: false, flipped: false };
+
+    /// The node's corners, counter-clockwise (the first `n`, `n` 3 or 4), and its centre (the
+    /// apex of its fan).
+    fn corners(&self, root: Root) -> ([(i64, i64); 4], usize, (i64, i64)) {
+        let h = root.full() >> self.depth;
+        let (x, y) = (self.x, self.y);
+        if root.triangle {
+            let g = if self.flipped { -h } else { h };
+            ([(x, y), (x + g, y), (x, y + g), (x, y)], 3, (x + g / 3, y + g / 3))
+        } else {
+            ([(x, y), (x + h, y), (x + h, y + h), (x, y + h)], 4, (x + h / 2, y + h / 2))
+        }
+    }
+
+    /// The child `domain` of the node.
+    fn child(&self, root: Root, domain: ChildDomain) -> Self {
+        let h = root.full() >> (self.depth + 1);
+        let g = if self.flipped { -h } else { h };
+        Self {
+            depth: self.depth + 1,
+            x: self.x + i64::from(domain.offset[0]) * g,
+            y: self.y + i64::from(domain.offset[1]) * g,
+            extraordinary: false,
+            flipped: self.flipped != domain.flipped,
+        }
+    }
 }
 
 /// The extraordinary pieces of one root that its leaves were split from, by node `(depth, x,
@@ -238,22 +293,23 @@ pub struct QuadtreeStats {
 }
 
 impl QuadtreeTessellator {
-    /// Prepares `mesh` under `scheme`, a primal quad split whose patches the bounds hold for
-    /// (checked on its matrices: every patch away from an extraordinary corner is a bicubic,
-    /// every sub-patch matrix at one a convex combination): Catmull-Clark, with its creases,
-    /// corners and semi-sharp features, and bilinear; closed and open meshes and holes (a
+    /// Prepares `mesh` under `scheme`, a primal quad or triangle split whose patches the bounds
+    /// hold for (checked on its matrices: every patch away from an extraordinary corner is a
+    /// bicubic, or a quartic triangle, every sub-patch matrix at one a convex combination):
+    /// Catmull-Clark, with its creases, corners and semi-sharp features, bilinear, and Loop
+    /// likewise; closed and open meshes and holes (a
     /// border's pieces are bicubics, or convex sub-patches at an extraordinary border vertex, as
     /// inside; a face without a surface has no root, so its neighbours end at it as at a
     /// boundary).
     ///
     /// # Errors
-    /// [`TessError::Scheme`] for a scheme other than a primal quad split or whose patches are
-    /// not as above; as [`PatchLevels::descending`].
+    /// [`TessError::Scheme`] for a scheme other than a primal quad or triangle split or whose
+    /// patches are not as above; as [`PatchLevels::descending`].
     pub fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
-        if scheme.split() != Split::Quad {
+        if !matches!(scheme.split(), Split::Quad | Split::Triangle) {
             return Err(TessError::Scheme {
                 scheme: scheme.name().to_string(),
-                reason: "the quadtree tessellator needs a primal quad split (Catmull-Clark)".into(),
+                reason: "the quadtree tessellator needs a primal quad or triangle split (Catmull-Clark, Loop)".into(),
             });
         }
         // Semi-sharp features spent by refinement: every piece bicubic or extraordinary.
@@ -267,9 +323,9 @@ impl QuadtreeTessellator {
             }
             match levels.domain(face)? {
                 FaceDomain::SubFaces { size, columns } => {
-                    roots.extend((0..size).map(|s| Root { face, sub: Some((s, size, columns)) }));
+                    roots.extend((0..size).map(|s| Root { face, sub: Some((s, size, columns)), triangle: false }));
                 }
-                _ => roots.push(Root { face, sub: None }),
+                domain => roots.push(Root { face, sub: None, triangle: domain == FaceDomain::Triangle }),
             }
         }
         let corners = mesh.face_ids().map(|f| mesh.face_half_edges(f).collect()).collect();
@@ -395,9 +451,11 @@ impl QuadtreeTessellator {
         for &root in roots {
             // A root's corner (0, 0) is its face's corner (an N-gon's sub-face `s`: corner `s`);
             // a quad's other corners too.
-            let corners: &[(usize, (i64, i64))] = match root.sub {
-                Some((s, ..)) => &[(s, (0, 0))],
-                None => &[(0, (0, 0)), (1, (FULL, 0)), (2, (FULL, FULL)), (3, (0, FULL))],
+            let (f, _, _) = Leaf::ROOT.corners(root);
+            let corners: &[(usize, (i64, i64))] = match (root.sub, root.triangle) {
+                (Some((s, ..)), _) => &[(s, (0, 0))],
+                (None, true) => &[(0, f[0]), (1, f[1]), (2, f[2])],
+                (None, false) => &[(0, f[0]), (1, f[1]), (2, f[2]), (3, f[3])],
             };
             for &(k, corner) in corners {
                 if self.corner_is_extraordinary(root, corner)? {
@@ -412,20 +470,22 @@ impl QuadtreeTessellator {
     /// extraordinary point is that corner.
     fn corner_is_extraordinary(&self, root: Root, (x, y): (i64, i64)) -> Result<bool, TessError> {
         let mut piece = self.root_piece(root)?;
-        let (qx, qy) = (usize::from(x == FULL), usize::from(y == FULL));
-        // A piece of depth d keeps its corner at the root's: quarters at the same corner.
+        let full = root.full();
+        // The child at that corner: a quad's quarter, a triangle's corner child.
+        let domain = ChildDomain { offset: [u8::from(x == full), u8::from(y == full)], flipped: false };
+        // A piece of depth d keeps its corner at the root's: children at the same corner.
         for _ in 0..=DEPTH_LIMIT + 40 {
             match &piece {
                 Piece::Regular(_) => return Ok(false),
                 Piece::Extraordinary { frame, .. } => {
                     let c = frame.to_face(Dyadic::new(0, 0, 1));
-                    if (c.u * FULL, c.v * FULL) == (x, y) {
+                    if (c.u * full, c.v * full) == (x, y) {
                         return Ok(true);
                     }
                 }
-                Piece::Face { .. } => {}
+                Piece::Face { .. } | Piece::Quartic(_) => {}
             }
-            piece = self.quarter(&piece, qx, qy)?;
+            piece = self.child(root, &piece, domain)?;
         }
         Err(TessError::Internal(format!("{}: no piece at a corner after {} levels", root.face, DEPTH_LIMIT + 40)))
     }
@@ -443,7 +503,7 @@ impl QuadtreeTessellator {
         }
         let mut out = FaceCurvature { second: 0.0, corner_hull: 0.0 };
         for &root in roots {
-            self.curvature_walk(self.root_piece(root)?, root.depth(), corner_depth, &mut out)?;
+            self.curvature_walk(root, self.root_piece(root)?, root.depth(), corner_depth, &mut out)?;
         }
         Ok(out)
     }
@@ -452,6 +512,7 @@ impl QuadtreeTessellator {
     /// input face.
     fn curvature_walk(
         &self,
+        root: Root,
         piece: Piece,
         depth: u32,
         corner_depth: u32,
@@ -468,10 +529,17 @@ impl QuadtreeTessellator {
                 out.corner_hull = out.corner_hull.max(crate::flatness::hull_diameter(points));
                 return Ok(());
             }
+            Piece::Quartic(_) => {
+                return Err(TessError::Unsupported {
+                    feature: "dual-grid rates to a tolerance under a triangle split (second-derivative bounds of \
+                              its quartic pieces; --method quadtree takes it)",
+                    element: format!("{}", root.face),
+                });
+            }
             _ => {}
         }
-        for (qx, qy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-            self.curvature_walk(self.quarter(&piece, qx, qy)?, depth + 1, corner_depth, out)?;
+        for &domain in root.child_domains() {
+            self.curvature_walk(root, self.child(root, &piece, domain)?, depth + 1, corner_depth, out)?;
         }
         Ok(())
     }
@@ -560,8 +628,7 @@ impl QuadtreeTessellator {
             let piece = self.root_piece(root)?;
             let max_depth = max_depth.saturating_sub(root.depth());
             let budget = Budget { epsilon, screen, max_depth, count: &count, options };
-            let node = Leaf { depth: 0, x: 0, y: 0, extraordinary: false };
-            self.build(root, piece, node, &budget, &mut leaves, &mut corners)?;
+            self.build(root, piece, Leaf::ROOT, &budget, &mut leaves, &mut corners)?;
             Ok::<_, TessError>((leaves, corners))
         })?;
         let (forest, corner_pieces): (Vec<Vec<Leaf>>, Vec<Corners>) = grown.into_iter().unzip();
@@ -584,15 +651,15 @@ impl QuadtreeTessellator {
         centres.clear();
         for (r, (root, leaves)) in self.roots.iter().zip(&forest).enumerate() {
             for leaf in leaves {
-                let h = FULL >> leaf.depth;
-                for (x, y) in [(leaf.x, leaf.y), (leaf.x + h, leaf.y), (leaf.x + h, leaf.y + h), (leaf.x, leaf.y + h)] {
+                let (corners, n, centre) = leaf.corners(*root);
+                for &(x, y) in &corners[..n] {
                     let key = self.key(*root, x, y);
                     ids.entry(key).or_insert_with(|| {
                         creators.push((r, x, y));
                         (creators.len() - 1) as u32
                     });
                 }
-                creators.push((r, leaf.x + h / 2, leaf.y + h / 2));
+                creators.push((r, centre.0, centre.1));
                 centres.push((creators.len() - 1) as u32);
             }
         }
@@ -660,8 +727,8 @@ impl QuadtreeTessellator {
             for (i, ((ring, params), (&centre, leaf))) in
                 root_rings.iter().zip(leaf_centres.by_ref().zip(leaves)).enumerate()
             {
-                let h = FULL >> leaf.depth;
-                let c = bfr(*root, leaf.x + h / 2, leaf.y + h / 2);
+                let (_, _, centre_point) = leaf.corners(*root);
+                let c = bfr(*root, centre_point.0, centre_point.1);
                 let entries = ring_entries.get(r).map_or(ring, |e| &e[i]);
                 for k in 0..ring.len() {
                     let l = (k + 1) % ring.len();
@@ -708,12 +775,14 @@ impl QuadtreeTessellator {
             (None, _) | (_, Piece::Face { .. }) => Some(budget.epsilon),
             (Some(screen), Piece::Extraordinary { points, .. }) => screen.epsilon(points),
             (Some(screen), Piece::Regular(b)) => screen.epsilon(b.net.as_flattened()),
+            (Some(screen), Piece::Quartic(q)) => screen.epsilon(&q.net),
         };
         let flat = match (&piece, epsilon) {
             (Piece::Face { .. }, _) => false,
             (_, None) => true,
             (Piece::Extraordinary { points, .. }, Some(e)) => flatness::extraordinary_is_flat(points, e),
             (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
+            (Piece::Quartic(q), Some(e)) => flatness::quartic_is_flat(q, e),
         };
         let epsilon = epsilon.unwrap_or(budget.epsilon);
         if flat {
@@ -726,16 +795,10 @@ impl QuadtreeTessellator {
         if node.depth >= budget.max_depth {
             return Err(TessError::DepthLimit { face: root.face.index(), depth: node.depth + root.depth(), epsilon });
         }
-        let h = FULL >> (node.depth + 1);
-        // Counter-clockwise order of the quarters keeps leaf order (and ids) deterministic.
-        for (qx, qy) in [(0, 0), (1, 0), (1, 1), (0, 1)] {
-            let child = Leaf {
-                depth: node.depth + 1,
-                x: node.x + qx as i64 * h,
-                y: node.y + qy as i64 * h,
-                extraordinary: false,
-            };
-            self.build(root, self.quarter(&piece, qx, qy)?, child, budget, leaves, corners)?;
+        // The engine's order of the children keeps leaf order (and ids) deterministic.
+        for &domain in root.child_domains() {
+            let child = node.child(root, domain);
+            self.build(root, self.child(root, &piece, domain)?, child, budget, leaves, corners)?;
         }
         if matches!(piece, Piece::Extraordinary { .. }) {
             corners.insert((node.depth, node.x, node.y), piece);

@@ -13,6 +13,10 @@ pub(super) enum ShapeKind {
     /// Regular interior patches, and the regular patches along an infinitely sharp crease or a
     /// boundary, whose rows across it are the crease rule's, not the B-spline's.
     Regular { net: Vec<f64> },
+    /// A quartic triangle (a triangle split's polynomial patch: Loop's box spline, and its
+    /// patches along creases and boundaries): Bézier point `k` ([`Quartic::index`]) is
+    /// `Σ_m net[k · size + m] · points[m]`, in the patch's frame.
+    Quartic { net: Vec<f64> },
     /// The extraordinary vertex at corner 0: the child kept at the corner, and the vertex's
     /// limit position and tangent-direction stencils.
     Extraordinary { position: Vec<f64>, du: Vec<f64>, dv: Vec<f64> },
@@ -30,6 +34,71 @@ pub(super) enum Piece {
     Extraordinary { matrices: Arc<PatchMatrices>, shape: usize, points: Vec<DVec3>, frame: PatchFrame },
     /// A polynomial piece, in the node's own coordinates (boxed: 384 bytes).
     Regular(Box<Bicubic>),
+    /// A polynomial triangle, in the node's own coordinates.
+    Quartic(Box<Quartic>),
+}
+
+/// The quartic triangle, in the face's coordinates, of a shape with net weights `net` (see
+/// [`ShapeKind::Quartic`]) over the control points `points`, in the patch's frame.
+pub(super) fn quartic_in_frame(net: &[f64], points: &[DVec3], frame: PatchFrame) -> Quartic {
+    let size = points.len();
+    let point = |k: usize| -> DVec3 { net[k * size..(k + 1) * size].iter().zip(points).map(|(&w, &p)| w * p).sum() };
+    // The frame maps the triangle onto itself: face control point (i, j) is the patch's at
+    // to_patch(i/4, j/4).
+    let mut out = [DVec3::ZERO; quartic::POINTS];
+    for j in 0..=4usize {
+        for i in 0..=4 - j {
+            let p = frame.to_patch(Dyadic::new(i as i64, j as i64, 4));
+            out[Quartic::index(i, j)] = point(Quartic::index(p.u as usize, p.v as usize));
+        }
+    }
+    Quartic { net: out }
+}
+
+/// The Bézier net weights of the quartic that interpolates a triangle `shape`'s limit surface
+/// at its 15 domain points `(i/4, j/4)` (its exact stencils): the shape's net if it is a
+/// quartic.
+fn candidate_quartic(
+    evaluator: &mut StencilEvaluator<&PatchMatrices>,
+    size: usize,
+    shape: usize,
+) -> Result<Vec<f64>, String> {
+    let mut values = vec![0.0; quartic::POINTS * size];
+    for j in 0..=4usize {
+        for i in 0..=4 - j {
+            let stencil = evaluator.stencil(shape, Dyadic::new(i as i64, j as i64, 4)).map_err(|e| e.to_string())?;
+            let a = Quartic::index(i, j);
+            values[a * size..(a + 1) * size].copy_from_slice(&stencil.position);
+        }
+    }
+    let inverse = quartic::collocation_inverse();
+    let mut net = vec![0.0; quartic::POINTS * size];
+    for (b, row) in net.chunks_exact_mut(size).enumerate() {
+        for (a, value) in values.chunks_exact(size).enumerate() {
+            let w = inverse[b][a];
+            row.iter_mut().zip(value).for_each(|(r, &x)| *r += w * x);
+        }
+    }
+    Ok(net)
+}
+
+/// Whether every child of triangle `shape` is the matching sub-triangle of its quartic, on
+/// every basis function, to `tolerance` (`net` as in [`children_are_quarters`]).
+fn children_are_sub_triangles(
+    matrices: &PatchMatrices,
+    shape: usize,
+    tolerance: f64,
+    net: impl Fn(usize, &[DVec3]) -> Quartic,
+) -> bool {
+    let s = &matrices.shapes[shape];
+    s.children.iter().all(|child| {
+        (0..s.size).all(|k| {
+            let basis: Vec<DVec3> = (0..s.size).map(|m| if m == k { DVec3::X } else { DVec3::ZERO }).collect();
+            let expected = net(shape, &basis).child(child.domain.offset, child.domain.flipped);
+            let mine = net(child.shape, &child.apply(&basis));
+            mine.net.iter().zip(&expected.net).map(|(a, b)| (*a - *b).length()).fold(0.0, f64::max) <= tolerance
+        })
+    })
 }
 
 /// The Bézier net, in the face's coordinates, of a polynomial shape with net weights `net`
@@ -149,12 +218,23 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
         return Ok(());
     }
     let shapes = &matrices.shapes;
+    // A triangle split's shapes have a flipped middle child.
+    let triangle = shapes.iter().any(|s| s.children.iter().any(|c| c.domain.flipped));
     let mut evaluator = StencilEvaluator::new(&**matrices);
+    let candidate = if triangle { candidate_quartic } else { candidate_net };
     let nets: Vec<Vec<f64>> =
-        (0..shapes.len()).map(|s| candidate_net(&mut evaluator, shapes[s].size, s)).collect::<Result<_, _>>()?;
+        (0..shapes.len()).map(|s| candidate(&mut evaluator, shapes[s].size, s)).collect::<Result<_, _>>()?;
     let net_of = |shape: usize, points: &[DVec3]| Some(bezier_in_frame(&nets[shape], points, PatchFrame::new(4, 0)));
-    let mut polynomial: Vec<bool> =
-        (0..shapes.len()).map(|s| children_are_quarters(matrices, s, 1e-11, net_of)).collect();
+    let quartic_of = |shape: usize, points: &[DVec3]| quartic_in_frame(&nets[shape], points, PatchFrame::new(3, 0));
+    let mut polynomial: Vec<bool> = (0..shapes.len())
+        .map(|s| {
+            if triangle {
+                children_are_sub_triangles(matrices, s, 1e-11, quartic_of)
+            } else {
+                children_are_quarters(matrices, s, 1e-11, net_of)
+            }
+        })
+        .collect();
     loop {
         let drop: Vec<usize> = (0..shapes.len())
             .filter(|&s| polynomial[s] && shapes[s].children.iter().any(|c| !polynomial[c.shape]))
@@ -166,13 +246,13 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
     }
     for (shape, net) in nets.into_iter().enumerate() {
         if polynomial[shape] {
-            out.insert((id, shape), ShapeKind::Regular { net });
+            out.insert((id, shape), if triangle { ShapeKind::Quartic { net } } else { ShapeKind::Regular { net } });
             continue;
         }
         let s = &shapes[shape];
         let (_, keep) = matrices
             .keeping(shape)
-            .ok_or_else(|| format!("patch shape {shape} is neither a bicubic nor keeps an extraordinary corner"))?;
+            .ok_or_else(|| format!("patch shape {shape} is neither a polynomial nor keeps an extraordinary corner"))?;
         if keep.domain.offset != [0, 0] {
             return Err(format!("patch shape {shape} keeps its shape away from corner 0"));
         }
@@ -185,7 +265,7 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
             }
             if child.shape != shape && !polynomial[child.shape] {
                 return Err(format!(
-                    "a child of extraordinary shape {shape} is neither a bicubic nor the shape itself"
+                    "a child of extraordinary shape {shape} is neither a polynomial nor the shape itself"
                 ));
             }
         }
@@ -263,6 +343,9 @@ impl QuadtreeTessellator {
                     Some(ShapeKind::Regular { net }) => {
                         Ok(Piece::Regular(Box::new(bezier_in_frame(net, &points, frame))))
                     }
+                    Some(ShapeKind::Quartic { net }) => {
+                        Ok(Piece::Quartic(Box::new(quartic_in_frame(net, &points, frame))))
+                    }
                     Some(ShapeKind::Extraordinary { .. }) => {
                         Ok(Piece::Extraordinary { matrices: patch.matrices.clone(), shape: patch.shape, points, frame })
                     }
@@ -274,29 +357,46 @@ impl QuadtreeTessellator {
         }
     }
 
-    /// The quarter `(qx, qy)` of a piece, in the quarter's own coordinates.
-    pub(super) fn quarter(&self, piece: &Piece, qx: usize, qy: usize) -> Result<Piece, TessError> {
+    /// The child `domain` of a piece of `root`, in the child's own coordinates.
+    pub(super) fn child(&self, root: Root, piece: &Piece, domain: ChildDomain) -> Result<Piece, TessError> {
+        // A point inside the child, in the node's coordinates: its image of (½, ½) in a
+        // square, of (¼, ¼) in a triangle.
+        let [a, b] = domain.offset.map(i64::from);
+        let inside = if root.triangle {
+            let sign = if domain.flipped { -1 } else { 1 };
+            Dyadic::new(sign + 4 * a, sign + 4 * b, 8)
+        } else {
+            Dyadic::new(2 * a + 1, 2 * b + 1, 4)
+        };
         match piece {
-            Piece::Regular(b) => Ok(Piece::Regular(Box::new(b.quarter(qx, qy)))),
+            Piece::Regular(p) => Ok(Piece::Regular(Box::new(p.quarter(a as usize, b as usize)))),
+            Piece::Quartic(q) => Ok(Piece::Quartic(Box::new(q.child(domain.offset, domain.flipped)))),
             Piece::Face { level, face } => match self.levels.resolve(*level, *face) {
-                Some(Resolved::Children { children, domain }) => {
-                    let (child, ..) = domain.child_of(Dyadic::new(2 * qx as i64 + 1, 2 * qy as i64 + 1, 4));
+                Some(Resolved::Children { children, domain: face_domain }) => {
+                    let (child, ..) = face_domain.child_of(inside);
                     self.piece(level + 1, FaceId::new((children.start + child) as u32))
                 }
                 _ => Err(TessError::Internal(format!("level {level} {face} has no children"))),
             },
             Piece::Extraordinary { matrices, shape, points, frame } => {
-                let centre = frame.to_patch(Dyadic::new(2 * qx as i64 + 1, 2 * qy as i64 + 1, 4));
-                let offset = [u8::from(centre.u > 2), u8::from(centre.v > 2)];
+                // The patch's child holding the node's child (the frame maps children onto
+                // children, the middle triangle onto itself, and keeps its offset).
+                let (patch_domain, size) =
+                    if root.triangle { (FaceDomain::Triangle, 3) } else { (FaceDomain::Quad, 4) };
+                let (k, ..) = patch_domain.child_of(frame.to_patch(inside));
+                let want = ChildDomain::of_face(size)[k];
                 let sub = matrices.shapes[*shape]
                     .children
                     .iter()
-                    .find(|c| c.domain.offset == offset && !c.domain.flipped)
-                    .ok_or_else(|| TessError::Internal(format!("no child at {offset:?}")))?;
+                    .find(|c| c.domain == want)
+                    .ok_or_else(|| TessError::Internal(format!("no child {want:?}")))?;
                 let child = sub.apply(points);
                 match self.shapes.get(&(Arc::as_ptr(matrices) as usize, sub.shape)) {
                     Some(ShapeKind::Regular { net }) => {
                         Ok(Piece::Regular(Box::new(bezier_in_frame(net, &child, *frame))))
+                    }
+                    Some(ShapeKind::Quartic { net }) => {
+                        Ok(Piece::Quartic(Box::new(quartic_in_frame(net, &child, *frame))))
                     }
                     Some(ShapeKind::Extraordinary { .. }) => Ok(Piece::Extraordinary {
                         matrices: matrices.clone(),

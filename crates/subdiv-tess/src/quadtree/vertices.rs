@@ -7,9 +7,13 @@ use super::*;
 /// A leaf's polygon: vertex ids and their root coordinates.
 pub(super) type Ring = (Vec<u32>, Vec<(i64, i64)>);
 
-/// The `Bfr` parameters of root point `(x, y)`, laid out by [`FaceDomain`] (exact in f64: the
-/// denominators are powers of two).
+/// The `Bfr` parameters of root point `(x, y)`, laid out by [`FaceDomain`] (exact in f64 where
+/// the point is dyadic: a triangle's `3 · FULL` divides exactly into its multiples of 3).
 pub(super) fn bfr(root: Root, x: i64, y: i64) -> (f64, f64) {
+    if root.triangle {
+        let full = root.full() as f64;
+        return (x as f64 / full, y as f64 / full);
+    }
     let p = Dyadic::new(x, y, FULL);
     match root.sub {
         None => p,
@@ -28,21 +32,26 @@ impl QuadtreeTessellator {
         y: i64,
         corners: Option<&Corners>,
     ) -> Result<(DVec3, DVec3), TessError> {
+        let full = root.full();
         let mut piece = self.root_piece(root)?;
+        // The point in the node's coordinates (over `full`), and the node.
         let (mut x, mut y) = (x, y);
-        // The node of `piece`: depth and corner in root coordinates.
-        let (mut depth, mut nx, mut ny) = (0u32, 0i64, 0i64);
+        let mut node = Leaf::ROOT;
         loop {
-            let (qx, qy) = match &piece {
+            let corner = match &piece {
                 Piece::Regular(b) => {
-                    let (p, du, dv) = b.eval_with_derivatives(x as f64 / FULL as f64, y as f64 / FULL as f64);
+                    let (p, du, dv) = b.eval_with_derivatives(x as f64 / full as f64, y as f64 / full as f64);
                     return Ok((p, crate::unit_normal(du.cross(dv))));
                 }
-                Piece::Face { .. } => (usize::from(2 * x >= FULL), usize::from(2 * y >= FULL)),
+                Piece::Quartic(q) => {
+                    let (p, du, dv) = q.eval_with_derivatives(x as f64 / full as f64, y as f64 / full as f64);
+                    return Ok((p, crate::unit_normal(du.cross(dv))));
+                }
+                Piece::Face { .. } => None,
                 Piece::Extraordinary { matrices, shape, points, frame } => {
                     let corner = frame.to_face(Dyadic::new(0, 0, 1));
-                    let (cx, cy) = (corner.u * FULL, corner.v * FULL);
-                    if (x, y) == (cx, cy) {
+                    let corner = (corner.u * full, corner.v * full);
+                    if (x, y) == corner {
                         let key = (Arc::as_ptr(matrices) as usize, *shape);
                         let Some(ShapeKind::Extraordinary { position, du, dv }) = self.shapes.get(&key) else {
                             return Err(TessError::Internal("extraordinary shape not classified".into()));
@@ -51,23 +60,30 @@ impl QuadtreeTessellator {
                         // The patch frame keeps the face's orientation (determinant 1).
                         return Ok((apply(position), crate::unit_normal(apply(du).cross(apply(dv)))));
                     }
-                    // On a border between quarters, take the one away from the corner: the point
-                    // then reaches a polynomial piece.
-                    let pick = |t: i64, c: i64| match (2 * t).cmp(&FULL) {
-                        std::cmp::Ordering::Less => 0,
-                        std::cmp::Ordering::Greater => 1,
-                        std::cmp::Ordering::Equal => usize::from(c == 0),
-                    };
-                    (pick(x, cx), pick(y, cy))
+                    Some(corner)
                 }
             };
-            x = 2 * x - qx as i64 * FULL;
-            y = 2 * y - qy as i64 * FULL;
-            let h = FULL >> (depth + 1);
-            (depth, nx, ny) = (depth + 1, nx + qx as i64 * h, ny + qy as i64 * h);
-            piece = match corners.and_then(|c| c.get(&(depth, nx, ny))) {
-                Some(kept) => kept.clone(),
-                None => self.quarter(&piece, qx, qy)?,
+            // The child holding the point; on a border between children, one away from the
+            // extraordinary corner: the point then reaches a polynomial piece.
+            let local = |d: &ChildDomain, (px, py): (i64, i64)| {
+                let sign = if d.flipped { -1 } else { 1 };
+                (sign * (2 * px - i64::from(d.offset[0]) * full), sign * (2 * py - i64::from(d.offset[1]) * full))
+            };
+            let holds = |(cx, cy): (i64, i64)| {
+                cx >= 0 && cy >= 0 && if root.triangle { cx + cy <= full } else { cx <= full && cy <= full }
+            };
+            let mut holding = root.child_domains().iter().filter(|d| holds(local(d, (x, y))));
+            let first =
+                *holding.clone().next().ok_or_else(|| TessError::Internal("a point outside its root".into()))?;
+            let domain = match corner {
+                Some(c) => *holding.find(|d| !holds(local(d, c))).unwrap_or(&first),
+                None => first,
+            };
+            (x, y) = local(&domain, (x, y));
+            node = node.child(root, domain);
+            piece = match corners.and_then(|c| c.get(&(node.depth, node.x, node.y))) {
+                Some(kept) if !node.flipped => kept.clone(),
+                _ => self.child(root, &piece, domain)?,
             };
         }
     }
@@ -77,8 +93,10 @@ impl QuadtreeTessellator {
     /// root, toward its centre (`2^-20` of the way; deterministic), else the root face's
     /// control-polygon normal (Newell's), so that every vertex has a direction.
     pub(super) fn fallback_normal(&self, root: Root, x: i64, y: i64) -> Result<DVec3, TessError> {
-        let inward = |t: i64| t + ((FULL / 2 - t) >> 20);
-        let (_, normal) = self.eval(root, inward(x), inward(y), None)?;
+        let (_, _, centre) = Leaf::ROOT.corners(root);
+        let inward = |t: i64, c: i64| t + ((c - t) >> 20);
+        let (x, y) = (inward(x, centre.0), inward(y, centre.1));
+        let (_, normal) = self.eval(root, x, y, None)?;
         if normal != DVec3::ZERO {
             return Ok(normal);
         }
@@ -104,6 +122,19 @@ impl QuadtreeTessellator {
             VertexKey::Edge { edge: e.index() as u32, t: if forward { t } else { FULL - t } }
         };
         let inner = |sub: usize| VertexKey::Inner { face: face.index() as u32, sub: sub as u32, x, y };
+        if root.triangle {
+            // Points on the sides are multiples of 3 (dyadic points of the side), over 3 · FULL.
+            let full = root.full();
+            return match (x, y) {
+                (0, 0) => vertex(0),
+                (_, 0) if x == full => vertex(1),
+                (0, _) if y == full => vertex(2),
+                (_, 0) => on_side(0, x / 3),
+                _ if x + y == full => on_side(1, y / 3),
+                (0, _) => on_side(2, (full - y) / 3),
+                _ => inner(0),
+            };
+        }
         match root.sub {
             None => match (x, y) {
                 (0, 0) => vertex(0),
@@ -131,12 +162,11 @@ impl QuadtreeTessellator {
     /// A leaf's polygon: its corners and the hanging vertices on its edges, counter-clockwise,
     /// with their root coordinates.
     pub(super) fn ring(&self, root: Root, leaf: &Leaf, ids: &HashMap<VertexKey, u32>) -> Ring {
-        let h = FULL >> leaf.depth;
-        let c = [(leaf.x, leaf.y), (leaf.x + h, leaf.y), (leaf.x + h, leaf.y + h), (leaf.x, leaf.y + h)];
-        let mut ring = Vec::with_capacity(8);
-        let mut params = Vec::with_capacity(8);
-        for k in 0..4 {
-            let (a, b) = (c[k], c[(k + 1) % 4]);
+        let (c, n, _) = leaf.corners(root);
+        let mut ring = Vec::with_capacity(2 * n);
+        let mut params = Vec::with_capacity(2 * n);
+        for k in 0..n {
+            let (a, b) = (c[k], c[(k + 1) % n]);
             ring.push(ids[&self.key(root, a.0, a.1)]);
             params.push(a);
             self.hanging(root, a, b, ids, &mut ring, &mut params);
