@@ -119,6 +119,25 @@ impl Quartic {
         })
     }
 
+    /// Upper bounds of `‖S_uu‖`, `‖S_uv‖` and `‖S_vv‖` over the triangle: the largest norms of
+    /// their Bernstein coefficients (each is a quadratic on the triangle whose coefficients are
+    /// `12 ×` second differences of the net, and it lies in their convex hull).
+    pub fn second_derivative_bounds(&self) -> [f64; 3] {
+        let b = |i: usize, j: usize| self.net[Self::index(i, j)];
+        let mut out = [0.0f64; 3];
+        for j in 0..=2 {
+            for i in 0..=2 - j {
+                let uu = b(i + 2, j) - 2.0 * b(i + 1, j) + b(i, j);
+                let uv = b(i + 1, j + 1) - b(i + 1, j) - b(i, j + 1) + b(i, j);
+                let vv = b(i, j + 2) - 2.0 * b(i, j + 1) + b(i, j);
+                for (o, d) in out.iter_mut().zip([uu, uv, vv]) {
+                    *o = o.max(12.0 * d.length());
+                }
+            }
+        }
+        out
+    }
+
     /// The largest absolute coordinate of the net: the scale of its floating-point rounding.
     pub fn magnitude(&self) -> f64 {
         self.net.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max)
@@ -194,6 +213,34 @@ mod tests {
         let fu = (q.eval(u + h, v) - q.eval(u - h, v)) / (2.0 * h);
         let fv = (q.eval(u, v + h) - q.eval(u, v - h)) / (2.0 * h);
         assert!((du - fu).length() < 1e-7 && (dv - fv).length() < 1e-7, "{du} {fu} {dv} {fv}");
+    }
+
+    /// The bounds are never below second differences sampled on a fine grid, and reached at
+    /// some sample for a quadratic (constant second derivatives).
+    #[test]
+    fn second_derivative_bounds_hold() {
+        let q = sample();
+        let bounds = q.second_derivative_bounds();
+        let h = 1e-4;
+        for j in 1..20 {
+            for i in 1..20 - j {
+                let (u, v) = (f64::from(i) / 20.0, f64::from(j) / 20.0);
+                let uu = (q.eval(u + h, v) - 2.0 * q.eval(u, v) + q.eval(u - h, v)) / (h * h);
+                let uv = (q.eval(u + h, v + h) - q.eval(u + h, v - h) - q.eval(u - h, v + h) + q.eval(u - h, v - h))
+                    / (4.0 * h * h);
+                let vv = (q.eval(u, v + h) - 2.0 * q.eval(u, v) + q.eval(u, v - h)) / (h * h);
+                for (k, d) in [uu, uv, vv].iter().enumerate() {
+                    assert!(d.length() <= bounds[k] * (1.0 + 1e-5) + 1e-6, "{k} at ({u}, {v})");
+                }
+            }
+        }
+        let quadratic = Quartic::from_values(&std::array::from_fn(|a| {
+            let (i, j) = domain_point(a);
+            let (u, v) = (i as f64 / 4.0, j as f64 / 4.0);
+            DVec3::new(u * u, 3.0 * u * v, -v * v)
+        }));
+        let [uu, uv, vv] = quadratic.second_derivative_bounds();
+        assert!((uu - 2.0).abs() < 1e-9 && (uv - 3.0).abs() < 1e-9 && (vv - 2.0).abs() < 1e-9);
     }
 
     #[test]

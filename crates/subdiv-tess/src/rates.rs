@@ -273,9 +273,16 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// it by rings ([`DualTessellator::tessellate_with_rings`](crate::DualTessellator::tessellate_with_rings)),
 /// whose depths [`rates`](Self::rates) computes and whose bound it states.
 ///
+/// Under a triangle split (Loop) the same argument runs in the *equilateral* chart (each face
+/// an equilateral triangle of side 1, so that two faces across an edge, or the six around a
+/// regular vertex, are one flat chart where the box spline is C²), with `M` the bound there
+/// ([`FaceCurvature::second`](crate::FaceCurvature::second)) and the triangles' longest sides
+/// of that chart (`SplitGeometry`): a cell's hexagon fans `1/(√3 n)`, strip and vertex
+/// triangles at most `√(19/12) / n`, so `n ≥ √(19 M / (24 ε))`; bands between rings `√7/4 · r`.
+///
 /// A `rounding_slack` of `1e−12 ×` the model's size is kept from `ε` for the f64 arithmetic.
 /// The bounds come from the quadtree tessellator's pieces, so this policy takes what it takes:
-/// Catmull-Clark meshes, open ones and holes too. At a border (a boundary, or the edge of a
+/// Catmull-Clark and Loop meshes, open ones and holes too. At a border (a boundary, or the edge of a
 /// hole) the strips close against border points at the parameters of the row beside them, and a
 /// border vertex's polygon is fanned around its limit point, all within `√2 / n` in the chart of
 /// one face or of the two faces at a regular border vertex. An *extraordinary* border vertex (a
@@ -345,18 +352,49 @@ pub struct RingDepths {
     pub centres: Vec<u32>,
 }
 
-/// How finely a face at `rate` samples next to its corners, as a rate of a quad: its dual
-/// points nearest a corner are `½ / reach` away in face units (an N-gon's sub-faces, at
-/// `⌈n/2⌉` each and half as wide, reach `2⌈n/2⌉`).
-pub(crate) fn reach(mesh: &Mesh, face: FaceId, rate: u32) -> u32 {
-    if mesh.face_size(face) == 4 { rate } else { 2 * rate.div_ceil(2) }
+/// How finely a face at `rate` samples next to its corners: under a quad split as a rate of a
+/// quad, its dual points nearest a corner `½ / reach` away in face units (an N-gon's sub-faces,
+/// at `⌈n/2⌉` each and half as wide, reach `2⌈n/2⌉`); under a triangle split (`triangle`) the
+/// rate, the corner centroid `1/(3 reach)` from each side.
+pub(crate) fn reach(mesh: &Mesh, triangle: bool, face: FaceId, rate: u32) -> u32 {
+    if triangle || mesh.face_size(face) == 4 { rate } else { 2 * rate.div_ceil(2) }
 }
 
-/// The depth `d` of the first ring around a point whose nearest dual points are `½ / finest`
-/// away (face units): `2^−d` is the largest power of two below `½ / finest`.
-pub(crate) fn first_ring_depth(finest: u32) -> u32 {
-    finest.next_power_of_two().trailing_zeros() + 2 - u32::from(!finest.is_power_of_two())
+/// The depth `d` of the first ring around a point whose finest face reach is `finest`: under a
+/// quad split `2^−d` is the largest power of two below the nearest dual points' `½ / finest`;
+/// under a triangle split (`triangle`) the largest below `1 / (3 finest)`, the corner
+/// centroids' distance from each side, so that the first ring's points on the edges and at
+/// `(r/2, r/2)` lie inside the polygon through the centroids.
+pub(crate) fn first_ring_depth(triangle: bool, finest: u32) -> u32 {
+    if triangle {
+        (3 * finest + 1).next_power_of_two().trailing_zeros()
+    } else {
+        finest.next_power_of_two().trailing_zeros() + 2 - u32::from(!finest.is_power_of_two())
+    }
 }
+
+/// The constants of the bound `½ M h²` for one split's dual-grid triangles (see
+/// [`ErrorRates::rates`]): the rate `n` needs `cells · M / n² ≤ ε`, and the band between rings
+/// of radii `r` and `r/2` needs `bands · M r² ≤ ε`.
+#[derive(Clone, Copy)]
+struct SplitGeometry {
+    /// `½ (n h)²` for the longest side `h` of a cell, strip or vertex triangle at rate `n`.
+    cells: f64,
+    /// `½ (h / r)²` for the longest side `h` of a band's triangles.
+    bands: f64,
+}
+
+/// Quads, in face units: cells, strips and vertex polygons within `h = √2 / n`; bands of side
+/// `√5/2 · r`.
+const QUAD_SPLIT: SplitGeometry = SplitGeometry { cells: 1.0, bands: 0.5 * 1.25 };
+
+/// Triangles, in equilateral units (each face an equilateral triangle of side 1, so that two
+/// faces across an edge are one flat chart): a cell's hexagon fans have sides `1/(√3 n)`; strip
+/// triangles join rows of centroids at most `2/(√3 n)` apart across the edge and `½ / n` along
+/// it, so `h² ≤ (¼ + 4/3) / n² = 19 / (12 n²)`; vertex fans are shorter. A band's trapezoid
+/// `r/2 ≤ s + t ≤ r` (its points `(r/2, 0)`, `(r, 0)`, `(r/2, r/2)`, `(r/4, r/4)`) has its longest
+/// diagonal `√7/4 · r`.
+const TRIANGLE_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 19.0 / 12.0, bands: 0.5 * 7.0 / 16.0 };
 
 /// Below this depth (a square of side 2^−40 around an extraordinary point) a hull bound that is
 /// still above `ε` means the model is too small for the tolerance.
@@ -405,6 +443,8 @@ impl ErrorRates {
         round: impl Fn(u32) -> u32,
     ) -> Result<DualRates, TessError> {
         let budget = self.budget(bounds, mesh)?;
+        let triangle = bounds.triangle_split();
+        let geometry = if triangle { TRIANGLE_SPLIT } else { QUAD_SPLIT };
         let max_rate = self.max_rate.max(1);
         let limit = |face: FaceId, needed: String| TessError::RateLimit { face: face.index(), needed, max_rate };
         let mut cache: std::collections::HashMap<(FaceId, u32), crate::FaceCurvature> = Default::default();
@@ -459,8 +499,8 @@ impl ErrorRates {
                 .face_vertices(f)
                 .iter()
                 .flat_map(|&v| mesh.vertex_faces(v))
-                .map(|g| reach(mesh, g, rates[g.index()]));
-            first_ring_depth(finest.max().unwrap_or(1))
+                .map(|g| reach(mesh, triangle, g, rates[g.index()]));
+            first_ring_depth(triangle, finest.max().unwrap_or(1))
         };
         loop {
             let mut second = vec![0.0; mesh.face_count()];
@@ -472,7 +512,7 @@ impl ErrorRates {
             for &f in &faces {
                 let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
                 let m = around.fold(0.0f64, |m, g| m.max(second[g.index()]));
-                let needed = (m / budget).sqrt().ceil().max(1.0);
+                let needed = (geometry.cells * m / budget).sqrt().ceil().max(1.0);
                 let needed = if needed > f64::from(max_rate) { needed } else { f64::from(round(needed as u32)) };
                 if needed > f64::from(max_rate) {
                     return Err(limit(f, format!("rate {needed}")));
@@ -492,17 +532,17 @@ impl ErrorRates {
                           curvature: &mut dyn FnMut(FaceId, u32) -> Result<crate::FaceCurvature, TessError>|
          -> Result<u32, TessError> {
             let around: Vec<FaceId> = around.collect();
-            let finest = around.iter().map(|&g| reach(mesh, g, rates[g.index()])).max().unwrap_or(1);
-            let first = first_ring_depth(finest);
+            let finest = around.iter().map(|&g| reach(mesh, triangle, g, rates[g.index()])).max().unwrap_or(1);
+            let first = first_ring_depth(triangle, finest);
             let mut d = first;
             loop {
                 let mut within = true;
                 for &g in &around {
                     let c = curvature(g, d)?;
                     if d > first {
-                        // The band between 2^−(d−1) and 2^−d: triangles of side ≤ √5/2 · 2^−(d−1).
+                        // The band between 2^−(d−1) and 2^−d.
                         let r = 0.5f64.powi(d as i32 - 1);
-                        if 0.5 * c.second * 1.25 * r * r > budget {
+                        if geometry.bands * c.second * r * r > budget {
                             let why = format!("finer rates around it (its rings' bands fail the bound at depth {d})");
                             return Err(limit(g, why));
                         }

@@ -272,7 +272,11 @@ pub struct FaceCurvature {
     /// An upper bound of `‖S_uu‖ + ‖S_uv‖ + ‖S_vv‖` over the face less the squares of side
     /// `2^−corner_depth` at its extraordinary corners, in units where the face's sides are 1
     /// long (an N-gon's sub-faces are ½ wide, as they meet their neighbours). It bounds
-    /// `‖D²S[d, d]‖` for every unit direction `d`.
+    /// `‖D²S[d, d]‖` for every unit direction `d`. Under a triangle split, the bound of
+    /// `‖D²S[d, d]‖` for unit `d` of the *equilateral* chart (each face an equilateral triangle of
+    /// side 1, so that two faces across an edge form one flat chart): `2 λ_max` of the matrix
+    /// `[[A, B], [B, C]]` of the bounds of `‖S_uu‖, ‖S_uv‖, ‖S_vv‖` (the map from that chart to
+    /// `(u, v)` has norm `√2`).
     pub second: f64,
     /// The largest diameter of the control-point hull of the pieces at the face's
     /// extraordinary corners at that depth (0 without such corners): the surface within
@@ -392,6 +396,12 @@ impl QuadtreeTessellator {
         (&self.channels.names, &self.channels.dimensions)
     }
 
+    /// Whether the mesh's faces are a triangle split's triangles (Loop), whose
+    /// [`FaceCurvature`] is in equilateral units.
+    pub fn triangle_split(&self) -> bool {
+        self.roots.iter().any(|r| r.triangle)
+    }
+
     /// The diagonal of the control mesh's bounding box (what relative tolerances scale).
     pub fn diagonal(&self) -> f64 {
         self.diagonal
@@ -476,14 +486,14 @@ impl QuadtreeTessellator {
         // A piece of depth d keeps its corner at the root's: children at the same corner.
         for _ in 0..=DEPTH_LIMIT + 40 {
             match &piece {
-                Piece::Regular(_) => return Ok(false),
+                Piece::Regular(_) | Piece::Quartic(_) => return Ok(false),
                 Piece::Extraordinary { frame, .. } => {
                     let c = frame.to_face(Dyadic::new(0, 0, 1));
                     if (c.u * full, c.v * full) == (x, y) {
                         return Ok(true);
                     }
                 }
-                Piece::Face { .. } | Piece::Quartic(_) => {}
+                Piece::Face { .. } => {}
             }
             piece = self.child(root, &piece, domain)?;
         }
@@ -529,12 +539,12 @@ impl QuadtreeTessellator {
                 out.corner_hull = out.corner_hull.max(crate::flatness::hull_diameter(points));
                 return Ok(());
             }
-            Piece::Quartic(_) => {
-                return Err(TessError::Unsupported {
-                    feature: "dual-grid rates to a tolerance under a triangle split (second-derivative bounds of \
-                              its quartic pieces; --method quadtree takes it)",
-                    element: format!("{}", root.face),
-                });
+            Piece::Quartic(q) => {
+                let scale = 4f64.powi(depth as i32);
+                let [a, b, c] = q.second_derivative_bounds();
+                let largest = 0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt();
+                out.second = out.second.max(scale * 2.0 * largest);
+                return Ok(());
             }
             _ => {}
         }

@@ -7,7 +7,7 @@ use super::*;
 
 mod rings;
 
-pub(super) use self::rings::{first_depth, ring_count};
+pub(super) use self::rings::ring_count;
 
 impl RingCorner {
     pub(super) fn face(self) -> usize {
@@ -15,12 +15,6 @@ impl RingCorner {
             Self::Vertex { face, .. } | Self::Centre { face, .. } => face as usize,
         }
     }
-}
-
-/// How finely face `f` at `rate` samples next to its corners: a quad split's
-/// [`reach`] (a quad's rate, `2⌈n/2⌉` for an N-gon's sub-faces); a triangle's rate.
-pub(super) fn face_reach(mesh: &Mesh, triangle: bool, f: FaceId, rate: u32) -> u32 {
-    if triangle { rate } else { reach(mesh, f, rate) }
 }
 
 /// The number of faces around a regular interior vertex.
@@ -300,7 +294,7 @@ impl<'a> Builder<'a> {
                     let mut corners = std::mem::take(&mut self.buf.ring_corners);
                     corners.clear();
                     corners.extend((0..size as u32).map(|sub| RingCorner::Centre { face: f as u32, sub }));
-                    let finest = face_reach(self.mesh, false, FaceId::new(f as u32), n);
+                    let finest = reach(self.mesh, false, FaceId::new(f as u32), n);
                     self.rings(&corners, &ring, depth, finest, (f, centre_point));
                     self.buf.ring_corners = corners;
                 } else {
@@ -653,10 +647,10 @@ impl<'a> Builder<'a> {
         let finest = mesh
             .outgoing(v)
             .filter(|&h| has_surface(h))
-            .map(|h| face_reach(mesh, self.triangle, mesh.face(h), self.buf.rates[mesh.face(h).index()]))
+            .map(|h| reach(mesh, self.triangle, mesh.face(h), self.buf.rates[mesh.face(h).index()]))
             .max()
             .unwrap_or(1);
-        let plain = !self.triangle && mesh.outgoing(v).all(|h| self.across(h).is_none() || !self.is_border(h));
+        let plain = mesh.outgoing(v).all(|h| self.across(h).is_none() || !self.is_border(h));
         for &start in &starts {
             ring.clear();
             corners.clear();

@@ -407,8 +407,8 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             let depth = rings.map_or(0, |r| r.centres[f.index()]);
             let centre = if depth > 0 {
                 // Two points per sub-face per ring, and the centre (N = 3 has none without).
-                let finest = reach(mesh, f, rates[f.index()]);
-                2 * size * ring_count(first_depth(false, finest), depth) as usize + 1
+                let finest = reach(mesh, false, f, rates[f.index()]);
+                2 * size * ring_count(first_ring_depth(false, finest), depth) as usize + 1
             } else {
                 usize::from(size >= 5)
             };
@@ -437,23 +437,23 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
         let depth = rings.map_or(0, |r| r.vertices[v.index()]);
         // Cut by a sharp edge or a seam between two faces with a surface (open rings need none).
         let cut_between = mesh.outgoing(v).any(|h| mesh.twin(h).is_some_and(|t| !hole(mesh.face(t))) && cut(h));
-        if border && depth > 0 && !triangle && !cut_between {
+        if border && depth > 0 && !cut_between {
             // Open rings: per run of faces between borders, two points per face and one more
             // per ring, and the limit point once.
-            let finest = faces.iter().map(|&f| face_reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
+            let finest = faces.iter().map(|&f| reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
             let runs = mesh
                 .outgoing(v)
                 .filter(|&h| !hole(mesh.face(h)) && mesh.twin(h).is_none_or(|t| hole(mesh.face(t))))
                 .count();
-            count += (2 * faces.len() + runs) * ring_count(first_depth(triangle, finest), depth) as usize + 1;
+            count += (2 * faces.len() + runs) * ring_count(first_ring_depth(triangle, finest), depth) as usize + 1;
         } else if !border
             && depth > 0
             && faces.len() >= 3
             && (faces.len() != regular(triangle) || sharp_corner(mesh, v))
         {
             // Two points per face per ring (its edge's and its inner one), and the limit point.
-            let finest = faces.iter().map(|&f| face_reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
-            count += 2 * faces.len() * ring_count(first_depth(triangle, finest), depth) as usize + 1;
+            let finest = faces.iter().map(|&f| reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
+            count += 2 * faces.len() * ring_count(first_ring_depth(triangle, finest), depth) as usize + 1;
         } else if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
             count += 1;
         }

@@ -3,15 +3,6 @@
 
 use super::*;
 
-/// The depth `d1` of the first ring around a point whose finest face reach is `finest`: under a
-/// quad split [`first_ring_depth`] (`2^−d1` the largest power of two below the nearest dual
-/// points' `½ / finest`); under a triangle split the largest power of two below `1 / (3 finest)`,
-/// the corner centroids' distance from each side, so that the first ring's points on the edges
-/// and at `(r/2, r/2)` lie inside the polygon through the centroids.
-pub(in crate::dual::topology) fn first_depth(triangle: bool, finest: u32) -> u32 {
-    if triangle { (3 * finest + 1).next_power_of_two().trailing_zeros() } else { first_ring_depth(finest) }
-}
-
 /// The number of rings around a point at `depth` (> 0) whose first ring is at depth `first`:
 /// from `2^−first` down to `2^−max(depth, first)`, one ring per halving (at least one).
 pub(in crate::dual::topology) fn ring_count(first: u32, depth: u32) -> u32 {
@@ -69,8 +60,7 @@ impl Builder<'_> {
     /// [`ErrorRates::rates`](crate::rates::ErrorRates::rates) assumes: from the polygon's corners
     /// to ring 1 two triangles per face and one across each edge; between rings `j` and `j + 1`
     /// two quads per face in its L-shaped region `[0, r_j]² \ [0, r_{j+1})²`; a fan inside the
-    /// last. Under a triangle split (no tolerance policy yet) the same with a triangle's frames:
-    /// `d1` from [`first_depth`], the inner point at `(r_j/2, r_j/2)`, and the quads in the
+    /// last. Under a triangle split the same with a triangle's frames: the inner point at `(r_j/2, r_j/2)`, and the quads in the
     /// trapezoid `r_{j+1} ≤ s + t ≤ r_j`.
     pub(in crate::dual::topology) fn rings(
         &mut self,
@@ -81,13 +71,10 @@ impl Builder<'_> {
         centre: (usize, Dyadic),
     ) {
         let n = corners.len() as u32;
-        let first = first_depth(self.triangle, finest);
+        let first = first_ring_depth(self.triangle, finest);
         let count = ring_count(first, depth);
         let base = self.out.vertex_count;
-        // Per face: the point on its first edge at r, and the inner one: the diagonal point
-        // (r, r) of a quad corner; (r/2, r/2) of a triangle corner, on the segment between the
-        // corner's two edge points (the triangle's region between rings is a trapezoid).
-        let ((edge, inner), shift) = if self.triangle { (((2, 0), (1, 1)), 1) } else { (((1, 0), (1, 1)), 0) };
+        let (edge, inner, _, shift) = self.ring_frame();
         for j in 0..count {
             for &c in corners {
                 let on_edge = self.ring_point(c, edge.0, edge.1, first + j + shift);
@@ -113,6 +100,16 @@ impl Builder<'_> {
         }
     }
 
+    /// A ring's points in a corner's frame at `(a, b) · 2^−(e + shift)` for ring depth `e`: the
+    /// point on the corner's first edge at `r`, the inner one, the point on its last edge, and
+    /// the shift: a quad corner's are `(r, 0)`, the diagonal point `(r, r)`, `(0, r)`; a triangle
+    /// corner's `(r, 0)`, `(r/2, r/2)` (on the segment between the corner's two edge points: the
+    /// triangle's region between rings is a trapezoid), `(0, r)`.
+    #[allow(clippy::type_complexity)]
+    fn ring_frame(&self) -> ((i64, i64), (i64, i64), (i64, i64), u32) {
+        if self.triangle { ((2, 0), (1, 1), (0, 2), 1) } else { ((1, 0), (1, 1), (0, 1), 0) }
+    }
+
     /// The bands between `count` rings of `n` faces: two quads per face in its L-shaped region
     /// between ring `j` and `j + 1`, `at(j, k)` point `k` of ring `j` (edge points at even `k`,
     /// diagonal points at odd).
@@ -126,8 +123,8 @@ impl Builder<'_> {
         }
     }
 
-    /// [`rings`](Self::rings) in an open run of faces around a border vertex (quad split; its
-    /// borders have nothing across): `outer` is the run's polygon, the border point on its first
+    /// [`rings`](Self::rings) in an open run of faces around a border vertex (its borders have
+    /// nothing across): `outer` is the run's polygon, the border point on its first
     /// edge, each face's nearest dual point, the border point on its last edge; `corners` one
     /// per face. Each ring has a point on every edge of the run at `r_j` (the last edge's made in
     /// the last face, on its `t` axis) and one per face at `(r_j, r_j)`, so the bands are the
@@ -144,18 +141,19 @@ impl Builder<'_> {
         centre: &mut Option<u32>,
     ) {
         let n = corners.len() as u32;
-        let first = first_depth(false, finest);
+        let first = first_ring_depth(self.triangle, finest);
         let count = ring_count(first, depth);
         let base = self.out.vertex_count;
+        let (edge, inner, last_edge, shift) = self.ring_frame();
         for j in 0..count {
             for &c in corners {
-                let on_edge = self.ring_point(c, 1, 0, first + j);
+                let on_edge = self.ring_point(c, edge.0, edge.1, first + j + shift);
                 self.push_site(c.face(), on_edge);
-                let diagonal = self.ring_point(c, 1, 1, first + j);
+                let diagonal = self.ring_point(c, inner.0, inner.1, first + j + shift);
                 self.push_site(c.face(), diagonal);
             }
             let last = corners[corners.len() - 1];
-            let on_last = self.ring_point(last, 0, 1, first + j);
+            let on_last = self.ring_point(last, last_edge.0, last_edge.1, first + j + shift);
             self.push_site(last.face(), on_last);
         }
         let p = match *centre {
