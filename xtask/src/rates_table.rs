@@ -41,7 +41,7 @@ pub(crate) fn run() -> Result<(), String> {
             crate::adaptive::limit_grids(&mesh, 24)?.into_iter().flatten().map(|(.., p)| p).collect();
         for r in TOLERANCES {
             let epsilon = Tolerance::Relative(r).absolute(bounds.diagonal()).map_err(|e| e.to_string())?;
-            let policy = ErrorRates { channels: false, ..ErrorRates::new(Tolerance::Relative(r)) };
+            let policy = ErrorRates::new(Tolerance::Relative(r));
             let (rational, rings) = match policy.rates(&bounds, &mesh) {
                 Ok(rates) => (rates.faces, rates.rings),
                 Err(e) => {

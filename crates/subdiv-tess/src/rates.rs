@@ -290,9 +290,8 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// the interior rules) takes rings in its open runs of faces, bounded as the closed rings below
 /// (each band in one face, from the first border point a triangle in the first face). The
 /// tessellator also cuts the polygon around a vertex along infinitely sharp edges and the seams
-/// of the channels it carries ([`channels`](Self::channels)); the runs on either side of such an
-/// edge would have to share their ring points on it, which they do not yet, so the policy
-/// refuses an extraordinary vertex on one.
+/// of the channels it carries: the runs on either side of such an edge take open rings too, and
+/// share their ring points on it (one vertex, an extra normal and channel values per side).
 ///
 /// ```
 /// use subdiv_mesh::{shapes, Mesh};
@@ -313,17 +312,12 @@ pub struct ErrorRates {
     pub tolerance: Tolerance,
     /// The largest rate allowed: a face that needs more is an error.
     pub max_rate: u32,
-    /// Whether the tessellation carries the mesh's face-varying channels
-    /// ([`DualOptions::channels`](crate::DualOptions)), which cuts the polygons around vertices
-    /// at their seams (see [`rates`](Self::rates)). Default: `true`, as the tessellator's.
-    pub channels: bool,
 }
 
 impl ErrorRates {
-    /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`], for a tessellation that carries the
-    /// mesh's channels.
+    /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`].
     pub fn new(tolerance: Tolerance) -> Self {
-        Self { tolerance, max_rate: DEFAULT_MAX_RATE, channels: true }
+        Self { tolerance, max_rate: DEFAULT_MAX_RATE }
     }
 }
 
@@ -462,18 +456,6 @@ impl ErrorRates {
         for &f in &faces {
             extraordinary[f.index()] = curvature(f, 1)?.corner_hull > 0.0;
         }
-        // Where the dual tessellation cuts the polygon around a vertex between two faces (an
-        // infinitely sharp edge, a seam of a carried channel), its runs have no rings: no bound
-        // covers their fans where the surface there is an extraordinary piece. (Runs that end
-        // at borders with nothing across take open rings.)
-        let cut = |h: subdiv_mesh::HalfEdgeId| {
-            let e = mesh.edge(h);
-            let between =
-                bounds.has_surface(mesh.face(h)) && mesh.twin(h).is_some_and(|t| bounds.has_surface(mesh.face(t)));
-            between
-                && (mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP
-                    || (self.channels && mesh.channels().iter().any(|c| mesh.is_seam(c, e))))
-        };
         // The vertices at which some face's surface is an extraordinary piece: every valence
         // other than the regular one, and sharp corners and darts of any valence.
         let mut corner_of = vec![false; mesh.vertex_count()];
@@ -481,13 +463,6 @@ impl ErrorRates {
             for v in bounds.extraordinary_corners(f)? {
                 corner_of[v.index()] = true;
             }
-        }
-        if let Some(v) = mesh.vertices().find(|&v| corner_of[v.index()] && mesh.outgoing(v).any(cut)) {
-            return Err(TessError::Unsupported {
-                feature: "tolerance rates at an extraordinary vertex on an infinitely sharp edge or a texture seam \
-                          (the dual tessellation's runs there share no rings yet; --method quadtree takes it)",
-                element: format!("{v}"),
-            });
         }
         // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the depth
         // of the first ring for the finest rate around each of its vertices (no triangle outside

@@ -572,3 +572,74 @@ proptest! {
         ring_checks(&mesh, &rates, &rings, false);
     }
 }
+
+/// Rings at extraordinary vertices on edges cut between two faces — an infinitely sharp edge
+/// (Catmull-Clark and Loop), a texture seam on every edge (one chart per face): the open runs on
+/// the two sides share their ring points on the cut edge, so the output is watertight and
+/// counted as predicted, every vertex on the surface, and each side's extra entry there is the
+/// same point seen from its own face, with that side's normal and exact channel values.
+#[test]
+fn rings_on_cut_edges_share_their_points() {
+    let sharp_edge = |mut soup: PolygonSoup| {
+        let [a, b] = [soup.face(FaceId::new(0))[0], soup.face(FaceId::new(0))[1]];
+        soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 10.0 });
+        soup
+    };
+    for (name, soup, builtin) in [
+        ("cube, a sharp edge", sharp_edge(shapes::cube()), Builtin::CatmullClark),
+        ("cube, a chart per face", shapes::face_charts(shapes::cube()), Builtin::CatmullClark),
+        ("icosahedron, a sharp edge", sharp_edge(shapes::icosahedron()), Builtin::Loop),
+        ("icosahedron, a chart per face", shapes::face_charts(shapes::icosahedron()), Builtin::Loop),
+    ] {
+        let mesh = Mesh::build(soup).unwrap();
+        let triangle = builtin == Builtin::Loop;
+        let scheme = builtin.scheme();
+        let evaluator = LimitEvaluator::new(scheme, &mesh, &RefineOptions::DEFAULT).unwrap();
+        // The channel's values: linear in mode `all` (the default here), as the tessellator's.
+        let channel = mesh.channels().first().map(|c| {
+            let surface = subdiv_schemes::ChannelSurface::new(&mesh, c, scheme, &RefineOptions::DEFAULT).unwrap();
+            subdiv_stencil::LinearEvaluator::new(&surface).unwrap().expect("mode all is linear")
+        });
+        let d = diagonal(&mesh);
+        for seed in 0..3 {
+            let rates = rates_for(&mesh, seed, 9);
+            let mut rings = random_rings(&mesh, seed, 9);
+            rings.vertices.iter_mut().for_each(|r| *r = (*r).max(1));
+            let mut tess = DualTessellator::new(scheme, &mesh, &DualOptions::default()).unwrap();
+            let out = tess.tessellate_with_rings(&rates, &rings).unwrap().clone();
+            assert!(check(&out).is_empty(), "{name}: border edges on a closed mesh");
+            assert_eq!(euler(&out), input_euler(&mesh), "{name}");
+            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, triangle, &rates, &rings));
+            let on_surface = |p: &subdiv_tess::SurfaceParameter| {
+                let sum = p.u + p.v;
+                let (u, v) = if triangle && sum > 1.0 - 1e-15 {
+                    (p.u * (1.0 - 1e-15) / sum, p.v * (1.0 - 1e-15) / sum)
+                } else {
+                    (p.u, p.v)
+                };
+                evaluator.eval(p.face, u, v).unwrap()
+            };
+            for (i, p) in out.parameters.iter().enumerate() {
+                let want = on_surface(p).position;
+                assert!((want - out.positions[i]).length() < 1e-12 * d, "{name}: vertex {i} off the surface");
+            }
+            assert!(!out.normal_vertices.is_empty(), "{name}: nothing split");
+            let vertices = out.positions.len();
+            for (e, (&v, p)) in out.normal_vertices.iter().zip(&out.normal_parameters).enumerate() {
+                let want = on_surface(p);
+                assert!(
+                    (want.position - out.positions[v as usize]).length() < 1e-12 * d,
+                    "{name}: extra {e} elsewhere"
+                );
+                let normal = want.du.cross(want.dv).normalize();
+                let got = out.normals[vertices + e];
+                assert!((normal - got).length() < 1e-9, "{name}: extra {e}'s normal at {p:?}: {got}, not {normal}");
+                if let Some(channel) = &channel {
+                    let value = channel.eval(p.face, p.u, p.v).unwrap().position;
+                    let got = &out.channels.values[2 * (vertices + e)..2 * (vertices + e) + 2];
+                    assert!((got[0] - value.x).abs() < 1e-12 && (got[1] - value.y).abs() < 1e-12, "{name}: extra {e}");
+                }
+            }
+        }
+    }
+}

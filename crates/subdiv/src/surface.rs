@@ -316,9 +316,7 @@ impl Surface {
                     Error::Tess(e) => Error::ToleranceBounds(e),
                     e => e,
                 })?;
-                // The dual tessellator carries channels where the scheme has rules for them.
-                let channels = self.scheme.has_crease_rules();
-                let policy = ErrorRates { tolerance: *tolerance, max_rate: options.max_rate, channels };
+                let policy = ErrorRates { tolerance: *tolerance, max_rate: options.max_rate };
                 let DualRates { faces, rings } = policy.rates(bounds, &self.mesh).map_err(|e| match e {
                     subdiv_tess::TessError::Unsupported { .. } => Error::ToleranceBounds(e),
                     e => Error::Tess(e),
@@ -691,9 +689,9 @@ mod tests {
         assert!(matches!(s.tessellate(&screen), Err(Error::DualScreenError)));
         let on_screen = s.tessellate(&screen.clone().with_method(Method::Quadtree)).unwrap();
         assert!(on_screen.info.epsilon.is_none() && !on_screen.mesh.triangles.is_empty());
-        // Both methods take the grid to a tolerance (its smooth corners ringed in open runs);
-        // the dual rates take no extraordinary vertex on an infinitely sharp edge, the quadtree
-        // does; the dual tessellator takes no rate 0.
+        // Both methods take the grid to a tolerance (its smooth corners ringed in open runs), and
+        // an extraordinary vertex on an infinitely sharp edge (the dual's runs on its two sides
+        // share their ring points on it); the dual tessellator takes no rate 0.
         let tolerance = TessOptions::DEFAULT.with_rates(Rates::Tolerance(Tolerance::Relative(1e-2)));
         assert!(s.tessellate(&tolerance).is_ok());
         assert!(s.tessellate(&quadtree.clone().with_rates(tolerance.rates.clone())).is_ok());
@@ -701,7 +699,7 @@ mod tests {
         let [a, b] = [creased.face(FaceId::new(0))[0], creased.face(FaceId::new(0))[1]];
         creased.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [a, b], sharpness: 10.0 });
         let mut creased = surface(creased);
-        assert!(matches!(creased.tessellate(&tolerance), Err(Error::ToleranceBounds(_))));
+        assert!(creased.tessellate(&tolerance).is_ok());
         assert!(creased.tessellate(&quadtree.with_rates(tolerance.rates.clone())).is_ok());
         assert!(matches!(s.tessellate(&TessOptions::DEFAULT.with_rates(Rates::Uniform(0))), Err(Error::Tess(_))));
         assert!(matches!(

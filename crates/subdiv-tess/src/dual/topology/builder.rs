@@ -7,7 +7,7 @@ use super::*;
 
 mod rings;
 
-pub(super) use self::rings::ring_count;
+pub(super) use self::rings::{RunEnd, ring_count};
 
 impl RingCorner {
     pub(super) fn face(self) -> usize {
@@ -88,6 +88,12 @@ pub(crate) struct BuilderBuffers {
     starts: Vec<HalfEdgeId>,
     /// The ring's corners, beside `ring` (for the rings around extraordinary points).
     ring_corners: Vec<RingCorner>,
+    /// Around the vertex being built, per edge cut between two faces (an infinitely sharp edge,
+    /// a seam), the open rings' points on it, by ring: made by the first run that reaches it,
+    /// taken (with that run's extra entries) by the run on its other side.
+    cut_ring_points: HashMap<u32, Vec<u32>>,
+    /// One ring's points, as [`Corner`]s (open rings).
+    ring_points: Vec<Corner>,
     /// The rates being built, and the ring depths (empty: none).
     rates: Vec<u32>,
     ring_vertices: Vec<u32>,
@@ -650,7 +656,7 @@ impl<'a> Builder<'a> {
             .map(|h| reach(mesh, self.triangle, mesh.face(h), self.buf.rates[mesh.face(h).index()]))
             .max()
             .unwrap_or(1);
-        let plain = mesh.outgoing(v).all(|h| self.across(h).is_none() || !self.is_border(h));
+        self.buf.cut_ring_points.clear();
         for &start in &starts {
             ring.clear();
             corners.clear();
@@ -660,7 +666,7 @@ impl<'a> Builder<'a> {
             }
             let mut h = start;
             // The run's last half-edge (into `v`, on its last border).
-            let mut end = start;
+            let mut end_edge = start;
             loop {
                 let f = mesh.face(h).index();
                 let corner = self.mesh.corner(h);
@@ -671,7 +677,7 @@ impl<'a> Builder<'a> {
                     if !closed {
                         ring.push(self.border(p).points.1);
                     }
-                    end = p;
+                    end_edge = p;
                     break;
                 }
                 h = mesh.twin(p).expect("not a border");
@@ -688,10 +694,19 @@ impl<'a> Builder<'a> {
                 self.rings(&corners, &ring, depth, finest, (f0, point));
                 continue;
             }
-            // An open run at a border vertex with a ring depth, its borders plain: open rings.
-            if !closed && depth > 0 && plain {
+            // An open run at a border vertex with a ring depth: open rings, sharing their points
+            // on an edge cut between two faces with the run across it.
+            if !closed && depth > 0 {
                 let point = self.corner_point(f0, self.mesh.corner(start));
-                self.open_rings(&corners, &ring, depth, finest, (f0, point), &mut centre);
+                let end = |h: HalfEdgeId, extra: Option<u32>| RunEnd {
+                    extra,
+                    shared: self.across(h).is_some().then(|| mesh.edge(h).index() as u32),
+                };
+                let ends = [
+                    end(start, self.border(start).extra.map(|e| e.0)),
+                    end(end_edge, self.border(end_edge).extra.map(|e| e.1)),
+                ];
+                self.open_rings(&corners, &ring, ends, depth, finest, (f0, point), &mut centre);
                 continue;
             }
             // Closed rings of 3 (and 4 under a quad split) are polygons of their own; rings of
@@ -721,7 +736,7 @@ impl<'a> Builder<'a> {
                         t[1].extra = self.border(start).extra.map(|e| e.0);
                     }
                     if k + 1 == last {
-                        t[2].extra = self.border(end).extra.map(|e| e.1);
+                        t[2].extra = self.border(end_edge).extra.map(|e| e.1);
                     }
                     self.triangle_at(t, f0 as u32);
                 }

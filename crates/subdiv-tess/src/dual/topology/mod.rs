@@ -435,11 +435,11 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             mesh.outgoing(v).any(|h| mesh.twin(h).is_none_or(|t| hole(mesh.face(t))) || hole(mesh.face(h)) || cut(h))
                 || mesh.is_boundary_vertex(v);
         let depth = rings.map_or(0, |r| r.vertices[v.index()]);
-        // Cut by a sharp edge or a seam between two faces with a surface (open rings need none).
-        let cut_between = mesh.outgoing(v).any(|h| mesh.twin(h).is_some_and(|t| !hole(mesh.face(t))) && cut(h));
-        if border && depth > 0 && !cut_between {
-            // Open rings: per run of faces between borders, two points per face and one more
-            // per ring, and the limit point once.
+        if border && depth > 0 {
+            // Open rings: per ring two points per face, and one more per run that starts at a
+            // border with nothing across (a run that starts at an edge cut between two faces
+            // shares its points there with the run across, whose last edge it is); the limit
+            // point once.
             let finest = faces.iter().map(|&f| reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
             let runs = mesh
                 .outgoing(v)
