@@ -259,9 +259,14 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// Taylor's theorem with integral remainder at each corner gives, for the point `p` with
 /// barycentric weights `λ_i`,
 ///
-/// `‖S(p) − Σ λ_i S(p_i)‖ ≤ ½ M Σ λ_i ‖p − p_i‖² ≤ ½ M h² = M / n²`,
+/// `‖S(p) − Σ λ_i S(p_i)‖ ≤ ½ M Σ λ_i ‖p − p_i‖²`,
 ///
-/// so a face with rate `n ≥ √(M/ε)` keeps its own triangles, and those it shares with coarser
+/// and `Σ λ_i ‖p − p_i‖² = R² − ‖p − O‖²` (`O`, `R` the circumcentre and radius). Over the
+/// triangle its largest value is `R² ≤ L²/3` when the triangle is acute (its largest angle is
+/// at least 60°, and `L = 2R sin` of it), else `(L/2)²` (at the midpoint of the longest side
+/// `L`, the point nearest `O`). So every triangle is within `M L² / 6 ≤ M / (3 n²)`, and a
+/// cell's right triangles (hypotenuse `√2/n`) within `M / (4 n²)`:
+/// a face with rate `n ≥ √(M/(3ε))` keeps its own triangles, and those it shares with coarser
 /// neighbours' rates, within `ε` — provided `M` bounds every face that a triangle touches:
 /// each face takes the largest `M` ([`QuadtreeTessellator::face_curvature`]) of the faces sharing a
 /// vertex with it. Near an extraordinary point `M` is taken over the face less the corner
@@ -278,7 +283,7 @@ pub const DEFAULT_MAX_RATE: u32 = crate::dual::MAX_DUAL_RATE;
 /// regular vertex, are one flat chart where the box spline is C²), with `M` the bound there
 /// ([`FaceCurvature::second`](crate::FaceCurvature::second)) and the triangles' longest sides
 /// of that chart (`SplitGeometry`): a cell's hexagon fans `1/(√3 n)`, strip and vertex
-/// triangles at most `√(19/12) / n`, so `n ≥ √(19 M / (24 ε))`; bands between rings `√7/4 · r`.
+/// triangles at most `√(19/12) / n`, so `n ≥ √(19 M / (72 ε))`; bands between rings `√7/4 · r`.
 ///
 /// A `rounding_slack` of `1e−12 ×` the model's size is kept from `ε` for the f64 arithmetic.
 /// The bounds come from the quadtree tessellator's pieces, so this policy takes what it takes:
@@ -367,28 +372,31 @@ pub(crate) fn first_ring_depth(triangle: bool, finest: u32) -> u32 {
     }
 }
 
-/// The constants of the bound `½ M h²` for one split's dual-grid triangles (see
-/// [`ErrorRates::rates`]): the rate `n` needs `cells · M / n² ≤ ε`, and the band between rings
-/// of radii `r` and `r/2` needs `bands · M r² ≤ ε`.
+/// The constants of the bound `½ M max Σ λ_i ‖p − p_i‖²` for one split's dual-grid triangles
+/// (see [`ErrorRates::rates`]; the maximum is at most `L²/3` for a longest side `L`, `L²/4` for
+/// a right triangle): the rate `n` needs `cells · M / n² ≤ ε`, and the band between rings of
+/// radii `r` and `r/2` needs `bands · M r² ≤ ε`.
 #[derive(Clone, Copy)]
 struct SplitGeometry {
-    /// `½ (n h)²` for the longest side `h` of a cell, strip or vertex triangle at rate `n`.
+    /// `½ n² max Σ λ_i ‖p − p_i‖²` over the cell, strip and vertex triangles at rate `n`.
     cells: f64,
-    /// `½ (h / r)²` for the longest side `h` of a band's triangles.
+    /// `½ r⁻² max Σ λ_i ‖p − p_i‖²` over a band's triangles.
     bands: f64,
 }
 
-/// Quads, in face units: cells, strips and vertex polygons within `h = √2 / n`; bands of side
-/// `√5/2 · r`.
-const QUAD_SPLIT: SplitGeometry = SplitGeometry { cells: 1.0, bands: 0.5 * 1.25 };
+/// Quads, in face units: cells' right triangles of hypotenuse `√2 / n` (`L²/4 = ½ n⁻²`); strip
+/// and vertex triangles within `√2 / n` (`L²/3 = ⅔ n⁻²`, the larger); bands' triangles of
+/// longest side `√5/2 · r` (`5/12 r²`).
+const QUAD_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 2.0 / 3.0, bands: 0.5 * 5.0 / 12.0 };
 
 /// Triangles, in equilateral units (each face an equilateral triangle of side 1, so that two
-/// faces across an edge are one flat chart): a cell's hexagon fans have sides `1/(√3 n)`; strip
-/// triangles join rows of centroids at most `2/(√3 n)` apart across the edge and `½ / n` along
-/// it, so `h² ≤ (¼ + 4/3) / n² = 19 / (12 n²)`; vertex fans are shorter. A band's trapezoid
-/// `r/2 ≤ s + t ≤ r` (its points `(r/2, 0)`, `(r, 0)`, `(r/2, r/2)`, `(r/4, r/4)`) has its longest
-/// diagonal `√7/4 · r`.
-const TRIANGLE_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 19.0 / 12.0, bands: 0.5 * 7.0 / 16.0 };
+/// faces across an edge are one flat chart): a cell's hexagon fans are equilateral of side
+/// `1/(√3 n)` (`R² = 1/(9 n²)`); strip triangles join rows of centroids at most `2/(√3 n)` apart
+/// across the edge and `½ / n` along it, so `L² ≤ (¼ + 4/3) / n² = 19 / (12 n²)` (`L²/3`, the
+/// largest); vertex fans are shorter. A band's trapezoid `r/2 ≤ s + t ≤ r` (its points
+/// `(r/2, 0)`, `(r, 0)`, `(r/2, r/2)`, `(r/4, r/4)`) is cut along a diagonal of at most `√7/4 · r`
+/// (`7/48 r²`).
+const TRIANGLE_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 19.0 / 36.0, bands: 0.5 * 7.0 / 48.0 };
 
 /// Below this depth (a square of side 2^−40 around an extraordinary point) a hull bound that is
 /// still above `ε` means the model is too small for the tolerance.
@@ -407,7 +415,8 @@ impl ErrorRates {
     /// `(r_{j+1}, 0), (r_j, 0), (r_j, r_j), (r_{j+1}, r_{j+1})` and its mirror, inside the
     /// face's L-shaped region `[0, r_j]² \ [0, r_{j+1})²`: two triangles each, of longest side
     /// `√5/2 · r_j`, in one flat chart where the surface is C². Their deviation is at most
-    /// `½ M (√5/2 · r_j)²`, `M` the second-derivative bound of the face less its corner square
+    /// `½ M (√5/2 · r_j)² / 3` (see [`ErrorRates`]), `M` the second-derivative bound of the face
+    /// less its corner square
     /// of side `r_{j+1}` — checked for every depth below the faces' own bound region. The fan
     /// inside the last ring lies, with the surface it stands for, in the hull of the corner
     /// piece of depth `d`: within its diameter. The band from the dual points to the first ring
@@ -598,7 +607,7 @@ mod tests {
         let torus = Mesh::build(shapes::quad_torus(16, 8)).expect("torus");
         let bounds = QuadtreeTessellator::new(cc, &torus).expect("closed");
         let rate = |r: f64| ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &torus).expect("reachable").faces;
-        let (coarse, fine) = (rate(1e-2), rate(1e-4));
+        let (coarse, fine) = (rate(1e-3), rate(1e-5));
         let ratio = f64::from(*fine.iter().max().expect("faces")) / f64::from(*coarse.iter().max().expect("faces"));
         assert!((8.0..=12.0).contains(&ratio), "rates {coarse:?} → {fine:?}");
         let cube = Mesh::build(shapes::cube()).expect("cube");
@@ -627,7 +636,7 @@ mod tests {
         let bounds = QuadtreeTessellator::new(cc, &torus).expect("closed");
         let r = ErrorRates::new(Tolerance::Relative(1e-3)).rates(&bounds, &torus).expect("reachable");
         assert!(r.rings.vertices.iter().all(|&d| d == 0));
-        // And the rates are ⌈√(M/ε)⌉ of the faces' own bound (no corner to exclude).
+        // And the rates are ⌈√(M/(3ε))⌉ of the faces' own bound (no corner to exclude).
         let epsilon = Tolerance::Relative(1e-3).absolute(bounds.diagonal()).expect("valid");
         let magnitude = torus.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
         let budget = epsilon - rounding_slack(magnitude);
@@ -637,7 +646,7 @@ mod tests {
             .map(|f| {
                 let around = torus.face_vertices(f).iter().flat_map(|&v| torus.vertex_faces(v));
                 let m = around.map(|g| second[g.index()]).fold(0.0, f64::max);
-                (m / budget).sqrt().ceil() as u32
+                (QUAD_SPLIT.cells * m / budget).sqrt().ceil() as u32
             })
             .collect();
         assert_eq!(r.faces, want);
