@@ -313,6 +313,14 @@ fn semi_sharp_cubes_are_within_tolerance_of_the_limit_surface() {
         Mesh::build(soup).unwrap()
     };
     guarantee(&creased(2.5), 9, &[1e-2, 1e-3]);
+    // A level's face without a patch yet is a leaf once the hull of its ring is within ε: a
+    // sharpness-6 crease is not split down to level 6 at a coarse tolerance, and the bound holds.
+    let sharp6 = creased(6.0);
+    guarantee(&sharp6, 9, &[1e-1, 1e-2]);
+    let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &sharp6).unwrap();
+    let coarse = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-1));
+    let (_, stats) = tess.tessellate_with_stats(&coarse).unwrap();
+    assert!(stats.max_depth < 6, "{stats:?}");
     // Infinitely sharp: the crease's regular patches are bicubics (their rows across it the
     // crease rule's), the corner's sub-patches convex combinations.
     let ratio = guarantee(&creased(10.0), 9, &[1e-2, 1e-3]);

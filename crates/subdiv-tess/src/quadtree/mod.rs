@@ -2,8 +2,9 @@
 //!
 //! Each input face is a quadtree root (an N-gon: one root per `Bfr` quad sub-face). A node is a
 //! dyadic square of its root's domain and holds the surface over it as one of three *pieces*:
-//! a face of a refinement level that has no patch yet ([`PatchLevels`] `Children`: always
-//! split), the control points of the extraordinary corner's sub-patch (flat when their hull is
+//! a face of a refinement level that has no patch yet ([`PatchLevels`] `Children`: flat when
+//! the hull of its ring is small, where the rules between the levels are convex combinations,
+//! as semi-sharp features' are; else split), the control points of the extraordinary corner's sub-patch (flat when their hull is
 //! small, [`flatness::extraordinary_is_flat`]), or a bicubic Bézier patch
 //! ([`flatness::regular_is_flat`]). Children come from the sub-patch matrices (exact
 //! subdivision) and de Casteljau. Nodes split at their midpoints until flat.
@@ -233,6 +234,10 @@ enum VertexKey {
 /// ```
 pub struct QuadtreeTessellator {
     levels: PatchLevels,
+    /// Whether every refinement stencil between the levels is a convex combination (the
+    /// built-in schemes' rules, semi-sharp blends included), so that a level's face without a
+    /// patch yet lies in the hull of its ring ([`Self::face_ring`]).
+    convex_levels: bool,
     shapes: HashMap<ShapeKey, ShapeKind>,
     roots: Vec<Root>,
     /// Per input face, its corners' half-edges.
@@ -334,8 +339,21 @@ impl QuadtreeTessellator {
         }
         let corners = mesh.face_ids().map(|f| mesh.face_half_edges(f).collect()).collect();
         let diagonal = mesh.bounding_box().map_or(0.0, |(lo, hi)| lo.distance(hi));
+        // Every row non-negative, summing to 1 (checked, not assumed: a scheme file's rules may
+        // not be).
+        let convex_levels = levels.stencils().iter().all(|stencils| {
+            (0..stencils.child_count()).all(|c| {
+                let (mut sum, mut negative) = (0.0, false);
+                for (_, w) in stencils.row(c) {
+                    sum += w;
+                    negative |= w < 0.0;
+                }
+                !negative && (sum - 1.0).abs() <= 1e-12
+            })
+        });
         let mut tess = Self {
             levels,
+            convex_levels,
             shapes: HashMap::new(),
             roots,
             corners,
@@ -780,16 +798,25 @@ impl QuadtreeTessellator {
         leaves: &mut Vec<Leaf>,
         corners: &mut Corners,
     ) -> Result<(), TessError> {
+        // A level's face without a patch is bounded by the hull of its ring, where the rules
+        // between the levels are convex combinations; else it is always split.
+        let ring = match &piece {
+            Piece::Face { level, face } if self.convex_levels => self.face_ring(*level, *face),
+            _ => Vec::new(),
+        };
         // The piece's own ε on the screen (none: wholly behind the near plane, flat at once).
         let epsilon = match (&budget.screen, &piece) {
-            (None, _) | (_, Piece::Face { .. }) => Some(budget.epsilon),
+            (None, _) => Some(budget.epsilon),
+            (Some(_), Piece::Face { .. }) if ring.is_empty() => Some(budget.epsilon),
+            (Some(screen), Piece::Face { .. }) => screen.epsilon(&ring),
             (Some(screen), Piece::Extraordinary { points, .. }) => screen.epsilon(points),
             (Some(screen), Piece::Regular(b)) => screen.epsilon(b.net.as_flattened()),
             (Some(screen), Piece::Quartic(q)) => screen.epsilon(&q.net),
         };
         let flat = match (&piece, epsilon) {
-            (Piece::Face { .. }, _) => false,
+            (Piece::Face { .. }, _) if ring.is_empty() => false,
             (_, None) => true,
+            (Piece::Face { .. }, Some(e)) => flatness::extraordinary_is_flat(&ring, e),
             (Piece::Extraordinary { points, .. }, Some(e)) => flatness::extraordinary_is_flat(points, e),
             (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
             (Piece::Quartic(q), Some(e)) => flatness::quartic_is_flat(q, e),
@@ -814,6 +841,26 @@ impl QuadtreeTessellator {
             corners.insert((node.depth, node.x, node.y), piece);
         }
         Ok(())
+    }
+}
+
+impl QuadtreeTessellator {
+    /// The control points that the surface over `face` of `level` (a face without a patch yet)
+    /// depends on: the vertices of every face around its corners. Each finer level's points
+    /// over it are convex combinations of these (the refinement rules of a vertex, an edge and a
+    /// face reach no further), so where every rule is ([`Self::convex_levels`]) the surface
+    /// over the face lies in their hull, and so does any triangle with its corners on it.
+    fn face_ring(&self, level: usize, face: FaceId) -> Vec<DVec3> {
+        let mesh = self.levels.mesh(level);
+        let mut seen: Vec<subdiv_mesh::VertexId> = Vec::new();
+        for &v in mesh.face_vertices(face) {
+            for g in mesh.vertex_faces(v) {
+                seen.extend_from_slice(mesh.face_vertices(g));
+            }
+        }
+        seen.sort_unstable();
+        seen.dedup();
+        seen.into_iter().map(|v| mesh.position(v)).collect()
     }
 }
 
