@@ -52,6 +52,13 @@
 //! control points ([`hull_diameter`]). This is the paper's `m_ε` argument (§4.1, `‖S − S(0,0)‖ <
 //! ε/2` once `m ≥ m_ε`) with the convex hull giving the constant: `diam ≤ 2 max‖c_i − S(0, 0)‖`.
 //!
+//! # Non-polynomial pieces
+//! A scheme whose regular pieces are no polynomials (paper 000's `sw-quad`) but whose matrices
+//! are convex combinations that reproduce linear functions of the control points' parameters
+//! is bounded by the control points' distance from an affine fit ([`linear_is_flat`]): second
+//! order like the cone and chord bounds, looser by the footprint of the control points (about
+//! three times the piece's side).
+//!
 //! # The paper's own quantities
 //! [`base_quad_distance_bound`] (Eq. 7: the distance of a patch to its bilinear base
 //! quadrilateral, as a guaranteed upper bound), [`two_sided_bound`] (Eq. 8: the slab between two
@@ -408,6 +415,43 @@ pub fn hull_diameter(points: &[DVec3]) -> f64 {
 pub fn extraordinary_is_flat(points: &[DVec3], epsilon: f64) -> bool {
     let magnitude = points.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
     hull_diameter(points) + rounding_slack(magnitude) <= epsilon
+}
+
+/// Whether a piece of a non-polynomial scheme is flat: its surface is `S(u) = Σ B_i(u) c_i` over
+/// its control points `points` with `B_i ≥ 0`, `Σ B_i = 1` (convex matrices) and `Σ B_i(u) ξ_i =
+/// u` (linear precision over the control points' `parameters` ξ; only the points of `influence`
+/// have weight). For any affine `A`, `S(u) − A(u) = Σ B_i(u) (c_i − A(ξ_i))`, so `‖S − A‖ ≤ D =
+/// max_i ‖c_i − A(ξ_i)‖`; a triangle with its corners on the piece interpolates values within
+/// `D` of `A` too, so every output point is within `2D` of the surface at its parameter. `A` is
+/// the least-squares fit; `D` shrinks like the square of the piece's size where the surface is
+/// smooth (second differences of the control points), as the cone and chord bounds do.
+pub fn linear_is_flat(points: &[DVec3], parameters: &[Vec<f64>; 2], influence: &[u32], epsilon: f64) -> bool {
+    let used: Vec<usize> = if influence.is_empty() {
+        (0..points.len()).collect()
+    } else {
+        influence.iter().map(|&k| k as usize).collect()
+    };
+    let basis = |k: usize| [1.0, parameters[0][k], parameters[1][k]];
+    let mut normal = [[0.0; 3]; 3];
+    let mut rhs = [DVec3::ZERO; 3];
+    for &k in &used {
+        let b = basis(k);
+        for i in 0..3 {
+            for j in 0..3 {
+                normal[i][j] += b[i] * b[j];
+            }
+            rhs[i] += b[i] * points[k];
+        }
+    }
+    let inverse = gauss_jordan(normal);
+    let a: [DVec3; 3] = std::array::from_fn(|i| (0..3).map(|j| inverse[i][j] * rhs[j]).sum());
+    if !a.iter().all(|c| c.is_finite()) {
+        // Parameters on a line (not a surface piece): the hull alone.
+        return extraordinary_is_flat(points, epsilon);
+    }
+    let d = used.iter().map(|&k| (points[k] - a[0] - a[1] * parameters[0][k] - a[2] * parameters[1][k]).length());
+    let magnitude = points.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
+    2.0 * d.fold(0.0, f64::max) + rounding_slack(magnitude) <= epsilon
 }
 
 /// The bilinear base quadrilateral of the patch's corners at `(x, y)` (paper 002, Eq. 4).

@@ -547,6 +547,21 @@ fn loop_meshes_are_within_tolerance_of_the_limit_surface() {
     eprintln!("creased icosahedron, dual at 1e-2: worst sampled distance / ε {ratio:.3}");
 }
 
+/// A non-polynomial scheme (paper 000's C1 `sw-quad`): its regular pieces reproduce linear
+/// functions by convex combinations, so their control points' distance from an affine fit bounds
+/// them; the bound holds, watertight, and the dual method's rates (second derivatives) refuse it.
+#[test]
+fn non_polynomial_pieces_are_within_tolerance() {
+    let model = Mesh::build(shapes::default_model()).unwrap();
+    // The control points span three times the piece: the bound is loose (measured 0.025 ε),
+    // but not absurdly so.
+    let ratio = guarantee_under(Builtin::SwQuad, &model, 9, &[1e-2, 3e-3]);
+    assert!(ratio > 0.01, "worst distance / ε = {ratio}");
+    guarantee_under(Builtin::SwQuad, &Mesh::build(shapes::cube()).unwrap(), 9, &[1e-2]);
+    let refused = dual_guarantee_under(Builtin::SwQuad, &model, 3, 1e-2);
+    assert!(matches!(&refused, Err(TessError::Unsupported { .. })), "{refused:?}");
+}
+
 /// A screen-space error bound: at the centroid and edge midpoints of every output triangle, the
 /// limit point and the output point project at most `pixels` apart, and a farther camera cuts
 /// more coarsely.

@@ -246,6 +246,9 @@ pub struct QuadtreeTessellator {
     /// The face-varying channels carried ([`with_channels`](Self::with_channels)); none by
     /// default.
     channels: Channels,
+    /// The exact evaluator of a non-polynomial scheme's surface (where some shape is
+    /// [`ShapeKind::Linear`]), which evaluates the vertices of its pieces.
+    limit: Option<subdiv_stencil::LimitEvaluator>,
     /// [`tessellate_into`](Self::tessellate_into)'s buffers, kept between calls.
     scratch: Scratch,
 }
@@ -359,9 +362,14 @@ impl QuadtreeTessellator {
             corners,
             diagonal,
             channels: Channels::default(),
+            limit: None,
             scratch: Scratch::default(),
         };
         tess.classify_shapes(scheme)?;
+        if tess.shapes.values().any(|k| matches!(k, ShapeKind::Linear)) {
+            tess.limit =
+                Some(subdiv_stencil::LimitEvaluator::new(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?);
+        }
         Ok(tess)
     }
 
@@ -504,7 +512,7 @@ impl QuadtreeTessellator {
         // A piece of depth d keeps its corner at the root's: children at the same corner.
         for _ in 0..=DEPTH_LIMIT + 40 {
             match &piece {
-                Piece::Regular(_) | Piece::Quartic(_) => return Ok(false),
+                Piece::Regular(_) | Piece::Quartic(_) | Piece::Linear { .. } => return Ok(false),
                 Piece::Extraordinary { frame, .. } => {
                     let c = frame.to_face(Dyadic::new(0, 0, 1));
                     if (c.u * full, c.v * full) == (x, y) {
@@ -556,6 +564,13 @@ impl QuadtreeTessellator {
             Piece::Extraordinary { points, .. } if depth >= corner_depth => {
                 out.corner_hull = out.corner_hull.max(crate::flatness::hull_diameter(points));
                 return Ok(());
+            }
+            Piece::Linear { .. } => {
+                return Err(TessError::Unsupported {
+                    feature: "dual-grid rates to a tolerance for a non-polynomial scheme (no second-derivative \
+                              bound; --method quadtree takes it)",
+                    element: format!("{}", root.face),
+                });
             }
             Piece::Quartic(q) => {
                 let scale = 4f64.powi(depth as i32);
@@ -809,7 +824,9 @@ impl QuadtreeTessellator {
             (None, _) => Some(budget.epsilon),
             (Some(_), Piece::Face { .. }) if ring.is_empty() => Some(budget.epsilon),
             (Some(screen), Piece::Face { .. }) => screen.epsilon(&ring),
-            (Some(screen), Piece::Extraordinary { points, .. }) => screen.epsilon(points),
+            (Some(screen), Piece::Extraordinary { points, .. } | Piece::Linear { points, .. }) => {
+                screen.epsilon(points)
+            }
             (Some(screen), Piece::Regular(b)) => screen.epsilon(b.net.as_flattened()),
             (Some(screen), Piece::Quartic(q)) => screen.epsilon(&q.net),
         };
@@ -818,6 +835,10 @@ impl QuadtreeTessellator {
             (_, None) => true,
             (Piece::Face { .. }, Some(e)) => flatness::extraordinary_is_flat(&ring, e),
             (Piece::Extraordinary { points, .. }, Some(e)) => flatness::extraordinary_is_flat(points, e),
+            (Piece::Linear { matrices, shape, points, .. }, Some(e)) => {
+                let s = &matrices.shapes[*shape];
+                s.parameters.as_ref().is_some_and(|p| flatness::linear_is_flat(points, p, &s.influence, e))
+            }
             (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
             (Piece::Quartic(q), Some(e)) => flatness::quartic_is_flat(q, e),
         };

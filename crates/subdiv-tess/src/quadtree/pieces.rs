@@ -17,6 +17,11 @@ pub(super) enum ShapeKind {
     /// patches along creases and boundaries): Bézier point `k` ([`Quartic::index`]) is
     /// `Σ_m net[k · size + m] · points[m]`, in the patch's frame.
     Quartic { net: Vec<f64> },
+    /// A shape that is no polynomial (a non-polynomial scheme's, such as `sw-quad`'s regular
+    /// patch) but whose matrices, from it on, are convex combinations that reproduce linear
+    /// functions of its control points' parameters: bounded by how far its control points are
+    /// from an affine function of their parameters ([`flatness::linear_is_flat`]).
+    Linear,
     /// The extraordinary vertex at corner 0: the child kept at the corner, and the vertex's
     /// limit position and tangent-direction stencils.
     Extraordinary { position: Vec<f64>, du: Vec<f64>, dv: Vec<f64> },
@@ -32,6 +37,8 @@ pub(super) enum Piece {
     Face { level: usize, face: FaceId },
     /// The sub-patch at the extraordinary corner, in the patch's frame.
     Extraordinary { matrices: Arc<PatchMatrices>, shape: usize, points: Vec<DVec3>, frame: PatchFrame },
+    /// A sub-patch of a [`ShapeKind::Linear`] shape, in the patch's frame.
+    Linear { matrices: Arc<PatchMatrices>, shape: usize, points: Vec<DVec3>, frame: PatchFrame },
     /// A polynomial piece, in the node's own coordinates (boxed: 384 bytes).
     Regular(Box<Bicubic>),
     /// A polynomial triangle, in the node's own coordinates.
@@ -210,8 +217,11 @@ fn children_are_quarters(
 /// ([`candidate_net`]) splits into its children's nets (de Casteljau quarters) and so do all
 /// its descendants': then the net agrees with the surface at every dyadic point (each
 /// descendant's net interpolates it at its corners), so everywhere. The set is the largest one
-/// closed under children. Every other shape must keep an extraordinary corner whose sub-patch
-/// matrices are convex combinations (the hull bound), its other children bicubics.
+/// closed under children. A shape that is none is [`ShapeKind::Linear`] when it has parameters
+/// (its matrices reproduce linear functions of them) and its matrices and its descendants' are
+/// convex combinations, the largest such set closed under children. Every other shape must
+/// keep an extraordinary corner whose sub-patch matrices are convex combinations (the hull
+/// bound), its other children polynomials or linear ones.
 pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey, ShapeKind>) -> Result<(), String> {
     let id = Arc::as_ptr(matrices) as usize;
     if out.contains_key(&(id, 0)) {
@@ -244,9 +254,32 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
         }
         drop.into_iter().for_each(|s| polynomial[s] = false);
     }
+    let convex = |s: usize| {
+        shapes[s].children.iter().all(|child| {
+            (0..child.rows()).all(|r| {
+                let row = child.row(r);
+                row.iter().all(|&w| w >= 0.0) && (row.iter().sum::<f64>() - 1.0).abs() <= 1e-12
+            })
+        })
+    };
+    let mut linear: Vec<bool> =
+        (0..shapes.len()).map(|s| !polynomial[s] && shapes[s].parameters.is_some() && convex(s)).collect();
+    loop {
+        let drop: Vec<usize> = (0..shapes.len())
+            .filter(|&s| linear[s] && shapes[s].children.iter().any(|c| !linear[c.shape] && !polynomial[c.shape]))
+            .collect();
+        if drop.is_empty() {
+            break;
+        }
+        drop.into_iter().for_each(|s| linear[s] = false);
+    }
     for (shape, net) in nets.into_iter().enumerate() {
         if polynomial[shape] {
             out.insert((id, shape), if triangle { ShapeKind::Quartic { net } } else { ShapeKind::Regular { net } });
+            continue;
+        }
+        if linear[shape] {
+            out.insert((id, shape), ShapeKind::Linear);
             continue;
         }
         let s = &shapes[shape];
@@ -263,9 +296,10 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
                     return Err(format!("sub-patch matrices of shape {shape} are not convex combinations"));
                 }
             }
-            if child.shape != shape && !polynomial[child.shape] {
+            if child.shape != shape && !polynomial[child.shape] && !linear[child.shape] {
                 return Err(format!(
-                    "a child of extraordinary shape {shape} is neither a polynomial nor the shape itself"
+                    "a child of extraordinary shape {shape} is neither a polynomial, nor reproduces linear functions \
+                     by convex combinations, nor is the shape itself"
                 ));
             }
         }
@@ -349,6 +383,9 @@ impl QuadtreeTessellator {
                     Some(ShapeKind::Extraordinary { .. }) => {
                         Ok(Piece::Extraordinary { matrices: patch.matrices.clone(), shape: patch.shape, points, frame })
                     }
+                    Some(ShapeKind::Linear) => {
+                        Ok(Piece::Linear { matrices: patch.matrices.clone(), shape: patch.shape, points, frame })
+                    }
                     None => Err(TessError::Internal(format!("shape of level {level} {face} not classified"))),
                 }
             }
@@ -378,7 +415,8 @@ impl QuadtreeTessellator {
                 }
                 _ => Err(TessError::Internal(format!("level {level} {face} has no children"))),
             },
-            Piece::Extraordinary { matrices, shape, points, frame } => {
+            Piece::Extraordinary { matrices, shape, points, frame }
+            | Piece::Linear { matrices, shape, points, frame } => {
                 // The patch's child holding the node's child (the frame maps children onto
                 // children, the middle triangle onto itself, and keeps its offset).
                 let (patch_domain, size) =
@@ -404,6 +442,9 @@ impl QuadtreeTessellator {
                         points: child,
                         frame: *frame,
                     }),
+                    Some(ShapeKind::Linear) => {
+                        Ok(Piece::Linear { matrices: matrices.clone(), shape: sub.shape, points: child, frame: *frame })
+                    }
                     None => Err(TessError::Internal("child shape not classified".into())),
                 }
             }

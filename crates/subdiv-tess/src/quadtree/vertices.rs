@@ -34,6 +34,7 @@ impl QuadtreeTessellator {
     ) -> Result<(DVec3, DVec3), TessError> {
         let full = root.full();
         let mut piece = self.root_piece(root)?;
+        let at_root = (x, y);
         // The point in the node's coordinates (over `full`), and the node.
         let (mut x, mut y) = (x, y);
         let mut node = Leaf::ROOT;
@@ -46,6 +47,13 @@ impl QuadtreeTessellator {
                 Piece::Quartic(q) => {
                     let (p, du, dv) = q.eval_with_derivatives(x as f64 / full as f64, y as f64 / full as f64);
                     return Ok((p, crate::unit_normal(du.cross(dv))));
+                }
+                Piece::Linear { .. } => {
+                    // No closed form: the surface's exact stencils at the point.
+                    let limit = self.limit.as_ref().ok_or_else(|| TessError::Internal("no exact evaluator".into()))?;
+                    let (u, v) = bfr(root, at_root.0, at_root.1);
+                    let p = limit.eval(root.face, u, v)?;
+                    return Ok((p.position, crate::unit_normal(p.du.cross(p.dv))));
                 }
                 Piece::Face { .. } => None,
                 Piece::Extraordinary { matrices, shape, points, frame } => {
