@@ -278,7 +278,13 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
             out.insert((id, shape), if triangle { ShapeKind::Quartic { net } } else { ShapeKind::Regular { net } });
             continue;
         }
-        if linear[shape] {
+        // A shape that keeps itself at corner 0 alone has its special point there (an
+        // extraordinary vertex, a dart, a sharp corner): the hull bound, and rings in the dual
+        // method, whatever its parameters; one that is itself everywhere (a non-polynomial
+        // scheme's regular patch) is linear.
+        let corner_only = matches!(matrices.keeping(shape), Some((_, keep)) if keep.domain.offset == [0, 0])
+            && shapes[shape].children.iter().any(|c| c.shape != shape);
+        if linear[shape] && !corner_only {
             out.insert((id, shape), ShapeKind::Linear);
             continue;
         }
