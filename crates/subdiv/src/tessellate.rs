@@ -70,7 +70,8 @@ pub enum Method {
     #[default]
     Dual,
     /// The error-driven quadtree with global vertex ids and polyline replacement (Lai-Cheng,
-    /// paper 002): Catmull-Clark meshes, open ones and holes too, texture coordinates carried;
+    /// paper 002): Catmull-Clark, Loop and `sw-quad` meshes, open ones and holes too, texture
+    /// coordinates carried;
     /// [`Rates::Tolerance`] and [`Rates::ScreenError`] only.
     Quadtree,
 }
