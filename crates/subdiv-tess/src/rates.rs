@@ -416,8 +416,10 @@ impl ErrorRates {
     /// face's L-shaped region `[0, r_j]² \ [0, r_{j+1})²`: two triangles each, of longest side
     /// `√5/2 · r_j`, in one flat chart where the surface is C². Their deviation is at most
     /// `½ M (√5/2 · r_j)² / 3` (see [`ErrorRates`]), `M` the second-derivative bound of the face
-    /// less its corner square
-    /// of side `r_{j+1}` — checked for every depth below the faces' own bound region. The fan
+    /// less its corner square of side `r_{j+1}` — checked for every depth below the faces' own
+    /// bound region. Where a band fails, the rates of the faces around the point are doubled
+    /// (the first ring moves inward, where a band's `M r²` is smaller: it falls like `λ^d`) and
+    /// the rates are settled again. The fan
     /// inside the last ring lies, with the surface it stands for, in the hull of the corner
     /// piece of depth `d`: within its diameter. The band from the dual points to the first ring
     /// has triangles in one face or across one edge, with corners at least `r_1` from the point
@@ -426,8 +428,9 @@ impl ErrorRates {
     ///
     /// # Errors
     /// [`TessError::Tolerance`] for a tolerance that is not a positive finite number,
-    /// [`TessError::RateLimit`] when a face needs more than `max_rate` or an extraordinary
-    /// point's hull stays above `ε` down to depth 40, and the errors of
+    /// [`TessError::RateLimit`] when a face needs more than `max_rate` (for its cells, or for
+    /// the bands of the rings around a point) or an extraordinary point's hull stays above `ε`
+    /// down to depth 40, and the errors of
     /// [`QuadtreeTessellator::face_curvature`].
     pub fn rates(&self, bounds: &QuadtreeTessellator, mesh: &Mesh) -> Result<DualRates, TessError> {
         self.rates_rounded(bounds, mesh, |n| n)
@@ -473,10 +476,6 @@ impl ErrorRates {
                 corner_of[v.index()] = true;
             }
         }
-        // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the depth
-        // of the first ring for the finest rate around each of its vertices (no triangle outside
-        // the rings comes closer); finer rates push d deeper, where M grows like (4λ)^d, slower
-        // than n², so the rates settle.
         let mut rates = vec![round(1); mesh.face_count()];
         let depth_of = |rates: &[u32], f: FaceId| -> u32 {
             let finest = mesh
@@ -486,55 +485,32 @@ impl ErrorRates {
                 .map(|g| reach(mesh, triangle, g, rates[g.index()]));
             first_ring_depth(triangle, finest.max().unwrap_or(1))
         };
-        loop {
-            let mut second = vec![0.0; mesh.face_count()];
-            for &f in &faces {
-                let depth = if extraordinary[f.index()] { depth_of(&rates, f) } else { 1 };
-                second[f.index()] = curvature(f, depth)?.second;
-            }
-            let mut changed = false;
-            for &f in &faces {
-                let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
-                let m = around.fold(0.0f64, |m, g| m.max(second[g.index()]));
-                let needed = (geometry.cells * m / budget).sqrt().ceil().max(1.0);
-                let needed = if needed > f64::from(max_rate) { needed } else { f64::from(round(needed as u32)) };
-                if needed > f64::from(max_rate) {
-                    return Err(limit(f, format!("rate {needed}")));
-                }
-                if needed as u32 > rates[f.index()] {
-                    rates[f.index()] = needed as u32;
-                    changed = true;
-                }
-            }
-            if !changed {
-                break;
-            }
-        }
         // Rings: per extraordinary point, from the first power of two inside its nearest dual
-        // points down to the least depth whose hull is within ε, every band checked.
-        let ring_depth = |around: &mut dyn Iterator<Item = FaceId>,
+        // points down to the least depth whose hull is within ε, every band checked; `Err` with
+        // the faces around when a band fails (finer rates there move the first ring inward,
+        // where a band's `M r²` is smaller: it falls like `λ^d`).
+        let ring_depth = |rates: &[u32],
+                          around: &[FaceId],
                           curvature: &mut dyn FnMut(FaceId, u32) -> Result<crate::FaceCurvature, TessError>|
-         -> Result<u32, TessError> {
-            let around: Vec<FaceId> = around.collect();
+         -> Result<Result<u32, u32>, TessError> {
             let finest = around.iter().map(|&g| reach(mesh, triangle, g, rates[g.index()])).max().unwrap_or(1);
             let first = first_ring_depth(triangle, finest);
             let mut d = first;
             loop {
                 let mut within = true;
-                for &g in &around {
+                for &g in around {
                     let c = curvature(g, d)?;
                     if d > first {
                         // The band between 2^−(d−1) and 2^−d.
                         let r = 0.5f64.powi(d as i32 - 1);
                         if geometry.bands * c.second * r * r > budget {
-                            let why = format!("finer rates around it (its rings' bands fail the bound at depth {d})");
-                            return Err(limit(g, why));
+                            return Ok(Err(d));
                         }
                     }
                     within &= c.corner_hull <= budget;
                 }
                 if within {
-                    return Ok(d);
+                    return Ok(Ok(d));
                 }
                 d += 1;
                 if d > MAX_RING_DEPTH {
@@ -545,20 +521,65 @@ impl ErrorRates {
                 }
             }
         };
-        let mut vertices = vec![0u32; mesh.vertex_count()];
-        for v in mesh.vertices() {
-            if corner_of[v.index()] {
-                let mut around = mesh.vertex_faces(v).filter(|&f| bounds.has_surface(f));
-                vertices[v.index()] = ring_depth(&mut around, &mut curvature)?;
+        let points: Vec<(Option<subdiv_mesh::VertexId>, Vec<FaceId>)> = mesh
+            .vertices()
+            .filter(|v| corner_of[v.index()])
+            .map(|v| (Some(v), mesh.vertex_faces(v).filter(|&f| bounds.has_surface(f)).collect()))
+            .chain(faces.iter().filter(|&&f| mesh.face_size(f) != 4 && !triangle).map(|&f| (None, vec![f])))
+            .collect();
+        loop {
+            // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the
+            // depth of the first ring for the finest rate around each of its vertices (no
+            // triangle outside the rings comes closer); finer rates push d deeper, where M grows
+            // like (4λ)^d, slower than n², so the rates settle.
+            loop {
+                let mut second = vec![0.0; mesh.face_count()];
+                for &f in &faces {
+                    let depth = if extraordinary[f.index()] { depth_of(&rates, f) } else { 1 };
+                    second[f.index()] = curvature(f, depth)?.second;
+                }
+                let mut changed = false;
+                for &f in &faces {
+                    let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
+                    let m = around.fold(0.0f64, |m, g| m.max(second[g.index()]));
+                    let needed = (geometry.cells * m / budget).sqrt().ceil().max(1.0);
+                    let needed = if needed > f64::from(max_rate) { needed } else { f64::from(round(needed as u32)) };
+                    if needed > f64::from(max_rate) {
+                        return Err(limit(f, format!("rate {needed}")));
+                    }
+                    if needed as u32 > rates[f.index()] {
+                        rates[f.index()] = needed as u32;
+                        changed = true;
+                    }
+                }
+                if !changed {
+                    break;
+                }
+            }
+            let mut vertices = vec![0u32; mesh.vertex_count()];
+            let mut centres = vec![0u32; mesh.face_count()];
+            let mut refine: Vec<(FaceId, u32)> = Vec::new();
+            for (point, around) in &points {
+                match ring_depth(&rates, around, &mut curvature)? {
+                    Ok(d) => match point {
+                        Some(v) => vertices[v.index()] = d,
+                        None => centres[around[0].index()] = d,
+                    },
+                    Err(d) => refine.extend(around.iter().map(|&g| (g, d))),
+                }
+            }
+            if refine.is_empty() {
+                return Ok(DualRates { faces: rates, rings: RingDepths { vertices, centres } });
+            }
+            for (g, d) in refine {
+                let finer = round(2 * rates[g.index()]);
+                if finer > max_rate {
+                    let why = format!("finer rates around it (its rings' bands fail the bound at depth {d})");
+                    return Err(limit(g, why));
+                }
+                rates[g.index()] = rates[g.index()].max(finer);
             }
         }
-        let mut centres = vec![0u32; mesh.face_count()];
-        for &f in &faces {
-            if mesh.face_size(f) != 4 {
-                centres[f.index()] = ring_depth(&mut std::iter::once(f), &mut curvature)?;
-            }
-        }
-        Ok(DualRates { faces: rates, rings: RingDepths { vertices, centres } })
     }
 
     /// `ε` less the rounding slack.

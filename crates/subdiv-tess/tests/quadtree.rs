@@ -293,6 +293,15 @@ fn open_meshes_are_within_tolerance_of_the_limit_surface() {
         let ratio = dual_guarantee(mesh, 5, 1e-2).unwrap();
         eprintln!("{name}, dual at 1e-2: worst sampled distance / ε {ratio:.3}");
     }
+    // Smooth corners whose first ring band fails the bound at the rates the cells ask for: the
+    // rates around are raised (the first ring moves inward, where the bands pass), not refused.
+    if let Some(path) = subdiv_testkit::shared_mesh("opensubdiv/catmark_edgeonly.obj") {
+        let edgeonly = subdiv_io::load_mesh(&path, &Default::default()).unwrap();
+        for relative in [1e-2, 1e-3] {
+            let ratio = dual_guarantee(&edgeonly, 5, relative).unwrap();
+            eprintln!("catmark_edgeonly, dual at {relative:e}: worst sampled distance / ε {ratio:.3}");
+        }
+    }
     // An extraordinary vertex on an infinitely sharp edge: the runs on its two sides take open
     // rings that share their points on the edge.
     let mut creased = shapes::cube();
