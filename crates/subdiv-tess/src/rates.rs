@@ -398,6 +398,14 @@ const QUAD_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 2.0 / 3.0, bands:
 /// (`7/48 r²`).
 const TRIANGLE_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 19.0 / 36.0, bands: 0.5 * 7.0 / 48.0 };
 
+/// The rings around an extraordinary point at the current rates.
+enum Rings {
+    /// Down to this depth, every band within the bound.
+    Down(u32),
+    /// The band ending at this depth fails the bound: the rates around must be finer.
+    BandFails(u32),
+}
+
 /// Below this depth (a square of side 2^−40 around an extraordinary point) a hull bound that is
 /// still above `ε` means the model is too small for the tolerance.
 const MAX_RING_DEPTH: u32 = 40;
@@ -486,13 +494,13 @@ impl ErrorRates {
             first_ring_depth(triangle, finest.max().unwrap_or(1))
         };
         // Rings: per extraordinary point, from the first power of two inside its nearest dual
-        // points down to the least depth whose hull is within ε, every band checked; `Err` with
-        // the faces around when a band fails (finer rates there move the first ring inward,
-        // where a band's `M r²` is smaller: it falls like `λ^d`).
+        // points down to the least depth whose hull is within ε, every band checked (where one
+        // fails, finer rates around move the first ring inward, where a band's `M r²` is
+        // smaller: it falls like `λ^d`).
         let ring_depth = |rates: &[u32],
                           around: &[FaceId],
                           curvature: &mut dyn FnMut(FaceId, u32) -> Result<crate::FaceCurvature, TessError>|
-         -> Result<Result<u32, u32>, TessError> {
+         -> Result<Rings, TessError> {
             let finest = around.iter().map(|&g| reach(mesh, triangle, g, rates[g.index()])).max().unwrap_or(1);
             let first = first_ring_depth(triangle, finest);
             let mut d = first;
@@ -504,13 +512,13 @@ impl ErrorRates {
                         // The band between 2^−(d−1) and 2^−d.
                         let r = 0.5f64.powi(d as i32 - 1);
                         if geometry.bands * c.second * r * r > budget {
-                            return Ok(Err(d));
+                            return Ok(Rings::BandFails(d));
                         }
                     }
                     within &= c.corner_hull <= budget;
                 }
                 if within {
-                    return Ok(Ok(d));
+                    return Ok(Rings::Down(d));
                 }
                 d += 1;
                 if d > MAX_RING_DEPTH {
@@ -561,11 +569,11 @@ impl ErrorRates {
             let mut refine: Vec<(FaceId, u32)> = Vec::new();
             for (point, around) in &points {
                 match ring_depth(&rates, around, &mut curvature)? {
-                    Ok(d) => match point {
+                    Rings::Down(d) => match point {
                         Some(v) => vertices[v.index()] = d,
                         None => centres[around[0].index()] = d,
                     },
-                    Err(d) => refine.extend(around.iter().map(|&g| (g, d))),
+                    Rings::BandFails(d) => refine.extend(around.iter().map(|&g| (g, d))),
                 }
             }
             if refine.is_empty() {
