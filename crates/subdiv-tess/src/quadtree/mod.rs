@@ -836,8 +836,12 @@ impl QuadtreeTessellator {
             (Piece::Face { .. }, Some(e)) => flatness::extraordinary_is_flat(&ring, e),
             (Piece::Extraordinary { points, .. }, Some(e)) => flatness::extraordinary_is_flat(points, e),
             (Piece::Linear { matrices, shape, points, .. }, Some(e)) => {
-                let s = &matrices.shapes[*shape];
-                s.parameters.as_ref().is_some_and(|p| flatness::linear_is_flat(points, p, &s.influence, e))
+                // Two levels down: the grandchildren's rings hug the piece (a footprint of about
+                // 1.5 times its side, against 3 for its own points), for a bound 4 times tighter.
+                let (samples, parameters) = linear_samples(matrices, *shape, points, LINEAR_LEVELS)
+                    .or_else(|| linear_samples(matrices, *shape, points, 0))
+                    .unwrap_or_default();
+                !samples.is_empty() && flatness::linear_is_flat(&samples, &parameters, &[], e)
             }
             (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
             (Piece::Quartic(q), Some(e)) => flatness::quartic_is_flat(q, e),

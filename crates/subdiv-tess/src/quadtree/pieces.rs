@@ -45,6 +45,45 @@ pub(super) enum Piece {
     Quartic(Box<Quartic>),
 }
 
+/// How many levels below a linear piece its bound samples the control points
+/// ([`linear_samples`]).
+pub(super) const LINEAR_LEVELS: u32 = 2;
+
+/// The control points of a linear piece's descendants `levels` levels down (those with
+/// influence), with their parameters in the piece's frame: the surface over the piece is
+/// theirs over domains that tile it, each a convex combination reproducing linear functions of
+/// those parameters, so one affine fit bounds it as the piece's own points do, over a footprint
+/// nearer the piece. `None` where a descendant has no parameters.
+pub(super) fn linear_samples(
+    matrices: &PatchMatrices,
+    shape: usize,
+    points: &[DVec3],
+    levels: u32,
+) -> Option<(Vec<DVec3>, [Vec<f64>; 2])> {
+    let s = &matrices.shapes[shape];
+    let [us, vs] = s.parameters.as_ref()?;
+    if levels == 0 {
+        let used: Vec<usize> = if s.influence.is_empty() {
+            (0..points.len()).collect()
+        } else {
+            s.influence.iter().map(|&k| k as usize).collect()
+        };
+        let samples = used.iter().map(|&k| points[k]).collect();
+        return Some((samples, [used.iter().map(|&k| us[k]).collect(), used.iter().map(|&k| vs[k]).collect()]));
+    }
+    let mut out = (Vec::new(), [Vec::new(), Vec::new()]);
+    for child in &s.children {
+        let (samples, [cu, cv]) = linear_samples(matrices, child.shape, &child.apply(points), levels - 1)?;
+        out.0.extend(samples);
+        for (u, v) in cu.into_iter().zip(cv) {
+            let (pu, pv) = child.domain.to_parent(u, v);
+            out.1[0].push(pu);
+            out.1[1].push(pv);
+        }
+    }
+    Some(out)
+}
+
 /// The quartic triangle, in the face's coordinates, of a shape with net weights `net` (see
 /// [`ShapeKind::Quartic`]) over the control points `points`, in the patch's frame.
 pub(super) fn quartic_in_frame(net: &[f64], points: &[DVec3], frame: PatchFrame) -> Quartic {
