@@ -12,8 +12,8 @@ use std::time::Instant;
 
 use subdiv::mesh::DVec3;
 use subdiv::schemes::Builtin;
-use subdiv::tess::Tolerance;
 use subdiv::tess::check::MeshDistance;
+use subdiv::tess::{QuadtreeTessellator, Tolerance};
 use subdiv::{Method, Rates, Surface, TessOptions};
 
 /// The meshes of issue 48's distance table (`../shared/testdata/meshes`).
@@ -88,7 +88,9 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                 // (paper 002's U'; the corner leaves go deeper only because the bound is
                 // parametric), fanned like the adaptive ones: four triangles a square, three a
                 // triangle.
-                (Some(stats), _) => uniform_fans(&surface, scheme, stats.max_regular_depth),
+                (Some(stats), _) => QuadtreeTessellator::new(scheme.scheme(), surface.mesh())
+                    .map_err(|e| format!("{name}: {e}"))?
+                    .uniform_triangle_count(stats.max_regular_depth),
                 // The dual tessellation at the largest rate on every face, counted by the tessellator.
                 (None, _) => {
                     let n = out.info.rates.iter().copied().max().unwrap_or(1);
@@ -104,19 +106,6 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
         }
     }
     Ok(())
-}
-
-/// The fan triangles of a uniform quadtree `depth` levels below the input faces (an N-gon's
-/// sub-faces are level 1; Loop's triangles split in four triangles, fanned in three).
-fn uniform_fans(surface: &Surface, scheme: Builtin, depth: u32) -> u64 {
-    let mesh = surface.mesh();
-    mesh.face_ids()
-        .map(|f| match (scheme, mesh.face_size(f)) {
-            (Builtin::Loop, _) => 3 * 4u64.saturating_pow(depth),
-            (_, 4) => 4 * 4u64.saturating_pow(depth),
-            (_, n) => 4 * n as u64 * 4u64.saturating_pow(depth.saturating_sub(1)),
-        })
-        .sum()
 }
 
 /// `osd_limit MESH --scheme S --grid 16`'s positions.

@@ -135,6 +135,9 @@ pub fn rounding_slack(magnitude: f64) -> f64 {
 /// The corners of the unit square in fan order.
 const CORNERS: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
 
+/// The corners of the unit triangle `u, v ≥ 0, u + v ≤ 1` in fan order.
+const TRIANGLE_CORNERS: [[f64; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+
 /// How often an undecided Bernstein bound is split before the node counts as not flat.
 const REFINEMENTS: usize = 6;
 
@@ -349,10 +352,9 @@ pub fn regular_is_flat(patch: &Bicubic, epsilon: f64) -> bool {
 pub fn quartic_is_flat(patch: &Quartic, epsilon: f64) -> bool {
     let (.., inv4) = collocation_inverses();
     let budget = epsilon - rounding_slack(patch.magnitude());
-    const CORNERS: [[f64; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
     budget >= 0.0
         && (0..3).all(|side| {
-            let fan = [[1.0 / 3.0, 1.0 / 3.0], CORNERS[side], CORNERS[(side + 1) % 3]];
+            let fan = [[1.0 / 3.0, 1.0 / 3.0], TRIANGLE_CORNERS[side], TRIANGLE_CORNERS[(side + 1) % 3]];
             let cone = cone_error(|u, v| patch.eval(u, v), fan, (inv4, inv4));
             bounded_by(cone, quartic_chord_bound(&patch.side(side)), budget)
         })
@@ -420,28 +422,23 @@ pub fn extraordinary_is_flat(points: &[DVec3], epsilon: f64) -> bool {
 
 /// Whether a piece of a non-polynomial scheme is flat: its surface is `S(u) = Σ B_i(u) c_i` over
 /// its control points `points` with `B_i ≥ 0`, `Σ B_i = 1` (convex matrices) and `Σ B_i(u) ξ_i =
-/// u` (linear precision over the control points' `parameters` ξ; only the points of `influence`
-/// have weight). For any affine `A`, `S(u) − A(u) = Σ B_i(u) (c_i − A(ξ_i))`, so `‖S − A‖ ≤ D =
+/// u` (linear precision over the control points' `parameters` ξ; points without influence
+/// left out by the caller). For any affine `A`, `S(u) − A(u) = Σ B_i(u) (c_i − A(ξ_i))`, so `‖S − A‖ ≤ D =
 /// max_i ‖c_i − A(ξ_i)‖`; a triangle with its corners on the piece interpolates values within
 /// `D` of `A` too, so every output point is within `2D` of the surface at its parameter. `A` is
 /// the least-squares fit; `D` shrinks like the square of the piece's size where the surface is
 /// smooth (second differences of the control points), as the cone and chord bounds do.
-pub fn linear_is_flat(points: &[DVec3], parameters: &[Vec<f64>; 2], influence: &[u32], epsilon: f64) -> bool {
-    let used: Vec<usize> = if influence.is_empty() {
-        (0..points.len()).collect()
-    } else {
-        influence.iter().map(|&k| k as usize).collect()
-    };
+pub fn linear_is_flat(points: &[DVec3], parameters: &[Vec<f64>; 2], epsilon: f64) -> bool {
     let basis = |k: usize| [1.0, parameters[0][k], parameters[1][k]];
     let mut normal = [[0.0; 3]; 3];
     let mut rhs = [DVec3::ZERO; 3];
-    for &k in &used {
+    for (k, &p) in points.iter().enumerate() {
         let b = basis(k);
         for i in 0..3 {
             for j in 0..3 {
                 normal[i][j] += b[i] * b[j];
             }
-            rhs[i] += b[i] * points[k];
+            rhs[i] += b[i] * p;
         }
     }
     let inverse = gauss_jordan(normal);
@@ -450,7 +447,7 @@ pub fn linear_is_flat(points: &[DVec3], parameters: &[Vec<f64>; 2], influence: &
         // Parameters on a line (not a surface piece): the hull alone.
         return extraordinary_is_flat(points, epsilon);
     }
-    let d = used.iter().map(|&k| (points[k] - a[0] - a[1] * parameters[0][k] - a[2] * parameters[1][k]).length());
+    let d = (0..points.len()).map(|k| (points[k] - a[0] - a[1] * parameters[0][k] - a[2] * parameters[1][k]).length());
     let magnitude = points.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);
     2.0 * d.fold(0.0, f64::max) + rounding_slack(magnitude) <= epsilon
 }
@@ -588,18 +585,15 @@ mod tests {
 
     /// A wavy quartic triangle: the quartic interpolating a smooth function at the domain points.
     fn wavy_quartic(scale: f64) -> Quartic {
-        let values = std::array::from_fn(|a| {
-            let (i, j) = crate::quartic::domain_point(a);
+        Quartic::from_values(&crate::quartic::per_point(|i, j| {
             let (x, y) = (i as f64 / 4.0, j as f64 / 4.0);
             DVec3::new(x, y, scale * ((3.0 * x).sin() * (2.0 * y).cos() + x * y))
-        });
-        Quartic::from_values(&values)
+        }))
     }
 
     /// A quartic's three fan triangles around `(⅓, ⅓)`.
     fn sampled_quartic_fan_error(patch: &Quartic, hanging: f64) -> f64 {
-        let corners = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
-        sampled_fan_error_of(|u, v| patch.eval(u, v), [1.0 / 3.0, 1.0 / 3.0], &corners, hanging)
+        sampled_fan_error_of(|u, v| patch.eval(u, v), [1.0 / 3.0, 1.0 / 3.0], &TRIANGLE_CORNERS, hanging)
     }
 
     #[test]
@@ -620,10 +614,7 @@ mod tests {
         // A linear triangle is flat at any tolerance.
         let flat = Quartic::from_values(&std::array::from_fn(|a| DVec3::new(a as f64, 0.5, 0.0)));
         let linear = Quartic {
-            net: std::array::from_fn(|a| {
-                let (i, j) = crate::quartic::domain_point(a);
-                DVec3::new(i as f64, j as f64, 0.5 * i as f64 - j as f64)
-            }),
+            net: crate::quartic::per_point(|i, j| DVec3::new(i as f64, j as f64, 0.5 * i as f64 - j as f64)),
         };
         assert!(quartic_is_flat(&linear, 1e-9));
         assert!(!quartic_is_flat(&flat, 1e-9), "values not on a plane are not flat");

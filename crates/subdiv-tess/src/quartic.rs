@@ -21,18 +21,31 @@ pub struct Quartic {
 /// `n!` for `n ≤ 4`.
 const FACTORIAL: [f64; 5] = [1.0, 1.0, 2.0, 6.0, 24.0];
 
-/// The Bernstein polynomials of degree `n ≤ 4` on the triangle at `(u, v)`, in [`Quartic`]'s
-/// order for that degree.
+/// The indices `(i, j)`, `i + j ≤ n`, of a triangle's Bézier net of degree `n`, in [`Quartic`]'s
+/// order for that degree (row `j` after row `j − 1`, `i` ascending in a row).
+pub(crate) fn domain_points(n: usize) -> impl Iterator<Item = (usize, usize)> + Clone {
+    (0..=n).flat_map(move |j| (0..=n - j).map(move |i| (i, j)))
+}
+
+/// A quartic's array over its domain points: `f(i, j)` at [`Quartic::index`]`(i, j)`.
+pub(crate) fn per_point(mut f: impl FnMut(usize, usize) -> DVec3) -> [DVec3; POINTS] {
+    let mut out = [DVec3::ZERO; POINTS];
+    for (o, (i, j)) in out.iter_mut().zip(domain_points(4)) {
+        *o = f(i, j);
+    }
+    out
+}
+
+/// The Bernstein polynomials of degree `n ≤ 4` on the triangle at `(u, v)`, in
+/// [`domain_points`]' order.
 fn bernstein(n: usize, u: f64, v: f64) -> impl Iterator<Item = f64> {
     let w = 1.0 - u - v;
-    (0..=n).flat_map(move |j| {
-        (0..=n - j).map(move |i| {
-            let k = n - i - j;
-            FACTORIAL[n] / (FACTORIAL[i] * FACTORIAL[j] * FACTORIAL[k])
-                * u.powi(i as i32)
-                * v.powi(j as i32)
-                * w.powi(k as i32)
-        })
+    domain_points(n).map(move |(i, j)| {
+        let k = n - i - j;
+        FACTORIAL[n] / (FACTORIAL[i] * FACTORIAL[j] * FACTORIAL[k])
+            * u.powi(i as i32)
+            * v.powi(j as i32)
+            * w.powi(k as i32)
     })
 }
 
@@ -47,12 +60,9 @@ pub(crate) fn collocation_inverse() -> &'static [[f64; POINTS]; POINTS] {
     static INVERSE: OnceLock<[[f64; POINTS]; POINTS]> = OnceLock::new();
     INVERSE.get_or_init(|| {
         let mut a = [[0.0; POINTS]; POINTS];
-        for j in 0..=4 {
-            for i in 0..=4 - j {
-                let row = &mut a[index_of(4, i, j)];
-                for (entry, b) in row.iter_mut().zip(bernstein(4, i as f64 / 4.0, j as f64 / 4.0)) {
-                    *entry = b;
-                }
+        for (row, (i, j)) in a.iter_mut().zip(domain_points(4)) {
+            for (entry, b) in row.iter_mut().zip(bernstein(4, i as f64 / 4.0, j as f64 / 4.0)) {
+                *entry = b;
             }
         }
         crate::flatness::gauss_jordan(a)
@@ -81,7 +91,7 @@ impl Quartic {
     pub fn eval_with_derivatives(&self, u: f64, v: f64) -> (DVec3, DVec3, DVec3) {
         let n = &self.net;
         let (mut du, mut dv) = (DVec3::ZERO, DVec3::ZERO);
-        for ((i, j), b) in (0..=3).flat_map(|j| (0..=3 - j).map(move |i| (i, j))).zip(bernstein(3, u, v)) {
+        for ((i, j), b) in domain_points(3).zip(bernstein(3, u, v)) {
             let base = n[Self::index(i, j)];
             du += b * 4.0 * (n[Self::index(i + 1, j)] - base);
             dv += b * 4.0 * (n[Self::index(i, j + 1)] - base);
@@ -94,17 +104,10 @@ impl Quartic {
     /// convention of `subdiv_schemes::ChildDomain`), as a quartic in its own parameters.
     pub fn child(&self, offset: [u8; 2], flipped: bool) -> Self {
         let sign = if flipped { -1.0 } else { 1.0 };
-        let values = std::array::from_fn(|a| {
-            let (i, j) = domain_point(a);
+        Self::from_values(&per_point(|i, j| {
             let (s, t) = (i as f64 / 4.0, j as f64 / 4.0);
             self.eval((sign * s + f64::from(offset[0])) / 2.0, (sign * t + f64::from(offset[1])) / 2.0)
-        });
-        Self::from_values(&values)
-    }
-
-    /// The corners at `(0, 0)`, `(1, 0)`, `(0, 1)`.
-    pub fn corners(&self) -> [DVec3; 3] {
-        [self.net[Self::index(0, 0)], self.net[Self::index(4, 0)], self.net[Self::index(0, 4)]]
+        }))
     }
 
     /// The control points along side `side` (0: `(0,0) → (1,0)`, 1: `(1,0) → (0,1)`, 2:
@@ -144,19 +147,13 @@ impl Quartic {
     }
 }
 
-/// The `(i, j)` of control point `a`.
-pub(crate) fn domain_point(a: usize) -> (usize, usize) {
-    (0..=4).flat_map(|j| (0..=4 - j).map(move |i| (i, j))).nth(a).unwrap_or((0, 0))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn sample() -> Quartic {
         Quartic {
-            net: std::array::from_fn(|a| {
-                let (i, j) = domain_point(a);
+            net: per_point(|i, j| {
                 let (x, y) = (i as f64, j as f64);
                 DVec3::new(x + 0.1 * y * y, y - 0.2 * x * y, (x * 1.3).sin() + (y * 0.7).cos())
             }),
@@ -169,26 +166,19 @@ mod tests {
             (Quartic::index(0, 0), Quartic::index(4, 0), Quartic::index(0, 1), Quartic::index(0, 4)),
             (0, 4, 5, 14)
         );
-        assert!((0..POINTS).all(|a| {
-            let (i, j) = domain_point(a);
-            Quartic::index(i, j) == a
-        }));
+        assert!(domain_points(4).enumerate().all(|(a, (i, j))| Quartic::index(i, j) == a));
     }
 
     #[test]
     fn values_round_trip_and_corners_interpolate() {
         let q = sample();
-        let values = std::array::from_fn(|a| {
-            let (i, j) = domain_point(a);
-            q.eval(i as f64 / 4.0, j as f64 / 4.0)
-        });
-        let back = Quartic::from_values(&values);
+        let back = Quartic::from_values(&per_point(|i, j| q.eval(i as f64 / 4.0, j as f64 / 4.0)));
         for (a, b) in back.net.iter().zip(&q.net) {
             assert!((*a - *b).length() < 1e-12, "{a} {b}");
         }
-        assert_eq!(q.eval(0.0, 0.0), q.corners()[0]);
-        assert!((q.eval(1.0, 0.0) - q.corners()[1]).length() < 1e-14);
-        assert!((q.eval(0.0, 1.0) - q.corners()[2]).length() < 1e-14);
+        assert_eq!(q.eval(0.0, 0.0), q.net[Quartic::index(0, 0)]);
+        assert!((q.eval(1.0, 0.0) - q.net[Quartic::index(4, 0)]).length() < 1e-14);
+        assert!((q.eval(0.0, 1.0) - q.net[Quartic::index(0, 4)]).length() < 1e-14);
     }
 
     #[test]
@@ -234,8 +224,7 @@ mod tests {
                 }
             }
         }
-        let quadratic = Quartic::from_values(&std::array::from_fn(|a| {
-            let (i, j) = domain_point(a);
+        let quadratic = Quartic::from_values(&per_point(|i, j| {
             let (u, v) = (i as f64 / 4.0, j as f64 / 4.0);
             DVec3::new(u * u, 3.0 * u * v, -v * v)
         }));

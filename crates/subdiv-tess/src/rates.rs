@@ -579,6 +579,9 @@ impl ErrorRates {
             if refine.is_empty() {
                 return Ok(DualRates { faces: rates, rings: RingDepths { vertices, centres } });
             }
+            // Each face once, though several failing points may surround it.
+            refine.sort_unstable_by_key(|&(g, _)| g);
+            refine.dedup_by_key(|&mut (g, _)| g);
             for (g, d) in refine {
                 let finer = round(2 * rates[g.index()]);
                 if finer > max_rate {

@@ -183,6 +183,11 @@ fn finer_tolerance_gives_more_polygons_and_adapts() {
     assert!(stats.extraordinary_leaves > 0);
     // Adaptive: fewer polygons than the uniform tessellation as deep as the deepest leaf.
     assert!((out.polygon_count() as u64) < tess.uniform_polygon_count(stats.max_depth));
+    // Fanned: four triangles a square; a uniform tessellation at depth 0 is the fanned roots.
+    let d = stats.max_depth;
+    assert_eq!(tess.uniform_triangle_count(d), 4 * tess.uniform_polygon_count(d));
+    let loop_tess = QuadtreeTessellator::new(Builtin::Loop.scheme(), &Mesh::build(shapes::icosahedron()).unwrap());
+    assert_eq!(loop_tess.unwrap().uniform_triangle_count(2), 3 * 20 * 16);
     let finer = tess.tessellate(&options.with_tolerance(Tolerance::Relative(1e-4))).unwrap();
     assert!(finer.polygon_count() > out.polygon_count());
 }

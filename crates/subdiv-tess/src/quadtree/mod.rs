@@ -345,14 +345,7 @@ impl QuadtreeTessellator {
         // Every row non-negative, summing to 1 (checked, not assumed: a scheme file's rules may
         // not be).
         let convex_levels = levels.stencils().iter().all(|stencils| {
-            (0..stencils.child_count()).all(|c| {
-                let (mut sum, mut negative) = (0.0, false);
-                for (_, w) in stencils.row(c) {
-                    sum += w;
-                    negative |= w < 0.0;
-                }
-                !negative && (sum - 1.0).abs() <= 1e-12
-            })
+            (0..stencils.child_count()).all(|c| is_convex_combination(stencils.row(c).map(|(_, w)| w)))
         });
         let mut tess = Self {
             levels,
@@ -487,13 +480,12 @@ impl QuadtreeTessellator {
         for &root in roots {
             // A root's corner (0, 0) is its face's corner (an N-gon's sub-face `s`: corner `s`);
             // a quad's other corners too.
-            let (f, _, _) = Leaf::ROOT.corners(root);
-            let corners: &[(usize, (i64, i64))] = match (root.sub, root.triangle) {
-                (Some((s, ..)), _) => &[(s, (0, 0))],
-                (None, true) => &[(0, f[0]), (1, f[1]), (2, f[2])],
-                (None, false) => &[(0, f[0]), (1, f[1]), (2, f[2]), (3, f[3])],
+            let (f, n, _) = Leaf::ROOT.corners(root);
+            let corners: Vec<(usize, (i64, i64))> = match root.sub {
+                Some((s, ..)) => vec![(s, (0, 0))],
+                None => f[..n].iter().copied().enumerate().collect(),
             };
-            for &(k, corner) in corners {
+            for (k, corner) in corners {
                 if self.corner_is_extraordinary(root, corner)? {
                     out.push(mesh.origin(self.corners[face.index()][k]));
                 }
@@ -591,6 +583,13 @@ impl QuadtreeTessellator {
     /// a uniform quadtree that is as deep as the adaptive one's deepest leaf outputs.
     pub fn uniform_polygon_count(&self, depth: u32) -> u64 {
         self.roots.iter().map(|r| 4u64.saturating_pow(depth.saturating_sub(r.depth()))).sum()
+    }
+
+    /// The triangles of the uniform tessellation at `depth`: each polygon fanned like a leaf
+    /// without hanging vertices, four triangles a square, three a triangle.
+    pub fn uniform_triangle_count(&self, depth: u32) -> u64 {
+        let fan = |r: &Root| if r.triangle { 3 } else { 4 };
+        self.roots.iter().map(|r| fan(r) * 4u64.saturating_pow(depth.saturating_sub(r.depth()))).sum()
     }
 
     /// Tessellates the surface so that every output triangle is within the tolerance of it
@@ -841,7 +840,7 @@ impl QuadtreeTessellator {
                 let (samples, parameters) = linear_samples(matrices, *shape, points, LINEAR_LEVELS)
                     .or_else(|| linear_samples(matrices, *shape, points, 0))
                     .unwrap_or_default();
-                !samples.is_empty() && flatness::linear_is_flat(&samples, &parameters, &[], e)
+                !samples.is_empty() && flatness::linear_is_flat(&samples, &parameters, e)
             }
             (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
             (Piece::Quartic(q), Some(e)) => flatness::quartic_is_flat(q, e),

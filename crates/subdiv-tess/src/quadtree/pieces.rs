@@ -91,14 +91,12 @@ pub(super) fn quartic_in_frame(net: &[f64], points: &[DVec3], frame: PatchFrame)
     let point = |k: usize| -> DVec3 { net[k * size..(k + 1) * size].iter().zip(points).map(|(&w, &p)| w * p).sum() };
     // The frame maps the triangle onto itself: face control point (i, j) is the patch's at
     // to_patch(i/4, j/4).
-    let mut out = [DVec3::ZERO; quartic::POINTS];
-    for j in 0..=4usize {
-        for i in 0..=4 - j {
+    Quartic {
+        net: quartic::per_point(|i, j| {
             let p = frame.to_patch(Dyadic::new(i as i64, j as i64, 4));
-            out[Quartic::index(i, j)] = point(Quartic::index(p.u as usize, p.v as usize));
-        }
+            point(Quartic::index(p.u as usize, p.v as usize))
+        }),
     }
-    Quartic { net: out }
 }
 
 /// The Bézier net weights of the quartic that interpolates a triangle `shape`'s limit surface
@@ -110,12 +108,9 @@ fn candidate_quartic(
     shape: usize,
 ) -> Result<Vec<f64>, String> {
     let mut values = vec![0.0; quartic::POINTS * size];
-    for j in 0..=4usize {
-        for i in 0..=4 - j {
-            let stencil = evaluator.stencil(shape, Dyadic::new(i as i64, j as i64, 4)).map_err(|e| e.to_string())?;
-            let a = Quartic::index(i, j);
-            values[a * size..(a + 1) * size].copy_from_slice(&stencil.position);
-        }
+    for (value, (i, j)) in values.chunks_exact_mut(size).zip(quartic::domain_points(4)) {
+        let stencil = evaluator.stencil(shape, Dyadic::new(i as i64, j as i64, 4)).map_err(|e| e.to_string())?;
+        value.copy_from_slice(&stencil.position);
     }
     let inverse = quartic::collocation_inverse();
     let mut net = vec![0.0; quartic::POINTS * size];
@@ -284,34 +279,16 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
             }
         })
         .collect();
-    loop {
-        let drop: Vec<usize> = (0..shapes.len())
-            .filter(|&s| polynomial[s] && shapes[s].children.iter().any(|c| !polynomial[c.shape]))
-            .collect();
-        if drop.is_empty() {
-            break;
-        }
-        drop.into_iter().for_each(|s| polynomial[s] = false);
-    }
+    close_under_children(matrices, &mut polynomial, |_| false);
     let convex = |s: usize| {
-        shapes[s].children.iter().all(|child| {
-            (0..child.rows()).all(|r| {
-                let row = child.row(r);
-                row.iter().all(|&w| w >= 0.0) && (row.iter().sum::<f64>() - 1.0).abs() <= 1e-12
-            })
-        })
+        shapes[s]
+            .children
+            .iter()
+            .all(|child| (0..child.rows()).all(|r| is_convex_combination(child.row(r).iter().copied())))
     };
     let mut linear: Vec<bool> =
         (0..shapes.len()).map(|s| !polynomial[s] && shapes[s].parameters.is_some() && convex(s)).collect();
-    loop {
-        let drop: Vec<usize> = (0..shapes.len())
-            .filter(|&s| linear[s] && shapes[s].children.iter().any(|c| !linear[c.shape] && !polynomial[c.shape]))
-            .collect();
-        if drop.is_empty() {
-            break;
-        }
-        drop.into_iter().for_each(|s| linear[s] = false);
-    }
+    close_under_children(matrices, &mut linear, |c| polynomial[c]);
     for (shape, net) in nets.into_iter().enumerate() {
         if polynomial[shape] {
             out.insert((id, shape), if triangle { ShapeKind::Quartic { net } } else { ShapeKind::Regular { net } });
@@ -334,13 +311,10 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
         if keep.domain.offset != [0, 0] {
             return Err(format!("patch shape {shape} keeps its shape away from corner 0"));
         }
+        if !convex(shape) {
+            return Err(format!("sub-patch matrices of shape {shape} are not convex combinations"));
+        }
         for child in &s.children {
-            for r in 0..child.rows() {
-                let row = child.row(r);
-                if row.iter().any(|&w| w < 0.0) || (row.iter().sum::<f64>() - 1.0).abs() > 1e-12 {
-                    return Err(format!("sub-patch matrices of shape {shape} are not convex combinations"));
-                }
-            }
             if child.shape != shape && !polynomial[child.shape] && !linear[child.shape] {
                 return Err(format!(
                     "a child of extraordinary shape {shape} is neither a polynomial, nor reproduces linear functions \
@@ -359,6 +333,32 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
         );
     }
     Ok(())
+}
+
+/// Shrinks `set` to its largest subset closed under children: a shape stays only if each child
+/// is in the set or `also(child)`.
+fn close_under_children(matrices: &PatchMatrices, set: &mut [bool], also: impl Fn(usize) -> bool) {
+    let shapes = &matrices.shapes;
+    loop {
+        let drop: Vec<usize> = (0..shapes.len())
+            .filter(|&s| set[s] && shapes[s].children.iter().any(|c| !set[c.shape] && !also(c.shape)))
+            .collect();
+        if drop.is_empty() {
+            return;
+        }
+        drop.into_iter().for_each(|s| set[s] = false);
+    }
+}
+
+/// Whether weights (a matrix row, a refinement stencil) are a convex combination: none
+/// negative, summing to 1 (to rounding). The hull bounds rest on it.
+pub(super) fn is_convex_combination(weights: impl IntoIterator<Item = f64>) -> bool {
+    let (mut sum, mut negative) = (0.0, false);
+    for w in weights {
+        sum += w;
+        negative |= w < 0.0;
+    }
+    !negative && (sum - 1.0).abs() <= 1e-12
 }
 
 /// The 4 × 4 grid order of a 16-point shape whose control points sit at the integer

@@ -18,6 +18,17 @@ pub(in crate::dual::topology) struct RunEnd {
     pub shared: Option<u32>,
 }
 
+/// A ring's points in a corner's frame, each at `(a, b) · 2^−(e + shift)` for ring depth `e`: a
+/// quad corner's are `(r, 0)` on its first edge, the diagonal point `(r, r)` and `(0, r)` on its
+/// last edge; a triangle corner's `(r, 0)`, `(r/2, r/2)` (on the segment between the corner's
+/// two edge points: the triangle's region between rings is a trapezoid) and `(0, r)`.
+struct RingFrame {
+    edge: (i64, i64),
+    inner: (i64, i64),
+    last_edge: (i64, i64),
+    shift: u32,
+}
+
 impl Builder<'_> {
     /// The point `(a, b) · 2^−e` (face units, `a, b ≤ 2`, `e ≥ 2`) of `corner`'s frame, as its
     /// face's parameter: a quad's own coordinates turned to the corner; an N-gon's sub-face
@@ -83,7 +94,7 @@ impl Builder<'_> {
         let first = first_ring_depth(self.triangle, finest);
         let count = ring_count(first, depth);
         let base = self.out.vertex_count;
-        let (edge, inner, _, shift) = self.ring_frame();
+        let RingFrame { edge, inner, shift, .. } = self.ring_frame();
         for j in 0..count {
             for &c in corners {
                 let on_edge = self.ring_point(c, edge.0, edge.1, first + j + shift);
@@ -109,14 +120,13 @@ impl Builder<'_> {
         }
     }
 
-    /// A ring's points in a corner's frame at `(a, b) · 2^−(e + shift)` for ring depth `e`: the
-    /// point on the corner's first edge at `r`, the inner one, the point on its last edge, and
-    /// the shift: a quad corner's are `(r, 0)`, the diagonal point `(r, r)`, `(0, r)`; a triangle
-    /// corner's `(r, 0)`, `(r/2, r/2)` (on the segment between the corner's two edge points: the
-    /// triangle's region between rings is a trapezoid), `(0, r)`.
-    #[allow(clippy::type_complexity)]
-    fn ring_frame(&self) -> ((i64, i64), (i64, i64), (i64, i64), u32) {
-        if self.triangle { ((2, 0), (1, 1), (0, 2), 1) } else { ((1, 0), (1, 1), (0, 1), 0) }
+    /// A ring's points in a corner's frame ([`RingFrame`]) under this split.
+    fn ring_frame(&self) -> RingFrame {
+        if self.triangle {
+            RingFrame { edge: (2, 0), inner: (1, 1), last_edge: (0, 2), shift: 1 }
+        } else {
+            RingFrame { edge: (1, 0), inner: (1, 1), last_edge: (0, 1), shift: 0 }
+        }
     }
 
     /// The bands between `count` rings of `n` faces: two quads per face in its L-shaped region
@@ -157,7 +167,7 @@ impl Builder<'_> {
         let n = corners.len() as u32;
         let first = first_ring_depth(self.triangle, finest);
         let count = ring_count(first, depth);
-        let (edge, inner, last_edge, shift) = self.ring_frame();
+        let RingFrame { edge, inner, last_edge, shift } = self.ring_frame();
         let last = corners[corners.len() - 1];
         let mut points = std::mem::take(&mut self.buf.ring_points);
         points.clear();
