@@ -13,6 +13,8 @@ use std::time::Instant;
 use subdiv::mesh::DVec3;
 use subdiv::schemes::Builtin;
 use subdiv::tess::check::MeshDistance;
+use subdiv::tess::dual::{MAX_DUAL_RATE, predicted_vertex_count};
+use subdiv::tess::rates::ErrorRates;
 use subdiv::tess::{QuadtreeTessellator, Tolerance};
 use subdiv::{Method, Rates, Surface, TessOptions};
 
@@ -91,11 +93,26 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                 (Some(stats), _) => QuadtreeTessellator::new(scheme.scheme(), surface.mesh())
                     .map_err(|e| format!("{name}: {e}"))?
                     .uniform_triangle_count(stats.max_regular_depth),
-                // The dual tessellation at the largest rate on every face, counted by the tessellator.
+                // The dual tessellation at the least uniform rate that meets the same bound (the
+                // largest ungraded rate) on every face: counted by the tessellator, or, past the
+                // largest rate it cuts, as twice the vertices it would make (a closed mesh's
+                // triangles; a few fewer on an open one).
                 (None, _) => {
-                    let n = out.info.rates.iter().copied().max().unwrap_or(1);
-                    let uniform = TessOptions::DEFAULT.with_rates(Rates::Uniform(n)).with_max_vertices(usize::MAX / 4);
-                    surface.tessellate(&uniform).map_or(0, |u| u.mesh.triangles.len() as u64)
+                    let mesh = surface.mesh();
+                    let bounds = QuadtreeTessellator::new(scheme.scheme(), mesh).map_err(|e| format!("{name}: {e}"))?;
+                    let ungraded = ErrorRates { max_rate: 1 << 20, ..ErrorRates::new(Tolerance::Relative(relative)) }
+                        .with_graded(false)
+                        .rates(&bounds, mesh)
+                        .map_err(|e| format!("{name}: {e}"))?;
+                    let n = ungraded.faces.iter().copied().max().unwrap_or(1);
+                    if n <= MAX_DUAL_RATE {
+                        let uniform =
+                            TessOptions::DEFAULT.with_rates(Rates::Uniform(n)).with_max_vertices(usize::MAX / 4);
+                        surface.tessellate(&uniform).map_or(0, |u| u.mesh.triangles.len() as u64)
+                    } else {
+                        let rates = vec![n; mesh.face_count()];
+                        2 * predicted_vertex_count(mesh, scheme == Builtin::Loop, &rates) as u64
+                    }
                 }
             };
             println!(

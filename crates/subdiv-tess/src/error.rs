@@ -98,7 +98,7 @@ pub enum TessError {
     /// input face (`"centres"`) ([`RingDepths`](crate::rates::RingDepths)).
     #[error("{got} ring depths given for {expected} {what} (one depth per element)")]
     RingCount {
-        /// Which list: `"vertices"` or `"centres"`.
+        /// Which list: `"vertices"`, `"centres"` or `"graded grids"`.
         what: &'static str,
         /// The number of vertices or faces.
         expected: usize,
@@ -114,6 +114,16 @@ pub enum TessError {
         depth: u32,
         /// The largest depth allowed.
         max: u32,
+    },
+    /// A graded grid ([`GradedGrid`](crate::rates::GradedGrid)) that does not fit its face: not a
+    /// quad under a quad split, or not one of the face's rate cells per axis with increasing
+    /// boundaries.
+    #[error("face {face}: its graded grid {reason}")]
+    Grading {
+        /// The input face.
+        face: usize,
+        /// The rule broken, in words.
+        reason: String,
     },
     /// The cage positions do not have one position per input vertex.
     #[error("{got} cage positions given for {expected} vertices (one position per vertex)")]

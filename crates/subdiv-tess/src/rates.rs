@@ -9,6 +9,10 @@ use glam::DVec3;
 use subdiv_mesh::{FaceId, Mesh};
 
 use crate::flatness::{Tolerance, rounding_slack};
+
+mod graded;
+
+pub use self::graded::{GRID_DENOMINATOR, GradedGrid};
 use crate::{QuadtreeTessellator, TessError};
 
 /// A pinhole camera: where it is, what it looks at, which way is up, and its vertical field of
@@ -317,12 +321,23 @@ pub struct ErrorRates {
     pub tolerance: Tolerance,
     /// The largest rate allowed: a face that needs more is an error.
     pub max_rate: u32,
+    /// Whether the faces around extraordinary points take grids graded toward them
+    /// ([`GradedGrid`], under a quad split): their cell counts then follow the bound away from
+    /// the points instead of its worst spot. Without, every face's grid is uniform (the
+    /// regular fast path's blocks), at rates that grow much faster as `ε` falls.
+    pub graded: bool,
 }
 
 impl ErrorRates {
-    /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`].
+    /// Rates to `tolerance`, at most [`DEFAULT_MAX_RATE`], graded around extraordinary points.
     pub fn new(tolerance: Tolerance) -> Self {
-        Self { tolerance, max_rate: DEFAULT_MAX_RATE }
+        Self { tolerance, max_rate: DEFAULT_MAX_RATE, graded: true }
+    }
+
+    /// The same policy, graded around extraordinary points or not.
+    #[must_use]
+    pub fn with_graded(self, graded: bool) -> Self {
+        Self { graded, ..self }
     }
 }
 
@@ -349,6 +364,26 @@ pub struct RingDepths {
     pub vertices: Vec<u32>,
     /// Per face (used at the centres of N-gons, N ≠ 4, under a quad split).
     pub centres: Vec<u32>,
+    /// Per face, its dual grid graded toward its extraordinary corners, or `None` for the
+    /// uniform grid of its rate (quads under a quad split only); empty: none graded.
+    pub graded: Vec<Option<GradedGrid>>,
+}
+
+impl RingDepths {
+    /// Face `face`'s graded grid, if it has one.
+    pub(crate) fn grid(&self, face: FaceId) -> Option<&GradedGrid> {
+        self.graded.get(face.index()).and_then(Option::as_ref)
+    }
+
+    /// [`reach`] of `face` at `rate`, or its graded grid's (an N-gon's sub-faces are half as
+    /// wide as a face).
+    pub(crate) fn reach(&self, mesh: &Mesh, triangle: bool, face: FaceId, rate: u32) -> u32 {
+        match self.grid(face) {
+            Some(grid) if mesh.face_size(face) == 4 => grid.reach(),
+            Some(grid) => 2 * grid.reach(),
+            None => reach(mesh, triangle, face, rate),
+        }
+    }
 }
 
 /// How finely a face at `rate` samples next to its corners: under a quad split as a rate of a
@@ -397,6 +432,36 @@ const QUAD_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 2.0 / 3.0, bands:
 /// `(r/2, 0)`, `(r, 0)`, `(r/2, r/2)`, `(r/4, r/4)`) is cut along a diagonal of at most `√7/4 · r`
 /// (`7/48 r²`).
 const TRIANGLE_SPLIT: SplitGeometry = SplitGeometry { cells: 0.5 * 19.0 / 36.0, bands: 0.5 * 7.0 / 48.0 };
+
+/// What a graded face's bound reads besides the curvature of the faces around its ring
+/// points: which faces have a surface, every face's bound less its corner quarters (for the
+/// faces sharing no ring point with it), the budget and the split's constants.
+#[derive(Clone, Copy)]
+struct Within<'a> {
+    surfaced: &'a [bool],
+    shallow: &'a [f64],
+    budget: f64,
+    geometry: SplitGeometry,
+}
+
+/// Rounds of the faces' rule after which the rates are taken as unsettled (a bug): each round
+/// raises some rate or grading, and they settle within a few on every shared mesh.
+const MAX_SETTLING_ROUNDS: u32 = 1000;
+
+/// The faces whose grids are graded toward their ring points: under a quad split, every
+/// N-gon (its centre has rings) and every quad with a ring point at a corner — so every face
+/// around a ring point (a uniform face there would have to keep its cells out of the first
+/// ring, which a graded neighbour's innermost cells put far deeper). None unless `grade`: not
+/// asked for, or under a triangle split (Loop's cells are not graded yet).
+fn graded_faces(mesh: &Mesh, grade: bool, surfaced: &[bool], corner_of: &[bool]) -> Vec<bool> {
+    mesh.face_ids()
+        .map(|f| {
+            grade
+                && surfaced[f.index()]
+                && (mesh.face_size(f) != 4 || mesh.face_vertices(f).iter().any(|v| corner_of[v.index()]))
+        })
+        .collect()
+}
 
 /// The rings around an extraordinary point at the current rates.
 enum Rings {
@@ -470,38 +535,52 @@ impl ErrorRates {
             cache.insert((f, d), c);
             Ok(c)
         };
-        // Faces without a surface (holes): no rate of theirs matters, and they bound nothing.
         let faces: Vec<FaceId> = mesh.face_ids().filter(|&f| bounds.has_surface(f)).collect();
         let mut extraordinary = vec![false; mesh.face_count()];
         for &f in &faces {
             extraordinary[f.index()] = curvature(f, 1)?.corner_hull > 0.0;
         }
-        // The vertices at which some face's surface is an extraordinary piece: every valence
-        // other than the regular one, and sharp corners and darts of any valence.
         let mut corner_of = vec![false; mesh.vertex_count()];
         for &f in faces.iter().filter(|f| extraordinary[f.index()]) {
             for v in bounds.extraordinary_corners(f)? {
                 corner_of[v.index()] = true;
             }
         }
+        let mut surfaced = vec![false; mesh.face_count()];
+        faces.iter().for_each(|f| surfaced[f.index()] = true);
+        let graded = graded_faces(mesh, self.graded && !triangle, &surfaced, &corner_of);
+        let mut shallow = vec![0.0; mesh.face_count()];
+        for &f in &faces {
+            shallow[f.index()] = curvature(f, 1)?.second;
+        }
+        let mut grids: Vec<Option<GradedGrid>> = vec![None; mesh.face_count()];
+        // The least reach of a graded face's innermost cells (raised where rings' bands fail).
+        let mut floors = vec![1u32; mesh.face_count()];
         let mut rates = vec![round(1); mesh.face_count()];
-        let depth_of = |rates: &[u32], f: FaceId| -> u32 {
-            let finest = mesh
-                .face_vertices(f)
-                .iter()
-                .flat_map(|&v| mesh.vertex_faces(v))
-                .map(|g| reach(mesh, triangle, g, rates[g.index()]));
-            first_ring_depth(triangle, finest.max().unwrap_or(1))
+        let reach_of = |rates: &[u32], grids: &[Option<GradedGrid>], f: FaceId| match &grids[f.index()] {
+            Some(grid) if mesh.face_size(f) == 4 => grid.reach(),
+            Some(grid) => 2 * grid.reach(),
+            None => reach(mesh, triangle, f, rates[f.index()]),
         };
-        // Rings: per extraordinary point, from the first power of two inside its nearest dual
-        // points down to the least depth whose hull is within ε, every band checked (where one
-        // fails, finer rates around move the first ring inward, where a band's `M r²` is
-        // smaller: it falls like `λ^d`).
+        // The faces whose reach puts the first rings around `f`'s extraordinary points: those
+        // around its ring corners, and `f` itself (an N-gon's centre).
+        let ring_neighbours = |f: FaceId| {
+            mesh.face_vertices(f)
+                .iter()
+                .filter(|v| corner_of[v.index()])
+                .flat_map(|&v| mesh.vertex_faces(v))
+                .chain(std::iter::once(f))
+                .filter(|&g| bounds.has_surface(g))
+        };
+        let finest_of = |rates: &[u32], grids: &[Option<GradedGrid>], f: FaceId| -> u32 {
+            ring_neighbours(f).map(|g| reach_of(rates, grids, g)).max().unwrap_or(1)
+        };
         let ring_depth = |rates: &[u32],
+                          grids: &[Option<GradedGrid>],
                           around: &[FaceId],
                           curvature: &mut dyn FnMut(FaceId, u32) -> Result<crate::FaceCurvature, TessError>|
          -> Result<Rings, TessError> {
-            let finest = around.iter().map(|&g| reach(mesh, triangle, g, rates[g.index()])).max().unwrap_or(1);
+            let finest = around.iter().map(|&g| reach_of(rates, grids, g)).max().unwrap_or(1);
             let first = first_ring_depth(triangle, finest);
             let mut d = first;
             loop {
@@ -509,7 +588,7 @@ impl ErrorRates {
                 for &g in around {
                     let c = curvature(g, d)?;
                     if d > first {
-                        // The band between 2^−(d−1) and 2^−d.
+                        // The band between the rings at `2^−(d−1)` and `2^−d`.
                         let r = 0.5f64.powi(d as i32 - 1);
                         if geometry.bands * c.second * r * r > budget {
                             return Ok(Rings::BandFails(d));
@@ -529,6 +608,8 @@ impl ErrorRates {
                 }
             }
         };
+        // Extraordinary points with rings: every vertex at an extraordinary corner of some
+        // face, and (quad split) every N-gon's centre.
         let points: Vec<(Option<subdiv_mesh::VertexId>, Vec<FaceId>)> = mesh
             .vertices()
             .filter(|v| corner_of[v.index()])
@@ -536,20 +617,27 @@ impl ErrorRates {
             .chain(faces.iter().filter(|&&f| mesh.face_size(f) != 4 && !triangle).map(|&f| (None, vec![f])))
             .collect();
         loop {
-            // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the
-            // depth of the first ring for the finest rate around each of its vertices (no
-            // triangle outside the rings comes closer); finer rates push d deeper, where M grows
-            // like (4λ)^d, slower than n², so the rates settle.
-            loop {
-                let mut second = vec![0.0; mesh.face_count()];
-                for &f in &faces {
-                    let depth = if extraordinary[f.index()] { depth_of(&rates, f) } else { 1 };
-                    second[f.index()] = curvature(f, depth)?.second;
+            // The least fixed point of the faces' rule (rates and gradings only grow).
+            for round_trip in 0.. {
+                if round_trip > MAX_SETTLING_ROUNDS {
+                    return Err(TessError::Internal(format!(
+                        "dual rates unsettled after {MAX_SETTLING_ROUNDS} rounds"
+                    )));
+                }
+                // Each uniform extraordinary face's bound over the face less the corner squares
+                // inside the first rings around it, which the faces sharing a ring point with it
+                // take; every other face, and every face for a neighbour that shares no ring
+                // point with it (no nearer those points), takes `shallow`.
+                let mut deep = shallow.clone();
+                for &f in faces.iter().filter(|f| extraordinary[f.index()] && !graded[f.index()]) {
+                    let depth = first_ring_depth(triangle, finest_of(&rates, &grids, f));
+                    deep[f.index()] = curvature(f, depth)?.second;
                 }
                 let mut changed = false;
-                for &f in &faces {
+                for &f in faces.iter().filter(|f| !graded[f.index()]) {
                     let around = mesh.face_vertices(f).iter().flat_map(|&v| mesh.vertex_faces(v));
-                    let m = around.fold(0.0f64, |m, g| m.max(second[g.index()]));
+                    let m = around.fold(0.0f64, |m, g| m.max(shallow[g.index()]));
+                    let m = ring_neighbours(f).fold(m, |m, g| m.max(deep[g.index()]));
                     let needed = (geometry.cells * m / budget).sqrt().ceil().max(1.0);
                     let needed = if needed > f64::from(max_rate) { needed } else { f64::from(round(needed as u32)) };
                     if needed > f64::from(max_rate) {
@@ -557,6 +645,18 @@ impl ErrorRates {
                     }
                     if needed as u32 > rates[f.index()] {
                         rates[f.index()] = needed as u32;
+                        changed = true;
+                    }
+                }
+                for &f in faces.iter().filter(|f| graded[f.index()]) {
+                    let floor = floors[f.index()].max(finest_of(&rates, &grids, f));
+                    let within = Within { surfaced: &surfaced, shallow: &shallow, budget, geometry };
+                    let grid = self.graded_grid(mesh, f, &corner_of, within, &mut curvature, floor)?;
+                    let grid = grid.map_err(|why| limit(f, why))?;
+                    if grids[f.index()].as_ref() != Some(&grid) {
+                        // An N-gon's sub-faces take `⌈n/2⌉` cells each.
+                        rates[f.index()] = if mesh.face_size(f) == 4 { grid.rate() } else { 2 * grid.rate() };
+                        grids[f.index()] = Some(grid);
                         changed = true;
                     }
                 }
@@ -568,7 +668,7 @@ impl ErrorRates {
             let mut centres = vec![0u32; mesh.face_count()];
             let mut refine: Vec<(FaceId, u32)> = Vec::new();
             for (point, around) in &points {
-                match ring_depth(&rates, around, &mut curvature)? {
+                match ring_depth(&rates, &grids, around, &mut curvature)? {
                     Rings::Down(d) => match point {
                         Some(v) => vertices[v.index()] = d,
                         None => centres[around[0].index()] = d,
@@ -577,12 +677,17 @@ impl ErrorRates {
                 }
             }
             if refine.is_empty() {
-                return Ok(DualRates { faces: rates, rings: RingDepths { vertices, centres } });
+                let graded = if grids.iter().any(Option::is_some) { grids } else { Vec::new() };
+                return Ok(DualRates { faces: rates, rings: RingDepths { vertices, centres, graded } });
             }
-            // Each face once, though several failing points may surround it.
             refine.sort_unstable_by_key(|&(g, _)| g);
             refine.dedup_by_key(|&mut (g, _)| g);
             for (g, d) in refine {
+                if graded[g.index()] {
+                    // A graded face's innermost cells twice as fine.
+                    floors[g.index()] = floors[g.index()].max(2 * reach_of(&rates, &grids, g));
+                    continue;
+                }
                 let finer = round(2 * rates[g.index()]);
                 if finer > max_rate {
                     let why = format!("finer rates around it (its rings' bands fail the bound at depth {d})");
@@ -593,7 +698,75 @@ impl ErrorRates {
         }
     }
 
-    /// `ε` less the rounding slack.
+    /// Face `f`'s grid graded toward its ring points (see [`graded`]): the allowed cell width
+    /// beyond the corner squares of side `2^−e` from the largest bound there of the faces
+    /// sharing a vertex with it — a face around one of `f`'s ring points (or `f`, for an N-gon's
+    /// centre) at depth `e`, any other less its corner quarters (it is no nearer `f`'s points,
+    /// nor `f` nearer its own) — and `floor` the least reach of its innermost cells.
+    ///
+    /// A quad's grid is in its own parameters, corner `c` of its vertices at `(0, 0)`, `(1, 0)`,
+    /// `(1, 1)`, `(0, 1)`. An N-gon's is every sub-face's (the same grid, so that the spokes
+    /// between them stay ladders of equal parameters), in sub-face units: half a face unit, the
+    /// N-gon's vertex at `(0, 0)` and its centre at `(1, 1)`; its width is twice the face
+    /// width, its corner squares of side `2^−e` are the face's of side `2^−(e+1)`, and its
+    /// reach is half the face's.
+    fn graded_grid(
+        &self,
+        mesh: &Mesh,
+        f: FaceId,
+        corner_of: &[bool],
+        Within { surfaced, shallow, budget, geometry }: Within<'_>,
+        curvature: &mut dyn FnMut(FaceId, u32) -> Result<crate::FaceCurvature, TessError>,
+        floor: u32,
+    ) -> Result<Result<GradedGrid, String>, TessError> {
+        let corners = mesh.face_vertices(f);
+        let ring = |c: usize| corner_of[corners[c].index()];
+        let quad = corners.len() == 4;
+        // The ends of u at 0 and 1, of v: a quad's corners, or a sub-face's vertex and centre.
+        let ends = if quad {
+            [[ring(0) || ring(3), ring(1) || ring(2)], [ring(0) || ring(1), ring(2) || ring(3)]]
+        } else {
+            let vertex = (0..corners.len()).any(ring);
+            [[vertex, true], [vertex, true]]
+        };
+        let mut near: Vec<FaceId> = corners
+            .iter()
+            .filter(|v| corner_of[v.index()])
+            .flat_map(|&v| mesh.vertex_faces(v))
+            .chain(std::iter::once(f))
+            .filter(|g| surfaced[g.index()])
+            .collect();
+        near.sort_unstable();
+        near.dedup();
+        let others = corners.iter().flat_map(|&v| mesh.vertex_faces(v)).fold(0.0f64, |m, g| m.max(shallow[g.index()]));
+        // Grid units per face unit, and the face depth of the grid's depth 0.
+        let (scale, shift) = if quad { (1.0, 0) } else { (2.0, 1) };
+        let mut widths = |e: u32| -> Result<u32, TessError> {
+            let mut m = others;
+            for &g in &near {
+                m = m.max(curvature(g, e + shift)?.second);
+            }
+            let width = scale * (budget / (geometry.cells * m)).sqrt() * f64::from(GRID_DENOMINATOR);
+            // A flat neighbourhood (m = 0) allows any width: the cast saturates.
+            Ok(width.min(f64::from(u32::MAX)) as u32)
+        };
+        let first_ring = |reach: u32| {
+            let face_reach = reach << shift;
+            (face_reach >= floor).then(|| first_ring_depth(false, face_reach) - shift)
+        };
+        let max_cells = if quad { self.max_rate.max(1) } else { self.max_rate.max(1) / 2 };
+        let graded = graded::graded_grid(&mut widths, ends, &first_ring, max_cells)?;
+        Ok(graded.map_err(|refusal| match refusal {
+            graded::Refusal::Cells(n) if quad => format!("rate {n} (graded toward its extraordinary points)"),
+            graded::Refusal::Cells(n) => {
+                format!("rate {} ({n} cells per sub-face side, graded toward its extraordinary points)", 2 * n)
+            }
+            graded::Refusal::Finer(depth) => {
+                format!("cells finer than 2^-{depth} of a face (ε is below what f64 resolves)")
+            }
+        }))
+    }
+
     fn budget(&self, bounds: &QuadtreeTessellator, mesh: &Mesh) -> Result<f64, TessError> {
         let epsilon = self.tolerance.absolute(bounds.diagonal())?;
         let magnitude = mesh.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);

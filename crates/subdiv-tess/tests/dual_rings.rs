@@ -294,7 +294,11 @@ fn rings_on_fixed_meshes_are_watertight_and_in_their_regions() {
         }
         // Depth 0 everywhere: the plain output, bit for bit.
         let rates = rates_for(&mesh, 7, 9);
-        let none = RingDepths { vertices: vec![0; mesh.vertex_count()], centres: vec![0; mesh.face_count()] };
+        let none = RingDepths {
+            vertices: vec![0; mesh.vertex_count()],
+            centres: vec![0; mesh.face_count()],
+            graded: Vec::new(),
+        };
         assert_eq!(tessellate_rings(&mesh, &rates, &none), tessellate(Builtin::CatmullClark, &mesh, &rates));
     }
 }
@@ -349,6 +353,7 @@ fn deepest_rings_are_exact() {
         let rings = RingDepths {
             vertices: vec![MAX_DUAL_RING_DEPTH; mesh.vertex_count()],
             centres: vec![MAX_DUAL_RING_DEPTH; mesh.face_count()],
+            graded: Vec::new(),
         };
         ring_checks(&mesh, &rates, &rings, true);
     }
@@ -394,7 +399,8 @@ fn bad_rings_are_typed_errors() {
     let mesh = Mesh::build(shapes::cube()).unwrap();
     let rates = vec![2; mesh.face_count()];
     let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
-    let good = RingDepths { vertices: vec![1; mesh.vertex_count()], centres: vec![0; mesh.face_count()] };
+    let good =
+        RingDepths { vertices: vec![1; mesh.vertex_count()], centres: vec![0; mesh.face_count()], graded: Vec::new() };
     let short = RingDepths { vertices: vec![1; 3], ..good.clone() };
     assert!(matches!(tess.tessellate_with_rings(&rates, &short), Err(TessError::RingCount { what: "vertices", .. })));
     let long = RingDepths { centres: vec![0; 9], ..good.clone() };
@@ -474,6 +480,47 @@ fn loop_rings_are_watertight_and_on_the_surface() {
     }
 }
 
+/// Limit points sampled on `mesh`: each face's 33 × 33 grid (each N-gon sub-face's), and grids
+/// shrinking towards every corner of every face and sub-face down to 2^−30; then, apart, the
+/// samples within 2^−8 of a corner (where the rings are).
+fn limit_samples(mesh: &Mesh, evaluator: &LimitEvaluator) -> (Vec<DVec3>, Vec<DVec3>) {
+    let mut samples: Vec<DVec3> = Vec::new();
+    let mut near: Vec<DVec3> = Vec::new();
+    for f in mesh.face_ids() {
+        let domain = evaluator.domain(f).unwrap();
+        samples.extend(evaluator.grid(f, 32).unwrap().into_iter().map(|(_, p)| p.position));
+        // Charts: the face, or each sub-face; chart point (x, y) in [0, 1]² is the face's
+        // (origin + scale · (x, y)).
+        let charts: Vec<((f64, f64), f64)> = match domain {
+            subdiv_stencil::FaceDomain::SubFaces { size, columns } => {
+                (0..size).map(|s| (((s % columns) as f64, (s / columns) as f64), 0.5)).collect()
+            }
+            _ => vec![((0.0, 0.0), 1.0)],
+        };
+        for chart in &charts {
+            for corner in 0..4 {
+                for k in 1..=30 {
+                    let side = 0.5f64.powi(k);
+                    for j in 0..=4 {
+                        for i in 0..=4 {
+                            let (a, b) = (side * f64::from(i) / 4.0, side * f64::from(j) / 4.0);
+                            let (x, y) = [(a, b), (1.0 - a, b), (1.0 - a, 1.0 - b), (a, 1.0 - b)][corner];
+                            let ((u0, v0), scale) = *chart;
+                            let (u, v) = (u0 + scale * x, v0 + scale * y);
+                            let p = evaluator.eval(f, u, v).unwrap().position;
+                            samples.push(p);
+                            if k >= 8 {
+                                near.push(p);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    (samples, near)
+}
+
 /// The guarantee end to end: rates and ring depths from `ErrorRates::rates`, then every limit
 /// point sampled — each face's 33 × 33 grid (each N-gon sub-face's), and grids shrinking
 /// towards every corner of every face and sub-face down to 2^−30 — is within ε of the output.
@@ -489,41 +536,7 @@ fn rings_keep_the_surface_within_tolerance() {
         let bounds = QuadtreeTessellator::new(cc, &mesh).unwrap();
         let evaluator = LimitEvaluator::new(cc, &mesh, &RefineOptions::DEFAULT).unwrap();
         // The samples do not depend on the tolerance: evaluated once.
-        let mut samples: Vec<DVec3> = Vec::new();
-        // The samples within 2^−8 of a corner (where the rings are), counted apart below.
-        let mut near: Vec<DVec3> = Vec::new();
-        for f in mesh.face_ids() {
-            let domain = evaluator.domain(f).unwrap();
-            samples.extend(evaluator.grid(f, 32).unwrap().into_iter().map(|(_, p)| p.position));
-            // Charts: the face, or each sub-face; chart point (x, y) in [0, 1]² is the face's
-            // (origin + scale · (x, y)).
-            let charts: Vec<((f64, f64), f64)> = match domain {
-                subdiv_stencil::FaceDomain::SubFaces { size, columns } => {
-                    (0..size).map(|s| (((s % columns) as f64, (s / columns) as f64), 0.5)).collect()
-                }
-                _ => vec![((0.0, 0.0), 1.0)],
-            };
-            for chart in &charts {
-                for corner in 0..4 {
-                    for k in 1..=30 {
-                        let side = 0.5f64.powi(k);
-                        for j in 0..=4 {
-                            for i in 0..=4 {
-                                let (a, b) = (side * f64::from(i) / 4.0, side * f64::from(j) / 4.0);
-                                let (x, y) = [(a, b), (1.0 - a, b), (1.0 - a, 1.0 - b), (a, 1.0 - b)][corner];
-                                let ((u0, v0), scale) = *chart;
-                                let (u, v) = (u0 + scale * x, v0 + scale * y);
-                                let p = evaluator.eval(f, u, v).unwrap().position;
-                                samples.push(p);
-                                if k >= 8 {
-                                    near.push(p);
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-        }
+        let (samples, near) = limit_samples(&mesh, &evaluator);
         for r in [3e-2, 1e-2] {
             let rates = ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &mesh).unwrap();
             let epsilon = Tolerance::Relative(r).absolute(bounds.diagonal()).unwrap();
@@ -558,6 +571,103 @@ fn rings_keep_the_surface_within_tolerance() {
                 plain_worst / epsilon
             );
         }
+    }
+}
+
+/// Graded grids (`ErrorRates`' default): every face around an extraordinary point — quads at
+/// such a corner, N-gons — takes a grid graded toward it, with far fewer points than the
+/// uniform rates that meet the same bound; the output is watertight where the mesh is closed
+/// (sharp edges and texture seams included), counted as predicted, on the surface, and every
+/// sampled limit point is within ε of it, open meshes too.
+#[test]
+fn graded_grids_are_watertight_smaller_and_within_tolerance() {
+    let builtin = Builtin::CatmullClark;
+    let sharp = creased_meshes().into_iter().find(|(name, ..)| name.contains("sharp loop")).unwrap().2;
+    for (name, mesh, closed) in [
+        ("cube", Mesh::build(shapes::cube()).unwrap(), true),
+        ("pentagonal prism", Mesh::build(shapes::ngon_prism(5)).unwrap(), true),
+        ("default model", Mesh::build(shapes::default_model()).unwrap(), true),
+        ("cube, sharp loop and corner", sharp, true),
+        ("cube, a chart per face", Mesh::build(shapes::face_charts(shapes::cube())).unwrap(), true),
+        ("open valence-5 pole", Mesh::build(shapes::pole(5)).unwrap(), false),
+    ] {
+        let bounds = QuadtreeTessellator::new(builtin.scheme(), &mesh).unwrap();
+        let r = 1e-3;
+        let graded = ErrorRates::new(Tolerance::Relative(r)).rates(&bounds, &mesh).unwrap();
+        let uniform = ErrorRates { max_rate: 1 << 16, ..ErrorRates::new(Tolerance::Relative(r)) }
+            .with_graded(false)
+            .rates(&bounds, &mesh)
+            .unwrap();
+        assert!(uniform.rings.graded.is_empty(), "{name}: graded grids without grading");
+        // Graded exactly where a face has an extraordinary point (a ring depth) of its own.
+        for f in mesh.face_ids() {
+            let ringed =
+                mesh.face_vertices(f).iter().any(|v| graded.rings.vertices[v.index()] > 0) || mesh.face_size(f) != 4;
+            assert_eq!(graded.rings.graded[f.index()].is_some(), ringed, "{name}: face {f:?}");
+        }
+        let count = |rates: &subdiv_tess::rates::DualRates| {
+            predicted_vertex_count_with_rings(&mesh, false, &rates.faces, &rates.rings)
+        };
+        let (graded_points, uniform_points) = (count(&graded), count(&uniform));
+        eprintln!(
+            "{name}, ε = {r} × bbox: graded {graded_points} points (largest rate {:?}), uniform {uniform_points} ({:?})",
+            graded.faces.iter().max(),
+            uniform.faces.iter().max()
+        );
+        assert!(3 * graded_points < uniform_points, "{name}: {graded_points} points graded, {uniform_points} uniform");
+        let out = if closed {
+            ring_checks(&mesh, &graded.faces, &graded.rings, true)
+        } else {
+            let out = tessellate_rings(&mesh, &graded.faces, &graded.rings);
+            assert_eq!(out.positions.len(), graded_points, "{name}");
+            out
+        };
+        let evaluator = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+        let epsilon = Tolerance::Relative(r).absolute(bounds.diagonal()).unwrap();
+        let (samples, _) = limit_samples(&mesh, &evaluator);
+        let buckets = MeshDistance::new(&out, epsilon);
+        let worst = samples.iter().map(|&p| buckets.distance(&out, p)).fold(0.0, f64::max);
+        eprintln!("  {} triangles, worst distance / ε = {:.4}", out.triangles.len(), worst / epsilon);
+        assert!(worst <= epsilon, "{name}: a limit point {worst:e} from the output (ε = {epsilon:e})");
+    }
+}
+
+/// A graded grid that does not fit its face is a typed error, not a topology.
+#[test]
+fn bad_graded_grids_are_typed_errors() {
+    let mesh = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    let bounds = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &mesh).unwrap();
+    let good = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&bounds, &mesh).unwrap();
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &DualOptions::default()).unwrap();
+    assert!(tess.tessellate_with_rings(&good.faces, &good.rings).is_ok());
+    let (pentagon, quad) = {
+        let f = |size: usize| mesh.face_ids().find(|&f| mesh.face_size(f) == size).unwrap().index();
+        (f(5), f(4))
+    };
+    let mut cases: Vec<(&str, RingDepths)> = Vec::new();
+    let mut short = good.rings.clone();
+    short.graded.pop();
+    cases.push(("one grid too few", short));
+    let mut unequal = good.rings.clone();
+    if let Some(grid) = unequal.graded[pentagon].as_mut() {
+        let d = subdiv_tess::rates::GRID_DENOMINATOR;
+        grid.axes[1][1] = (grid.axes[1][1] + grid.axes[1][2]) / 2 + u32::from(grid.axes[1][1] == d / 4);
+    }
+    cases.push(("an N-gon's unequal axes", unequal));
+    let mut decreasing = good.rings.clone();
+    if let Some(grid) = decreasing.graded[quad].as_mut() {
+        grid.axes[0].swap(1, 2);
+    }
+    cases.push(("boundaries that do not increase", decreasing));
+    let mut counted = good.rings.clone();
+    if let Some(grid) = counted.graded[quad].as_mut() {
+        grid.axes[0].remove(1);
+        grid.axes[1].remove(1);
+    }
+    cases.push(("a cell count not the rate", counted));
+    for (what, rings) in cases {
+        let err = tess.tessellate_with_rings(&good.faces, &rings);
+        assert!(matches!(err, Err(TessError::RingCount { .. } | TessError::Grading { .. })), "{what}: {err:?}");
     }
 }
 

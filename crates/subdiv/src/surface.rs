@@ -316,7 +316,7 @@ impl Surface {
                     Error::Tess(e) => Error::ToleranceBounds(e),
                     e => e,
                 })?;
-                let policy = ErrorRates { tolerance: *tolerance, max_rate: options.max_rate };
+                let policy = ErrorRates { max_rate: options.max_rate, ..ErrorRates::new(*tolerance) };
                 let DualRates { faces, rings } = policy.rates(bounds, &self.mesh).map_err(|e| match e {
                     subdiv_tess::TessError::Unsupported { .. } => Error::ToleranceBounds(e),
                     e => Error::Tess(e),

@@ -350,7 +350,7 @@ impl DualTessellator {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn tessellate_with_rings(&mut self, rates: &[u32], rings: &RingDepths) -> Result<&TessMesh, TessError> {
-        self.check_rings(rings)?;
+        self.check_rings(rates, rings)?;
         self.rebuild(rates, Some(rings))?;
         self.fill_output();
         Ok(&self.output)
@@ -399,9 +399,28 @@ impl DualTessellator {
         Ok(())
     }
 
-    /// Checks that `rings` has one depth per vertex and per face, none too deep.
-    fn check_rings(&self, rings: &RingDepths) -> Result<(), TessError> {
+    /// Checks that `rings` has one depth per vertex and per face, none too deep, and graded
+    /// grids (if any) per face, each on a quad of the quad split with `rates`' cells per axis.
+    fn check_rings(&self, rates: &[u32], rings: &RingDepths) -> Result<(), TessError> {
         let (vertices, faces) = (self.vertex_count, self.face_count());
+        if !rings.graded.is_empty() && rings.graded.len() != faces {
+            return Err(TessError::RingCount { what: "graded grids", expected: faces, got: rings.graded.len() });
+        }
+        for (face, grid) in rings.graded.iter().enumerate().filter_map(|(f, g)| Some(f).zip(g.as_ref())) {
+            let rate = rates.get(face).copied().unwrap_or(0);
+            let reason = match self.evaluator.domains()[face] {
+                Some(FaceDomain::Quad) => grid.fault(rate),
+                // Every sub-face's grid, the same on both axes (the spokes are ladders).
+                Some(FaceDomain::SubFaces { .. }) if grid.axes[0] != grid.axes[1] => {
+                    Some("has different axes on an N-gon".to_string())
+                }
+                Some(FaceDomain::SubFaces { .. }) => grid.fault(rate.div_ceil(2)),
+                _ => Some("is not on a quad or an N-gon of a quad split".to_string()),
+            };
+            if let Some(reason) = reason {
+                return Err(TessError::Grading { face, reason });
+            }
+        }
         if rings.vertices.len() != vertices {
             return Err(TessError::RingCount { what: "vertices", expected: vertices, got: rings.vertices.len() });
         }

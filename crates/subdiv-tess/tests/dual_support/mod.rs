@@ -362,7 +362,11 @@ pub(crate) fn random_rings(mesh: &Mesh, seed: u64, max: u32) -> RingDepths {
             })
             .collect()
     };
-    RingDepths { vertices: depths(mesh.vertex_count(), 0x5151), centres: depths(mesh.face_count(), 0xC3C3) }
+    RingDepths {
+        vertices: depths(mesh.vertex_count(), 0x5151),
+        centres: depths(mesh.face_count(), 0xC3C3),
+        graded: Vec::new(),
+    }
 }
 
 /// Meshes with sharp features: infinitely sharp crease loops and paths (straight, turning,

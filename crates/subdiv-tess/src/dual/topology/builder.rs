@@ -40,6 +40,11 @@ pub(super) fn quad_side(base: u32, m: u32, c: usize) -> (u32, u32) {
     }
 }
 
+/// The denominator of a graded grid's cell centres.
+fn grid_q() -> i64 {
+    2 * i64::from(GRID_DENOMINATOR)
+}
+
 /// One input face's cells.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct FaceCells {
@@ -49,6 +54,8 @@ pub(super) struct FaceCells {
     m: u32,
     /// The face's domain.
     domain: FaceDomain,
+    /// Whether its grid is graded (a quad's, [`BuilderBuffers::graded`]): explicit sites, no block.
+    graded: bool,
 }
 
 /// Builds the topology of `mesh` (level 0 of the patch levels, holes tagged) at `rates`.
@@ -94,10 +101,9 @@ pub(crate) struct BuilderBuffers {
     cut_ring_points: HashMap<u32, Vec<u32>>,
     /// One ring's points, as [`Corner`]s (open rings).
     ring_points: Vec<Corner>,
-    /// The rates being built, and the ring depths (empty: none).
+    /// The rates being built, and the ring depths and graded grids (empty: none).
     rates: Vec<u32>,
-    ring_vertices: Vec<u32>,
-    ring_centres: Vec<u32>,
+    rings: RingDepths,
 }
 
 impl<'a> Builder<'a> {
@@ -135,11 +141,14 @@ impl<'a> Builder<'a> {
     ) {
         self.buf.rates.clear();
         self.buf.rates.extend_from_slice(rates);
-        self.buf.ring_vertices.clear();
-        self.buf.ring_centres.clear();
-        if let Some(r) = rings {
-            self.buf.ring_vertices.extend_from_slice(&r.vertices);
-            self.buf.ring_centres.extend_from_slice(&r.centres);
+        match rings {
+            Some(r) => self.buf.rings.clone_from(r),
+            None => {
+                let RingDepths { vertices, centres, graded } = &mut self.buf.rings;
+                vertices.clear();
+                centres.clear();
+                graded.clear();
+            }
         }
         std::mem::swap(&mut self.out, out);
         let o = &mut self.out;
@@ -270,18 +279,31 @@ impl<'a> Builder<'a> {
         };
         let base = self.out.vertex_count;
         match domain {
+            FaceDomain::Quad if self.graded_grid(f).is_some() => {
+                let grid = self.buf.rings.graded[f].take().expect("a graded grid");
+                for j in 0..n {
+                    for i in 0..n {
+                        let point = Dyadic::new(grid.centre(0, i) as i64, grid.centre(1, j) as i64, grid_q());
+                        self.push_site(f, point);
+                    }
+                }
+                self.buf.rings.graded[f] = Some(grid);
+                self.run(f as u32, RunShape::Grid { base, n });
+                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded: true }));
+            }
             FaceDomain::Quad => {
                 let sites = self.out.sites.len() as u32;
                 self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
                 self.quad_cell(f, domain, None, n);
-                self.buf.faces.push(Some(FaceCells { base, m: n, domain }));
+                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded: false }));
             }
             FaceDomain::SubFaces { size, .. } => {
-                let m = n.div_ceil(2);
+                // Graded: the grid's cells per side, `⌈n/2⌉` (checked by the tessellator).
+                let m = self.graded_grid(f).map_or(n.div_ceil(2), GradedGrid::rate);
                 for s in 0..size {
                     self.quad_cell(f, domain, Some(s), m);
                 }
-                self.buf.faces.push(Some(FaceCells { base, m, domain }));
+                self.buf.faces.push(Some(FaceCells { base, m, domain, graded: false }));
                 let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
                 // Spoke s: sub-face s's side 1 (from the middle of side s to the centre) against
                 // sub-face s + 1's side 2, reversed: equal rates, so quads.
@@ -295,12 +317,12 @@ impl<'a> Builder<'a> {
                 ring.clear();
                 ring.extend((0..size).map(|s| cell(s, m - 1, m - 1)));
                 let centre_point = domain.from_sub_face(0, Dyadic::new(1, 1, 1));
-                let depth = self.buf.ring_centres.get(f).copied().unwrap_or(0);
+                let depth = self.buf.rings.centres.get(f).copied().unwrap_or(0);
                 if depth > 0 {
                     let mut corners = std::mem::take(&mut self.buf.ring_corners);
                     corners.clear();
                     corners.extend((0..size as u32).map(|sub| RingCorner::Centre { face: f as u32, sub }));
-                    let finest = reach(self.mesh, false, FaceId::new(f as u32), n);
+                    let finest = self.reach(f);
                     self.rings(&corners, &ring, depth, finest, (f, centre_point));
                     self.buf.ring_corners = corners;
                 } else {
@@ -320,7 +342,7 @@ impl<'a> Builder<'a> {
                         }
                     }
                 }
-                self.buf.faces.push(Some(FaceCells { base, m: n, domain }));
+                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded: false }));
                 let up = |i: u32, j: u32| base + 2 * n * j - j * j + 2 * i;
                 for j in 1..n {
                     for i in 1..n - j {
@@ -347,11 +369,19 @@ impl<'a> Builder<'a> {
         let base = self.out.vertex_count;
         let q = 2 * i64::from(m);
         if let Some(s) = sub {
+            // An N-gon's graded grid is every sub-face's.
+            let grid = self.buf.rings.graded.get_mut(f).and_then(Option::take);
             for j in 0..m {
                 for i in 0..m {
-                    let a = Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, q);
+                    let a = match &grid {
+                        None => Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, q),
+                        Some(g) => Dyadic::new(g.centre(0, i) as i64, g.centre(1, j) as i64, grid_q()),
+                    };
                     self.push_site(f, domain.from_sub_face(s, a));
                 }
+            }
+            if grid.is_some() {
+                self.buf.rings.graded[f] = grid;
             }
         } else {
             // A whole face: a block, whose sites are implicit.
@@ -363,7 +393,7 @@ impl<'a> Builder<'a> {
     /// The first point and the step of face `f`'s row nearest its side `c` (as
     /// [`side_row`](Self::side_row) lists it), if `f` is a whole quad (a block).
     pub(super) fn block_side(&self, f: usize, c: usize) -> Option<(u32, u32, u32)> {
-        let cells = self.buf.faces[f]?;
+        let cells = self.buf.faces[f].filter(|cells| !cells.graded)?;
         let FaceDomain::Quad = cells.domain else { return None };
         let (start, step) = quad_side(cells.base, cells.m, c);
         Some((start, step, cells.m))
@@ -379,11 +409,25 @@ impl<'a> Builder<'a> {
         match cells.domain {
             FaceDomain::Quad => {
                 let (start, step) = quad_side(base, m, c);
+                let grid = self.graded_grid(f).filter(|_| cells.graded);
                 for k in 0..m {
+                    // The parameter along the side of its point `k` (from corner `c`).
+                    let (num, den) = match grid {
+                        None => (u64::from(2 * k + 1), 2 * m64),
+                        Some(grid) => {
+                            let den = 2 * u64::from(GRID_DENOMINATOR);
+                            match c {
+                                0 => (grid.centre(0, k), den),
+                                1 => (grid.centre(1, k), den),
+                                2 => (den - grid.centre(0, m - 1 - k), den),
+                                _ => (den - grid.centre(1, m - 1 - k), den),
+                            }
+                        }
+                    };
                     row.push(RowPoint {
                         vertex: start.wrapping_add(k.wrapping_mul(step)),
-                        num: u64::from(2 * k + 1),
-                        den: 2 * m64,
+                        num,
+                        den,
                         near: true,
                         extra: None,
                     });
@@ -391,25 +435,26 @@ impl<'a> Builder<'a> {
             }
             FaceDomain::SubFaces { size, .. } => {
                 let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
-                // Sub-face c's side 0 covers the first half, sub-face c + 1's side 3 the second.
+                // Sub-face c's side 0 covers the first half, sub-face c + 1's side 3 the second
+                // (its point `k` from the middle of the side at `1 − v` of its sub-face).
+                let grid = self.graded_grid(f);
+                let along = |k: u32, second: bool| match (grid, second) {
+                    (None, false) => (u64::from(2 * k + 1), 4 * m64),
+                    (None, true) => (2 * m64 + u64::from(2 * k + 1), 4 * m64),
+                    (Some(g), false) => (g.centre(0, k), 4 * u64::from(GRID_DENOMINATOR)),
+                    (Some(g), true) => {
+                        let den = 4 * u64::from(GRID_DENOMINATOR);
+                        (den - g.centre(1, m - 1 - k), den)
+                    }
+                };
                 for k in 0..m {
-                    row.push(RowPoint {
-                        vertex: cell(c, k, 0),
-                        num: u64::from(2 * k + 1),
-                        den: 4 * m64,
-                        near: true,
-                        extra: None,
-                    });
+                    let (num, den) = along(k, false);
+                    row.push(RowPoint { vertex: cell(c, k, 0), num, den, near: true, extra: None });
                 }
                 let next = (c + 1) % size;
                 for k in 0..m {
-                    row.push(RowPoint {
-                        vertex: cell(next, 0, m - 1 - k),
-                        num: 2 * m64 + u64::from(2 * k + 1),
-                        den: 4 * m64,
-                        near: true,
-                        extra: None,
-                    });
+                    let (num, den) = along(k, true);
+                    row.push(RowPoint { vertex: cell(next, 0, m - 1 - k), num, den, near: true, extra: None });
                 }
             }
             FaceDomain::Triangle => {
@@ -435,6 +480,16 @@ impl<'a> Builder<'a> {
                 }
             }
         }
+    }
+
+    /// Face `f`'s graded grid, if it has one.
+    pub(super) fn graded_grid(&self, f: usize) -> Option<&GradedGrid> {
+        self.buf.rings.grid(FaceId::new(f as u32))
+    }
+
+    /// How finely face `f` samples next to its corners ([`RingDepths::reach`]).
+    pub(super) fn reach(&self, f: usize) -> u32 {
+        self.buf.rings.reach(self.mesh, self.triangle, FaceId::new(f as u32), self.buf.rates[f])
     }
 
     /// The parameter of face `f` at `t = num / den` along its side `c`.
@@ -646,16 +701,12 @@ impl<'a> Builder<'a> {
         let mut centre = None;
         let mut ring = std::mem::take(&mut self.buf.ring);
         let mut corners = std::mem::take(&mut self.buf.ring_corners);
-        let depth = self.buf.ring_vertices.get(v.index()).copied().unwrap_or(0);
+        let depth = self.buf.rings.vertices.get(v.index()).copied().unwrap_or(0);
         // Rings need the finest reach around the vertex (every run's first ring where the rates
         // put it), and, in open runs, borders with nothing across: a sharp edge or a seam between
         // two faces would have to share its ring points between the runs on its sides.
-        let finest = mesh
-            .outgoing(v)
-            .filter(|&h| has_surface(h))
-            .map(|h| reach(mesh, self.triangle, mesh.face(h), self.buf.rates[mesh.face(h).index()]))
-            .max()
-            .unwrap_or(1);
+        let finest =
+            mesh.outgoing(v).filter(|&h| has_surface(h)).map(|h| self.reach(mesh.face(h).index())).max().unwrap_or(1);
         self.buf.cut_ring_points.clear();
         for &start in &starts {
             ring.clear();

@@ -31,7 +31,7 @@
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
 use subdiv_stencil::{Dyadic, FaceDomain};
 
-use crate::rates::{RingDepths, first_ring_depth, reach};
+use crate::rates::{GRID_DENOMINATOR, GradedGrid, RingDepths, first_ring_depth, reach};
 
 mod builder;
 #[cfg(test)]
@@ -389,6 +389,12 @@ fn write_runs<T: Copy + Send + Sync>(
 pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rings: Option<&RingDepths>) -> usize {
     let hole = |f: FaceId| mesh.is_hole(f);
     let rate_of = |f: FaceId| rates[f.index()] as usize;
+    let reach_of = |f: FaceId| {
+        rings.map_or_else(
+            || reach(mesh, triangle, f, rates[f.index()]),
+            |r| r.reach(mesh, triangle, f, rates[f.index()]),
+        )
+    };
     // Edges the construction cuts between two faces: infinitely sharp ones, and the seams of
     // the mesh's channels (carried by default).
     let cut = |h: HalfEdgeId| {
@@ -407,7 +413,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             let depth = rings.map_or(0, |r| r.centres[f.index()]);
             let centre = if depth > 0 {
                 // Two points per sub-face per ring, and the centre (N = 3 has none without).
-                let finest = reach(mesh, false, f, rates[f.index()]);
+                let finest = reach_of(f);
                 2 * size * ring_count(first_ring_depth(false, finest), depth) as usize + 1
             } else {
                 usize::from(size >= 5)
@@ -440,7 +446,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             // border with nothing across (a run that starts at an edge cut between two faces
             // shares its points there with the run across, whose last edge it is); the limit
             // point once.
-            let finest = faces.iter().map(|&f| reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
+            let finest = faces.iter().map(|&f| reach_of(f)).max().unwrap_or(1);
             let runs = mesh
                 .outgoing(v)
                 .filter(|&h| !hole(mesh.face(h)) && mesh.twin(h).is_none_or(|t| hole(mesh.face(t))))
@@ -452,7 +458,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
             && (faces.len() != regular(triangle) || sharp_corner(mesh, v))
         {
             // Two points per face per ring (its edge's and its inner one), and the limit point.
-            let finest = faces.iter().map(|&f| reach(mesh, triangle, f, rates[f.index()])).max().unwrap_or(1);
+            let finest = faces.iter().map(|&f| reach_of(f)).max().unwrap_or(1);
             count += 2 * faces.len() * ring_count(first_ring_depth(triangle, finest), depth) as usize + 1;
         } else if border || (faces.len() >= 3 && (triangle || faces.len() >= 5)) {
             count += 1;
