@@ -47,7 +47,7 @@ pub(crate) struct RenderArgs {
     /// The image size in pixels (sides from 1 to 16384).
     #[arg(long, value_name = "W,H", default_value = "800,600")]
     size: String,
-    /// Every face at this rate (1 to 128). The default policy, at 8.
+    /// Every face at this rate (1 to 1024). The default policy, at 8.
     #[arg(long, value_name = "N", conflicts_with = "pixels")]
     rate: Option<u32>,
     /// Screen-space rates: output edges about P pixels long in the image, from the automatic

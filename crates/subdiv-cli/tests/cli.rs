@@ -471,8 +471,8 @@ fn render_writes_numbered_frames_and_rejects_bad_arguments() {
         (&["--size", "16385,48"][..], "sides must be integers from 1 to 16384"),
         (&["--size", "64"][..], "--size 64: expected 2 numbers"),
         (&["--frames", "0"][..], "--frames 0: the number of frames must be at least 1"),
-        (&["--rate", "0"][..], "--rate 0: rates are integers from 1 to 128"),
-        (&["--rate", "129"][..], "rates are integers from 1 to 128"),
+        (&["--rate", "0"][..], "--rate 0: rates are integers from 1 to 1024"),
+        (&["--rate", "1025"][..], "rates are integers from 1 to 1024"),
         (&["--pixels", "-1"][..], "--pixels -1: pixels per edge must be a positive finite number"),
     ] {
         let mut all = vec!["render", "-o", out_arg];

@@ -11,7 +11,10 @@ use subdiv_gpu::{Gpu, GpuError, GpuEvalOptions, GpuTessellation, RateCache};
 use subdiv_mesh::{Mesh, shapes};
 use subdiv_schemes::Builtin;
 use subdiv_tess::dual::{PlanError, PlanItem};
-use subdiv_tess::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, TessError, TessMesh};
+use subdiv_tess::rates::ErrorRates;
+use subdiv_tess::{
+    DualOptions, DualTessellator, EvaluationPlan, FlatMesh, QuadtreeTessellator, TessError, TessMesh, Tolerance,
+};
 
 fn diagonal(mesh: &Mesh) -> f64 {
     let (lo, hi) = mesh.bounding_box().expect("a mesh with vertices");
@@ -112,6 +115,30 @@ fn split_normals_match_the_cpu() {
             let (dp, dn) = check(&gpu, &name, Builtin::CatmullClark, &mesh, &rates);
             assert!(dp <= 1e-6 && dn <= 1e-5, "{name}: position {dp:e} × bbox, normal {dn:e}");
         }
+    }
+}
+
+/// A tolerance's rates: rings around extraordinary points and grids graded toward them, whose
+/// cell points are explicit sites like the rings', go through the plan as any other point.
+#[test]
+fn graded_rings_match_the_cpu() {
+    let Some(gpu) = subdiv_testkit::gpu() else { return };
+    let cc = Builtin::CatmullClark.scheme();
+    for (name, soup) in [("cube", shapes::cube()), ("pentagonal prism", shapes::ngon_prism(5))] {
+        let mesh = Mesh::build(soup).unwrap();
+        let bounds = QuadtreeTessellator::new(cc, &mesh).unwrap();
+        let rates = ErrorRates::new(Tolerance::Relative(1e-2)).rates(&bounds, &mesh).unwrap();
+        assert!(rates.rings.graded.iter().any(Option::is_some), "{name}: nothing graded");
+        let mut tess = DualTessellator::new(cc, &mesh, &DualOptions::default()).unwrap();
+        tess.tessellate_with_rings(&rates.faces, &rates.rings).unwrap();
+        let mut flat = FlatMesh::default();
+        tess.write_flat(&mut flat);
+        let plan = tess.evaluation_plan();
+        let on_gpu =
+            GpuTessellation::new(&gpu, &plan, &flat.indices, mesh.positions(), &GpuEvalOptions::default()).unwrap();
+        let (dp, dn) = compare(&on_gpu.read_vertices(&gpu).unwrap(), tess.mesh(), diagonal(&mesh));
+        eprintln!("{name}, graded at 1e-2: position {dp:.1e} × bbox, normal {dn:.1e}");
+        assert!(dp <= 1e-6 && dn <= 1e-5, "{name}: position {dp:e}, normal {dn:e}");
     }
 }
 

@@ -23,10 +23,19 @@ pub(crate) fn eigenspace(m: &Mat<f64>, lambda: f64, left: bool) -> Result<Vec<Ve
 pub(crate) fn null_space(a: &Mat<f64>, left: bool) -> Result<Vec<Vec<f64>>, String> {
     let n = a.nrows();
     let a = if left { a.transpose().to_owned() } else { a.clone() };
-    let svd = a.svd().map_err(|e| format!("SVD failed: {e:?}"))?;
-    let sigma = svd.S().column_vector();
-    let v = svd.V();
-    Ok((0..n).filter(|&c| sigma[c] < NULL_TOLERANCE).map(|c| (0..n).map(|r| v[(r, c)]).collect()).collect())
+    let null = |sigma: faer::ColRef<'_, f64>, vectors: faer::MatRef<'_, f64>| -> Vec<Vec<f64>> {
+        (0..n).filter(|&c| sigma[c] < NULL_TOLERANCE).map(|c| (0..n).map(|r| vectors[(r, c)]).collect()).collect()
+    };
+    match a.svd() {
+        Ok(svd) => Ok(null(svd.S().column_vector(), svd.V())),
+        // The iteration does not converge on a few matrices (a Loop period of 28 steps at a
+        // parameter of denominator 645); that of the transpose takes another path, and its
+        // left singular vectors are these right ones.
+        Err(first) => {
+            let svd = a.transpose().to_owned().svd().map_err(|e| format!("SVD failed: {first:?}, then {e:?}"))?;
+            Ok(null(svd.S().column_vector(), svd.U()))
+        }
+    }
 }
 
 /// Left eigenvectors `w` of `m` for `lambda` normalised by linear conditions: solution `k` has

@@ -137,6 +137,30 @@ fn assert_consistent_across_levels(builtin: Builtin, soup: PolygonSoup, levels: 
     }
 }
 
+/// A regular Loop patch at `(212, 44) / 645` (the centroid of a sub-triangle at rate 215): the
+/// period of that parameter is 28 steps, and faer's SVD of the shifted period matrix does not
+/// converge; the transpose's does. The stencil is then the one the child patch gives, as
+/// everywhere.
+#[test]
+fn loop_stencils_at_a_long_period_are_found() {
+    let mesh = Mesh::build(shapes::triangle_torus(8, 8)).unwrap();
+    let refined = refine(&mesh, Builtin::Loop.scheme(), &RefineOptions::DEFAULT).unwrap();
+    let coarse = patches(Builtin::Loop, &mesh);
+    let fine = patches(Builtin::Loop, &refined);
+    let face = FaceId::new(0);
+    let (start, points, m, shape) = find(&coarse, &mesh, face);
+    let point = Dyadic::new(212, 44, 645);
+    let s = surface_stencil(&m, shape, point).unwrap();
+    check_sums(&s, "rate 215's centroid");
+    let (c, child_point, _) = FaceDomain::Triangle.child_of(point);
+    let child = sub_patch_starts(Builtin::Loop.scheme(), &mesh, start, &refined).unwrap()[c];
+    let found = fine.at(&refined, child).unwrap();
+    let t = surface_stencil(&found.matrices, found.shape, child_point).unwrap();
+    let (lo, hi) = mesh.bounding_box().unwrap();
+    let tolerance = 1e-11 * (hi - lo).max_element();
+    assert_close(apply(&s.position, &points), apply(&t.position, &positions(&refined, &found)), tolerance, "position");
+}
+
 #[test]
 fn catmull_clark_stencils_are_consistent_across_levels() {
     assert_consistent_across_levels(Builtin::CatmullClark, shapes::cube(), 2, 1);

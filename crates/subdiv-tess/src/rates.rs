@@ -499,6 +499,26 @@ impl ErrorRates {
     /// and within `√2 / n` of each other: the faces' bound, which excludes only the corner
     /// squares of side `r_1` (for the finest rate around), covers them.
     ///
+    /// # The bound, graded
+    /// With [`graded`](Self::graded), every face around a ring point (under a quad split) takes
+    /// a [`GradedGrid`] instead of one rate: per axis, cells whose widths never grow toward the
+    /// axis' ends at ring points. The uniform argument holds cell by cell: a cell quad (and a
+    /// strip triangle beside an edge) spans two consecutive centres per axis, so its longest
+    /// side is within `√2 w` for the wider of its cells' widths `w`, and it lies beyond the
+    /// corner square whose side is the nearer centre's distance from the end. Each dyadic
+    /// interval `[2^−(d+1), 2^−d]` of a half axis takes cells no wider than the bound beyond the
+    /// square of side `2^−(d+2)` allows (a quad with a centre in the interval reaches at most
+    /// into the next interval out, whose cells obey the square of side `2^−(d+1)`); a quad is
+    /// at least as far from a ring corner, in the max norm, as its centres along either axis, so
+    /// both its sides obey the bound of the square it lies outside. The innermost run `[0,
+    /// 2^−d]` of `k` equal cells (a power of two) is, next to the corner, a uniform grid of rate
+    /// `2^d k`: the uniform argument covers it and its band to the first ring, with the bound
+    /// beyond that ring (for the finest reach around the point). An N-gon's grid is every
+    /// sub-face's, in sub-face units (half a face unit). The strips between a graded face and a
+    /// neighbour take the larger bound of the two faces beyond the same square, which each
+    /// face's grading reads (faces sharing a ring point with it at depth `e`, the others less
+    /// their corner quarters: no triangle between faces sharing no ring point comes nearer one).
+    ///
     /// # Errors
     /// [`TessError::Tolerance`] for a tolerance that is not a positive finite number,
     /// [`TessError::RateLimit`] when a face needs more than `max_rate` (for its cells, or for

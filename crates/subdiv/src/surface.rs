@@ -343,7 +343,7 @@ impl Surface {
     /// [`Error::QuadtreeRates`] for [`Method::Quadtree`] without [`Rates::Tolerance`]; as
     /// [`face_rates`](Self::face_rates); [`Error::Tess`] for a mesh or scheme the tessellator
     /// does not take (the quadtree: Catmull-Clark and Loop meshes; the dual: primal schemes
-    /// with sub-patch matrices), rates outside `1..=128`, or a
+    /// with sub-patch matrices), rates outside `1..=1024`, or a
     /// tolerance the quadtree cannot meet within its depth and polygon limits.
     pub fn tessellate(&mut self, options: &TessOptions) -> Result<Tessellation, Error> {
         if options.method == Method::Dual {
@@ -707,7 +707,7 @@ mod tests {
             Err(Error::Tess(_))
         ));
         let mut flat = FlatMesh { vertices: vec![1.0], indices: vec![], ..FlatMesh::default() };
-        assert!(s.tessellate_into(&TessOptions::DEFAULT.with_rates(Rates::Uniform(500)), &mut flat).is_err());
+        assert!(s.tessellate_into(&TessOptions::DEFAULT.with_rates(Rates::Uniform(1025)), &mut flat).is_err());
         assert_eq!(flat.vertices, [1.0], "a failed call leaves the sink alone");
         let bad_camera = Rates::Screen {
             camera: Camera::look_at(DVec3::ZERO, DVec3::ZERO, DVec3::Z),

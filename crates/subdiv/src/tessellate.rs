@@ -16,7 +16,7 @@ use crate::Error;
 /// methods; the only policy [`Method::Quadtree`] takes).
 #[derive(Clone, Debug, PartialEq)]
 pub enum Rates {
-    /// Every face at this rate: `n × n` samples per quad, `1..=128`.
+    /// Every face at this rate: `n × n` samples per quad, `1..=1024`.
     Uniform(u32),
     /// One rate per face, in face order.
     PerFace(Vec<u32>),
@@ -98,7 +98,8 @@ pub struct TessOptions {
     pub method: Method,
     /// The largest rate [`Rates::Tolerance`] and [`Rates::Screen`] may give a face (dual; a
     /// face that needs more to meet a tolerance is an error). Default:
-    /// [`DEFAULT_MAX_RATE`] (128, the largest the dual tessellator takes).
+    /// [`DEFAULT_MAX_RATE`] (1024, the largest the dual tessellator takes: the vertex budget
+    /// below is the guard that matters).
     pub max_rate: u32,
     /// Also list the output's polygons in [`TessMesh`]'s polygon lists: the dual
     /// tessellation's quads (face grids, equal-rate strips, valence-4 vertices), or the
@@ -298,7 +299,7 @@ impl Tessellation {
 /// [`Surface::face_rates`](crate::Surface::face_rates) checks against
 /// [`TessOptions::max_vertices`]; for callers that drive a
 /// [`DualTessellator`](subdiv_tess::DualTessellator) themselves. Rates the tessellator refuses
-/// anyway (a wrong count, a rate outside `1..=128`) are left to its own error.
+/// anyway (a wrong count, a rate outside `1..=1024`) are left to its own error.
 ///
 /// ```
 /// use subdiv::mesh::{shapes, Mesh};

@@ -83,8 +83,11 @@ pub use crate::plan::{
 use crate::rates::RingDepths;
 use crate::{SurfaceParameter, TessChannels, TessError, TessMesh, TessSink};
 
-/// The largest rate [`DualTessellator::tessellate`] takes.
-pub const MAX_DUAL_RATE: u32 = 128;
+/// The largest rate [`DualTessellator::tessellate`] takes: a face of `1024²` points, past
+/// which a request is one nobody means (the vertex budgets of the callers, predicted from the
+/// rates before any work, are the guard that matters; this one only keeps the counts far from
+/// overflow).
+pub const MAX_DUAL_RATE: u32 = 1024;
 
 /// The largest ring depth [`DualTessellator::tessellate_with_rings`] takes: rings come down to
 /// `2^−60` face units, whose parameters (and an N-gon's sub-face coordinates, twice as fine)
@@ -476,7 +479,7 @@ impl DualTessellator {
             return Err(TessError::RateCount { expected: self.face_count(), got: rates.len() });
         }
         if let Some((face, &rate)) = rates.iter().enumerate().find(|(_, r)| !(1..=MAX_DUAL_RATE).contains(*r)) {
-            return Err(TessError::Rate { face, rate, rule: "rates are integers from 1 to MAX_DUAL_RATE = 128" });
+            return Err(TessError::Rate { face, rate, rule: "rates are integers from 1 to MAX_DUAL_RATE = 1024" });
         }
         self.output_current = false;
         self.flat_indices.clear();
