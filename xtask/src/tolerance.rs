@@ -13,10 +13,14 @@ use std::time::Instant;
 use subdiv::mesh::DVec3;
 use subdiv::schemes::Builtin;
 use subdiv::tess::check::MeshDistance;
-use subdiv::tess::dual::{MAX_DUAL_RATE, predicted_vertex_count};
+use subdiv::tess::dual::predicted_vertex_count;
 use subdiv::tess::rates::ErrorRates;
 use subdiv::tess::{QuadtreeTessellator, Tolerance};
 use subdiv::{Method, Rates, Surface, TessOptions};
+
+/// The largest uniform dual tessellation the table makes to count its triangles; past it, the
+/// count is predicted (a uniform rate of hundreds on a thousand faces is gigabytes).
+const COUNTED_VERTICES: usize = 1 << 22;
 
 /// The meshes of issue 48's distance table (`../shared/testdata/meshes`).
 const MESHES: [&str; 6] = [
@@ -94,8 +98,8 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                     .map_err(|e| format!("{name}: {e}"))?
                     .uniform_triangle_count(stats.max_regular_depth),
                 // The dual tessellation at the least uniform rate that meets the same bound (the
-                // largest ungraded rate) on every face: counted by the tessellator, or, past the
-                // largest rate it cuts, as twice the vertices it would make (a closed mesh's
+                // largest ungraded rate) on every face: counted by the tessellator, or, past
+                // `COUNTED_VERTICES`, as twice the vertices it would make (a closed mesh's
                 // triangles; a few fewer on an open one).
                 (None, _) => {
                     let mesh = surface.mesh();
@@ -105,13 +109,14 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                         .rates(&bounds, mesh)
                         .map_err(|e| format!("{name}: {e}"))?;
                     let n = ungraded.faces.iter().copied().max().unwrap_or(1);
-                    if n <= MAX_DUAL_RATE {
+                    let rates = vec![n; mesh.face_count()];
+                    let predicted = predicted_vertex_count(mesh, scheme == Builtin::Loop, &rates);
+                    if predicted <= COUNTED_VERTICES {
                         let uniform =
                             TessOptions::DEFAULT.with_rates(Rates::Uniform(n)).with_max_vertices(usize::MAX / 4);
                         surface.tessellate(&uniform).map_or(0, |u| u.mesh.triangles.len() as u64)
                     } else {
-                        let rates = vec![n; mesh.face_count()];
-                        2 * predicted_vertex_count(mesh, scheme == Builtin::Loop, &rates) as u64
+                        2 * predicted as u64
                     }
                 }
             };
