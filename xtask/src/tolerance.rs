@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
-use subdiv::mesh::DVec3;
+use subdiv::mesh::{BuildOptions, DVec3};
 use subdiv::schemes::Builtin;
 use subdiv::tess::check::MeshDistance;
 use subdiv::tess::dual::predicted_vertex_count;
@@ -63,7 +63,9 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     for path in &meshes {
         let name = path.file_name().map_or_else(|| path.display().to_string(), |n| n.to_string_lossy().into_owned());
         let scheme = if name.starts_with("loop_") { Builtin::Loop } else { Builtin::CatmullClark };
-        let mut surface = match Surface::load(path, scheme.scheme()) {
+        // Non-manifold meshes split into sheets, as OpenSubdiv (osd_limit) refines them.
+        let sheets = BuildOptions::DEFAULT.with_split_sheets(true);
+        let mut surface = match subdiv::io::load_mesh(path, &sheets).map(|mesh| Surface::new(mesh, scheme.scheme())) {
             Ok(surface) => surface,
             Err(e) => {
                 println!("| {name} | both | | refused on reading: {} | | | | |", one_line(&e.to_string()));

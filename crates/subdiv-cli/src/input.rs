@@ -20,6 +20,12 @@ pub(crate) struct InputArgs {
     /// keeps its texture coordinates.
     #[arg(long)]
     pub(crate) weld: bool,
+    /// Take a non-manifold mesh apart into sheets, as OpenSubdiv refines it: an edge of more
+    /// than two faces becomes an infinitely sharp crease where the sheets end, a vertex whose
+    /// faces form several fans one vertex per fan (sharpened into a corner unless a crease of
+    /// two such edges runs through it). Refused by default.
+    #[arg(long)]
+    pub(crate) split_sheets: bool,
 }
 
 impl InputArgs {
@@ -104,7 +110,7 @@ impl LoadedMesh {
         // The soup goes into the mesh, not a copy of it, and its line table only lives while an
         // error may need it: a large input is then held once, as its mesh.
         let Self { name, soup, lines } = loaded;
-        let mesh = Mesh::build_with(soup, &BuildOptions::default())
+        let mesh = Mesh::build_with(soup, &BuildOptions::default().with_split_sheets(input.split_sheets))
             .map_err(|error| UserError(locate(&name, lines.as_ref(), &error)))?;
         Ok((name, mesh))
     }

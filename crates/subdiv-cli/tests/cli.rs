@@ -75,6 +75,19 @@ fn shared_meshes_report_their_counts() {
     assert_eq!(report["valid"], false);
     assert!(report["problems"].as_array().unwrap().iter().all(|p| p["rule"] == "non-manifold-edge"));
     assert_eq!(String::from_utf8_lossy(&output.stderr).lines().count(), 1);
+    // Refused by the other commands too, naming the option that takes it apart into sheets as
+    // OpenSubdiv does; with it, tessellated to a tolerance by both methods.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fan.glb");
+    let (fan, out) = (fan.to_str().unwrap(), out.to_str().unwrap());
+    let refused = subdiv(&["tessellate", fan, "-o", out]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("--split-sheets"));
+    for method in ["dual", "quadtree"] {
+        let args = ["tessellate", fan, "--split-sheets", "--method", method, "--tolerance", "1e-3", "--relative"];
+        let output = subdiv(&[&args[..], &["-o", out]].concat());
+        assert!(output.status.success(), "{method}: {}", String::from_utf8_lossy(&output.stderr));
+    }
 }
 
 #[test]

@@ -26,15 +26,29 @@ pub struct BuildOptions {
     /// oriented soup is an error ([`MeshError::InconsistentOrientation`]). A non-orientable
     /// component (a Möbius strip) stays an error ([`MeshError::NonOrientable`]).
     pub orient: bool,
+    /// Take a non-manifold soup apart into sheets as OpenSubdiv refines it: an edge of more
+    /// than two faces becomes a border of each (an infinitely sharp crease where the sheets
+    /// end), a vertex whose faces form more than one fan becomes one vertex per fan, and the
+    /// copies of a vertex OpenSubdiv sharpens (a non-manifold vertex, unless exactly two
+    /// non-manifold edges meet there) are tagged infinitely sharp corners. Default `false`: a
+    /// non-manifold soup is an error ([`MeshError::NonManifoldEdge`],
+    /// [`MeshError::NonManifoldVertex`]).
+    pub split_sheets: bool,
 }
 
 impl BuildOptions {
-    /// The defaults: no orientation repair.
-    pub const DEFAULT: Self = Self { orient: false };
+    /// The defaults: no orientation repair, no sheets split.
+    pub const DEFAULT: Self = Self { orient: false, split_sheets: false };
 
     /// Sets [`orient`](Self::orient).
     pub fn with_orient(mut self, orient: bool) -> Self {
         self.orient = orient;
+        self
+    }
+
+    /// Sets [`split_sheets`](Self::split_sheets).
+    pub fn with_split_sheets(mut self, split_sheets: bool) -> Self {
+        self.split_sheets = split_sheets;
         self
     }
 }
@@ -109,6 +123,9 @@ impl Mesh {
     /// Builds the half-edge mesh of `soup` with `options`.
     pub fn build_with(mut soup: PolygonSoup, options: &BuildOptions) -> Result<Mesh, MeshError> {
         let mut sink = Sink { errors: Vec::new(), first_only: true };
+        if options.split_sheets {
+            crate::sheets::split_sheets(&mut soup);
+        }
         if options.orient {
             orient(&mut soup, &mut sink);
             if let Some(error) = sink.errors.pop() {

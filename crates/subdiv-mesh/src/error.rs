@@ -79,7 +79,8 @@ pub enum MeshError {
     #[error(
         "non-manifold edge {a}-{b}: {face_count} faces share it (first {face}); an edge may have at most 2: the \
          limit would not be a surface there (OpenSubdiv makes the edge infinitely sharp, so {face_count} sheets end \
-         on one crease curve, with no single normal); split the edge or the mesh into pieces"
+         on one crease curve, with no single normal); split the edge or the mesh into pieces, or build it with its sheets \
+         split (`--split-sheets`)"
     )]
     NonManifoldEdge {
         /// One end of the edge.
@@ -98,7 +99,7 @@ pub enum MeshError {
     #[error(
         "non-manifold {vertex}: its faces form {fans} separate fans; they must form one: the limit would not be a \
          surface there (OpenSubdiv makes the vertex a corner of every fan, {fans} surfaces touching at one point); \
-         give each fan its own copy of the vertex"
+         give each fan its own copy of the vertex, or build the mesh with its sheets split (`--split-sheets`)"
     )]
     NonManifoldVertex {
         /// The vertex.

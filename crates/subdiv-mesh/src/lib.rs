@@ -34,6 +34,7 @@ pub mod par;
 mod patch;
 mod region;
 pub mod shapes;
+mod sheets;
 mod soup;
 mod split;
 #[cfg(feature = "proptest")]

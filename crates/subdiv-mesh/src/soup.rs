@@ -141,6 +141,11 @@ impl PolygonSoup {
         self.face_vertices[range].reverse();
     }
 
+    /// Every face's corners, in face order, to renumber their vertices.
+    pub(crate) fn corners_mut(&mut self) -> &mut [VertexId] {
+        &mut self.face_vertices
+    }
+
     /// The flattened face data: `(offsets, vertices)` with `offsets.len() == face_count() + 1`.
     pub fn raw_faces(&self) -> (&[u32], &[VertexId]) {
         (&self.face_offsets, &self.face_vertices)
