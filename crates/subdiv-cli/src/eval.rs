@@ -93,7 +93,8 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
     options.refine.face_varying = args.fvar_interpolation;
     let start = Instant::now();
     let named = |error: subdiv::Error| UserError(format!("{}: {error}", input_name));
-    let has_uv = mesh.channel(Channel::UV).is_some();
+    let dropped = crate::scheme_arg::channels_dropped(&mesh, &scheme);
+    let has_uv = mesh.channel(Channel::UV).is_some() && !dropped;
     let surface = Surface::new(mesh, &scheme);
     let evaluator = surface.evaluator(&options).map_err(named)?;
     let mut skipped = 0;
@@ -152,6 +153,9 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
     }
     if skipped > 0 {
         let _ = writeln!(stderr, "subdiv eval: {skipped} points or faces without limit surface (holes) skipped");
+    }
+    if dropped {
+        let _ = writeln!(stderr, "subdiv eval: {}", crate::scheme_arg::CHANNELS_DROPPED);
     }
     Ok(())
 }

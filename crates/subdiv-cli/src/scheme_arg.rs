@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 
+use subdiv::Mesh;
 use subdiv::schemes::{Builtin, Scheme};
 
 use crate::UserError;
@@ -33,6 +34,16 @@ impl SchemeArgs {
         parsed.map_err(|e| UserError(format!("{}: {e}", path.display())))
     }
 }
+
+/// Whether `mesh`'s face-varying channels (texture coordinates) are left out under `scheme`,
+/// which has no rules for them (the face-varying rules are those of the primal schemes with
+/// crease rules): said, not silent, by every command that drops them.
+pub(crate) fn channels_dropped(mesh: &Mesh, scheme: &Scheme) -> bool {
+    !mesh.channels().is_empty() && !scheme.has_crease_rules()
+}
+
+/// What the commands say when [`channels_dropped`].
+pub(crate) const CHANNELS_DROPPED: &str = "texture coordinates left out (the scheme has no face-varying rules)";
 
 pub(crate) fn parse_builtin(name: &str) -> Result<Builtin, String> {
     Builtin::from_name(name).ok_or_else(|| {

@@ -212,14 +212,11 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         }
     };
     // Said, not silent: the output has no texture coordinates although the input has some.
-    let dropped = if surface.mesh().channels().is_empty() {
-        ""
-    } else if !surface.scheme().has_crease_rules() {
-        "; texture coordinates not carried (the scheme has no face-varying rules)"
+    let detail = if crate::scheme_arg::channels_dropped(surface.mesh(), surface.scheme()) {
+        format!("{detail}; {}", crate::scheme_arg::CHANNELS_DROPPED)
     } else {
-        ""
+        detail
     };
-    let detail = format!("{detail}{dropped}");
     let seconds = start.elapsed().as_secs_f64();
     bar.say("writing");
     let written = match (&result, format) {

@@ -238,6 +238,49 @@ fn stencil_prints_the_papers_four_point_numbers() {
     assert!(String::from_utf8_lossy(&refused.stderr).contains("no exact stencils"));
 }
 
+/// A cage with texture coordinates under a scheme without face-varying rules (interpolating
+/// triangles): `eval` and `tessellate` leave the coordinates out and say so, instead of refusing.
+#[test]
+fn schemes_without_face_varying_rules_leave_texture_coordinates_out() {
+    let dir = tempfile::tempdir().unwrap();
+    // An octahedron (butterfly's triangles) and a cube (Kobbelt's quads), texture coordinates
+    // at every corner.
+    let mut octahedron =
+        String::from("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\nvt 0 0\nvt 1 0\nvt 0 1\n");
+    for [a, b, c] in [[1, 3, 5], [3, 2, 5], [2, 4, 5], [4, 1, 5], [3, 1, 6], [2, 3, 6], [4, 2, 6], [1, 4, 6]] {
+        octahedron.push_str(&format!("f {a}/1 {b}/2 {c}/3\n"));
+    }
+    let mut cube = String::new();
+    for i in 0..8 {
+        cube.push_str(&format!("v {} {} {}\n", i & 1, (i >> 1) & 1, (i >> 2) & 1));
+    }
+    cube.push_str("vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n");
+    for [a, b, c, d] in [[1, 3, 4, 2], [5, 6, 8, 7], [1, 2, 6, 5], [3, 7, 8, 4], [1, 5, 7, 3], [2, 4, 8, 6]] {
+        cube.push_str(&format!("f {a}/1 {b}/2 {c}/3 {d}/4\n"));
+    }
+    let write = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let (octahedron, cube) = (write("octahedron.obj", &octahedron), write("cube.obj", &cube));
+    for (scheme, cage) in [("butterfly", &octahedron), ("kobbelt", &cube)] {
+        let output = subdiv(&["eval", cage, "--scheme", scheme, "--grid", "2"]);
+        assert!(output.status.success(), "{scheme}: {}", String::from_utf8_lossy(&output.stderr));
+        let text = String::from_utf8(output.stdout).unwrap();
+        assert_eq!(text.lines().next(), Some("face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz"), "{scheme}");
+        assert!(String::from_utf8_lossy(&output.stderr).contains("texture coordinates left out"), "{scheme}");
+        let out = dir.path().join("out.glb");
+        let output = subdiv(&["tessellate", cage, "--scheme", scheme, "--rate", "4", "-o", out.to_str().unwrap()]);
+        assert!(output.status.success(), "{scheme}: {}", String::from_utf8_lossy(&output.stderr));
+        assert!(String::from_utf8_lossy(&output.stderr).contains("texture coordinates left out"), "{scheme}");
+    }
+    // Loop has the rules: the coordinates are evaluated.
+    let output = subdiv(&["eval", &octahedron, "--scheme", "loop", "--grid", "2"]);
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    assert!(String::from_utf8(output.stdout).unwrap().lines().next().unwrap().ends_with(",s,t,dsu,dtu,dsv,dtv"));
+}
+
 #[test]
 fn eval_writes_osd_limit_csv_and_rejects_bad_samples() {
     // The built-in model: 60 quads, (N + 1)² rows each, in osd_limit's columns.
