@@ -1,6 +1,6 @@
 //! The scheme options shared by the subcommands: a built-in by name, or a scheme file.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use subdiv::Mesh;
 use subdiv::schemes::{Builtin, Scheme};
@@ -22,17 +22,22 @@ pub(crate) struct SchemeArgs {
 impl SchemeArgs {
     /// The scheme asked for.
     pub(crate) fn resolve(&self) -> Result<Scheme, UserError> {
-        let Some(path) = &self.scheme_file else {
-            return Ok(self.scheme.scheme().clone());
-        };
-        let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
-        let parsed = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
-            Scheme::from_ron_str(&text)
-        } else {
-            Scheme::from_toml_str(&text)
-        };
-        parsed.map_err(|e| UserError(format!("{}: {e}", path.display())))
+        match &self.scheme_file {
+            Some(path) => read_scheme_file(path),
+            None => Ok(self.scheme.scheme().clone()),
+        }
     }
+}
+
+/// The user-defined scheme in the file at `path`: TOML, or RON when the name ends in `.ron`.
+pub(crate) fn read_scheme_file(path: &Path) -> Result<Scheme, UserError> {
+    let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+    let parsed = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
+        Scheme::from_ron_str(&text)
+    } else {
+        Scheme::from_toml_str(&text)
+    };
+    parsed.map_err(|e| UserError(format!("{}: {e}", path.display())))
 }
 
 /// Whether `mesh`'s face-varying channels (texture coordinates) are left out under `scheme`,

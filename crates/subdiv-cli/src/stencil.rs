@@ -2,10 +2,11 @@
 //! scheme's patch at a rational (u, v).
 
 use std::io::Write;
+use std::path::PathBuf;
 
 use serde_json::{Value, json};
 use subdiv::mesh::BoundaryInterpolation;
-use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType};
+use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType, Scheme};
 use subdiv::stencil::curve::basis_grid;
 use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator, exact_surface_stencil};
 
@@ -18,6 +19,10 @@ pub(crate) struct StencilArgs {
     /// surface scheme (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear).
     #[arg(long, default_value = "catmull-clark")]
     scheme: String,
+    /// A user-defined surface scheme: a TOML file, or RON when the name ends in `.ron`
+    /// (`subdiv scheme NAME` prints a built-in's file as a start). Overrides `--scheme`.
+    #[arg(long, value_name = "FILE")]
+    scheme_file: Option<PathBuf>,
     /// The grid rate: curves are sampled on (1/n)ℤ, surfaces at (i/n, j/n) when `--at` is not
     /// given.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1024))]
@@ -38,6 +43,9 @@ pub(crate) struct StencilArgs {
 }
 
 pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserError> {
+    if let Some(path) = &args.scheme_file {
+        return run_surface(args, &crate::scheme_arg::read_scheme_file(path)?, out);
+    }
     if let Some(curve) = CurveScheme::builtin(&args.scheme) {
         return run_curve(args, &curve, out);
     }
@@ -46,7 +54,7 @@ pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserEr
         known.extend(Builtin::ALL.iter().map(|b| b.name()));
         UserError(format!("unknown scheme {:?}; known: {}", args.scheme, known.join(", ")))
     })?;
-    run_surface(args, builtin, out)
+    run_surface(args, builtin.scheme(), out)
 }
 
 fn run_curve(args: &StencilArgs, scheme: &CurveScheme, out: &mut impl Write) -> Result<(), UserError> {
@@ -98,8 +106,7 @@ fn run_curve(args: &StencilArgs, scheme: &CurveScheme, out: &mut impl Write) -> 
     Ok(())
 }
 
-fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Result<(), UserError> {
-    let scheme = builtin.scheme();
+fn run_surface(args: &StencilArgs, scheme: &Scheme, out: &mut impl Write) -> Result<(), UserError> {
     let valence = args.valence.map_or(scheme.regular_valence(), |k| k as usize);
     let matrices = PatchMatrices::of(scheme, PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)?;
     let points: Vec<Dyadic> = match &args.at {
@@ -151,7 +158,7 @@ fn run_surface(args: &StencilArgs, builtin: Builtin, out: &mut impl Write) -> Re
     }
     if args.json {
         let report = json!({
-            "scheme": builtin.name(), "valence": valence, "control_points": matrices.shapes[0].size,
+            "scheme": scheme.name, "valence": valence, "control_points": matrices.shapes[0].size,
             "stencils": reports,
         });
         writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;

@@ -238,6 +238,48 @@ fn stencil_prints_the_papers_four_point_numbers() {
     assert!(String::from_utf8_lossy(&refused.stderr).contains("no exact stencils"));
 }
 
+/// `stencil --scheme-file`: a built-in's own file gives the built-in's stencils, bit for bit, in
+/// decimals and fractions; a variant of it (other weights) gives its own, still affine.
+#[test]
+fn stencil_takes_a_scheme_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let printed = subdiv(&["scheme", "catmull-clark"]);
+    assert!(printed.status.success(), "{}", String::from_utf8_lossy(&printed.stderr));
+    let file = dir.path().join("cc.toml");
+    std::fs::write(&file, &printed.stdout).unwrap();
+    let file = file.to_str().unwrap();
+    for exact in [&[][..], &["--exact"]] {
+        let at = ["--valence", "5", "--at", "1/3,1/5", "--json"];
+        let builtin = subdiv(&[&["stencil", "--scheme", "catmull-clark"][..], &at, exact].concat());
+        let from_file = subdiv(&[&["stencil", "--scheme-file", file][..], &at, exact].concat());
+        assert!(from_file.status.success(), "{}", String::from_utf8_lossy(&from_file.stderr));
+        assert_eq!(from_file.stdout, builtin.stdout, "{exact:?}");
+    }
+    // Another vertex rule, still affine: (k - 3)/k + k · 2/k² + k · 1/k² = 1.
+    let variant = String::from_utf8(printed.stdout.clone())
+        .unwrap()
+        .replace("centre = \"(k - 2)/k\", spoke = \"1/k^2\"", "centre = \"(k - 3)/k\", spoke = \"2/k^2\"")
+        .replace("name = \"catmull-clark\"", "name = \"cc-variant\"");
+    let variant_file = dir.path().join("variant.toml");
+    std::fs::write(&variant_file, variant).unwrap();
+    let at = ["stencil", "--valence", "5", "--at", "1/3,1/5", "--json", "--scheme-file"];
+    let output = subdiv(&[&at[..], &[variant_file.to_str().unwrap()]].concat());
+    assert!(output.status.success(), "{}", String::from_utf8_lossy(&output.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&output.stdout).unwrap();
+    assert_eq!(report["scheme"], "cc-variant");
+    let position: Vec<f64> =
+        report["stencils"][0]["position"].as_array().unwrap().iter().map(|w| w.as_f64().unwrap()).collect();
+    assert!((position.iter().sum::<f64>() - 1.0).abs() < 1e-9, "{position:?}");
+    let builtin = subdiv(&["stencil", "--scheme", "catmull-clark", "--valence", "5", "--at", "1/3,1/5", "--json"]);
+    let builtin: serde_json::Value = serde_json::from_slice(&builtin.stdout).unwrap();
+    assert_ne!(report["stencils"], builtin["stencils"]);
+    let bad = dir.path().join("bad.toml");
+    std::fs::write(&bad, "name = \"x\"\n").unwrap();
+    let refused = subdiv(&["stencil", "--scheme-file", bad.to_str().unwrap()]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("bad.toml"));
+}
+
 /// A cage with texture coordinates under a scheme without face-varying rules (interpolating
 /// triangles): `eval` and `tessellate` leave the coordinates out and say so, instead of refusing.
 #[test]
