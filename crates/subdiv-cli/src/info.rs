@@ -31,7 +31,7 @@ pub(crate) fn run(args: &InfoArgs, out: &mut impl Write) -> Result<(), UserError
         Some(path) => LoadedMesh::read(path, &args.input)?,
         None => LoadedMesh::built_in(shapes::default_model()),
     };
-    let options = BuildOptions::default().with_orient(args.orient);
+    let options = BuildOptions::default().with_orient(args.orient).with_split_sheets(args.input.split_sheets);
     match Mesh::build_with(loaded.soup.clone(), &options) {
         Ok(mesh) => {
             let report = report(&loaded.name, &mesh);
@@ -45,6 +45,11 @@ pub(crate) fn run(args: &InfoArgs, out: &mut impl Write) -> Result<(), UserError
         Err(first) => {
             // Report every problem on stdout, then fail with the first one on stderr.
             let mut problems = validate(&loaded.soup);
+            if args.input.split_sheets {
+                // Taken apart into sheets, a non-manifold edge or vertex is no problem.
+                problems
+                    .retain(|p| !matches!(p, MeshError::NonManifoldEdge { .. } | MeshError::NonManifoldVertex { .. }));
+            }
             if problems.is_empty() {
                 problems.push(first.clone()); // orientation repair failed (non-orientable)
             }

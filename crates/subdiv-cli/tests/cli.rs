@@ -75,6 +75,10 @@ fn shared_meshes_report_their_counts() {
     assert_eq!(report["valid"], false);
     assert!(report["problems"].as_array().unwrap().iter().all(|p| p["rule"] == "non-manifold-edge"));
     assert_eq!(String::from_utf8_lossy(&output.stderr).lines().count(), 1);
+    // Taken apart into sheets, it is a mesh: three sheets' worth of vertices on the spine.
+    let report = json(&["info", "--json", "--split-sheets", fan.to_str().unwrap()]);
+    assert_eq!(report["faces"], 13);
+    assert!(report["vertices"].as_u64().unwrap() > 22, "{report}");
     // Refused by the other commands too, naming the option that takes it apart into sheets as
     // OpenSubdiv does; with it, tessellated to a tolerance by both methods.
     let dir = tempfile::tempdir().unwrap();
