@@ -10,13 +10,18 @@ use subdiv::schemes::{Builtin, CurveScheme};
 use subdiv::stencil::curve::basis_grid;
 
 use crate::UserError;
+use crate::scheme_arg::SchemeFile;
 
 /// Arguments of `subdiv plot-basis`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct PlotArgs {
     /// A built-in curve scheme: cubic-bspline, chaikin, four-point, six-point, sw-curve.
-    #[arg(long)]
-    scheme: String,
+    #[arg(long, required_unless_present = "scheme_file")]
+    scheme: Option<String>,
+    /// A user-defined curve scheme: a TOML file with `arity`, `offset` and `mask` (the
+    /// built-ins' are in `crates/subdiv-schemes/schemes/curves/`). Overrides `--scheme`.
+    #[arg(long, value_name = "FILE")]
+    scheme_file: Option<PathBuf>,
     /// The grid rate: samples at k/n over the support.
     #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=1024))]
     n: u32,
@@ -177,13 +182,20 @@ pub(crate) fn write_png(path: &Path, image: &RgbImage) -> Result<(), UserError> 
 
 /// `subdiv plot-basis --scheme S --n N [--derivative] -o OUT.png`.
 pub(crate) fn run(args: &PlotArgs, out: &mut impl Write) -> Result<(), UserError> {
-    let Some(curve) = CurveScheme::builtin(&args.scheme) else {
-        let error = if Builtin::from_name(&args.scheme).is_some() {
-            PlotError::SurfaceScheme(args.scheme.clone())
-        } else {
-            PlotError::UnknownScheme(args.scheme.clone())
-        };
-        return Err(UserError(error.to_string()));
+    let curve = match (&args.scheme_file, &args.scheme) {
+        (Some(path), _) => match crate::scheme_arg::read_any_scheme_file(path)? {
+            SchemeFile::Curve(curve) => curve,
+            SchemeFile::Surface(scheme) => return Err(UserError(PlotError::SurfaceScheme(scheme.name).to_string())),
+        },
+        (None, Some(name)) => CurveScheme::builtin(name).ok_or_else(|| {
+            let error = if Builtin::from_name(name).is_some() {
+                PlotError::SurfaceScheme(name.clone())
+            } else {
+                PlotError::UnknownScheme(name.clone())
+            };
+            UserError(error.to_string())
+        })?,
+        (None, None) => return Err(UserError("give --scheme NAME or --scheme-file FILE".to_string())),
     };
     let grid = basis_grid(&curve, args.n)?;
     let values = if args.derivative { grid.dphi_f64() } else { grid.phi_f64() };

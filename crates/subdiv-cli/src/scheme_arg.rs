@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use subdiv::Mesh;
-use subdiv::schemes::{Builtin, Scheme};
+use subdiv::schemes::{Builtin, CurveScheme, Scheme};
 
 use crate::UserError;
 
@@ -29,7 +29,27 @@ impl SchemeArgs {
     }
 }
 
-/// The user-defined scheme in the file at `path`: TOML, or RON when the name ends in `.ron`.
+/// A user-defined scheme read from a file: a surface scheme, or a curve scheme (a TOML file with
+/// `arity`, `offset` and `mask`, as `crates/subdiv-schemes/schemes/curves/` holds the built-ins).
+pub(crate) enum SchemeFile {
+    Surface(Box<Scheme>),
+    Curve(CurveScheme),
+}
+
+/// The scheme in the file at `path`: a curve scheme if it reads as one, else a surface scheme
+/// (TOML, or RON when the name ends in `.ron`).
+pub(crate) fn read_any_scheme_file(path: &Path) -> Result<SchemeFile, UserError> {
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
+        let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+        if let Ok(curve) = CurveScheme::from_toml_str(&text) {
+            return Ok(SchemeFile::Curve(curve));
+        }
+    }
+    read_scheme_file(path).map(|scheme| SchemeFile::Surface(Box::new(scheme)))
+}
+
+/// The user-defined surface scheme in the file at `path`: TOML, or RON when the name ends in
+/// `.ron`.
 pub(crate) fn read_scheme_file(path: &Path) -> Result<Scheme, UserError> {
     let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
     let parsed = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {

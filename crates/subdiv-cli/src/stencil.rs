@@ -11,6 +11,7 @@ use subdiv::stencil::curve::basis_grid;
 use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator, exact_surface_stencil};
 
 use crate::UserError;
+use crate::scheme_arg::SchemeFile;
 
 /// Arguments of `subdiv stencil`.
 #[derive(Debug, clap::Args)]
@@ -19,8 +20,9 @@ pub(crate) struct StencilArgs {
     /// surface scheme (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear).
     #[arg(long, default_value = "catmull-clark")]
     scheme: String,
-    /// A user-defined surface scheme: a TOML file, or RON when the name ends in `.ron`
-    /// (`subdiv scheme NAME` prints a built-in's file as a start). Overrides `--scheme`.
+    /// A user-defined scheme: a curve scheme's TOML file (`arity`, `offset`, `mask`), or a
+    /// surface scheme's TOML or RON file (`subdiv scheme NAME` prints a built-in's as a start).
+    /// Overrides `--scheme`.
     #[arg(long, value_name = "FILE")]
     scheme_file: Option<PathBuf>,
     /// The grid rate: curves are sampled on (1/n)ℤ, surfaces at (i/n, j/n) when `--at` is not
@@ -44,7 +46,10 @@ pub(crate) struct StencilArgs {
 
 pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserError> {
     if let Some(path) = &args.scheme_file {
-        return run_surface(args, &crate::scheme_arg::read_scheme_file(path)?, out);
+        return match crate::scheme_arg::read_any_scheme_file(path)? {
+            SchemeFile::Surface(scheme) => run_surface(args, &scheme, out),
+            SchemeFile::Curve(curve) => run_curve(args, &curve, out),
+        };
     }
     if let Some(curve) = CurveScheme::builtin(&args.scheme) {
         return run_curve(args, &curve, out);

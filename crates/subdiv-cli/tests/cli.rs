@@ -418,6 +418,46 @@ fn plot_basis_writes_the_four_point_basis_function() {
     }
 }
 
+/// Curve schemes as data: `plot-basis --scheme-file` and `stencil --scheme-file` take a curve
+/// scheme's TOML file; the four-point scheme's own file gives the built-in's plot and stencils
+/// bit for bit, another weight its own; a surface scheme's file is no curve to plot.
+#[test]
+fn curve_scheme_files_plot_and_give_stencils() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, text: &str| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let four =
+        "name = \"four-point\"\narity = 2\noffset = 3\nmask = [\"-1/16\", 0, \"9/16\", 1, \"9/16\", 0, \"-1/16\"]\n";
+    let four = write("four.toml", four);
+    let wider = "name = \"four-point-32\"\narity = 2\noffset = 3\nmask = [\"-1/32\", 0, \"17/32\", 1, \"17/32\", 0, \"-1/32\"]\n";
+    let wider = write("wider.toml", wider);
+    let png = |args: &[&str], name: &str| {
+        let path = dir.path().join(name);
+        let output = subdiv(&[&["plot-basis", "--n", "21", "-o", path.to_str().unwrap()][..], args].concat());
+        assert!(output.status.success(), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
+        std::fs::read(&path).unwrap()
+    };
+    let builtin = png(&["--scheme", "four-point"], "builtin.png");
+    assert_eq!(png(&["--scheme-file", &four], "file.png"), builtin);
+    assert_ne!(png(&["--scheme-file", &wider], "wider.png"), builtin);
+    let stencil = |args: &[&str]| {
+        let output = subdiv(&[&["stencil", "--n", "3", "--exact", "--json"][..], args].concat());
+        assert!(output.status.success(), "{args:?}: {}", String::from_utf8_lossy(&output.stderr));
+        output.stdout
+    };
+    assert_eq!(stencil(&["--scheme-file", &four]), stencil(&["--scheme", "four-point"]));
+    assert_ne!(stencil(&["--scheme-file", &wider]), stencil(&["--scheme", "four-point"]));
+    let printed = subdiv(&["scheme", "loop"]);
+    let surface = write("loop.toml", &String::from_utf8(printed.stdout).unwrap());
+    let out = dir.path().join("x.png");
+    let refused = subdiv(&["plot-basis", "--scheme-file", &surface, "-o", out.to_str().unwrap()]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("surface scheme"));
+}
+
 #[test]
 fn tessellate_writes_a_watertight_glb_and_obj() {
     let dir = tempfile::tempdir().unwrap();
