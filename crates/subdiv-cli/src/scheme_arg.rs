@@ -36,16 +36,19 @@ pub(crate) enum SchemeFile {
     Curve(CurveScheme),
 }
 
-/// The scheme in the file at `path`: a curve scheme if it reads as one, else a surface scheme
-/// (TOML, or RON when the name ends in `.ron`).
+/// The scheme in the file at `path` (TOML, or RON when the name ends in `.ron`): a curve scheme
+/// if it reads as one, else a surface scheme.
 pub(crate) fn read_any_scheme_file(path: &Path) -> Result<SchemeFile, UserError> {
-    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
-        let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
-        if let Ok(curve) = CurveScheme::from_toml_str(&text) {
-            return Ok(SchemeFile::Curve(curve));
-        }
+    let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+    let curve = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
+        CurveScheme::from_ron_str(&text)
+    } else {
+        CurveScheme::from_toml_str(&text)
+    };
+    match curve {
+        Ok(curve) => Ok(SchemeFile::Curve(curve)),
+        Err(_) => read_scheme_file(path).map(|scheme| SchemeFile::Surface(Box::new(scheme))),
     }
-    read_scheme_file(path).map(|scheme| SchemeFile::Surface(Box::new(scheme)))
 }
 
 /// The user-defined surface scheme in the file at `path`: TOML, or RON when the name ends in
@@ -80,9 +83,10 @@ pub(crate) fn parse_builtin(name: &str) -> Result<Builtin, String> {
 /// Arguments of `subdiv scheme`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct PrintArgs {
-    /// The built-in scheme to print.
-    #[arg(value_parser = parse_builtin)]
-    name: Builtin,
+    /// The built-in scheme to print: a surface scheme, or a curve scheme (cubic-bspline,
+    /// chaikin, four-point, six-point, sw-curve).
+    #[arg(value_parser = parse_any_builtin)]
+    name: String,
     /// Print RON instead of TOML.
     #[arg(long)]
     ron: bool,
@@ -90,10 +94,25 @@ pub(crate) struct PrintArgs {
 
 /// `subdiv scheme NAME [--ron]`: a built-in scheme as a file, a template for one's own.
 pub(crate) fn print(args: &PrintArgs, out: &mut impl std::io::Write) -> Result<(), UserError> {
-    if args.ron {
-        writeln!(out, "{}", args.name.scheme().to_ron_string())?;
-    } else {
-        write!(out, "{}", args.name.toml())?;
+    match (Builtin::from_name(&args.name), CurveScheme::builtin_toml(&args.name)) {
+        (Some(surface), _) if args.ron => writeln!(out, "{}", surface.scheme().to_ron_string())?,
+        (Some(surface), _) => write!(out, "{}", surface.toml())?,
+        (None, Some(_)) if args.ron => {
+            let curve = CurveScheme::builtin(&args.name).expect("a built-in curve scheme");
+            writeln!(out, "{}", curve.to_ron_string().map_err(|e| UserError(e.to_string()))?)?;
+        }
+        (None, Some(toml)) => write!(out, "{toml}")?,
+        (None, None) => return Err(UserError(parse_any_builtin(&args.name).unwrap_err())),
     }
     Ok(())
+}
+
+/// A built-in surface or curve scheme's name.
+fn parse_any_builtin(name: &str) -> Result<String, String> {
+    if Builtin::from_name(name).is_some() || CurveScheme::builtin_toml(name).is_some() {
+        return Ok(name.to_string());
+    }
+    let mut known: Vec<&str> = Builtin::ALL.iter().map(|s| s.name()).collect();
+    known.extend(CurveScheme::BUILTIN_NAMES);
+    Err(format!("unknown scheme {name:?}; known: {}", known.join(", ")))
 }

@@ -442,6 +442,13 @@ fn curve_scheme_files_plot_and_give_stencils() {
     };
     let builtin = png(&["--scheme", "four-point"], "builtin.png");
     assert_eq!(png(&["--scheme-file", &four], "file.png"), builtin);
+    // `subdiv scheme` prints a curve scheme's file too, in TOML or RON: the same plot.
+    for (format, name) in [(&[][..], "printed.toml"), (&["--ron"][..], "printed.ron")] {
+        let printed = subdiv(&[&["scheme", "four-point"][..], format].concat());
+        assert!(printed.status.success(), "{}", String::from_utf8_lossy(&printed.stderr));
+        let file = write(name, &String::from_utf8(printed.stdout).unwrap());
+        assert_eq!(png(&["--scheme-file", &file], "printed.png"), builtin, "{name}");
+    }
     assert_ne!(png(&["--scheme-file", &wider], "wider.png"), builtin);
     let stencil = |args: &[&str]| {
         let output = subdiv(&[&["stencil", "--n", "3", "--exact", "--json"][..], args].concat());

@@ -273,6 +273,20 @@ impl CurveScheme {
         Some(Self::from_toml_str(toml).expect("the built-in curve schemes are valid"))
     }
 
+    /// The file of the built-in scheme called `name`, as shipped (comments included): a
+    /// template for one's own.
+    ///
+    /// ```
+    /// use subdiv_schemes::CurveScheme;
+    ///
+    /// let text = CurveScheme::builtin_toml("four-point").unwrap();
+    /// assert_eq!(CurveScheme::from_toml_str(text)?, CurveScheme::builtin("four-point").unwrap());
+    /// # Ok::<(), subdiv_schemes::CurveError>(())
+    /// ```
+    pub fn builtin_toml(name: &str) -> Option<&'static str> {
+        BUILTINS.iter().find(|(n, _)| *n == name).map(|(_, toml)| *toml)
+    }
+
     /// A scheme from its parts, checked: the arity is 2 to [`MAX_ARITY`](Self::MAX_ARITY),
     /// the mask's entries are finite, `offset` indexes the mask, and the weights of each rule
     /// (the entries `a[k]` with `k ≡ residue + offset` modulo the arity) sum to 1 (to 1e-12
