@@ -93,9 +93,10 @@ pub(crate) fn run(args: &EvalArgs, out: &mut impl Write) -> Result<(), UserError
     options.refine.face_varying = args.fvar_interpolation;
     let start = Instant::now();
     let named = |error: subdiv::Error| UserError(format!("{}: {error}", input_name));
-    let dropped = crate::scheme_arg::channels_dropped(&mesh, &scheme);
-    let has_uv = mesh.channel(Channel::UV).is_some() && !dropped;
-    let surface = Surface::new(mesh, &scheme);
+    let has_uv = mesh.channel(Channel::UV).is_some();
+    let surface = Surface::new(mesh, &scheme).with_refine_options(options.refine);
+    let dropped = crate::scheme_arg::channels_dropped(&surface);
+    let has_uv = has_uv && !dropped;
     let evaluator = surface.evaluator(&options).map_err(named)?;
     let mut skipped = 0;
     let rows = match (args.grid, &args.samples) {

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use subdiv::Mesh;
+use subdiv::Surface;
 use subdiv::schemes::{Builtin, CurveScheme, Scheme};
 
 use crate::UserError;
@@ -63,15 +63,16 @@ pub(crate) fn read_scheme_file(path: &Path) -> Result<Scheme, UserError> {
     parsed.map_err(|e| UserError(format!("{}: {e}", path.display())))
 }
 
-/// Whether `mesh`'s face-varying channels (texture coordinates) are left out under `scheme`,
-/// which has no rules for them (the face-varying rules are those of the primal schemes with
-/// crease rules): said, not silent, by every command that drops them.
-pub(crate) fn channels_dropped(mesh: &Mesh, scheme: &Scheme) -> bool {
-    !mesh.channels().is_empty() && !scheme.has_crease_rules()
+/// Whether `surface`'s face-varying channels (texture coordinates) are left out: its scheme does
+/// not take them in its face-varying mode ([`Surface::takes_channels`]). Said, not silent, by
+/// every command that drops them.
+pub(crate) fn channels_dropped(surface: &Surface) -> bool {
+    !surface.mesh().channels().is_empty() && !surface.takes_channels()
 }
 
 /// What the commands say when [`channels_dropped`].
-pub(crate) const CHANNELS_DROPPED: &str = "texture coordinates left out (the scheme has no face-varying rules)";
+pub(crate) const CHANNELS_DROPPED: &str =
+    "texture coordinates left out (the scheme has no face-varying rules but the linear ones, --fvar-interpolation all)";
 
 pub(crate) fn parse_builtin(name: &str) -> Result<Builtin, String> {
     Builtin::from_name(name).ok_or_else(|| {

@@ -212,7 +212,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
         }
     };
     // Said, not silent: the output has no texture coordinates although the input has some.
-    let detail = if crate::scheme_arg::channels_dropped(surface.mesh(), surface.scheme()) {
+    let detail = if crate::scheme_arg::channels_dropped(&surface) {
         format!("{detail}; {}", crate::scheme_arg::CHANNELS_DROPPED)
     } else {
         detail
@@ -313,7 +313,7 @@ fn gpu_tessellate(
     let FaceRates { faces, rings, epsilon } = surface.face_rates(options).map_err(|e| located(&e))?;
     let dual = DualOptions {
         quads: options.polygons,
-        channels: surface.scheme().has_crease_rules(),
+        channels: surface.takes_channels(),
         face_varying,
         ..DualOptions::default()
     };

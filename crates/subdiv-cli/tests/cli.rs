@@ -284,10 +284,11 @@ fn stencil_takes_a_scheme_file() {
     assert!(String::from_utf8_lossy(&refused.stderr).contains("bad.toml"));
 }
 
-/// A cage with texture coordinates under a scheme without face-varying rules (interpolating
-/// triangles): `eval` and `tessellate` leave the coordinates out and say so, instead of refusing.
+/// A cage with texture coordinates under a scheme without face-varying rules of its own (the
+/// interpolating ones): linear texture coordinates (the default mode) are evaluated and carried,
+/// a smooth mode is left out with a notice by `eval` and `tessellate` alike, never refused.
 #[test]
-fn schemes_without_face_varying_rules_leave_texture_coordinates_out() {
+fn schemes_without_face_varying_rules_take_linear_texture_coordinates() {
     let dir = tempfile::tempdir().unwrap();
     // An octahedron (butterfly's triangles) and a cube (Kobbelt's quads), texture coordinates
     // at every corner.
@@ -311,13 +312,30 @@ fn schemes_without_face_varying_rules_leave_texture_coordinates_out() {
     };
     let (octahedron, cube) = (write("octahedron.obj", &octahedron), write("cube.obj", &cube));
     for (scheme, cage) in [("butterfly", &octahedron), ("kobbelt", &cube)] {
+        // Linear (the default mode): each face's corners (0, 0), (1, 0), (0, 1) [and (1, 1)]
+        // interpolated at its (u, v), so s = u and t = v at every point.
         let output = subdiv(&["eval", cage, "--scheme", scheme, "--grid", "2"]);
+        assert!(output.status.success(), "{scheme}: {}", String::from_utf8_lossy(&output.stderr));
+        let text = String::from_utf8(output.stdout).unwrap();
+        let mut lines = text.lines();
+        assert!(lines.next().unwrap().ends_with(",s,t,dsu,dtu,dsv,dtv"), "{scheme}");
+        for line in lines {
+            let x: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
+            assert!((x[12] - x[1]).abs() < 1e-12 && (x[13] - x[2]).abs() < 1e-12, "{scheme}: {line}");
+        }
+        let out = dir.path().join("out.glb");
+        let output = subdiv(&["tessellate", cage, "--scheme", scheme, "--rate", "4", "-o", out.to_str().unwrap()]);
+        assert!(output.status.success(), "{scheme}: {}", String::from_utf8_lossy(&output.stderr));
+        assert!(!String::from_utf8_lossy(&output.stderr).contains("left out"), "{scheme}");
+        assert!(String::from_utf8_lossy(&std::fs::read(&out).unwrap()).contains("TEXCOORD_0"), "{scheme}");
+        // A smooth mode, which the scheme has no rules for: left out, and said.
+        let smooth = ["--scheme", scheme, "--fvar-interpolation", "none"];
+        let output = subdiv(&[&["eval", cage, "--grid", "2"][..], &smooth].concat());
         assert!(output.status.success(), "{scheme}: {}", String::from_utf8_lossy(&output.stderr));
         let text = String::from_utf8(output.stdout).unwrap();
         assert_eq!(text.lines().next(), Some("face,u,v,px,py,pz,dux,duy,duz,dvx,dvy,dvz"), "{scheme}");
         assert!(String::from_utf8_lossy(&output.stderr).contains("texture coordinates left out"), "{scheme}");
-        let out = dir.path().join("out.glb");
-        let output = subdiv(&["tessellate", cage, "--scheme", scheme, "--rate", "4", "-o", out.to_str().unwrap()]);
+        let output = subdiv(&[&["tessellate", cage, "--rate", "4", "-o", out.to_str().unwrap()][..], &smooth].concat());
         assert!(output.status.success(), "{scheme}: {}", String::from_utf8_lossy(&output.stderr));
         assert!(String::from_utf8_lossy(&output.stderr).contains("texture coordinates left out"), "{scheme}");
     }

@@ -59,14 +59,16 @@ impl ChannelSurface {
     /// mode (else the mesh's tag, else [`FaceVaryingInterpolation::All`]) and boundary rule.
     ///
     /// # Errors
-    /// [`SchemeError::FeatureNotSupported`] for a scheme without crease rules (the face-varying
-    /// rules are those of the primal schemes with crease rules) or a channel of more than three
-    /// components.
+    /// [`SchemeError::FeatureNotSupported`] where the scheme does not take the channel
+    /// ([`takes`](Self::takes)) or for a channel of more than three components.
     pub fn new(mesh: &Mesh, channel: &Channel, scheme: &Scheme, options: &RefineOptions) -> Result<Self, SchemeError> {
         let unsupported =
             |feature, element| SchemeError::FeatureNotSupported { scheme: scheme.name.clone(), feature, element };
-        if !scheme.has_crease_rules() {
-            return Err(unsupported("face-varying channels", format!("channel {:?}", channel.name())));
+        if !Self::takes(mesh, scheme, options) {
+            return Err(unsupported(
+                "face-varying channels other than linear ones (FaceVaryingInterpolation::All)",
+                format!("channel {:?}", channel.name()),
+            ));
         }
         if channel.dimension() > 3 {
             let element = format!("channel {:?} of {} components", channel.name(), channel.dimension());
@@ -85,6 +87,32 @@ impl ChannelSurface {
             _ => scheme.clone(),
         };
         Ok(Self { mesh, scheme, linear: rules.mode == FaceVaryingInterpolation::All })
+    }
+
+    /// Whether `scheme` takes `mesh`'s face-varying channels under `options` (its face-varying
+    /// mode, else the mesh's tag, else [`FaceVaryingInterpolation::All`]): a primal scheme with
+    /// crease rules in every mode (the face-varying rules are theirs), and any scheme that
+    /// splits quads or triangles in mode `All` — linear interpolation of the corners, a rule
+    /// every such scheme can take (butterfly, Kobbelt, `sw-quad`). Not the dual, mid-edge and
+    /// √3 splits, whose faces are not the mesh's.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, FaceVaryingInterpolation, Mesh};
+    /// use subdiv_schemes::{Builtin, ChannelSurface, RefineOptions};
+    ///
+    /// let mesh = Mesh::build(shapes::octahedron())?;
+    /// let linear = RefineOptions::DEFAULT.with_face_varying(FaceVaryingInterpolation::All);
+    /// let smooth = RefineOptions::DEFAULT.with_face_varying(FaceVaryingInterpolation::None);
+    /// assert!(ChannelSurface::takes(&mesh, Builtin::Butterfly.scheme(), &linear));
+    /// assert!(!ChannelSurface::takes(&mesh, Builtin::Butterfly.scheme(), &smooth));
+    /// assert!(ChannelSurface::takes(&mesh, Builtin::Loop.scheme(), &smooth));
+    /// assert!(!ChannelSurface::takes(&mesh, Builtin::DooSabin.scheme(), &linear));
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn takes(mesh: &Mesh, scheme: &Scheme, options: &RefineOptions) -> bool {
+        scheme.has_crease_rules()
+            || (options.rules_for(mesh).channels.mode == FaceVaryingInterpolation::All
+                && matches!(scheme.split(), Split::Quad | Split::Triangle))
     }
 
     /// Whether the channel is linear over every face ([`FaceVaryingInterpolation::All`]): its

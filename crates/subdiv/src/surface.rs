@@ -476,15 +476,24 @@ impl Surface {
         crate::check_vertex_budget(&self.mesh, &self.scheme, &rates.faces, rates.rings.as_ref(), options.max_vertices)
     }
 
+    /// Whether the tessellations and evaluations of the mesh's face-varying channels (texture
+    /// coordinates) are made under the scheme and face-varying mode
+    /// ([`ChannelSurface::takes`](subdiv_schemes::ChannelSurface::takes)): every mode under a
+    /// primal scheme with crease rules, the linear mode under any quad or triangle split. Where
+    /// not, tessellations leave the channels out.
+    pub fn takes_channels(&self) -> bool {
+        subdiv_schemes::ChannelSurface::takes(&self.mesh, &self.scheme, &self.refine_options)
+    }
+
     /// The dual tessellator with `options`' quads and parallelism, made on first use (later
     /// calls keep its patches, stencils and templates whatever their options).
     fn dual(&mut self, options: &TessOptions) -> Result<&mut DualTessellator, Error> {
-        // Channels under a scheme without face-varying rules (sw-quad, the interpolating ones) are
+        // Channels the scheme does not take (smooth modes under the interpolating schemes) are
         // not carried: the surface is still tessellated, without them.
         let wanted = DualOptions {
             quads: options.polygons,
             parallelism: options.parallelism,
-            channels: self.scheme.has_crease_rules(),
+            channels: self.takes_channels(),
             face_varying: self.refine_options.face_varying,
         };
         let tess = match self.dual.take() {
@@ -517,7 +526,12 @@ fn quadtree<'a>(
 ) -> Result<&'a mut QuadtreeTessellator, Error> {
     let tess = match slot.take() {
         Some(tess) => tess,
-        None if scheme.has_crease_rules() => {
+        None if subdiv_schemes::ChannelSurface::takes(
+            mesh,
+            scheme,
+            &RefineOptions { face_varying: mode, ..RefineOptions::DEFAULT },
+        ) =>
+        {
             QuadtreeTessellator::new(scheme, mesh)?.with_channels(scheme, mesh, mode)?
         }
         None => QuadtreeTessellator::new(scheme, mesh)?,
