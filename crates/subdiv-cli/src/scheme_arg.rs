@@ -39,27 +39,30 @@ pub(crate) enum SchemeFile {
 /// The scheme in the file at `path` (TOML, or RON when the name ends in `.ron`): a curve scheme
 /// if it reads as one, else a surface scheme.
 pub(crate) fn read_any_scheme_file(path: &Path) -> Result<SchemeFile, UserError> {
-    let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
-    let curve = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
-        CurveScheme::from_ron_str(&text)
-    } else {
-        CurveScheme::from_toml_str(&text)
-    };
+    let (text, ron) = read_text(path)?;
+    let curve = if ron { CurveScheme::from_ron_str(&text) } else { CurveScheme::from_toml_str(&text) };
     match curve {
         Ok(curve) => Ok(SchemeFile::Curve(curve)),
-        Err(_) => read_scheme_file(path).map(|scheme| SchemeFile::Surface(Box::new(scheme))),
+        Err(_) => parse_surface(path, &text, ron).map(|scheme| SchemeFile::Surface(Box::new(scheme))),
     }
 }
 
 /// The user-defined surface scheme in the file at `path`: TOML, or RON when the name ends in
 /// `.ron`.
 pub(crate) fn read_scheme_file(path: &Path) -> Result<Scheme, UserError> {
+    let (text, ron) = read_text(path)?;
+    parse_surface(path, &text, ron)
+}
+
+/// The text of the scheme file at `path`, and whether it is RON (by its extension).
+fn read_text(path: &Path) -> Result<(String, bool), UserError> {
     let text = std::fs::read_to_string(path).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
-    let parsed = if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron")) {
-        Scheme::from_ron_str(&text)
-    } else {
-        Scheme::from_toml_str(&text)
-    };
+    Ok((text, path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ron"))))
+}
+
+/// `text`, the file at `path`, as a surface scheme.
+fn parse_surface(path: &Path, text: &str, ron: bool) -> Result<Scheme, UserError> {
+    let parsed = if ron { Scheme::from_ron_str(text) } else { Scheme::from_toml_str(text) };
     parsed.map_err(|e| UserError(format!("{}: {e}", path.display())))
 }
 

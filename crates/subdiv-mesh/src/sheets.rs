@@ -114,15 +114,16 @@ pub(crate) fn split_sheets(soup: &mut PolygonSoup) {
         .flat_map(|c| copies_of(c.vertex).into_iter().map(|v| CornerTag { vertex: VertexId::new(v), ..*c }))
         .chain(sharpened.iter().map(|&v| CornerTag { vertex: VertexId::new(v), sharpness: Tags::INFINITELY_SHARP }))
         .collect();
-    // A crease on a cut edge goes to every copy of the edge.
+    // A crease on a cut edge goes to every copy of the edge (the new edges are listed only for
+    // a soup with creases).
+    let creases = std::mem::take(&mut tags.creases);
     let mut edges: HashSet<(u32, u32)> = HashSet::new();
-    for &f in &faces {
+    for &f in faces.iter().filter(|_| !creases.is_empty()) {
         for h in offsets[f] as usize..offsets[f + 1] as usize {
             let (a, b) = (fv[h], fv[next(h, f)]);
             edges.insert((a.min(b), a.max(b)));
         }
     }
-    let creases = std::mem::take(&mut tags.creases);
     for c in creases {
         let [a, b] = c.vertices.map(copies_of);
         let mut pushed = false;

@@ -375,14 +375,19 @@ impl RingDepths {
         self.graded.get(face.index()).and_then(Option::as_ref)
     }
 
-    /// [`reach`] of `face` at `rate`, or its graded grid's (an N-gon's sub-faces are half as
-    /// wide as a face).
+    /// [`graded_reach`] of `face` at `rate` with its graded grid, if any.
     pub(crate) fn reach(&self, mesh: &Mesh, triangle: bool, face: FaceId, rate: u32) -> u32 {
-        match self.grid(face) {
-            Some(grid) if mesh.face_size(face) == 4 => grid.reach(),
-            Some(grid) => 2 * grid.reach(),
-            None => reach(mesh, triangle, face, rate),
-        }
+        graded_reach(mesh, triangle, face, rate, self.grid(face))
+    }
+}
+
+/// [`reach`] of `face` at `rate`, or, where it has a graded grid, the grid's (an N-gon's
+/// sub-faces are half as wide as a face, so their reach counts twice).
+fn graded_reach(mesh: &Mesh, triangle: bool, face: FaceId, rate: u32, grid: Option<&GradedGrid>) -> u32 {
+    match grid {
+        Some(grid) if mesh.face_size(face) == 4 => grid.reach(),
+        Some(grid) => 2 * grid.reach(),
+        None => reach(mesh, triangle, face, rate),
     }
 }
 
@@ -555,11 +560,14 @@ impl ErrorRates {
             cache.insert((f, d), c);
             Ok(c)
         };
+        // Faces without a surface (holes): no rate of theirs matters, and they bound nothing.
         let faces: Vec<FaceId> = mesh.face_ids().filter(|&f| bounds.has_surface(f)).collect();
         let mut extraordinary = vec![false; mesh.face_count()];
         for &f in &faces {
             extraordinary[f.index()] = curvature(f, 1)?.corner_hull > 0.0;
         }
+        // The vertices at which some face's surface is an extraordinary piece: every valence
+        // other than the regular one, and sharp corners and darts of any valence.
         let mut corner_of = vec![false; mesh.vertex_count()];
         for &f in faces.iter().filter(|f| extraordinary[f.index()]) {
             for v in bounds.extraordinary_corners(f)? {
@@ -577,10 +585,8 @@ impl ErrorRates {
         // The least reach of a graded face's innermost cells (raised where rings' bands fail).
         let mut floors = vec![1u32; mesh.face_count()];
         let mut rates = vec![round(1); mesh.face_count()];
-        let reach_of = |rates: &[u32], grids: &[Option<GradedGrid>], f: FaceId| match &grids[f.index()] {
-            Some(grid) if mesh.face_size(f) == 4 => grid.reach(),
-            Some(grid) => 2 * grid.reach(),
-            None => reach(mesh, triangle, f, rates[f.index()]),
+        let reach_of = |rates: &[u32], grids: &[Option<GradedGrid>], f: FaceId| {
+            graded_reach(mesh, triangle, f, rates[f.index()], grids[f.index()].as_ref())
         };
         // The faces whose reach puts the first rings around `f`'s extraordinary points: those
         // around its ring corners, and `f` itself (an N-gon's centre).
@@ -637,7 +643,10 @@ impl ErrorRates {
             .chain(faces.iter().filter(|&&f| mesh.face_size(f) != 4 && !triangle).map(|&f| (None, vec![f])))
             .collect();
         loop {
-            // The least fixed point of the faces' rule (rates and gradings only grow).
+            // Fixed point: a face's bound region stops at the corner square of side 2^−d, d the
+            // depth of the first ring for the finest reach around each of its ring points (no
+            // triangle outside the rings comes closer); finer reaches push d deeper, where M
+            // grows like (4λ)^d, slower than n², so rates and gradings (which only grow) settle.
             for round_trip in 0.. {
                 if round_trip > MAX_SETTLING_ROUNDS {
                     return Err(TessError::Internal(format!(
@@ -684,6 +693,8 @@ impl ErrorRates {
                     break;
                 }
             }
+            // Rings: per extraordinary point, from the first power of two inside its nearest
+            // dual points down to the least depth whose hull is within ε, every band checked.
             let mut vertices = vec![0u32; mesh.vertex_count()];
             let mut centres = vec![0u32; mesh.face_count()];
             let mut refine: Vec<(FaceId, u32)> = Vec::new();
@@ -787,6 +798,7 @@ impl ErrorRates {
         }))
     }
 
+    /// `ε` less the rounding slack.
     fn budget(&self, bounds: &QuadtreeTessellator, mesh: &Mesh) -> Result<f64, TessError> {
         let epsilon = self.tolerance.absolute(bounds.diagonal())?;
         let magnitude = mesh.positions().iter().map(|p| p.abs().max_element()).fold(0.0, f64::max);

@@ -106,15 +106,7 @@ pub(super) enum Refusal {
 
 /// What a face's grading reads: the allowed cell width beyond the corner squares of side
 /// `2^−e`, in units of `1 / GRID_DENOMINATOR` (0 where the bound cannot be met at that size).
-pub(super) trait Widths {
-    fn allowed(&mut self, e: u32) -> Result<u32, TessError>;
-}
-
-impl<F: FnMut(u32) -> Result<u32, TessError>> Widths for F {
-    fn allowed(&mut self, e: u32) -> Result<u32, TessError> {
-        self(e)
-    }
-}
+pub(super) type Widths<'a> = dyn FnMut(u32) -> Result<u32, TessError> + 'a;
 
 /// The cells of half an axis graded toward its end, as widths from that end outward (summing
 /// to [`HALF`]), and the number of innermost cells (the uniform run at the end).
@@ -130,7 +122,7 @@ impl<F: FnMut(u32) -> Result<u32, TessError>> Widths for F {
 /// meet the bound beyond the first ring that a reach of `2^d k` puts around the point. `None`
 /// when that needs intervals deeper than [`MAX_GRADED_DEPTH`].
 fn graded_half(
-    widths: &mut impl Widths,
+    widths: &mut Widths<'_>,
     far: u32,
     ring: &dyn Fn(u32) -> Option<u32>,
 ) -> Result<Option<(Vec<u32>, u32)>, TessError> {
@@ -143,7 +135,7 @@ fn graded_half(
         if k <= length {
             let width = length / k;
             if let Some(depth) = ring(GRID_DENOMINATOR / width)
-                && width <= widths.allowed(depth)?
+                && width <= widths(depth)?
             {
                 let mut cells = vec![width; k as usize];
                 for &(length, count) in intervals.iter().rev() {
@@ -153,7 +145,7 @@ fn graded_half(
             }
         }
         let length = HALF >> d;
-        let width = widths.allowed(d + 2)?;
+        let width = widths(d + 2)?;
         if width == 0 {
             break;
         }
@@ -171,32 +163,33 @@ fn graded_half(
 /// # Errors
 /// The errors of `widths`; inside, why no grid serves, for the caller to name the face.
 pub(super) fn graded_grid(
-    widths: &mut impl Widths,
+    widths: &mut Widths<'_>,
     graded: [[bool; 2]; 2],
     ring: &dyn Fn(u32) -> Option<u32>,
     max_cells: u32,
 ) -> Result<Result<GradedGrid, Refusal>, TessError> {
     // The uniform half: cells no wider than `W(2)` (its quads next to the middle lie beyond
     // the corner squares of side ¼).
-    let uniform = widths.allowed(2)?;
+    let uniform = widths(2)?;
     if uniform == 0 {
         return Ok(Err(Refusal::Finer(30)));
     }
     let far = HALF.div_ceil(uniform);
-    let mut axes: [(Vec<u32>, [u32; 2]); 2] = Default::default();
-    for (axis, ends) in axes.iter_mut().zip(graded) {
-        let mut halves: [(Vec<u32>, u32); 2] = Default::default();
-        for (half, end) in halves.iter_mut().zip(ends) {
-            *half = if end {
-                match graded_half(widths, far, ring)? {
-                    Some(h) => h,
-                    None => return Ok(Err(Refusal::Finer(MAX_GRADED_DEPTH + 2))),
-                }
-            } else {
-                (split(HALF, far).collect(), 0)
-            };
+    // Every half axis toward an extraordinary end is graded alike: the bound beyond the corner
+    // squares of side `2^−e` is the face's (and its neighbours'), whichever corner.
+    let toward_end = if graded.as_flattened().contains(&true) {
+        match graded_half(widths, far, ring)? {
+            Some(half) => half,
+            None => return Ok(Err(Refusal::Finer(MAX_GRADED_DEPTH + 2))),
         }
-        let [(low, low_run), (high, high_run)] = halves;
+    } else {
+        (Vec::new(), 0)
+    };
+    let uniform_half: Vec<u32> = split(HALF, far).collect();
+    let half = |end: bool| if end { toward_end.clone() } else { (uniform_half.clone(), 0) };
+    let mut axes: [(Vec<u32>, [u32; 2]); 2] = Default::default();
+    for (axis, [low_end, high_end]) in axes.iter_mut().zip(graded) {
+        let ((low, low_run), (high, high_run)) = (half(low_end), half(high_end));
         // Widths along the axis: the low half from 0, the high half mirrored.
         let widths: Vec<u32> = low.into_iter().chain(high.into_iter().rev()).collect();
         *axis = (widths, [low_run, high_run]);

@@ -41,8 +41,20 @@ pub(super) fn quad_side(base: u32, m: u32, c: usize) -> (u32, u32) {
 }
 
 /// The denominator of a graded grid's cell centres.
-fn grid_q() -> i64 {
-    2 * i64::from(GRID_DENOMINATOR)
+const GRID_Q: i64 = 2 * GRID_DENOMINATOR as i64;
+
+/// The parameter along side `c` of a quad cell (from its corner `c`) of the side's row point
+/// `k` ([`quad_side`]'s order), as `num / den`: `(2k + 1) / 2m` on a uniform grid of `m` cells
+/// per side, a cell centre of `grid`'s (mirrored on sides 2 and 3, which run backwards).
+fn cell_side_parameter(grid: Option<&GradedGrid>, m: u32, c: usize, k: u32) -> (u64, u64) {
+    let Some(grid) = grid else { return (u64::from(2 * k + 1), 2 * u64::from(m)) };
+    let den = GRID_Q as u64;
+    match c {
+        0 => (grid.centre(0, k), den),
+        1 => (grid.centre(1, k), den),
+        2 => (den - grid.centre(0, m - 1 - k), den),
+        _ => (den - grid.centre(1, m - 1 - k), den),
+    }
 }
 
 /// One input face's cells.
@@ -279,23 +291,15 @@ impl<'a> Builder<'a> {
         };
         let base = self.out.vertex_count;
         match domain {
-            FaceDomain::Quad if self.graded_grid(f).is_some() => {
-                let grid = self.buf.rings.graded[f].take().expect("a graded grid");
-                for j in 0..n {
-                    for i in 0..n {
-                        let point = Dyadic::new(grid.centre(0, i) as i64, grid.centre(1, j) as i64, grid_q());
-                        self.push_site(f, point);
-                    }
-                }
-                self.buf.rings.graded[f] = Some(grid);
-                self.run(f as u32, RunShape::Grid { base, n });
-                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded: true }));
-            }
             FaceDomain::Quad => {
-                let sites = self.out.sites.len() as u32;
-                self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
+                // A graded grid's sites are explicit; a uniform one is a block.
+                let graded = self.graded_grid(f).is_some();
+                if !graded {
+                    let sites = self.out.sites.len() as u32;
+                    self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
+                }
                 self.quad_cell(f, domain, None, n);
-                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded: false }));
+                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded }));
             }
             FaceDomain::SubFaces { size, .. } => {
                 // Graded: the grid's cells per side, `⌈n/2⌉` (checked by the tessellator).
@@ -368,24 +372,25 @@ impl<'a> Builder<'a> {
     pub(super) fn quad_cell(&mut self, f: usize, domain: FaceDomain, sub: Option<usize>, m: u32) {
         let base = self.out.vertex_count;
         let q = 2 * i64::from(m);
-        if let Some(s) = sub {
-            // An N-gon's graded grid is every sub-face's.
-            let grid = self.buf.rings.graded.get_mut(f).and_then(Option::take);
+        // A graded grid (a whole quad's, or every sub-face's of an N-gon), out of the buffers
+        // while the sites are pushed.
+        let grid = self.buf.rings.graded.get_mut(f).and_then(Option::take);
+        if sub.is_none() && grid.is_none() {
+            // A uniform whole face: a block, whose sites are implicit.
+            self.out.vertex_count += m * m;
+        } else {
             for j in 0..m {
                 for i in 0..m {
                     let a = match &grid {
                         None => Dyadic::new(2 * i64::from(i) + 1, 2 * i64::from(j) + 1, q),
-                        Some(g) => Dyadic::new(g.centre(0, i) as i64, g.centre(1, j) as i64, grid_q()),
+                        Some(g) => Dyadic::new(g.centre(0, i) as i64, g.centre(1, j) as i64, GRID_Q),
                     };
-                    self.push_site(f, domain.from_sub_face(s, a));
+                    self.push_site(f, sub.map_or(a, |s| domain.from_sub_face(s, a)));
                 }
             }
-            if grid.is_some() {
-                self.buf.rings.graded[f] = grid;
-            }
-        } else {
-            // A whole face: a block, whose sites are implicit.
-            self.out.vertex_count += m * m;
+        }
+        if grid.is_some() {
+            self.buf.rings.graded[f] = grid;
         }
         self.run(f as u32, RunShape::Grid { base, n: m });
     }
@@ -411,19 +416,7 @@ impl<'a> Builder<'a> {
                 let (start, step) = quad_side(base, m, c);
                 let grid = self.graded_grid(f).filter(|_| cells.graded);
                 for k in 0..m {
-                    // The parameter along the side of its point `k` (from corner `c`).
-                    let (num, den) = match grid {
-                        None => (u64::from(2 * k + 1), 2 * m64),
-                        Some(grid) => {
-                            let den = 2 * u64::from(GRID_DENOMINATOR);
-                            match c {
-                                0 => (grid.centre(0, k), den),
-                                1 => (grid.centre(1, k), den),
-                                2 => (den - grid.centre(0, m - 1 - k), den),
-                                _ => (den - grid.centre(1, m - 1 - k), den),
-                            }
-                        }
-                    };
+                    let (num, den) = cell_side_parameter(grid, m, c, k);
                     row.push(RowPoint {
                         vertex: start.wrapping_add(k.wrapping_mul(step)),
                         num,
@@ -435,26 +428,19 @@ impl<'a> Builder<'a> {
             }
             FaceDomain::SubFaces { size, .. } => {
                 let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
-                // Sub-face c's side 0 covers the first half, sub-face c + 1's side 3 the second
-                // (its point `k` from the middle of the side at `1 − v` of its sub-face).
+                // Sub-face c's side 0 covers the first half of the face's side, sub-face
+                // c + 1's side 3 (from the side's middle) the second: at `s/2` and `(1 + s)/2`
+                // for `s` along the sub-face's side.
                 let grid = self.graded_grid(f);
-                let along = |k: u32, second: bool| match (grid, second) {
-                    (None, false) => (u64::from(2 * k + 1), 4 * m64),
-                    (None, true) => (2 * m64 + u64::from(2 * k + 1), 4 * m64),
-                    (Some(g), false) => (g.centre(0, k), 4 * u64::from(GRID_DENOMINATOR)),
-                    (Some(g), true) => {
-                        let den = 4 * u64::from(GRID_DENOMINATOR);
-                        (den - g.centre(1, m - 1 - k), den)
-                    }
-                };
                 for k in 0..m {
-                    let (num, den) = along(k, false);
-                    row.push(RowPoint { vertex: cell(c, k, 0), num, den, near: true, extra: None });
+                    let (num, den) = cell_side_parameter(grid, m, 0, k);
+                    row.push(RowPoint { vertex: cell(c, k, 0), num, den: 2 * den, near: true, extra: None });
                 }
                 let next = (c + 1) % size;
                 for k in 0..m {
-                    let (num, den) = along(k, true);
-                    row.push(RowPoint { vertex: cell(next, 0, m - 1 - k), num, den, near: true, extra: None });
+                    let (num, den) = cell_side_parameter(grid, m, 3, k);
+                    let vertex = cell(next, 0, m - 1 - k);
+                    row.push(RowPoint { vertex, num: den + num, den: 2 * den, near: true, extra: None });
                 }
             }
             FaceDomain::Triangle => {

@@ -31,7 +31,7 @@
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
 use subdiv_stencil::{Dyadic, FaceDomain};
 
-use crate::rates::{GRID_DENOMINATOR, GradedGrid, RingDepths, first_ring_depth, reach};
+use crate::rates::{GRID_DENOMINATOR, GradedGrid, RingDepths, first_ring_depth};
 
 mod builder;
 #[cfg(test)]
@@ -389,12 +389,8 @@ fn write_runs<T: Copy + Send + Sync>(
 pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rings: Option<&RingDepths>) -> usize {
     let hole = |f: FaceId| mesh.is_hole(f);
     let rate_of = |f: FaceId| rates[f.index()] as usize;
-    let reach_of = |f: FaceId| {
-        rings.map_or_else(
-            || reach(mesh, triangle, f, rates[f.index()]),
-            |r| r.reach(mesh, triangle, f, rates[f.index()]),
-        )
-    };
+    let no_rings = RingDepths::default();
+    let reach_of = |f: FaceId| rings.unwrap_or(&no_rings).reach(mesh, triangle, f, rates[f.index()]);
     // Edges the construction cuts between two faces: infinitely sharp ones, and the seams of
     // the mesh's channels (carried by default).
     let cut = |h: HalfEdgeId| {
