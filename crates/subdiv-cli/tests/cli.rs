@@ -232,7 +232,7 @@ fn stencil_prints_the_papers_four_point_numbers() {
     assert!((weights.iter().map(|w| w.as_f64().unwrap()).sum::<f64>() - 1.0).abs() < 1e-12);
     // Off the grid, or a scheme without sub-patch matrices: status 2.
     assert_eq!(subdiv(&["stencil", "--scheme", "four-point", "--n", "3", "--at", "1/2"]).status.code(), Some(2));
-    assert_eq!(subdiv(&["stencil", "--scheme", "doo-sabin", "--at", "0,0"]).status.code(), Some(2));
+    assert_eq!(subdiv(&["stencil", "--scheme", "sqrt3", "--at", "0,0"]).status.code(), Some(2));
     // Exact surface stencils: sw-quad at valence 5 (paper 000 Fig. 6), and a refusal for Loop at
     // valence 5, whose weights involve cos(2π/5).
     let report = json(&["stencil", "--scheme", "sw-quad", "--valence", "5", "--at", "1/3,0", "--exact", "--json"]);
@@ -389,11 +389,12 @@ fn eval_writes_osd_limit_csv_and_rejects_bad_samples() {
         assert!(!rejected.exists() && output.stdout.is_empty(), "{content:?}: nothing written");
     }
     // A scheme without sub-patch matrices, and a mesh a scheme cannot take: typed errors.
-    let output = subdiv(&["eval", "--scheme", "doo-sabin", "--grid", "1"]);
+    let octahedron = dir.path().join("octahedron.obj");
+    subdiv::io::write_obj(&octahedron, &subdiv::mesh::shapes::octahedron()).unwrap();
+    let output = subdiv(&["eval", "--scheme", "sqrt3", "--grid", "1", octahedron.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(2));
-    assert!(
-        String::from_utf8_lossy(&output.stderr).contains("sub-patch matrices are not available for the dual split")
-    );
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(stderr.contains("sub-patch matrices are not available for the √3 split"), "{stderr}");
     let output = subdiv(&["eval", "--scheme", "loop", "--grid", "1"]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("loop takes only 3-sided faces"));
@@ -510,6 +511,99 @@ fn tessellate_writes_a_watertight_glb_and_obj() {
         assert_eq!(mesh.genus(), Some(0), "{method}");
         assert!(mesh.face_size_histogram().contains_key(&4), "{method}: quads");
     }
+}
+
+/// An `n`-gon prism whose caps are fans of triangles around two vertices of valence `n`; the
+/// ring's vertices have valence 4.
+fn capped_prism(n: usize) -> subdiv::mesh::PolygonSoup {
+    use subdiv::mesh::{DVec3, VertexId};
+    let mut soup = subdiv::mesh::PolygonSoup::new();
+    for z in [-1.0, 1.0] {
+        for i in 0..n {
+            let a = std::f64::consts::TAU * i as f64 / n as f64;
+            soup.push_vertex(DVec3::new(a.cos(), a.sin(), z));
+        }
+    }
+    soup.push_vertex(DVec3::new(0.1, 0.0, -1.6));
+    soup.push_vertex(DVec3::new(0.0, 0.2, 1.4));
+    let (b, t) = (|i: usize| VertexId::new((i % n) as u32), |i: usize| VertexId::new((n + i % n) as u32));
+    let (cb, ct) = (VertexId::new(2 * n as u32), VertexId::new(2 * n as u32 + 1));
+    for i in 0..n {
+        soup.push_face([b(i), b(i + 1), t(i + 1), t(i)]);
+        soup.push_face([cb, b(i + 1), b(i)]);
+        soup.push_face([ct, t(i), t(i + 1)]);
+    }
+    soup
+}
+
+/// Doo-Sabin and mid-edge (patches around the faces' corners, `subdiv_schemes::dual_patch`) on
+/// closed meshes with faces of 3 to 8 sides and vertices of valence 3 to 8: `eval --grid 4`
+/// gives every grid point, `tessellate --rate 8` is watertight and its vertices are the
+/// evaluations at their parameters (to 1e-12), and `render` draws where there is a device.
+#[test]
+fn dual_schemes_evaluate_tessellate_and_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut meshes = Vec::new();
+    for n in 3..=8 {
+        for (kind, soup) in [("prism", subdiv::mesh::shapes::ngon_prism(n)), ("capped", capped_prism(n))] {
+            let path = dir.path().join(format!("{kind}{n}.obj"));
+            subdiv::io::write_obj(&path, &soup).unwrap();
+            meshes.push(path);
+        }
+    }
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    for scheme in ["doo-sabin", "midedge"] {
+        for mesh in &meshes {
+            let what = format!("{scheme} {}", mesh.display());
+            let cage = subdiv::io::load_mesh(mesh, &Default::default()).unwrap();
+            let out = subdiv(&["eval", &path(mesh), "--scheme", scheme, "--grid", "4"]);
+            assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
+            let rows = String::from_utf8(out.stdout).unwrap().lines().count() - 1;
+            let per_face: usize =
+                cage.face_ids().map(|f| if cage.face_size(f) == 4 { 25 } else { 25 * cage.face_size(f) }).sum();
+            assert_eq!(rows, per_face, "{what}");
+
+            let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
+            let out = subdiv(&[
+                "tessellate",
+                &path(mesh),
+                "--scheme",
+                scheme,
+                "--rate",
+                "8",
+                "--polygons",
+                "--params",
+                &path(&csv),
+                "-o",
+                &path(&obj),
+            ]);
+            assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
+            let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+            assert_eq!(tess.boundary_edge_count(), 0, "{what}: watertight");
+            assert_eq!(tess.genus(), Some(0), "{what}");
+            let text = std::fs::read_to_string(&csv).unwrap();
+            let params: Vec<Vec<f64>> =
+                text.lines().skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
+            assert_eq!(params.len(), tess.vertex_count(), "{what}");
+            let points: String = params.iter().map(|r| format!("{} {:?} {:?}\n", r[1], r[2], r[3])).collect();
+            std::fs::write(&samples, points).unwrap();
+            let out = subdiv(&["eval", &path(mesh), "--scheme", scheme, "--samples", &path(&samples)]);
+            assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
+            let evaluated = String::from_utf8(out.stdout).unwrap();
+            for (k, line) in evaluated.lines().skip(1).enumerate() {
+                let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+                let p = tess.positions()[k];
+                let gap = (p - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
+                assert!(gap < 1e-12, "{what}: vertex {k} is {gap:e} off the surface");
+            }
+        }
+    }
+    if subdiv_testkit::gpu().is_none() {
+        return;
+    }
+    let png = dir.path().join("ds.png");
+    let out = subdiv(&["render", &path(&meshes[5]), "--scheme", "doo-sabin", "--size", "64,48", "-o", &path(&png)]);
+    assert!(out.status.success() && png.exists(), "{}", String::from_utf8_lossy(&out.stderr));
 }
 
 /// With no arguments: the built-in model at the default rate, to `tessellation.glb`; the

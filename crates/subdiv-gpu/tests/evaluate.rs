@@ -153,6 +153,9 @@ fn procedural_meshes_match_the_cpu() {
         (Builtin::CatmullClark, "open grid", shapes::quad_grid(4, 3)),
         (Builtin::CatmullClark, "default model", shapes::default_model()),
         (Builtin::Loop, "icosahedron", shapes::icosahedron()),
+        // Patches around face corners, on levels 1 and 2.
+        (Builtin::DooSabin, "Doo-Sabin pentagonal prism", shapes::ngon_prism(5)),
+        (Builtin::Midedge, "mid-edge default model", shapes::default_model()),
     ] {
         let mesh = Mesh::build(soup).unwrap();
         for rate in [1, 5, 16] {

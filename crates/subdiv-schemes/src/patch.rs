@@ -29,8 +29,10 @@ use subdiv_mesh::{BoundaryInterpolation, DVec3, FaceId, HalfEdgeId, Mesh, Patch}
 use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
 mod derivation;
+mod dual;
 
 use derivation::{Derivation, canonical_start};
+pub use dual::{dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners};
 
 /// The largest patch radius tried.
 pub(crate) const MAX_RADIUS: usize = 3;
@@ -351,8 +353,8 @@ impl PatchMatrices {
     /// Computes the matrices without the cache.
     ///
     /// # Errors
-    /// [`SchemeError::SplitNotSupported`] for dual, mid-edge and √3 splits (their patches
-    /// are not faces of the control mesh), [`SchemeError::FeatureNotSupported`] for boundary
+    /// [`SchemeError::SplitNotSupported`] for the √3 split (a ternary split two steps at a
+    /// time), [`SchemeError::FeatureNotSupported`] for boundary
     /// patches of schemes without boundary rules; [`SchemeError::ValenceNotSupported`] below valence 3, with no faces, or when no
     /// patch radius up to 3 is closed under refinement (Kobbelt's scheme at valences other
     /// than 3 and 4: its virtual points make the support near the vertex wider than any ring).
@@ -364,7 +366,11 @@ impl PatchMatrices {
         let triangles = match scheme.split() {
             Split::Quad => false,
             Split::Triangle => true,
-            split @ (Split::Dual | Split::Midedge | Split::Sqrt3) => return Err(split_not_supported(scheme, split)),
+            Split::Dual | Split::Midedge => {
+                let dual = scheme.dual_form().expect("dual and mid-edge schemes have a dual form");
+                return Self::compute_dual(&dual, patch_type);
+            }
+            split @ Split::Sqrt3 => return Err(split_not_supported(scheme, split)),
         };
         let (valence, invalid) = match patch_type {
             PatchType::Derived { .. } => {
@@ -421,6 +427,30 @@ impl PatchMatrices {
             reason: "the limit surface over a face near this vertex depends on vertices beyond every patch \
                      radius up to 3 (the scheme's rules there reach further than its regular support)",
         })
+    }
+
+    /// The dual split's matrices (of mid-edge: its two steps' dual form, [`Scheme::dual_form`]):
+    /// smooth interior types only (the split takes closed meshes without sharpness), valence 3
+    /// or more (an `n`-gon at corner 0; see [`dual_patch`]).
+    fn compute_dual(scheme: &Scheme, patch_type: PatchType) -> Result<Self, SchemeError> {
+        match patch_type {
+            PatchType::Interior { valence, sharp } if valence >= 3 && sharp.is_smooth() => {
+                dual::derive(scheme, valence)
+            }
+            PatchType::Interior { valence, .. } => Err(SchemeError::ValenceNotSupported {
+                scheme: scheme.name.clone(),
+                valence,
+                reason: "a dual patch has a face of 3 or more sides at corner 0, and no sharp features",
+            }),
+            PatchType::Boundary { faces, .. } => Err(SchemeError::ValenceNotSupported {
+                scheme: scheme.name.clone(),
+                valence: faces + 1,
+                reason: "the dual split has no boundary rules, so no boundary patches",
+            }),
+            PatchType::Derived { .. } => {
+                Err(SchemeError::Internal("the dual split has no derived configurations".to_string()))
+            }
+        }
     }
 
     /// The matrices of the configuration of `start`'s face in `mesh` (a level of a real mesh,
@@ -523,11 +553,11 @@ fn split_not_supported(scheme: &Scheme, split: Split) -> SchemeError {
         scheme: scheme.name.clone(),
         what: "sub-patch matrices",
         split: match split {
-            Split::Dual => "dual",
-            Split::Midedge => "mid-edge",
-            _ => "√3",
+            Split::Sqrt3 => "√3",
+            _ => "this",
         },
-        reason: "its sub-patches are not faces of the control mesh",
+        reason: "two of its steps split each triangle in nine (a ternary split), and sub-patch matrices \
+                 are made for binary splits",
     }
 }
 

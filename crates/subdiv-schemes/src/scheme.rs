@@ -442,6 +442,47 @@ impl Scheme {
         matches!(self.rules, Rules::Quad { crease: Some(_), .. } | Rules::Triangle { crease: Some(_), .. })
     }
 
+    /// The scheme as a dual split, where it is one or where its cycle of steps
+    /// ([`steps_per_cycle`](Self::steps_per_cycle)) is: a dual scheme itself, and mid-edge, whose
+    /// two steps make a point per face corner, the middle of the corner's two edge points (½ of
+    /// the corner's vertex and ¼ of each neighbour along the face), with the dual split's faces.
+    /// Its limit surface is the scheme's, and its patches are the dual split's
+    /// ([`dual_patch`](crate::dual_patch)). `None` for the others (√3's two steps split each
+    /// triangle in nine).
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::{refine_uniform, Builtin, RefineOptions};
+    ///
+    /// let cube = Mesh::build(shapes::cube())?;
+    /// let midedge = Builtin::Midedge.scheme();
+    /// let twice = refine_uniform(&cube, midedge, 2, &RefineOptions::DEFAULT)?;
+    /// let once = refine_uniform(&cube, &midedge.dual_form().unwrap(), 1, &RefineOptions::DEFAULT)?;
+    /// let mut a: Vec<_> = twice.positions().iter().map(|p| p.to_array().map(|x| (x * 1e12).round() as i64)).collect();
+    /// let mut b: Vec<_> = once.positions().iter().map(|p| p.to_array().map(|x| (x * 1e12).round() as i64)).collect();
+    /// a.sort_unstable();
+    /// b.sort_unstable();
+    /// assert_eq!(a, b);
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn dual_form(&self) -> Option<Scheme> {
+        match self.rules {
+            Rules::Dual { .. } => Some(self.clone()),
+            Rules::Midedge => {
+                // ¼ at j = 1 and at j = k − 1: δ(x) = (1 − |x| + |1 − |x||) / 2 on integers.
+                let corner = "(2 - abs(j-1) + abs(1-abs(j-1)) - abs(j-k+1) + abs(1-abs(j-k+1)))/8";
+                Some(Scheme {
+                    name: format!("{} (two steps)", self.name),
+                    rules: Rules::Dual {
+                        own: "1/2".parse().expect("a constant"),
+                        corner: corner.parse().expect("a valid formula"),
+                    },
+                })
+            }
+            _ => None,
+        }
+    }
+
     /// How many refinement steps bring the grid back onto itself: 2 for √3 and mid-edge, whose
     /// single steps rotate the grid; 1 otherwise. Analysis takes this many steps at once.
     pub fn steps_per_cycle(&self) -> usize {

@@ -74,9 +74,14 @@ fn every_sub_patch_row_is_affine() {
 
 #[test]
 fn unsupported_splits_and_valences_are_typed_errors() {
-    for builtin in [Builtin::DooSabin, Builtin::Midedge, Builtin::Sqrt3] {
-        let err = PatchMatrices::compute(builtin.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
-        assert!(matches!(err, SchemeError::SplitNotSupported { what: "sub-patch matrices", .. }), "{err}");
+    let err = PatchMatrices::compute(Builtin::Sqrt3.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
+    assert!(matches!(err, SchemeError::SplitNotSupported { what: "sub-patch matrices", .. }), "{err}");
+    // The dual splits' patches: interior, around faces of 3 or more sides.
+    for builtin in [Builtin::DooSabin, Builtin::Midedge] {
+        for patch_type in [PatchType::interior(2), PatchType::boundary(2, 0)] {
+            let err = PatchMatrices::compute(builtin.scheme(), patch_type, EDGE_ONLY).unwrap_err();
+            assert!(matches!(err, SchemeError::ValenceNotSupported { .. }), "{err}");
+        }
     }
     let cc = Builtin::CatmullClark.scheme();
     // Valence 2 exists for quads (two faces sharing two sides), not for triangles.

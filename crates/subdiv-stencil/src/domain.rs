@@ -41,12 +41,15 @@ pub enum FaceDomain {
 }
 
 impl FaceDomain {
-    /// The domain of a face of `size` sides under `split`; `None` for a split without
+    /// The domain of a face of `size` sides under `split` (the dual and mid-edge splits' faces take
+    /// the quad split's domains: their patches are the faces' corners); `None` for a split without
     /// sub-patch matrices, or a triangle split's non-triangle.
     pub fn of(split: Split, size: usize) -> Option<Self> {
         match (split, size) {
-            (Split::Quad, 4) => Some(Self::Quad),
-            (Split::Quad, _) => Some(Self::SubFaces { size, columns: (1..).find(|c| c * c >= size).unwrap_or(size) }),
+            (Split::Quad | Split::Dual | Split::Midedge, 4) => Some(Self::Quad),
+            (Split::Quad | Split::Dual | Split::Midedge, _) => {
+                Some(Self::SubFaces { size, columns: (1..).find(|c| c * c >= size).unwrap_or(size) })
+            }
             (Split::Triangle, 3) => Some(Self::Triangle),
             _ => None,
         }

@@ -21,6 +21,7 @@
 
 mod address;
 mod domain;
+mod dual_levels;
 mod error;
 mod exact;
 mod linalg;

@@ -373,8 +373,15 @@ mod tests {
         assert!(matches!(eval.eval(FaceId::new(0), 1.0, 1.5), Err(StencilError::OutsideFace { face: 0, .. })));
         assert!(matches!(eval.eval(FaceId::new(0), f64::INFINITY, 0.0), Err(StencilError::OutsideFace { .. })));
 
+        // The dual split takes no holes; √3 has no sub-patch matrices.
         let doo_sabin = LimitEvaluator::new(Builtin::DooSabin.scheme(), &mesh, &RefineOptions::DEFAULT);
-        assert!(matches!(doo_sabin, Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported { .. }))));
+        assert!(matches!(
+            doo_sabin,
+            Err(StencilError::Scheme(subdiv_schemes::SchemeError::FeatureNotSupported { .. }))
+        ));
+        let octahedron = Mesh::build(shapes::octahedron()).unwrap();
+        let sqrt3 = LimitEvaluator::new(Builtin::Sqrt3.scheme(), &octahedron, &RefineOptions::DEFAULT);
+        assert!(matches!(sqrt3, Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported { .. }))));
     }
 
     /// `k` sectors of a `rings`-ring grid (quads, or triangles) over a half-disk around vertex 0,

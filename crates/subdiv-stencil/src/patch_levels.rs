@@ -31,7 +31,7 @@ const MAX_PATCH_RADIUS: usize = 3;
 
 /// How a face of one level of [`PatchLevels`] is evaluated.
 #[derive(Clone, Debug)]
-enum Resolution {
+pub(crate) enum Resolution {
     /// Through its patch.
     Patch(FoundPatch),
     /// Through its children, these faces of the next level.
@@ -42,11 +42,33 @@ enum Resolution {
 
 /// One level of the refined mesh and how its faces of interest are evaluated.
 #[derive(Debug)]
-struct Level {
-    mesh: Mesh,
-    /// Per face of `mesh`, how it is evaluated if points can reach it (every face on level 0);
-    /// dense, since looking a face up is on every evaluation's path.
-    faces: Vec<Option<Resolution>>,
+pub(crate) struct Level {
+    /// The level's mesh: its vertices are the patches' control points, and (primal splits) its
+    /// faces the level's faces.
+    pub(crate) mesh: Mesh,
+    /// Per face of the level, how it is evaluated if points can reach it (every face on level
+    /// 0); dense, since looking a face up is on every evaluation's path.
+    pub(crate) faces: Vec<Option<Resolution>>,
+    /// Per face, the corner its patch starts at, where the faces are not `mesh`'s (the dual
+    /// split's levels below the input: face corners and their children, see `dual_levels`);
+    /// empty where they are, and the patch's start half-edge says it.
+    rotations: Vec<u8>,
+}
+
+impl Level {
+    /// A level of `mesh` with nothing resolved yet: one face per face of `mesh`, or `virtual_faces`
+    /// faces that are not `mesh`'s (each with a rotation).
+    pub(crate) fn new(mesh: Mesh, virtual_faces: Option<usize>) -> Self {
+        let faces = vec![None; virtual_faces.unwrap_or(mesh.face_count())];
+        let rotations = virtual_faces.map_or_else(Vec::new, |n| vec![0; n]);
+        Self { mesh, faces, rotations }
+    }
+
+    /// Resolves virtual face `face` by `resolution`, a patch starting at corner `rotation`.
+    pub(crate) fn set(&mut self, face: usize, resolution: Resolution, rotation: usize) {
+        self.faces[face] = Some(resolution);
+        self.rotations[face] = rotation as u8;
+    }
 }
 
 /// How a face of one level of [`PatchLevels`] reaches the limit surface.
@@ -145,7 +167,7 @@ impl PatchLevels {
     /// they cannot refine).
     ///
     /// # Errors
-    /// [`StencilError::Scheme`] for a scheme without sub-patch matrices (dual, mid-edge, √3:
+    /// [`StencilError::Scheme`] for a scheme without sub-patch matrices (√3:
     /// `SplitNotSupported`; Kobbelt next to valences other than 3, 4: `ValenceNotSupported`), a
     /// face the scheme does not take, or boundaries a scheme has no rules for;
     /// [`StencilError::NoPatch`] if a face finds no patch within 16 levels (an internal error).
@@ -175,6 +197,12 @@ impl PatchLevels {
         let patch_size = match scheme.split() {
             Split::Quad => 4,
             Split::Triangle => 3,
+            // Mid-edge's levels are those of its two steps as one (`Scheme::dual_form`).
+            Split::Dual | Split::Midedge => {
+                let dual = scheme.dual_form().expect("dual and mid-edge schemes have a dual form");
+                let (levels, stencils) = crate::dual_levels::dual_levels(&dual, mesh, options)?;
+                return Ok(Self { split: scheme.split(), levels, stencils });
+            }
             // MeshPatches says why not.
             _ => {
                 MeshPatches::new(scheme, mesh, options)?;
@@ -212,7 +240,7 @@ impl PatchLevels {
                 }
             }
             if refine.is_empty() {
-                levels.push(Level { mesh: current, faces });
+                levels.push(Level { mesh: current, faces, rotations: Vec::new() });
                 break;
             }
             if levels.len() + 1 == MAX_LEVELS {
@@ -236,7 +264,7 @@ impl PatchLevels {
                 faces[f.index()] = Some(Resolution::Children(children));
             }
             next_wanted.sort_unstable();
-            levels.push(Level { mesh: current, faces });
+            levels.push(Level { mesh: current, faces, rotations: Vec::new() });
             stencils.push(next.stencils);
             current = next.mesh;
             wanted = next_wanted;
@@ -294,12 +322,14 @@ impl PatchLevels {
                 },
             },
             Resolution::Patch(found) => {
-                let first = l.mesh.face_half_edges(face).next().expect("faces have corners");
-                Resolved::Patch {
-                    mesh: &l.mesh,
-                    patch: found,
-                    frame: PatchFrame::new(l.mesh.face_size(face), found.start.index() - first.index()),
-                }
+                let frame = match l.rotations.get(face.index()) {
+                    Some(&rotation) => PatchFrame::new(4, usize::from(rotation)),
+                    None => {
+                        let first = l.mesh.face_half_edges(face).next().expect("faces have corners");
+                        PatchFrame::new(l.mesh.face_size(face), found.start.index() - first.index())
+                    }
+                };
+                Resolved::Patch { mesh: &l.mesh, patch: found, frame }
             }
         })
     }

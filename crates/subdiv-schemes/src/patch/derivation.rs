@@ -257,11 +257,12 @@ fn reached_from_cycles(shapes: &[PatchShape]) -> Vec<bool> {
     reached
 }
 
-/// Each shape's [`PatchShape::influence`]: the least fixed point of "a face's corners
-/// influence it, and so does every point that a child's matrix reads (with a weight above
-/// [`ZERO_WEIGHT`]) into a point that influences the child".
-pub(super) fn influence_sets(shapes: &[PatchShape], face_size: usize) -> Vec<Vec<u32>> {
-    let mut inside: Vec<Vec<bool>> = shapes.iter().map(|s| (0..s.size).map(|k| k < face_size).collect()).collect();
+/// Each shape's [`PatchShape::influence`]: the least fixed point of "the first `seeds` control
+/// points influence it (a primal face's corners, a dual quad's centre: the points whose
+/// descendants converge to the patch's surface), and so does every point that a child's matrix
+/// reads (with a weight above [`ZERO_WEIGHT`]) into a point that influences the child".
+pub(super) fn influence_sets(shapes: &[PatchShape], seeds: usize) -> Vec<Vec<u32>> {
+    let mut inside: Vec<Vec<bool>> = shapes.iter().map(|s| (0..s.size).map(|k| k < seeds).collect()).collect();
     let mut changed = true;
     while changed {
         changed = false;

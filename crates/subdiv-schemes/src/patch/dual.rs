@@ -1,0 +1,259 @@
+//! Patches of the dual split (Doo-Sabin, or any scheme written with `[rules.dual]`), defined by
+//! dependency rather than by rings.
+//!
+//! A dual step puts a point at every face corner, so after one step every vertex of a closed
+//! mesh has valence 4, and the limit surface is a union of pieces, one per vertex `p`: the
+//! *dual quad* of `p`, whose corners are the limits of the centres of `p`'s four faces
+//! `g_0..g_3` (counter-clockwise from a starting face), and whose control points are those
+//! faces' vertices ([`dual_patch`]). The next step puts a child at each corner of `p`, and the
+//! children's dual quads are the quarters of `p`'s: the child in face `g_c` sits at corner `c`
+//! with the parent's axes, and its own faces are `g_c`'s face (at corner `c`), the faces of
+//! the two edges of `p` beside it, and `p`'s vertex face (at the centre). Their vertices are
+//! corner points of `g_0..g_3`, each a combination of one face's vertices, so every child's
+//! control points are rows over the parent's, whatever the scheme's weights: the patch is
+//! closed under refinement by the support of its rows.
+//!
+//! The extraordinary places are the faces of the dual levels that are not quads (a face of the
+//! control mesh, or a vertex's face, of `n` sides, stays an `n`-gon): the dual split's
+//! [`PatchType::Interior`] of valence `n` is the dual quad with an `n`-gon at corner 0 and quads
+//! at the others — the dual mesh's vertex of valence `n` — whose child 0 keeps the shape. A dual
+//! quad with two such faces (the first level's, beside a vertex of valence `k` and a face of
+//! `n` sides) is split once more: each child has one at most.
+
+use std::collections::{HashMap, VecDeque};
+
+use subdiv_mesh::{HalfEdgeId, Mesh, Patch, VertexId};
+
+use super::derivation::{influence_sets, parameter_coordinates};
+use super::{ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, ZERO_WEIGHT};
+use crate::{RefineOptions, Refiner, Scheme, SchemeError, Stencils};
+
+/// The first word of a dual patch's signature, which no primal signature starts with.
+const DUAL_SIGNATURE: u32 = u32::MAX;
+
+/// Levels after the first after which the shapes must have closed up (they close after two).
+const MAX_LEVELS: usize = 4;
+
+/// The next half-edge counter-clockwise around `h`'s origin; `None` across a boundary.
+fn counter_clockwise(mesh: &Mesh, h: HalfEdgeId) -> Option<HalfEdgeId> {
+    mesh.twin(mesh.prev(h))
+}
+
+/// `h` turned `turns` times counter-clockwise around its origin; `None` across a boundary.
+fn turned(mesh: &Mesh, h: HalfEdgeId, turns: usize) -> Option<HalfEdgeId> {
+    (0..turns).try_fold(h, |h, _| counter_clockwise(mesh, h))
+}
+
+/// The four half-edges leaving `start`'s origin, counter-clockwise from `start`: `None` unless
+/// the origin is an interior vertex of exactly four faces.
+pub fn dual_quad_corners(mesh: &Mesh, start: HalfEdgeId) -> Option<[HalfEdgeId; 4]> {
+    let mut around = [start; 4];
+    for c in 1..4 {
+        around[c] = counter_clockwise(mesh, around[c - 1])?;
+        if around[c] == start {
+            return None;
+        }
+    }
+    (counter_clockwise(mesh, around[3])? == start).then_some(around)
+}
+
+/// The dual quad of `start`'s origin `p`, with corner 0 at the centre of `start`'s face: its
+/// control points (`p` first, then each face's vertices from `p` on, counter-clockwise from
+/// `start`'s face, each once) and its signature (the four faces, each as its size and its
+/// vertices' places in the list). `None` unless `p` is an interior vertex of four faces.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh, VertexId};
+/// use subdiv_schemes::dual_patch;
+///
+/// // The centre of a 5 × 5 grid of quads on a torus: nine control points.
+/// let torus = Mesh::build(shapes::quad_torus(5, 5))?;
+/// let start = torus.outgoing(VertexId::new(12)).next().unwrap();
+/// assert_eq!(dual_patch(&torus, start).unwrap().vertices.len(), 9);
+/// # Ok::<(), subdiv_mesh::MeshError>(())
+/// ```
+pub fn dual_patch(mesh: &Mesh, start: HalfEdgeId) -> Option<Patch> {
+    let around = dual_quad_corners(mesh, start)?;
+    let mut vertices = vec![mesh.origin(start)];
+    let mut signature = vec![DUAL_SIGNATURE];
+    for h in around {
+        signature.push(mesh.face_size(mesh.face(h)) as u32);
+        let mut k = h;
+        loop {
+            let v = mesh.origin(k);
+            let place = vertices.iter().position(|&x| x == v).unwrap_or_else(|| {
+                vertices.push(v);
+                vertices.len() - 1
+            });
+            signature.push(place as u32);
+            k = mesh.next(k);
+            if k == h {
+                break;
+            }
+        }
+    }
+    Some(Patch { vertices, signature })
+}
+
+/// The starts of the dual quads of the four children of the dual quad at `start` on `parent`,
+/// on `child` (the parent refined by the dual split): child `c` is the corner point of the
+/// `c`-th half-edge around (the split numbers a corner's point and, in the face made from the
+/// parent face, its half-edge by the parent half-edge), and its dual quad, with the parent's
+/// axes, starts `4 − c` turns on from that face (so the face made from `g_c` is at its corner
+/// `c`). `None` unless `start`'s origin has four faces, all interior.
+pub fn dual_child_starts(parent: &Mesh, start: HalfEdgeId, child: &Mesh) -> Option<[HalfEdgeId; 4]> {
+    let around = dual_quad_corners(parent, start)?;
+    let mut starts = [start; 4];
+    for (c, h) in around.into_iter().enumerate() {
+        let own = HalfEdgeId::new(h.raw());
+        debug_assert_eq!(child.origin(own), VertexId::new(h.raw()), "the dual split's numbering");
+        starts[c] = turned(child, own, (4 - c) % 4)?;
+    }
+    Some(starts)
+}
+
+/// The start of the dual quad, on `child` (the mesh refined once by the dual split), that
+/// covers the corner of the parent's face at half-edge `h`: the corner point's dual quad with
+/// corner 0 at the centre of the vertex face of `h`'s origin (two turns from the face made from
+/// `h`'s), so that its parameters are the corner's: `(0, 0)` at the vertex, `(1, 0)` at the
+/// middle of `h`'s side, `(1, 1)` at the face's centre and `(0, 1)` at the middle of the side
+/// before. `None` on a boundary.
+pub fn dual_corner_start(child: &Mesh, h: HalfEdgeId) -> Option<HalfEdgeId> {
+    turned(child, HalfEdgeId::new(h.raw()), 2)
+}
+
+/// The levels of a dual derivation: `meshes[0]` the first refined level, `stencils[l]` the rows
+/// of `meshes[l + 1]` over `meshes[l]`.
+struct Levels<'a> {
+    scheme: &'a Scheme,
+    meshes: Vec<Mesh>,
+    stencils: Vec<Stencils>,
+}
+
+impl Levels<'_> {
+    fn refine(&mut self) -> Result<(), SchemeError> {
+        let last = self.meshes.last().expect("the first level is refined first");
+        let refiner = Refiner::new(last, self.scheme, 1, &RefineOptions::DEFAULT)?;
+        self.stencils.push(refiner.levels()[0].clone());
+        self.meshes.push(refiner.into_mesh());
+        Ok(())
+    }
+}
+
+/// The matrices of the dual split's interior type of `valence`: from the canonical pillow of
+/// that valence refined once, where its centre's vertex face is a `valence`-gon, the dual quad
+/// of the first face's corner point at the centre, started at that face (shape 0), and every
+/// shape its children reach.
+pub(super) fn derive(scheme: &Scheme, valence: usize) -> Result<PatchMatrices, SchemeError> {
+    let internal = |e: String| SchemeError::Internal(format!("{}: dual patch derivation: {e}", scheme.name));
+    let pillow = crate::canonical::pillow(valence, 2, false, SharpFeatures::SMOOTH);
+    let base = Mesh::build(pillow).map_err(|e| internal(e.to_string()))?;
+    let corner = super::derivation::canonical_start(&base, PatchType::interior(valence));
+    let first = Refiner::new(&base, scheme, 1, &RefineOptions::DEFAULT)?.into_mesh();
+    let mut levels = Levels { scheme, meshes: vec![first], stencils: Vec::new() };
+    let start = dual_corner_start(&levels.meshes[0], corner).ok_or_else(|| internal("the centre is open".into()))?;
+
+    let mut shapes: Vec<PatchShape> = Vec::new();
+    let mut by_signature: HashMap<Vec<u32>, usize> = HashMap::new();
+    let mut pending = VecDeque::new();
+    let mut register = |patch: Patch, level: usize, start: HalfEdgeId, pending: &mut VecDeque<_>| {
+        if let Some(&s) = by_signature.get(&patch.signature) {
+            return s;
+        }
+        let s = shapes.len();
+        by_signature.insert(patch.signature.clone(), s);
+        shapes.push(PatchShape {
+            size: patch.vertices.len(),
+            signature: patch.signature,
+            children: Vec::new(),
+            influence: Vec::new(),
+            parameters: None,
+            mirror: None,
+        });
+        pending.push_back((s, level, start, patch.vertices));
+        s
+    };
+    let patch =
+        dual_patch(&levels.meshes[0], start).ok_or_else(|| internal("the corner point is not a dual quad".into()))?;
+    register(patch, 0, start, &mut pending);
+    let mut children_of = Vec::new();
+    while let Some((shape, level, start, vertices)) = pending.pop_front() {
+        if level == MAX_LEVELS {
+            return Err(internal(format!("the shapes do not close up within {MAX_LEVELS} levels")));
+        }
+        if levels.meshes.len() == level + 1 {
+            levels.refine()?;
+        }
+        let (parent, child, rows) = (&levels.meshes[level], &levels.meshes[level + 1], &levels.stencils[level]);
+        let starts = dual_child_starts(parent, start, child).ok_or_else(|| internal("a child is open".into()))?;
+        let column: HashMap<usize, usize> = vertices.iter().enumerate().map(|(c, v)| (v.index(), c)).collect();
+        let mut children = Vec::with_capacity(4);
+        for (c, &child_start) in starts.iter().enumerate() {
+            let patch = dual_patch(child, child_start).ok_or_else(|| internal("a child is not a dual quad".into()))?;
+            let mut entries = vec![0.0; patch.vertices.len() * vertices.len()];
+            for (r, v) in patch.vertices.iter().enumerate() {
+                for (p, w) in rows.row(v.index()) {
+                    match column.get(&p) {
+                        Some(&k) => entries[r * vertices.len() + k] += w,
+                        None if w.abs() > ZERO_WEIGHT => {
+                            return Err(internal("a child's row reads a point outside its parent".into()));
+                        }
+                        None => {}
+                    }
+                }
+            }
+            let domain = ChildDomain::of_face(4)[c];
+            let rows = patch.vertices.len();
+            let child_shape = register(patch, level + 1, child_start, &mut pending);
+            children.push(SubPatch::from_entries(child_shape, domain, rows, entries));
+        }
+        children_of.push((shape, children));
+    }
+    for (shape, children) in children_of {
+        shapes[shape].children = children;
+    }
+    // The surface over a dual quad is the limit of its centre's descendants.
+    let influence = influence_sets(&shapes, 1);
+    for (shape, influence) in shapes.iter_mut().zip(influence) {
+        shape.influence = influence;
+    }
+    for s in 0..shapes.len() {
+        shapes[s].parameters = parameter_coordinates(&shapes, s);
+    }
+    Ok(PatchMatrices::from_shapes(scheme, PatchType::interior(valence), 1, 4, shapes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Builtin;
+
+    #[test]
+    fn doo_sabin_types_close_up_with_the_regular_biquadratic_shape() {
+        let ds = Builtin::DooSabin.scheme();
+        for n in [3, 4, 5, 6, 8] {
+            let m = PatchMatrices::compute(ds, PatchType::interior(n), subdiv_mesh::BoundaryInterpolation::EdgeOnly)
+                .unwrap();
+            // n + 5 control points: the n-gon's, two more per edge face, three more of the
+            // opposite quad.
+            assert_eq!(m.shapes[0].size, n + 5, "valence {n}");
+            assert_eq!(m.shapes[0].children[0].shape, 0, "valence {n}: child 0 keeps the n-gon");
+            let regular = m.shapes.iter().position(|s| s.size == 9).expect("the regular shape");
+            assert!(m.shapes[regular].children.iter().all(|c| c.shape == regular));
+            assert_eq!(m.shapes.len(), if n == 4 { 1 } else { 2 }, "valence {n}");
+            // The regular shape reproduces its parameters (the biquadratic B-spline's, centre
+            // at (1/2, 1/2)); the extraordinary one does not.
+            let [u, v] = m.shapes[regular].parameters.clone().expect("regular parameters");
+            assert!((u[0] - 0.5).abs() < 1e-12 && (v[0] - 0.5).abs() < 1e-12, "{u:?} {v:?}");
+            assert_eq!(m.shapes[0].parameters.is_none(), n != 4);
+            // Every row sums to 1.
+            for shape in &m.shapes {
+                for child in &shape.children {
+                    for r in 0..child.rows() {
+                        assert!((child.row(r).iter().sum::<f64>() - 1.0).abs() < 1e-13);
+                    }
+                }
+            }
+        }
+    }
+}
