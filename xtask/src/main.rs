@@ -52,6 +52,7 @@ mod bench_args;
 mod bench_eval;
 mod bench_gpu;
 mod bench_refine;
+mod bench_schemes;
 mod bench_tess;
 mod fuzz;
 mod osd;
@@ -64,7 +65,7 @@ mod tolerance;
 
 use std::path::{Path, PathBuf};
 
-const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench eval --mode cold [--mesh M]... [--grid N] [--method M]... | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask sweep [--seconds S] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask tolerance [--mesh M]... [--relative R] | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
+const USAGE: &str = "usage: cargo xtask ci | cargo xtask bench [topology|stencil|eval] | cargo xtask bench eval --mode cold [--mesh M]... [--grid N] [--method M]... | cargo xtask bench refine [--mesh M]... [--levels K]... [--threads T]... [--mode MODE]... [--rounds R] [--channels yes|no] | cargo xtask bench tess [--mesh M]... [--rate N]... [--threads T]... [--mode MODE]... [--channels yes|no]... | cargo xtask bench gpu [--mesh M]... [--rate N]... [--frames K] | cargo xtask bench schemes [--quads M] [--triangles M] [--grid N] [--rate R] | cargo xtask same-output --before OLD/subdiv [--after NEW/subdiv] | cargo xtask sweep [--seconds S] | cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug] | cargo xtask paper | cargo xtask rates | cargo xtask tolerance [--mesh M]... [--relative R] | cargo xtask adaptive [--samples N] [--all] | cargo xtask tables [--check] | cargo xtask osd-refine PATH/TO/osd_refine";
 use std::process::{Command, ExitCode};
 
 fn main() -> ExitCode {
@@ -75,6 +76,7 @@ fn main() -> ExitCode {
         Some("bench") if args.get(1).is_some_and(|a| a == "gpu") => bench_gpu::run(&args[2..]),
         Some("bench") if args.get(1).is_some_and(|a| a == "refine") => bench_refine::run(&args[2..]),
         Some("bench") if args.get(1).is_some_and(|a| a == "eval") => bench_eval::run(&args[2..]),
+        Some("bench") if args.get(1).is_some_and(|a| a == "schemes") => bench_schemes::run(&args[2..]),
         Some("bench") => bench(args.get(1).map(String::as_str)),
         Some("same-output") => same_output::run(&args[1..]),
         Some("sweep") => sweep::run(&args[1..]),

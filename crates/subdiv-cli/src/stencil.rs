@@ -17,7 +17,8 @@ use crate::scheme_arg::SchemeFile;
 #[derive(Debug, clap::Args)]
 pub(crate) struct StencilArgs {
     /// A built-in curve scheme (cubic-bspline, chaikin, four-point, six-point, sw-curve) or
-    /// surface scheme (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear).
+    /// surface scheme (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear, doo-sabin,
+    /// midedge).
     #[arg(long, default_value = "catmull-clark")]
     scheme: String,
     /// A user-defined scheme: a curve scheme's TOML file (`arity`, `offset`, `mask`), or a
@@ -29,7 +30,9 @@ pub(crate) struct StencilArgs {
     /// given.
     #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=1024))]
     n: u32,
-    /// Valence of the surface patch's corner 0 (default: the scheme's regular valence).
+    /// Valence of the surface patch's corner 0 (default: the scheme's regular valence); for
+    /// doo-sabin and midedge, whose patches are centred on face corners, the sides of the face
+    /// at corner 0.
     #[arg(long, value_parser = clap::value_parser!(u32).range(3..=64))]
     valence: Option<u32>,
     /// One point: `X` for a curve (on the grid), `U,V` for a surface; fractions such as `1/3`.

@@ -107,8 +107,8 @@ pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};
 pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches};
 pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
-    ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces, dual_child_starts,
-    dual_corner_start, dual_patch, dual_quad_corners, sub_patch_starts,
+    ChildDomain, MAX_PATCH_RADIUS, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces,
+    dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners, sub_patch_starts,
 };
 pub use patch_table::{DEFAULT_PATCH_TABLES, PATCH_TABLE_MAGIC, PATCH_TABLE_VERSION, PatchTableSpec, PatchTables};
 pub use refine::{

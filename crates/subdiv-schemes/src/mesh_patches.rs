@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
 
-use crate::patch::{MAX_RADIUS, PatchMatrices, PatchType, SharpFeatures};
+use crate::patch::{MAX_PATCH_RADIUS, PatchMatrices, PatchType, SharpFeatures};
 use crate::{RefineOptions, Scheme, SchemeError};
 
 /// The sub-patch matrices a mesh's faces need — one [`PatchMatrices`] per patch type at its
@@ -134,7 +134,7 @@ impl MeshPatches {
             faces.into_iter().flat_map(|f| mesh.face_vertices(f).iter().copied()).collect();
         corners.sort_unstable();
         corners.dedup();
-        Self::for_vertices(scheme, mesh, options, mesh.vertices_within(&corners, MAX_RADIUS))
+        Self::for_vertices(scheme, mesh, options, mesh.vertices_within(&corners, MAX_PATCH_RADIUS))
     }
 
     fn for_vertices(

@@ -34,8 +34,12 @@ mod dual;
 use derivation::{Derivation, canonical_start};
 pub use dual::{dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners};
 
-/// The largest patch radius tried.
-pub(crate) const MAX_RADIUS: usize = 3;
+/// The largest patch radius tried, in rings of faces: the smallest radius whose patches are
+/// closed under refinement is 1 for Catmull-Clark, Loop, sw-quad and bilinear, 2 for Butterfly
+/// and for Kobbelt at valences 3 and 4, and 4 for Kobbelt at other valences (its virtual points,
+/// extrapolated from the extraordinary vertex's ring, reach further than its regular support:
+/// 120 control points at valence 5, 1,300 at 64).
+pub const MAX_PATCH_RADIUS: usize = 4;
 
 /// The largest valence whose interior type [`PatchMatrices::interior_shape`] looks in (the
 /// committed tables' largest: beyond it a look-up would derive a type to save a fit).
@@ -356,8 +360,8 @@ impl PatchMatrices {
     /// [`SchemeError::SplitNotSupported`] for the √3 split (a ternary split two steps at a
     /// time), [`SchemeError::FeatureNotSupported`] for boundary
     /// patches of schemes without boundary rules; [`SchemeError::ValenceNotSupported`] below valence 3, with no faces, or when no
-    /// patch radius up to 3 is closed under refinement (Kobbelt's scheme at valences other
-    /// than 3 and 4: its virtual points make the support near the vertex wider than any ring).
+    /// patch radius up to [`MAX_PATCH_RADIUS`] is closed under refinement (a user's scheme whose
+    /// rules reach further).
     pub fn compute(
         scheme: &Scheme,
         patch_type: PatchType,
@@ -403,7 +407,7 @@ impl PatchMatrices {
         if let Some(reason) = invalid {
             return Err(SchemeError::ValenceNotSupported { scheme: scheme.name.clone(), valence, reason });
         }
-        for radius in 1..=MAX_RADIUS {
+        for radius in 1..=MAX_PATCH_RADIUS {
             let rings = radius + 3;
             let mut soup = match patch_type {
                 PatchType::Interior { valence, sharp } => crate::canonical::pillow(valence, rings, triangles, sharp),
@@ -425,7 +429,7 @@ impl PatchMatrices {
             scheme: scheme.name.clone(),
             valence,
             reason: "the limit surface over a face near this vertex depends on vertices beyond every patch \
-                     radius up to 3 (the scheme's rules there reach further than its regular support)",
+                     radius up to 4 (the scheme's rules there reach further than its regular support)",
         })
     }
 

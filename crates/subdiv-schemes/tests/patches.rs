@@ -96,9 +96,9 @@ fn unsupported_splits_and_valences_are_typed_errors() {
     // Butterfly has no boundary rules.
     let err = PatchMatrices::compute(Builtin::Butterfly.scheme(), PatchType::boundary(3, 0), EDGE_ONLY).unwrap_err();
     assert!(matches!(err, SchemeError::FeatureNotSupported { feature: "boundaries", .. }), "{err}");
-    // Kobbelt's virtual points reach past every patch radius around a valence-5 vertex.
-    let err = PatchMatrices::compute(Builtin::Kobbelt.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
-    assert!(matches!(err, SchemeError::ValenceNotSupported { valence: 5, .. }), "{err}");
+    // Kobbelt's virtual points reach past three rings around a valence-5 vertex, not past four.
+    let m = PatchMatrices::compute(Builtin::Kobbelt.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap();
+    assert_eq!((m.radius, m.shapes[0].size), (4, 120));
 }
 
 /// An open `n × n` grid of quads, each split into two triangles along alternating diagonals.

@@ -4,8 +4,8 @@
 
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{
-    DerivedConfigurations, FoundPatch, LocalRefinement, MeshPatches, RefineOptions, Refiner, Scheme, Split, Stencils,
-    child_faces,
+    DerivedConfigurations, FoundPatch, LocalRefinement, MAX_PATCH_RADIUS, MeshPatches, RefineOptions, Refiner, Scheme,
+    Split, Stencils, child_faces,
 };
 
 use crate::{Dyadic, FaceDomain, PatchFrame, StencilError};
@@ -24,10 +24,6 @@ const MAX_LEVELS: usize = 16;
 /// 0.30 / 0.32 s; never deriving (descending until the sharpness is spent) 0.67, 2.1 and
 /// 0.33 s. From level 0 most configurations are met once (the car derives 407 for 1,249 faces).
 const DERIVED_FROM_LEVEL: usize = 2;
-
-/// The largest patch radius of any scheme: a level whose patch types are not known yet
-/// refines this many rings (plus one) around its faces.
-const MAX_PATCH_RADIUS: usize = 3;
 
 /// How a face of one level of [`PatchLevels`] is evaluated.
 #[derive(Clone, Debug)]

@@ -28,11 +28,17 @@ fn closed_quad_meshes_are_watertight_at_random_rates() {
         let ones = vec![1; mesh.face_count()];
         closed_checks(Builtin::CatmullClark, &mesh, &ones);
     }
-    // Other quad splits: Kobbelt where its valences (3 and 4) allow; bilinear away from
-    // extraordinary vertices (some of its exact stencils there are not unique: a typed error
-    // from the stencils, `TessError::Surface`).
+    // Other quad splits: Kobbelt (valences 3 and 5: its patches there reach four rings); bilinear
+    // away from extraordinary vertices (some of its exact stencils there are not unique: a typed
+    // error from the stencils, `TessError::Surface`); the dual splits, whose patches are the
+    // faces' corners (Doo-Sabin, and mid-edge by its two steps).
     let cube = Mesh::build(shapes::cube()).unwrap();
     closed_checks(Builtin::Kobbelt, &cube, &rates_for(&cube, 5, 9));
+    let model = Mesh::build(shapes::default_model()).unwrap();
+    closed_checks(Builtin::Kobbelt, &model, &rates_for(&model, 3, 4));
+    let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    closed_checks(Builtin::DooSabin, &prism, &rates_for(&prism, 4, 7));
+    closed_checks(Builtin::Midedge, &model, &rates_for(&model, 2, 5));
     let torus = Mesh::build(shapes::quad_torus(4, 3)).unwrap();
     closed_checks(Builtin::Bilinear, &torus, &rates_for(&torus, 6, 9));
 }
@@ -104,6 +110,10 @@ fn vertices_are_on_the_limit_surface() {
     on_limit_surface(Builtin::CatmullClark, &grid, &rates_for(&grid, 5, 7));
     on_limit_surface(Builtin::Bilinear, &torus, &rates_for(&torus, 8, 5));
     on_limit_surface(Builtin::Kobbelt, &cube, &rates_for(&cube, 9, 5));
+    on_limit_surface(Builtin::Kobbelt, &model, &rates_for(&model, 3, 4));
+    let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    on_limit_surface(Builtin::DooSabin, &prism, &rates_for(&prism, 7, 4));
+    on_limit_surface(Builtin::Midedge, &model, &rates_for(&model, 5, 3));
     let ico = Mesh::build(shapes::icosahedron()).unwrap();
     on_limit_surface(Builtin::Loop, &ico, &rates_for(&ico, 6, 6));
     on_limit_surface(Builtin::Butterfly, &ico, &rates_for(&ico, 10, 4));

@@ -1,0 +1,166 @@
+//! Interpolating schemes pass through every refined vertex: the limit at the dyadic points of
+//! level `L` is the level-`L` vertices, `L = 1..3`, extraordinary vertices included. An
+//! independent check of the exact evaluators (which never refine the mesh to approximate): the
+//! refinement engine's points on one side, the sub-patch matrices' eigenvectors and the descent
+//! on the other — Butterfly's extraordinary rule, Kobbelt's virtual points at valences other
+//! than 4 (whose patches reach past three rings), the four- and six-point curves.
+
+use std::collections::HashMap;
+
+use glam::DVec3;
+use subdiv_mesh::{Mesh, PolygonSoup, VertexId, shapes};
+use subdiv_schemes::{Builtin, CurveScheme, PolygonKind, RefineOptions, Scheme, refine_uniform};
+use subdiv_stencil::LimitEvaluator;
+use subdiv_stencil::curve::basis_grid;
+
+/// Every vertex moved by a fixed pseudo-random offset, so that no symmetry helps.
+fn jittered(mut soup: PolygonSoup, amount: f64) -> PolygonSoup {
+    let mut state = 0x2545_f491_4f6c_dd1d_u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for p in soup.positions_mut() {
+        *p += DVec3::new(next(), next(), next()) * amount;
+    }
+    soup
+}
+
+/// Two apexes of valence `k` over a ring of `k` vertices of valence 4, triangles.
+fn bipyramid(k: usize) -> PolygonSoup {
+    let mut soup = PolygonSoup::new();
+    for i in 0..k {
+        let a = std::f64::consts::TAU * i as f64 / k as f64;
+        soup.push_vertex(DVec3::new(a.cos(), a.sin(), 0.0));
+    }
+    soup.push_vertex(DVec3::Z);
+    soup.push_vertex(-DVec3::Z);
+    let ring = |i: usize| VertexId::new((i % k) as u32);
+    let (top, bottom) = (VertexId::new(k as u32), VertexId::new(k as u32 + 1));
+    for i in 0..k {
+        soup.push_face([top, ring(i), ring(i + 1)]);
+        soup.push_face([bottom, ring(i + 1), ring(i)]);
+    }
+    soup
+}
+
+/// The same surface split once into quads (bilinearly): the triangles' vertices keep their
+/// valences, so a quad scheme meets valence `k`.
+fn quads_of(soup: PolygonSoup) -> PolygonSoup {
+    let mesh = Mesh::build(soup).unwrap();
+    refine_uniform(&mesh, Builtin::Bilinear.scheme(), 1, &RefineOptions::DEFAULT).unwrap().to_soup()
+}
+
+/// Looks points up by position, within `tolerance`.
+struct Points {
+    cells: HashMap<[i64; 3], Vec<DVec3>>,
+    size: f64,
+}
+
+impl Points {
+    fn new(points: &[DVec3], size: f64) -> Self {
+        let mut cells: HashMap<[i64; 3], Vec<DVec3>> = HashMap::new();
+        for &p in points {
+            cells.entry(Self::cell(p, size)).or_default().push(p);
+        }
+        Self { cells, size }
+    }
+
+    fn cell(p: DVec3, size: f64) -> [i64; 3] {
+        (p / size).floor().to_array().map(|x| x as i64)
+    }
+
+    /// The distance from `p` to the nearest point within one cell of it.
+    fn distance(&self, p: DVec3) -> f64 {
+        let [x, y, z] = Self::cell(p, self.size);
+        let mut best = f64::INFINITY;
+        for dx in -1..=1 {
+            for dy in -1..=1 {
+                for dz in -1..=1 {
+                    for q in self.cells.get(&[x + dx, y + dy, z + dz]).into_iter().flatten() {
+                        best = best.min((*q - p).length());
+                    }
+                }
+            }
+        }
+        best
+    }
+}
+
+/// Every grid point `(i, j) / 2^L` of every face (sub-faces of N-gons) is a level-`L` vertex, and
+/// every level-`L` vertex is such a grid point.
+fn passes_through_refined_vertices(scheme: &Scheme, name: &str, soup: PolygonSoup, levels: usize) {
+    let mesh = Mesh::build(soup).unwrap();
+    let eval = LimitEvaluator::new(scheme, &mesh, &RefineOptions::DEFAULT).unwrap();
+    for level in 1..=levels {
+        let refined = refine_uniform(&mesh, scheme, level, &RefineOptions::DEFAULT).unwrap();
+        let vertices = Points::new(refined.positions(), 1e-6);
+        let mut limit = Vec::new();
+        for f in mesh.face_ids() {
+            for (g, point) in eval.grid(f, 1 << level).unwrap() {
+                let gap = vertices.distance(point.position);
+                assert!(gap < 1e-12, "{scheme} {name} level {level} face {f} at {g:?}: {gap:e} from every vertex");
+                limit.push(point.position);
+            }
+        }
+        let limit = Points::new(&limit, 1e-6);
+        for (v, &p) in refined.positions().iter().enumerate() {
+            let gap = limit.distance(p);
+            assert!(gap < 1e-12, "{scheme} {name} level {level}: vertex {v} is {gap:e} from every grid point");
+        }
+    }
+}
+
+#[test]
+fn butterfly_passes_through_its_refined_vertices_at_valences_3_to_8() {
+    let butterfly = Builtin::Butterfly.scheme();
+    for k in 3..=8 {
+        passes_through_refined_vertices(butterfly, &format!("bipyramid {k}"), jittered(bipyramid(k), 0.1), 3);
+    }
+    passes_through_refined_vertices(butterfly, "icosahedron", jittered(shapes::icosahedron(), 0.1), 3);
+}
+
+#[test]
+fn kobbelt_passes_through_its_refined_vertices_at_valences_3_to_8() {
+    let kobbelt = Builtin::Kobbelt.scheme();
+    passes_through_refined_vertices(kobbelt, "cube", jittered(shapes::cube(), 0.1), 3);
+    for k in 3..=8 {
+        let soup = jittered(quads_of(bipyramid(k)), 0.1);
+        passes_through_refined_vertices(kobbelt, &format!("bipyramid {k} in quads"), soup, 2);
+    }
+}
+
+/// The curves: `Σ p_i φ(m / 2^L − i)` on a closed polygon is the level-`L` point `m`.
+#[test]
+fn four_and_six_point_curves_pass_through_their_refined_points() {
+    let points: Vec<DVec3> = (0..9)
+        .map(|i| {
+            let a = std::f64::consts::TAU * f64::from(i) / 9.0;
+            DVec3::new(a.cos() * (1.0 + 0.3 * f64::from(i % 3)), a.sin(), 0.1 * f64::from(i * i % 5))
+        })
+        .collect();
+    let n = points.len() as i64;
+    for name in ["four-point", "six-point"] {
+        let scheme = CurveScheme::builtin(name).unwrap();
+        for level in 1..=4 {
+            let rate = 1u32 << level;
+            let grid = basis_grid(&scheme, rate).unwrap();
+            let refined = scheme.refine_levels(&points, level, PolygonKind::Closed);
+            assert_eq!(refined.len() as i64, n << level, "{name}");
+            for (m, &r) in refined.iter().enumerate() {
+                let mut p = DVec3::ZERO;
+                for (k, phi) in grid.phi.iter().enumerate() {
+                    // φ at (first + k) / rate, weighting p_i with first + k = m − i·rate.
+                    let offset = grid.first + k as i64;
+                    let shifted = m as i64 - offset;
+                    if shifted % i64::from(rate) == 0 {
+                        p += phi.to_f64() * points[(shifted / i64::from(rate)).rem_euclid(n) as usize];
+                    }
+                }
+                assert!((p - r).length() < 1e-12, "{name} level {level} point {m}: {p} vs {r}");
+            }
+        }
+    }
+}
