@@ -290,8 +290,8 @@ fn stencil_takes_a_scheme_file() {
 #[test]
 fn schemes_without_face_varying_rules_take_linear_texture_coordinates() {
     let dir = tempfile::tempdir().unwrap();
-    // An octahedron (butterfly's triangles) and a cube (Kobbelt's quads), texture coordinates
-    // at every corner.
+    // An octahedron (butterfly's triangles) and a cube (Kobbelt's, Doo-Sabin's and mid-edge's
+    // quads), texture coordinates at every corner.
     let mut octahedron =
         String::from("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\nvt 0 0\nvt 1 0\nvt 0 1\n");
     for [a, b, c] in [[1, 3, 5], [3, 2, 5], [2, 4, 5], [4, 1, 5], [3, 1, 6], [2, 3, 6], [4, 2, 6], [1, 4, 6]] {
@@ -311,7 +311,7 @@ fn schemes_without_face_varying_rules_take_linear_texture_coordinates() {
         path.to_str().unwrap().to_string()
     };
     let (octahedron, cube) = (write("octahedron.obj", &octahedron), write("cube.obj", &cube));
-    for (scheme, cage) in [("butterfly", &octahedron), ("kobbelt", &cube)] {
+    for (scheme, cage) in [("butterfly", &octahedron), ("kobbelt", &cube), ("doo-sabin", &cube), ("midedge", &cube)] {
         // Linear (the default mode): each face's corners (0, 0), (1, 0), (0, 1) [and (1, 1)]
         // interpolated at its (u, v), so s = u and t = v at every point.
         let output = subdiv(&["eval", cage, "--scheme", scheme, "--grid", "2"]);

@@ -91,10 +91,10 @@ impl ChannelSurface {
 
     /// Whether `scheme` takes `mesh`'s face-varying channels under `options` (its face-varying
     /// mode, else the mesh's tag, else [`FaceVaryingInterpolation::All`]): a primal scheme with
-    /// crease rules in every mode (the face-varying rules are theirs), and any scheme that
-    /// splits quads or triangles in mode `All` — linear interpolation of the corners, a rule
-    /// every such scheme can take (butterfly, Kobbelt, `sw-quad`). Not the dual, mid-edge and
-    /// √3 splits, whose faces are not the mesh's.
+    /// crease rules in every mode (the face-varying rules are theirs), and in mode `All` — linear
+    /// interpolation of the corners, a rule every scheme whose faces have `Bfr`'s domains can
+    /// take — every other scheme but √3 (butterfly, Kobbelt, `sw-quad`, and the dual splits,
+    /// Doo-Sabin and mid-edge, whose faces take the quad split's domains).
     ///
     /// ```
     /// use subdiv_mesh::{shapes, FaceVaryingInterpolation, Mesh};
@@ -106,13 +106,14 @@ impl ChannelSurface {
     /// assert!(ChannelSurface::takes(&mesh, Builtin::Butterfly.scheme(), &linear));
     /// assert!(!ChannelSurface::takes(&mesh, Builtin::Butterfly.scheme(), &smooth));
     /// assert!(ChannelSurface::takes(&mesh, Builtin::Loop.scheme(), &smooth));
-    /// assert!(!ChannelSurface::takes(&mesh, Builtin::DooSabin.scheme(), &linear));
+    /// assert!(ChannelSurface::takes(&mesh, Builtin::DooSabin.scheme(), &linear));
+    /// assert!(!ChannelSurface::takes(&mesh, Builtin::Sqrt3.scheme(), &linear));
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn takes(mesh: &Mesh, scheme: &Scheme, options: &RefineOptions) -> bool {
         scheme.has_crease_rules()
             || (options.rules_for(mesh).channels.mode == FaceVaryingInterpolation::All
-                && matches!(scheme.split(), Split::Quad | Split::Triangle))
+                && scheme.split() != Split::Sqrt3)
     }
 
     /// Whether the channel is linear over every face ([`FaceVaryingInterpolation::All`]): its
