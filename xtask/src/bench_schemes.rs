@@ -2,9 +2,10 @@
 //! surface scheme on one mesh, one thread, in one process: exact evaluation (`EvalMethod::Stencil`,
 //! a new evaluator per round, so its preparation is counted: what `subdiv eval --method stencil`
 //! meets) in points per second, and the dual tessellation at a uniform rate (a new `Surface` per
-//! round) in triangles per second. Quad schemes take `--quads` (default: spot's control mesh),
-//! triangle schemes `--triangles` (default: Loop's cube of the OpenSubdiv corpus). Medians of
-//! [`ROUNDS`]. A scheme that refuses the mesh is reported with its reason.
+//! round) in triangles per second. Quad schemes take `--quads`
+//! (default: the built-in model, closed, all quads — Kobbelt takes nothing else — with
+//! valences 3 and 5), triangle schemes `--triangles` (default: spot triangulated, valences 3 to
+//! 8). Medians of [`ROUNDS`]. A scheme that refuses the mesh is reported with its reason.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -20,20 +21,28 @@ const ROUNDS: usize = 5;
 pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let usage = "usage: cargo xtask bench schemes [--quads M] [--triangles M] [--grid N] [--rate R]";
     let meshes = crate::shared_dir().join("testdata/meshes");
-    let (mut quads, mut triangles) =
-        (meshes.join("keenan/spot_control_mesh.obj"), meshes.join("opensubdiv/loop_cube.obj"));
-    let (mut grid, mut rate) = (4u32, 8u32);
+    let (mut quads, mut triangles) = (None, meshes.join("keenan/spot_triangulated.obj"));
+    let (mut grid, mut rate) = (8u32, 16u32);
     let mut rest = args.iter();
     while let Some(a) = rest.next() {
         let mut value = || rest.next().ok_or_else(|| format!("{a} needs a value; {usage}"));
         match a.as_str() {
-            "--quads" => quads = PathBuf::from(value()?),
+            "--quads" => quads = Some(PathBuf::from(value()?)),
             "--triangles" => triangles = PathBuf::from(value()?),
             "--grid" => grid = value()?.parse().map_err(|e| format!("--grid: {e}"))?,
             "--rate" => rate = value()?.parse().map_err(|e| format!("--rate: {e}"))?,
             other => return Err(format!("unknown option {other:?}; {usage}")),
         }
     }
+    let work = tempfile::tempdir().map_err(|e| format!("temporary folder: {e}"))?;
+    let quads = match quads {
+        Some(path) => path,
+        None => {
+            let path = work.path().join("built-in.obj");
+            subdiv::io::write_obj(&path, &subdiv::mesh::shapes::default_model()).map_err(|e| e.to_string())?;
+            path
+        }
+    };
     // One thread, whatever the options inside say.
     rayon::ThreadPoolBuilder::new().num_threads(1).build_global().map_err(|e| e.to_string())?;
     for builtin in Builtin::ALL {
