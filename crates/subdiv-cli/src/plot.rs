@@ -43,19 +43,26 @@ pub(crate) struct PlotArgs {
 #[derive(Debug)]
 enum PlotError {
     /// A surface scheme: its basis function is bivariate.
-    SurfaceScheme(String),
+    Surface(String),
     /// No built-in scheme has this name.
-    UnknownScheme(String),
+    Unknown(String),
+    /// A local curve scheme: several basis functions near its special point.
+    Local(String),
 }
 
 impl fmt::Display for PlotError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let curves = CurveScheme::BUILTIN_NAMES.join(", ");
         match self {
-            Self::SurfaceScheme(name) => {
+            Self::Surface(name) => {
                 write!(f, "plot-basis draws curve schemes ({curves}); `{name}` is a surface scheme")
             }
-            Self::UnknownScheme(name) => write!(f, "unknown curve scheme {name:?}; known: {curves}"),
+            Self::Unknown(name) => write!(f, "unknown curve scheme {name:?}; known: {curves}"),
+            Self::Local(name) => write!(
+                f,
+                "plot-basis draws uniform curve schemes ({curves}); `{name}` has rules of its own near the origin \
+                 (`subdiv stencil --scheme-file` prints its basis functions)"
+            ),
         }
     }
 }
@@ -185,13 +192,16 @@ pub(crate) fn run(args: &PlotArgs, out: &mut impl Write) -> Result<(), UserError
     let curve = match (&args.scheme_file, &args.scheme) {
         (Some(path), _) => match crate::scheme_arg::read_any_scheme_file(path)? {
             SchemeFile::Curve(curve) => curve,
-            SchemeFile::Surface(scheme) => return Err(UserError(PlotError::SurfaceScheme(scheme.name).to_string())),
+            SchemeFile::Surface(scheme) => return Err(UserError(PlotError::Surface(scheme.name).to_string())),
+            SchemeFile::LocalCurve(local) => {
+                return Err(UserError(PlotError::Local(local.name().to_string()).to_string()));
+            }
         },
         (None, Some(name)) => CurveScheme::builtin(name).ok_or_else(|| {
             let error = if Builtin::from_name(name).is_some() {
-                PlotError::SurfaceScheme(name.clone())
+                PlotError::Surface(name.clone())
             } else {
-                PlotError::UnknownScheme(name.clone())
+                PlotError::Unknown(name.clone())
             };
             UserError(error.to_string())
         })?,

@@ -3,7 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use subdiv::Surface;
-use subdiv::schemes::{Builtin, CurveScheme, Scheme};
+use subdiv::schemes::{Builtin, CurveScheme, LocalCurveScheme, Scheme};
 
 use crate::UserError;
 
@@ -34,12 +34,19 @@ impl SchemeArgs {
 pub(crate) enum SchemeFile {
     Surface(Box<Scheme>),
     Curve(CurveScheme),
+    /// A curve scheme with rows of its own near the origin (TOML `[[rows]]`).
+    LocalCurve(LocalCurveScheme),
 }
 
 /// The scheme in the file at `path` (TOML, or RON when the name ends in `.ron`): a curve scheme
-/// if it reads as one, else a surface scheme.
+/// if it reads as one (with `[[rows]]`: a local one), else a surface scheme.
 pub(crate) fn read_any_scheme_file(path: &Path) -> Result<SchemeFile, UserError> {
     let (text, ron) = read_text(path)?;
+    if !ron && text.lines().any(|l| l.trim() == "[[rows]]") {
+        let local =
+            LocalCurveScheme::from_toml_str(&text).map_err(|e| UserError(format!("{}: {e}", path.display())))?;
+        return Ok(SchemeFile::LocalCurve(local));
+    }
     let curve = if ron { CurveScheme::from_ron_str(&text) } else { CurveScheme::from_toml_str(&text) };
     match curve {
         Ok(curve) => Ok(SchemeFile::Curve(curve)),
@@ -88,7 +95,7 @@ pub(crate) fn parse_builtin(name: &str) -> Result<Builtin, String> {
 #[derive(Debug, clap::Args)]
 pub(crate) struct PrintArgs {
     /// The built-in scheme to print: a surface scheme, or a curve scheme (cubic-bspline,
-    /// chaikin, four-point, six-point, sw-curve).
+    /// chaikin, four-point, six-point, sw-curve, nonuniform-cubic-bspline: TOML only).
     #[arg(value_parser = parse_any_builtin)]
     name: String,
     /// Print RON instead of TOML.
@@ -106,17 +113,27 @@ pub(crate) fn print(args: &PrintArgs, out: &mut impl std::io::Write) -> Result<(
             writeln!(out, "{}", curve.to_ron_string().map_err(|e| UserError(e.to_string()))?)?;
         }
         (None, Some(toml)) => write!(out, "{toml}")?,
-        (None, None) => return Err(UserError(parse_any_builtin(&args.name).unwrap_err())),
+        (None, None) => match LocalCurveScheme::builtin_toml(&args.name) {
+            Some(_) if args.ron => {
+                return Err(UserError(format!("{}: a local curve scheme is written in TOML only", args.name)));
+            }
+            Some(toml) => write!(out, "{toml}")?,
+            None => return Err(UserError(parse_any_builtin(&args.name).unwrap_err())),
+        },
     }
     Ok(())
 }
 
 /// A built-in surface or curve scheme's name.
 fn parse_any_builtin(name: &str) -> Result<String, String> {
-    if Builtin::from_name(name).is_some() || CurveScheme::builtin_toml(name).is_some() {
+    if Builtin::from_name(name).is_some()
+        || CurveScheme::builtin_toml(name).is_some()
+        || LocalCurveScheme::builtin_toml(name).is_some()
+    {
         return Ok(name.to_string());
     }
     let mut known: Vec<&str> = Builtin::ALL.iter().map(|s| s.name()).collect();
     known.extend(CurveScheme::BUILTIN_NAMES);
+    known.extend(LocalCurveScheme::BUILTIN_NAMES);
     Err(format!("unknown scheme {name:?}; known: {}", known.join(", ")))
 }

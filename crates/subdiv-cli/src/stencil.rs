@@ -6,8 +6,8 @@ use std::path::PathBuf;
 
 use serde_json::{Value, json};
 use subdiv::mesh::BoundaryInterpolation;
-use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType, Scheme};
-use subdiv::stencil::curve::basis_grid;
+use subdiv::schemes::{Builtin, CurveScheme, LocalCurveScheme, PatchMatrices, PatchType, Scheme};
+use subdiv::stencil::curve::{LocalCurveGrid, basis_grid};
 use subdiv::stencil::{Dyadic, Grid, Rational, StencilEvaluator, exact_surface_stencil};
 
 use crate::UserError;
@@ -16,7 +16,8 @@ use crate::scheme_arg::SchemeFile;
 /// Arguments of `subdiv stencil`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct StencilArgs {
-    /// A built-in curve scheme (cubic-bspline, chaikin, four-point, six-point, sw-curve) or
+    /// A built-in curve scheme (cubic-bspline, chaikin, four-point, six-point, sw-curve,
+    /// nonuniform-cubic-bspline: paper 000 §2's, uniform away from the origin) or
     /// surface scheme (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear, doo-sabin,
     /// midedge).
     #[arg(long, default_value = "catmull-clark")]
@@ -52,13 +53,18 @@ pub(crate) fn run(args: &StencilArgs, out: &mut impl Write) -> Result<(), UserEr
         return match crate::scheme_arg::read_any_scheme_file(path)? {
             SchemeFile::Surface(scheme) => run_surface(args, &scheme, out),
             SchemeFile::Curve(curve) => run_curve(args, &curve, out),
+            SchemeFile::LocalCurve(local) => run_local(args, &local, out),
         };
     }
     if let Some(curve) = CurveScheme::builtin(&args.scheme) {
         return run_curve(args, &curve, out);
     }
+    if let Some(local) = LocalCurveScheme::builtin(&args.scheme) {
+        return run_local(args, &local, out);
+    }
     let builtin = Builtin::from_name(&args.scheme).ok_or_else(|| {
         let mut known: Vec<&str> = CurveScheme::BUILTIN_NAMES.to_vec();
+        known.extend(LocalCurveScheme::BUILTIN_NAMES);
         known.extend(Builtin::ALL.iter().map(|b| b.name()));
         UserError(format!("unknown scheme {:?}; known: {}", args.scheme, known.join(", ")))
     })?;
@@ -109,6 +115,69 @@ fn run_curve(args: &StencilArgs, scheme: &CurveScheme, out: &mut impl Write) -> 
         writeln!(out, "{:>12} {:>24} {:>24}", "x", "phi", "dphi")?;
         for ((x, phi), dphi) in x.iter().zip(&grid.phi).zip(&grid.dphi) {
             writeln!(out, "{:>12} {:>24} {:>24}", x.to_string(), text(phi), text(dphi))?;
+        }
+    }
+    Ok(())
+}
+
+/// A local curve scheme (rows of its own near the origin): the basis functions of the special
+/// control points and their two neighbours on `(1/n)ℤ`, or with `--at X` every point's weight
+/// there. Positions only: the tangents of a local scheme are not solved.
+fn run_local(args: &StencilArgs, scheme: &LocalCurveScheme, out: &mut impl Write) -> Result<(), UserError> {
+    let n = i64::from(args.n);
+    let grid = LocalCurveGrid::new(scheme, args.n)?;
+    let number = |r: &Rational| if args.exact { json!(r.to_string()) } else { json!(r.to_f64()) };
+    let text = |r: &Rational| if args.exact { r.to_string() } else { format!("{:.17}", r.to_f64()) };
+    let (lo, hi) = grid.special;
+    let points: Vec<i64> = (lo - 1..=hi + 1).collect();
+    let span = grid.families.iter().map(|(first, values)| (*first, *first + values.len() as i64 - 1));
+    let reach = span.fold(0, |r, (first, last)| r.max(first.abs()).max(last.abs())) + (hi - lo + 2) * n;
+    let (first, last) = (-reach, reach);
+    if let Some(at) = &args.at {
+        let (p, q) = subdiv::stencil::parse_fraction(at).map_err(|e| UserError(e.to_string()))?;
+        let scaled = p.checked_mul(n).ok_or_else(|| UserError(format!("x = {at} is too large")))?;
+        if scaled % q != 0 {
+            return Err(UserError(format!("x = {at} is not on the grid (1/{n})ℤ; pass --n a multiple of {q}")));
+        }
+        let k = scaled / q;
+        let weights: Vec<(i64, Rational)> =
+            (k / n - reach..=k / n + reach).map(|i| (i, grid.basis(i, k))).filter(|(_, w)| !w.is_zero()).collect();
+        if args.json {
+            let list: Vec<Value> = weights.iter().map(|(i, w)| json!({"point": i, "weight": number(w)})).collect();
+            let report = json!({"scheme": scheme.name(), "n": n, "x": at, "position": list});
+            writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+        } else {
+            writeln!(out, "{} at x = {at}: weights of the control points p_i (positions only)", scheme.name())?;
+            let list: Vec<String> = weights.iter().map(|(i, w)| format!("p{i}: {}", text(w))).collect();
+            writeln!(out, "position  {}", list.join(", "))?;
+        }
+        return Ok(());
+    }
+    // The rows where one of the listed basis functions is nonzero.
+    let rows: Vec<i64> = (first..=last).filter(|&k| points.iter().any(|&i| !grid.basis(i, k).is_zero())).collect();
+    let x = |k: i64| Rational::new(k, n).expect("n ≥ 1");
+    if args.json {
+        let basis: serde_json::Map<String, Value> = points
+            .iter()
+            .map(|&i| (i.to_string(), Value::Array(rows.iter().map(|&k| number(&grid.basis(i, k))).collect())))
+            .collect();
+        let report = json!({
+            "scheme": scheme.name(), "n": n, "special": [lo, hi],
+            "x": rows.iter().map(|&k| number(&x(k))).collect::<Vec<_>>(), "basis": basis,
+        });
+        writeln!(out, "{}", serde_json::to_string_pretty(&report)?)?;
+    } else {
+        write!(out, "{:>12}", "x")?;
+        for i in &points {
+            write!(out, " {:>24}", format!("phi_{i}"))?;
+        }
+        writeln!(out)?;
+        for &k in &rows {
+            write!(out, "{:>12}", x(k).to_string())?;
+            for &i in &points {
+                write!(out, " {:>24}", text(&grid.basis(i, k)))?;
+            }
+            writeln!(out)?;
         }
     }
     Ok(())

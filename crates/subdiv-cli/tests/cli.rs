@@ -513,6 +513,43 @@ fn tessellate_writes_a_watertight_glb_and_obj() {
     }
 }
 
+/// A curve scheme with rows of its own near the origin as data: paper 000 §2's non-uniform cubic
+/// B-spline is a built-in file that `stencil` evaluates exactly, `scheme` prints and a user's
+/// copy reads back; `plot-basis` says why it does not draw it.
+#[test]
+fn local_curve_schemes_are_files_that_stencil_evaluates() {
+    let report = json(&["stencil", "--scheme", "nonuniform-cubic-bspline", "--at", "0", "--exact", "--json"]);
+    let weights: Vec<(i64, String)> = report["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| (w["point"].as_i64().unwrap(), w["weight"].as_str().unwrap().to_string()))
+        .collect();
+    assert_eq!(weights, [(-1, "1/15".to_string()), (0, "3/5".to_string()), (1, "1/3".to_string())]);
+    let text = String::from_utf8(subdiv(&["scheme", "nonuniform-cubic-bspline"]).stdout).unwrap();
+    assert!(text.contains("[[rows]]") && text.contains("29/40"), "{text}");
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("mine.toml");
+    std::fs::write(&file, text.replace("nonuniform-cubic-bspline", "mine")).unwrap();
+    let table = json(&["stencil", "--scheme-file", file.to_str().unwrap(), "--n", "2", "--exact", "--json"]);
+    assert_eq!(table["special"], serde_json::json!([-1, 1]));
+    let x = table["x"].as_array().unwrap();
+    let at_zero = x.iter().position(|v| v == "0").unwrap();
+    assert_eq!(table["basis"]["0"][at_zero], "3/5");
+    let out = subdiv(&["plot-basis", "--scheme-file", file.to_str().unwrap(), "-o", "x.png"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("rules of its own near the origin"));
+    // A row that does not sum to 1: one line naming the row.
+    std::fs::write(&file, text.replace("\"3/8\", \"5/8\"", "\"3/8\", \"4/8\"")).unwrap();
+    let out = subdiv(&["stencil", "--scheme-file", file.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("the row of new point 1"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// An `n`-gon prism whose caps are fans of triangles around two vertices of valence `n`; the
 /// ring's vertices have valence 4.
 fn capped_prism(n: usize) -> subdiv::mesh::PolygonSoup {

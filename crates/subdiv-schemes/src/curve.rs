@@ -84,6 +84,16 @@ pub enum CurveError {
         /// Its value.
         value: f64,
     },
+    /// A local curve scheme's own rule for one new point is not usable.
+    #[error("curve scheme `{scheme}`: the row of new point {point}: {reason}")]
+    LocalRow {
+        /// The scheme's name.
+        scheme: String,
+        /// The new point whose row it is.
+        point: i64,
+        /// What is wrong.
+        reason: String,
+    },
     /// A TOML scheme file does not parse (syntax, missing or unknown field, bad weight): where
     /// and why, in one line.
     #[error("cannot read the curve scheme (TOML): {0}")]
@@ -189,12 +199,12 @@ struct RawCurveScheme {
     mask: Vec<Weight>,
 }
 
-fn binary() -> u32 {
+pub(crate) fn binary() -> u32 {
     2
 }
 
 /// A mask entry: a number, or a string holding a number or a fraction `p/q`.
-struct Weight(f64);
+pub(crate) struct Weight(pub(crate) f64);
 
 impl<'de> Deserialize<'de> for Weight {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
@@ -459,6 +469,20 @@ impl CurveScheme {
     }
 
     /// The rules, one per residue of the child index modulo the arity.
+    /// The weight of old point `parent` in new point `child`: `mask[child − arity·parent +
+    /// offset]`, 0 outside the mask.
+    ///
+    /// ```
+    /// use subdiv_schemes::CurveScheme;
+    ///
+    /// let chaikin = CurveScheme::builtin("chaikin").unwrap();
+    /// assert_eq!((chaikin.weight(0, 0), chaikin.weight(0, 1), chaikin.weight(0, 2)), (0.75, 0.25, 0.0));
+    /// ```
+    pub fn weight(&self, child: i64, parent: i64) -> f64 {
+        let k = child - i64::from(self.arity) * parent + self.offset as i64;
+        usize::try_from(k).ok().and_then(|k| self.mask.get(k)).copied().unwrap_or(0.0)
+    }
+
     fn rules(&self) -> Vec<Rule> {
         let m = i64::from(self.arity);
         (0..m)

@@ -87,6 +87,7 @@ mod dual;
 mod eigen;
 mod error;
 mod expr;
+mod local_curve;
 mod mesh_patches;
 mod nonuniform;
 mod patch;
@@ -104,6 +105,7 @@ pub use channel::ChannelSurface;
 pub use curve::{CurveError, CurveMatrix, CurveScheme, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};
+pub use local_curve::{LocalCurveScheme, LocalRow};
 pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches};
 pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{

@@ -25,26 +25,31 @@
 //! weight as the nearest rational with denominator at most [`ExactMask::MAX_DENOMINATOR`] and
 //! checks that it reproduces the float and that every rule sums to exactly 1.
 //!
-//! **The non-uniform cubic B-spline** ([`NonUniformCubicGrid`], paper §2): knots `t_i = i` for
-//! `i ≥ 0` and `t_i = 2i` for `i < 0` (intervals of 2 left of the origin, 1 right of it), refined
-//! by inserting every midpoint; the refined knots are `t_i / 2`, so the scheme is stationary.
-//! Control point `p_i` (blossom `f(t_{i−1}, t_i, t_{i+1})`) sits at the uniform parameter
-//! `x = i` at level 0, and `i / 2^j` at level `j`. Our reading of the paper: the subdivision
-//! matrix is derived here by exact knot insertion; the printed 5×5 matrix of the paper is that
-//! of the mirrored knots (`t_i = 2i` for `i > 0`), see [`NonUniformCubicGrid::local_matrix`].
-//! The columns of five types (uniform left of −1, `p_{−1}`, `p_0`, `p_1`, uniform right of 1)
-//! give five refinable functions, solved together by the route-1 system with partition of unity
-//! at every grid point of `[−4, 4]`. The basis function of `p_i` is the B-spline `N_i(t)` on the
-//! knots `t_{i−2}..t_{i+2}` composed with `t(x) = x` for `x ≥ 0` and `2x` for `x < 0`; so the
-//! functions are not smooth at 0 in `x`. (The paper attributes the kink to "x = 2t for t > 0",
-//! which fits neither its knots nor its matrix: with its knots the factor 2 is on the negative
-//! side, `t = 2x`; with the mirrored knots of its matrix it is `t = 2x` for `x > 0`.) Its
-//! listed scaling relations use a centring of their own and are not used here; each relation
-//! is read from a column of the derived matrix, the three special functions in the global
+//! **Local schemes** ([`LocalCurveGrid`], paper §2): a stationary scheme that is uniform away
+//! from the origin and has rows of its own near it (`subdiv_schemes::LocalCurveScheme`, a file
+//! like any curve scheme). The control points whose columns differ from the mask's, or whose
+//! children do, have refinable functions of their own in the global parameter; with the
+//! uniform one they are solved together by the route-1 system, with partition of unity at
+//! every grid point around the origin. **The non-uniform cubic B-spline**
+//! ([`NonUniformCubicGrid`]): knots `t_i = i` for `i ≥ 0` and `t_i = 2i` for `i < 0` (intervals
+//! of 2 left of the origin, 1 right of it), refined by inserting every midpoint; the refined
+//! knots are `t_i / 2`, so the scheme is stationary. Control point `p_i` (blossom `f(t_{i−1},
+//! t_i, t_{i+1})`) sits at the uniform parameter `x = i` at level 0, and `i / 2^j` at level `j`.
+//! Our reading of the paper: the subdivision matrix is derived here by exact knot insertion; the
+//! printed 5×5 matrix of the paper is that of the mirrored knots (`t_i = 2i` for `i > 0`), see
+//! [`NonUniformCubicGrid::local_matrix`]. Its rows that differ from the cubic B-spline's are
+//! those of the new points `−2..=2`, and the built-in file `nonuniform-cubic-bspline` holds
+//! them; the special points are `p_{−1}, p_0, p_1`. The basis function of `p_i` is the B-spline
+//! `N_i(t)` on the knots `t_{i−2}..t_{i+2}` composed with `t(x) = x` for `x ≥ 0` and `2x` for
+//! `x < 0`; so the functions are not smooth at 0 in `x`. (The paper attributes the kink to "x =
+//! 2t for t > 0", which fits neither its knots nor its matrix: with its knots the factor 2 is on
+//! the negative side, `t = 2x`; with the mirrored knots of its matrix it is `t = 2x` for `x >
+//! 0`.) Its listed scaling relations use a centring of their own and are not used here; each
+//! relation is read from a column of the matrix, the special functions in the global
 //! parameter `x`.
 
 use faer::Mat;
-use subdiv_schemes::CurveScheme;
+use subdiv_schemes::{CurveScheme, LocalCurveScheme, LocalRow};
 
 use crate::StencilError;
 use crate::linalg::normalised_left_eigenvectors;
@@ -58,7 +63,7 @@ pub const MAX_CURVE_RATE: u32 = 1024;
 /// φ(arity·x − (first + k))`, with no zero at either end.
 ///
 /// ```
-/// use subdiv_schemes::CurveScheme;
+/// use subdiv_schemes::{CurveScheme, LocalCurveScheme, LocalRow};
 /// use subdiv_stencil::Rational;
 /// use subdiv_stencil::curve::ExactMask;
 ///
@@ -143,7 +148,7 @@ impl ExactMask {
     /// `|r − w| < 1e-15 · max(1, |w|)`; then the checks of [`new`](Self::new).
     ///
     /// ```
-    /// use subdiv_schemes::CurveScheme;
+    /// use subdiv_schemes::{CurveScheme, LocalCurveScheme, LocalRow};
     /// use subdiv_stencil::StencilError;
     /// use subdiv_stencil::curve::ExactMask;
     ///
@@ -318,7 +323,7 @@ fn check_rate(rate: u32) -> Result<i64, StencilError> {
 /// outside.
 ///
 /// ```
-/// use subdiv_schemes::CurveScheme;
+/// use subdiv_schemes::{CurveScheme, LocalCurveScheme, LocalRow};
 /// use subdiv_stencil::Rational;
 /// use subdiv_stencil::curve::basis_grid;
 ///
@@ -347,7 +352,7 @@ pub struct BasisGrid {
 /// increasing `i` with the zero weights dropped.
 ///
 /// ```
-/// use subdiv_schemes::CurveScheme;
+/// use subdiv_schemes::{CurveScheme, LocalCurveScheme, LocalRow};
 /// use subdiv_stencil::Rational;
 /// use subdiv_stencil::curve::basis_grid;
 ///
@@ -493,7 +498,7 @@ impl BasisGrid {
 /// [`BasisGrid::new`] is taken by least squares.
 ///
 /// ```
-/// use subdiv_schemes::CurveScheme;
+/// use subdiv_schemes::{CurveScheme, LocalCurveScheme, LocalRow};
 /// use subdiv_stencil::curve::{EigenGrid, ExactMask, basis_grid};
 ///
 /// let four = CurveScheme::builtin("four-point").unwrap();
@@ -580,8 +585,141 @@ impl EigenGrid {
     }
 }
 
-/// The basis functions of the non-uniform cubic B-spline of paper §2 on the grid
-/// `(1/rate)ℤ` (see the [module docs](self) for the knots and the parameterisation).
+/// The limit functions of a [`LocalCurveScheme`] (uniform away from the origin, rows of its
+/// own near it) on the grid `(1/rate)ℤ`, exactly: the uniform scheme's basis `F_0`, whose
+/// shifts `F_0(x − i)` are the control points' far from the origin, and one refinable function
+/// per *special* control point, in the global parameter `x` (a stationary scheme refines the
+/// same rows at every level, so the basis of special point `i` at level `j` is `F_i(arity^j
+/// x)`). Special points: those whose column of the subdivision matrix differs from the mask's,
+/// and those whose children include a special point (their limit functions reach the
+/// origin's), closed and made contiguous. All families are solved together: the scaling
+/// relation of each (one column of the matrix), and partition of unity at every grid point
+/// around the origin.
+///
+/// ```
+/// use subdiv_schemes::LocalCurveScheme;
+/// use subdiv_stencil::Rational;
+/// use subdiv_stencil::curve::LocalCurveGrid;
+///
+/// let scheme = LocalCurveScheme::builtin("nonuniform-cubic-bspline").unwrap();
+/// let grid = LocalCurveGrid::new(&scheme, 2)?;
+/// assert_eq!(grid.special, (-1, 1));
+/// // At x = 0 only p_{−1}, p_0, p_1 weigh: the non-uniform limit mask.
+/// let r = |p, q| Rational::new(p, q).unwrap();
+/// assert_eq!([grid.basis(-1, 0), grid.basis(0, 0), grid.basis(1, 0)], [r(1, 15), r(3, 5), r(1, 3)]);
+/// # Ok::<(), subdiv_stencil::StencilError>(())
+/// ```
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LocalCurveGrid {
+    /// The grid rate `n`.
+    pub rate: u32,
+    /// The special control points `lo..=hi`.
+    pub special: (i64, i64),
+    /// `families[0]` the uniform function (centred at 0), `families[1 + i − lo]` special point
+    /// `i`'s (in the global parameter): `(first, values)` with `values[k]` at `(first + k) /
+    /// rate`.
+    pub families: Vec<(i64, Vec<Rational>)>,
+}
+
+impl LocalCurveGrid {
+    /// Solves `scheme`'s families at `rate`.
+    ///
+    /// # Errors
+    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_CURVE_RATE`];
+    /// [`StencilError::CurveMaskNotRational`] for a weight that is no small fraction;
+    /// [`StencilError::CurveScalingSystem`] if the system has no unique solution.
+    pub fn new(scheme: &LocalCurveScheme, rate: u32) -> Result<Self, StencilError> {
+        let n = check_rate(rate)?;
+        let uniform = scheme.uniform();
+        let a = i64::from(uniform.arity());
+        let name = scheme.name().to_string();
+        let len = uniform.mask().len() as i64;
+        // The children a parent can have: the mask's reach and every special row.
+        let children_of = |parent: i64| {
+            let rows = scheme.rows().iter().map(|r| r.point);
+            let lo = rows.clone().chain([a * parent - uniform.offset() as i64]).min().unwrap_or(0);
+            let hi = rows.chain([a * parent - uniform.offset() as i64 + len]).max().unwrap_or(0);
+            (lo..=hi).filter(move |&k| scheme.weight(k, parent) != 0.0)
+        };
+        let reach = 64 + len;
+        let mut special: Vec<bool> = (-reach..=reach)
+            .map(|i| scheme.rows().iter().any(|r| scheme.weight(r.point, i) != uniform.weight(r.point, i)))
+            .collect();
+        let is = |special: &[bool], i: i64| (-reach..=reach).contains(&i) && special[(i + reach) as usize];
+        loop {
+            let grown: Vec<bool> =
+                (-reach..=reach).map(|i| is(&special, i) || children_of(i).any(|k| is(&special, k))).collect();
+            if grown == special {
+                break;
+            }
+            special = grown;
+        }
+        let (lo, hi) = match (special.iter().position(|&s| s), special.iter().rposition(|&s| s)) {
+            (Some(lo), Some(hi)) => (lo as i64 - reach, hi as i64 - reach),
+            _ => (1, 0),
+        };
+        let family_of = |i: i64| if (lo..=hi).contains(&i) { ((1 + i - lo) as usize, 0) } else { (0, i) };
+        let exact = |child: i64, parent: i64| {
+            let value = scheme.weight(child, parent);
+            exact_weight(value, ExactMask::MAX_DENOMINATOR).ok_or_else(|| StencilError::CurveMaskNotRational {
+                scheme: name.clone(),
+                index: usize::try_from(child - a * parent + uniform.offset() as i64).unwrap_or(0),
+                value,
+                max_denominator: ExactMask::MAX_DENOMINATOR,
+            })
+        };
+        // One relation per family, read from one column: the uniform one far from the origin.
+        let far = hi.max(0) + reach;
+        let relations: Vec<Vec<Term>> = std::iter::once(far)
+            .chain(lo..=hi)
+            .map(|column| {
+                let (_, centre) = family_of(column);
+                children_of(column)
+                    .map(|k| {
+                        let (family, c) = family_of(k);
+                        // F_t(y) with y = x − centre: F_u(a·x − c) = F_u(a·y − (c − a·centre)).
+                        Ok(Term { family, shift: c - a * centre, weight: exact(k, column)? })
+                    })
+                    .collect::<Result<Vec<_>, StencilError>>()
+            })
+            .collect::<Result<_, _>>()?;
+        let system = Refinable::new(a, n, &relations);
+        let mut rows = system.scaling_rows(&Rational::one());
+        // Partition of unity at every grid point around the origin: Σ_i F(x − centre_i) = 1.
+        let around = lo.abs().max(hi.abs()) + len;
+        for k in -around * n..=around * n {
+            let row: SparseRow = (-2 * around..=2 * around)
+                .filter_map(|i| {
+                    let (family, centre) = family_of(i);
+                    system.index(family, k - centre * n).map(|u| (u, Rational::one()))
+                })
+                .collect();
+            rows.push((row, Rational::one()));
+        }
+        let families = system.solve(rows).map_err(|e| StencilError::CurveScalingSystem {
+            scheme: name.clone(),
+            rate,
+            quantity: "positions",
+            detail: e.to_string(),
+        })?;
+        let families = families.into_iter().zip(&system.windows).map(|(values, &(first, _))| (first, values)).collect();
+        Ok(Self { rate, special: (lo, hi), families })
+    }
+
+    /// The basis function of control point `p_i` at `x = numerator / rate`.
+    pub fn basis(&self, i: i64, numerator: i64) -> Rational {
+        let (lo, hi) = self.special;
+        let (family, centre) = if (lo..=hi).contains(&i) { ((1 + i - lo) as usize, 0) } else { (0, i) };
+        let (first, values) = &self.families[family];
+        let k = i128::from(numerator) - i128::from(centre) * i128::from(self.rate) - i128::from(*first);
+        usize::try_from(k).ok().and_then(|k| values.get(k)).cloned().unwrap_or_else(Rational::zero)
+    }
+}
+
+/// The non-uniform cubic B-spline of paper §2 (see the [module docs](self) for the knots and
+/// the parameterisation): its rows derived by knot insertion, and its basis functions on the
+/// grid `(1/rate)ℤ` by [`LocalCurveGrid`] — the same rows as the built-in scheme file
+/// `nonuniform-cubic-bspline` (a test holds them equal).
 ///
 /// ```
 /// use subdiv_stencil::Rational;
@@ -597,13 +735,7 @@ impl EigenGrid {
 /// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct NonUniformCubicGrid {
-    /// The grid rate `n`.
-    pub rate: u32,
-    /// The five refinable functions, in the order uniform-left, `p_{−1}`, `p_0`, `p_1`,
-    /// uniform-right: `(first, values)` with `values[k]` at `(first + k) / rate`. The uniform
-    /// ones are centred at 0 (the basis of `p_i` is `F(x − i)`); the three others are in the
-    /// global parameter (the basis of `p_i` is `F(x)`).
-    pub families: Vec<(i64, Vec<Rational>)>,
+    grid: LocalCurveGrid,
 }
 
 impl NonUniformCubicGrid {
@@ -659,63 +791,41 @@ impl NonUniformCubicGrid {
         std::array::from_fn(|r| std::array::from_fn(|c| Self::entry(r as i64 - 2, c as i64 - 2)))
     }
 
-    /// Family and centre of the basis function of `p_i`: `F_family(x − centre)`.
-    fn family_of(i: i64) -> (usize, i64) {
-        match i {
-            ..=-2 => (0, i),
-            -1..=1 => ((i + 2) as usize, 0),
-            _ => (4, i),
-        }
-    }
-
-    /// Solves the five-family scaling system at `rate`.
-    ///
-    /// # Errors
-    /// [`StencilError::Rate`] for a rate of 0 or above [`MAX_CURVE_RATE`];
-    /// [`StencilError::CurveScalingSystem`] if the system had no unique solution.
-    pub fn new(rate: u32) -> Result<Self, StencilError> {
-        let n = check_rate(rate)?;
-        // One representative column per family: −2 (uniform left), −1, 0, 1, 2 (uniform right).
-        let relations: Vec<Vec<Term>> = (-2..=2)
-            .map(|column: i64| {
-                let (_, centre) = Self::family_of(column);
-                (2 * column - 4..=2 * column + 4)
-                    .filter_map(|k| {
-                        let weight = Self::entry(k, column);
-                        let (family, c) = Self::family_of(k);
-                        // F_t(y) with y = x − centre: F_u(2x − c) = F_u(2y − (c − 2·centre)).
-                        (!weight.is_zero()).then(|| Term { family, shift: c - 2 * centre, weight })
-                    })
-                    .collect()
+    /// The scheme as data: the uniform cubic B-spline's mask, and the rows of knot insertion
+    /// that differ from it (the new points `−2..=2`).
+    pub fn scheme() -> LocalCurveScheme {
+        let cubic = CurveScheme::builtin("cubic-bspline").expect("a built-in");
+        let name = subdiv_schemes::NonUniformCubicBSpline::NAME;
+        let uniform = CurveScheme::new(name, cubic.arity(), cubic.offset(), cubic.mask().to_vec()).expect("the cubic");
+        let rows = (-4..=4)
+            .filter_map(|k| {
+                let row = Self::row(k);
+                let differs = row.iter().any(|(c, w)| w.to_f64() != uniform.weight(k, *c));
+                differs.then(|| LocalRow {
+                    point: k,
+                    first: row[0].0,
+                    weights: row.iter().map(|(_, w)| w.to_f64()).collect(),
+                })
             })
             .collect();
-        let system = Refinable::new(2, n, &relations);
-        let mut rows = system.scaling_rows(&Rational::one());
-        // Partition of unity at every grid point of [−4, 4]: Σ_i F(x − centre_i) = 1.
-        for k in -4 * n..=4 * n {
-            let row: SparseRow = (-8..=8)
-                .filter_map(|i| {
-                    let (family, centre) = Self::family_of(i);
-                    system.index(family, k - centre * n).map(|u| (u, Rational::one()))
-                })
-                .collect();
-            rows.push((row, Rational::one()));
-        }
-        let families = system.solve(rows).map_err(|e| StencilError::CurveScalingSystem {
-            scheme: subdiv_schemes::NonUniformCubicBSpline::NAME.to_owned(),
-            rate,
-            quantity: "positions",
-            detail: e.to_string(),
-        })?;
-        let families = families.into_iter().zip(&system.windows).map(|(values, &(lo, _))| (lo, values)).collect();
-        Ok(Self { rate, families })
+        LocalCurveScheme::new(uniform, rows).expect("knot insertion's rows sum to 1")
+    }
+
+    /// Solves the scheme's families at `rate` ([`LocalCurveGrid::new`]).
+    ///
+    /// # Errors
+    /// As [`LocalCurveGrid::new`].
+    pub fn new(rate: u32) -> Result<Self, StencilError> {
+        Ok(Self { grid: LocalCurveGrid::new(&Self::scheme(), rate)? })
+    }
+
+    /// The solved families.
+    pub fn grid(&self) -> &LocalCurveGrid {
+        &self.grid
     }
 
     /// The basis function of control point `p_i` at `x = numerator / rate`.
     pub fn basis(&self, i: i64, numerator: i64) -> Rational {
-        let (family, centre) = Self::family_of(i);
-        let (first, values) = &self.families[family];
-        let k = i128::from(numerator) - i128::from(centre) * i128::from(self.rate) - i128::from(*first);
-        usize::try_from(k).ok().and_then(|k| values.get(k)).cloned().unwrap_or_else(Rational::zero)
+        self.grid.basis(i, numerator)
     }
 }

@@ -317,3 +317,29 @@ proptest! {
         prop_assert!(s.tangent.iter().map(|(_, w)| w).sum::<Rational>().is_zero());
     }
 }
+
+/// The built-in file `nonuniform-cubic-bspline` is paper §2's scheme: its matrix near the
+/// origin is knot insertion's, and its basis values (exact fractions) are those of the grid
+/// from knot insertion's rows, which the tests above hold to the B-splines.
+#[test]
+fn the_non_uniform_file_is_the_papers_scheme() {
+    use subdiv_schemes::LocalCurveScheme;
+    use subdiv_stencil::curve::LocalCurveGrid;
+    let file = LocalCurveScheme::builtin("nonuniform-cubic-bspline").unwrap();
+    let derived = NonUniformCubicGrid::scheme();
+    assert_eq!(file.rows(), derived.rows());
+    let m = NonUniformCubicGrid::local_matrix();
+    for (r, row) in m.iter().enumerate() {
+        for (c, entry) in row.iter().enumerate() {
+            let w = file.weight(r as i64 - 2, c as i64 - 2);
+            // The file's fractions read as the nearest doubles; the grids below (solved in
+            // fractions recovered from them) are equal exactly.
+            assert_eq!(w, entry.to_f64(), "row {r} column {c}");
+        }
+    }
+    for n in 1..=6u32 {
+        let grid = LocalCurveGrid::new(&file, n).unwrap();
+        let knots = NonUniformCubicGrid::new(n).unwrap();
+        assert_eq!(&grid, knots.grid(), "n = {n}");
+    }
+}
