@@ -1,13 +1,15 @@
 //! `subdiv plot-basis`: a curve scheme's basis function φ (or φ′) on (1/n)ℤ as a PNG, paper
-//! 000's Figures 2 (four-point, n = 21) and 3 (its derivative, n = 31) for any curve scheme.
+//! 000's Figures 2 (four-point, n = 21) and 3 (its derivative, n = 31) for any curve scheme; a
+//! surface scheme's regular basis function φ (or ∂φ/∂u) on (1/n)ℤ² as a heat map.
 
 use std::fmt;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use image::{ImageFormat, Rgb, RgbImage};
-use subdiv::schemes::{Builtin, CurveScheme};
+use subdiv::schemes::{Builtin, CurveScheme, Scheme};
 use subdiv::stencil::curve::basis_grid;
+use subdiv::stencil::surface_basis::{SurfaceBasisGrid, SurfaceMask};
 
 use crate::UserError;
 use crate::scheme_arg::SchemeFile;
@@ -15,17 +17,20 @@ use crate::scheme_arg::SchemeFile;
 /// Arguments of `subdiv plot-basis`.
 #[derive(Debug, clap::Args)]
 pub(crate) struct PlotArgs {
-    /// A built-in curve scheme: cubic-bspline, chaikin, four-point, six-point, sw-curve.
+    /// A built-in curve scheme (cubic-bspline, chaikin, four-point, six-point, sw-curve) or
+    /// surface scheme with a regular scaling relation (catmull-clark, loop, butterfly, kobbelt,
+    /// sw-quad, bilinear, sqrt3).
     #[arg(long, required_unless_present = "scheme_file")]
     scheme: Option<String>,
-    /// A user-defined curve scheme: a TOML file with `arity`, `offset` and `mask` (the
-    /// built-ins' are in `crates/subdiv-schemes/schemes/curves/`). Overrides `--scheme`.
+    /// A user-defined scheme: a curve scheme's TOML file with `arity`, `offset` and `mask` (the
+    /// built-ins' are in `crates/subdiv-schemes/schemes/curves/`), or a surface scheme's.
+    /// Overrides `--scheme`.
     #[arg(long, value_name = "FILE")]
     scheme_file: Option<PathBuf>,
-    /// The grid rate: samples at k/n over the support.
+    /// The grid rate: samples at k/n over the support (surfaces: at (i/n, j/n), n at most 128).
     #[arg(long, default_value_t = 21, value_parser = clap::value_parser!(u32).range(1..=1024))]
     n: u32,
-    /// Plot the derivative φ′ instead of φ.
+    /// Plot the derivative φ′ (surfaces: ∂φ/∂u) instead of φ.
     #[arg(long)]
     derivative: bool,
     /// The PNG to write (through a temporary file, then renamed).
@@ -42,8 +47,6 @@ pub(crate) struct PlotArgs {
 /// Why `plot-basis` cannot plot the scheme asked for.
 #[derive(Debug)]
 enum PlotError {
-    /// A surface scheme: its basis function is bivariate.
-    Surface(String),
     /// No built-in scheme has this name.
     Unknown(String),
     /// A local curve scheme: several basis functions near its special point.
@@ -54,10 +57,10 @@ impl fmt::Display for PlotError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let curves = CurveScheme::BUILTIN_NAMES.join(", ");
         match self {
-            Self::Surface(name) => {
-                write!(f, "plot-basis draws curve schemes ({curves}); `{name}` is a surface scheme")
+            Self::Unknown(name) => {
+                let surfaces: Vec<&str> = Builtin::ALL.iter().map(|b| b.name()).collect();
+                write!(f, "unknown scheme {name:?}; known: {curves}, {}", surfaces.join(", "))
             }
-            Self::Unknown(name) => write!(f, "unknown curve scheme {name:?}; known: {curves}"),
             Self::Local(name) => write!(
                 f,
                 "plot-basis draws uniform curve schemes ({curves}); `{name}` has rules of its own near the origin \
@@ -192,19 +195,16 @@ pub(crate) fn run(args: &PlotArgs, out: &mut impl Write) -> Result<(), UserError
     let curve = match (&args.scheme_file, &args.scheme) {
         (Some(path), _) => match crate::scheme_arg::read_any_scheme_file(path)? {
             SchemeFile::Curve(curve) => curve,
-            SchemeFile::Surface(scheme) => return Err(UserError(PlotError::Surface(scheme.name).to_string())),
+            SchemeFile::Surface(scheme) => return run_surface(args, &scheme, out),
             SchemeFile::LocalCurve(local) => {
                 return Err(UserError(PlotError::Local(local.name().to_string()).to_string()));
             }
         },
-        (None, Some(name)) => CurveScheme::builtin(name).ok_or_else(|| {
-            let error = if Builtin::from_name(name).is_some() {
-                PlotError::Surface(name.clone())
-            } else {
-                PlotError::Unknown(name.clone())
-            };
-            UserError(error.to_string())
-        })?,
+        (None, Some(name)) => match (CurveScheme::builtin(name), Builtin::from_name(name)) {
+            (Some(curve), _) => curve,
+            (None, Some(surface)) => return run_surface(args, surface.scheme(), out),
+            (None, None) => return Err(UserError(PlotError::Unknown(name.clone()).to_string())),
+        },
         (None, None) => return Err(UserError("give --scheme NAME or --scheme-file FILE".to_string())),
     };
     let grid = basis_grid(&curve, args.n)?;
@@ -225,6 +225,82 @@ pub(crate) fn run(args: &PlotArgs, out: &mut impl Write) -> Result<(), UserError
         args.height
     )?;
     Ok(())
+}
+
+/// A surface scheme's regular basis function (or its `u` derivative) on `(1/n)ℤ²`, from its
+/// scaling relation (route 1), as a heat map over its support in the lattice's coordinates
+/// (triangle schemes: along the grid lines (1, 0) and (0, 1)): red above zero, blue below,
+/// white at zero, the lattice's lines grey.
+fn run_surface(args: &PlotArgs, scheme: &Scheme, out: &mut impl Write) -> Result<(), UserError> {
+    let mask = SurfaceMask::of(scheme)?;
+    let grid = SurfaceBasisGrid::new(&mask, args.n)?;
+    let (lo, extent) = grid.bounds();
+    let sample = |m: [i64; 2]| -> f64 {
+        let value = if args.derivative { grid.du(m) } else { grid.value(m) };
+        value.map_or(0.0, |v| v.to_f64())
+    };
+    let values: Vec<f64> = (0..extent[0] * extent[1])
+        .map(|k| sample([lo[0] + (k % extent[0]) as i64, lo[1] + (k / extent[0]) as i64]))
+        .collect();
+    let image = heat_map(&values, lo, extent, args.n, args.width, args.height);
+    write_png(&args.output, &image)?;
+    let what = if args.derivative { "∂φ/∂u" } else { "φ" };
+    writeln!(
+        out,
+        "{}: {what} of {} at {} points of (1/{})Z², {}×{} pixels",
+        args.output.display(),
+        scheme.name,
+        values.len(),
+        args.n,
+        args.width,
+        args.height
+    )?;
+    Ok(())
+}
+
+/// `values` on the numerators `lo..lo + extent` (row-major, `u` fastest) of `(1/rate)ℤ²`,
+/// bilinear between samples, as colours: the largest modulus full red or blue.
+fn heat_map(values: &[f64], lo: [i64; 2], extent: [usize; 2], rate: u32, width: u32, height: u32) -> RgbImage {
+    let mut canvas = Canvas { image: RgbImage::from_pixel(width, height, WHITE) };
+    let scale = values.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-300);
+    let n = f64::from(rate);
+    let (x_lo, y_lo) = (lo[0] as f64 / n, lo[1] as f64 / n);
+    let (x_span, y_span) = (((extent[0] - 1) as f64 / n).max(1e-9), ((extent[1] - 1) as f64 / n).max(1e-9));
+    // One scale for both axes, centred, with a margin.
+    let (w, h) = (f64::from(width), f64::from(height));
+    let unit = (0.9 * w / x_span).min(0.9 * h / y_span);
+    let (x0, y0) = ((w - unit * x_span) / 2.0, (h + unit * y_span) / 2.0);
+    let at = |i: usize, j: usize| values[j * extent[0] + i];
+    for py in 0..height {
+        for px in 0..width {
+            // Grid coordinates of the pixel's centre.
+            let gx = ((f64::from(px) + 0.5 - x0) / unit) * n;
+            let gy = ((y0 - f64::from(py) - 0.5) / unit) * n;
+            if gx < 0.0 || gy < 0.0 || gx > (extent[0] - 1) as f64 || gy > (extent[1] - 1) as f64 {
+                continue;
+            }
+            let (i, j) =
+                ((gx as usize).min(extent[0].saturating_sub(2)), (gy as usize).min(extent[1].saturating_sub(2)));
+            let (fx, fy) = (gx - i as f64, gy - j as f64);
+            let (i1, j1) = ((i + 1).min(extent[0] - 1), (j + 1).min(extent[1] - 1));
+            let v =
+                (1.0 - fy) * ((1.0 - fx) * at(i, j) + fx * at(i1, j)) + fy * ((1.0 - fx) * at(i, j1) + fx * at(i1, j1));
+            let t = (v / scale).clamp(-1.0, 1.0);
+            let fade = (255.0 * (1.0 - t.abs())).round() as u8;
+            let colour = if t >= 0.0 { Rgb([255, fade, fade]) } else { Rgb([fade, fade, 255]) };
+            canvas.put(i64::from(px), i64::from(py), colour);
+        }
+    }
+    // The lattice's lines, at integer coordinates.
+    let (px, py) = (|x: f64| (x0 + (x - x_lo) * unit).round() as i64, |y: f64| (y0 - (y - y_lo) * unit).round() as i64);
+    let (x_hi, y_hi) = (x_lo + x_span, y_lo + y_span);
+    for x in (x_lo.ceil() as i64)..=(x_hi.floor() as i64) {
+        canvas.line((px(x as f64), py(y_lo)), (px(x as f64), py(y_hi)), 1, ZERO);
+    }
+    for y in (y_lo.ceil() as i64)..=(y_hi.floor() as i64) {
+        canvas.line((px(x_lo), py(y as f64)), (px(x_hi), py(y as f64)), 1, ZERO);
+    }
+    canvas.image
 }
 
 #[cfg(test)]

@@ -428,7 +428,9 @@ fn plot_basis_writes_the_four_point_basis_function() {
     let image = image::open(&path).unwrap();
     assert_eq!((image.width(), image.height()), (800, 500));
 
-    for scheme in ["loop", "no-such-scheme"] {
+    // A surface scheme without a regular scaling relation (its points lie on a shifted
+    // lattice), and no scheme at all.
+    for scheme in ["doo-sabin", "no-such-scheme"] {
         let output = subdiv(&["plot-basis", "--scheme", scheme, "-o", p]);
         assert_eq!(output.status.code(), Some(2), "{scheme}");
         let stderr = String::from_utf8_lossy(&output.stderr);
@@ -476,12 +478,13 @@ fn curve_scheme_files_plot_and_give_stencils() {
     };
     assert_eq!(stencil(&["--scheme-file", &four]), stencil(&["--scheme", "four-point"]));
     assert_ne!(stencil(&["--scheme-file", &wider]), stencil(&["--scheme", "four-point"]));
+    // A surface scheme's file: its regular basis function as a heat map.
     let printed = subdiv(&["scheme", "loop"]);
     let surface = write("loop.toml", &String::from_utf8(printed.stdout).unwrap());
     let out = dir.path().join("x.png");
-    let refused = subdiv(&["plot-basis", "--scheme-file", &surface, "-o", out.to_str().unwrap()]);
-    assert_eq!(refused.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("surface scheme"));
+    let drawn = subdiv(&["plot-basis", "--scheme-file", &surface, "--n", "4", "-o", out.to_str().unwrap()]);
+    assert!(drawn.status.success(), "{}", String::from_utf8_lossy(&drawn.stderr));
+    assert_eq!(image::open(&out).unwrap().width(), 800);
 }
 
 #[test]
@@ -548,6 +551,63 @@ fn local_curve_schemes_are_files_that_stencil_evaluates() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+}
+
+/// A user's surface scheme that is none of the built-ins — Catmull-Clark with other weights at
+/// extraordinary vertices (the same at valence 4) — goes through every command that takes a
+/// scheme, and its surface differs from Catmull-Clark's only near extraordinary vertices.
+#[test]
+fn a_users_surface_scheme_goes_through_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = r#"vertex = { centre = "(k - 2)/k", spoke = "1/k^2", face = "1/k^2" }"#;
+    let text = String::from_utf8(subdiv(&["scheme", "catmull-clark"]).stdout).unwrap();
+    assert!(text.contains(original), "{text}");
+    let text = text
+        .replace("name = \"catmull-clark\"", "name = \"my-quad\"")
+        .replace(original, r#"vertex = { centre = "1 - 7/(4*k)", spoke = "3/(2*k^2)", face = "1/(4*k^2)" }"#);
+    let file = dir.path().join("my-quad.toml");
+    std::fs::write(&file, &text).unwrap();
+    let cube = dir.path().join("cube.obj");
+    subdiv::io::write_obj(&cube, &subdiv::mesh::shapes::cube()).unwrap();
+    let (file, cube) = (file.to_str().unwrap(), cube.to_str().unwrap());
+    let output = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    for args in [
+        vec!["refine", cube, "--levels", "2", "-o", &output("fine.obj")],
+        vec!["analyze", "--valence", "5"],
+        vec!["stencil", "--valence", "5", "--at", "1/3,1/4"],
+        vec!["eval", cube, "--grid", "4", "-o", &output("limit.csv")],
+        vec!["tessellate", cube, "--rate", "8", "-o", &output("t.glb")],
+        vec!["plot-basis", "--n", "8", "-o", &output("basis.png")],
+    ] {
+        let mut all = args.clone();
+        all.extend(["--scheme-file", file]);
+        let out = subdiv(&all);
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    for name in ["fine.obj", "limit.csv", "t.glb", "basis.png"] {
+        assert!(dir.path().join(name).exists(), "{name}");
+    }
+    // At a corner of the cube (valence 3), where the rules differ, the surface is not
+    // Catmull-Clark's.
+    let at = |scheme: &[&str], point: &str| -> Vec<f64> {
+        let samples = dir.path().join("s.txt");
+        std::fs::write(&samples, format!("0 {point}\n")).unwrap();
+        let mut args = vec!["eval", cube, "--samples", samples.to_str().unwrap()];
+        args.extend_from_slice(scheme);
+        let out = subdiv(&args);
+        let text = String::from_utf8(out.stdout).unwrap();
+        text.lines().nth(1).unwrap().split(',').skip(3).take(3).map(|x| x.parse().unwrap()).collect()
+    };
+    let gap = |point: &str| {
+        let (a, b) = (at(&["--scheme-file", file], point), at(&[], point));
+        a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
+    };
+    assert!(gap("0 0") > 1e-3, "the corner moves: {}", gap("0 0"));
+    if subdiv_testkit::gpu().is_some() {
+        let png = output("r.png");
+        let out = subdiv(&["render", cube, "--scheme-file", file, "--size", "64,48", "-o", &png]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    }
 }
 
 /// An `n`-gon prism whose caps are fans of triangles around two vertices of valence `n`; the

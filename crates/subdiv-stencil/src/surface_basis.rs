@@ -553,6 +553,12 @@ impl SurfaceBasisGrid {
         Some(self.index(m).map_or_else(Rational::zero, |i| values[i].clone()))
     }
 
+    /// The box of numerators holding the support: the smallest `m` on each axis and the
+    /// number of grid points along it.
+    pub fn bounds(&self) -> ([i64; 2], [usize; 2]) {
+        (self.lo, self.extent)
+    }
+
     /// `φ(m / rate)`: zero outside the support, `None` where `m`'s residue was not computed.
     pub fn value(&self, m: [i64; 2]) -> Option<Rational> {
         self.sample(&self.phi, m)
