@@ -18,8 +18,8 @@ use crate::scheme_arg::SchemeFile;
 #[derive(Debug, clap::Args)]
 pub(crate) struct PlotArgs {
     /// A built-in curve scheme (cubic-bspline, chaikin, four-point, six-point, sw-curve) or
-    /// surface scheme with a regular scaling relation (catmull-clark, loop, butterfly, kobbelt,
-    /// sw-quad, bilinear, sqrt3).
+    /// surface scheme (catmull-clark, loop, doo-sabin, midedge, sqrt3, butterfly, kobbelt,
+    /// sw-quad, bilinear).
     #[arg(long, required_unless_present = "scheme_file")]
     scheme: Option<String>,
     /// A user-defined scheme: a curve scheme's TOML file with `arity`, `offset` and `mask` (the
@@ -229,8 +229,8 @@ pub(crate) fn run(args: &PlotArgs, out: &mut impl Write) -> Result<(), UserError
 
 /// A surface scheme's regular basis function (or its `u` derivative) on `(1/n)ℤ²`, from its
 /// scaling relation (route 1), as a heat map over its support in the lattice's coordinates
-/// (triangle schemes: along the grid lines (1, 0) and (0, 1)): red above zero, blue below,
-/// white at zero, the lattice's lines grey.
+/// (triangle schemes: along the grid lines (1, 0) and (0, 1); the dual splits' control point at
+/// `(½, ½)`): red above zero, blue below, white at zero, the lattice's lines grey.
 fn run_surface(args: &PlotArgs, scheme: &Scheme, out: &mut impl Write) -> Result<(), UserError> {
     let mask = SurfaceMask::of(scheme)?;
     let grid = SurfaceBasisGrid::new(&mask, args.n)?;

@@ -157,6 +157,11 @@ pub struct SurfaceMask {
     arity: u32,
     steps: usize,
     weights: Vec<([i64; 2], Rational)>,
+    /// Whether the control points sit at `ℤ² + (½, ½)` (the dual splits: Doo-Sabin, mid-edge by
+    /// its two steps), so that the mask is that of `ψ(x) = φ(x − (½, ½))`, the basis function
+    /// of the control point at `(½, ½)`: with `φ(y) = Σ s φ(2y − k)` over half-integer `k`,
+    /// `ψ(x) = Σ s ψ(2x − (k + (½, ½)))`, integer shifts again.
+    half: bool,
     /// The convex hull of the offsets, counter-clockwise.
     hull: Vec<[i64; 2]>,
     /// The lattice maps `M` with `s_{M·k} = s_k`.
@@ -172,32 +177,29 @@ impl SurfaceMask {
     /// position is its row applied to its parents' positions, and the weight of the parent at
     /// the origin in the refined point at `k/a` is `s_k`. Checked: every weight is a fraction
     /// with a denominator up to [`MAX_DENOMINATOR`](Self::MAX_DENOMINATOR), every refined point
-    /// lies on `(1/a)ℤ²`, and each of the `a²` rules sums to exactly 1.
+    /// lies on `(1/a)ℤ²` (the dual splits: on `(1/a)(ℤ² + (½, ½))`, read as the mask of the
+    /// basis shifted by `(½, ½)`, see [`control_offset`](Self::control_offset)), and each of
+    /// the `a²` rules sums to exactly 1. Mid-edge is read as its two steps, one dual step
+    /// ([`Scheme::dual_form`]).
     ///
     /// # Errors
-    /// [`SchemeError::SplitNotSupported`] (inside [`StencilError::Scheme`]) for dual and
-    /// mid-edge splits, whose refined points lie off the dilated lattice; engine errors;
-    /// [`StencilError::SurfaceMask`] when a check fails.
+    /// Engine errors; [`StencilError::SurfaceMask`] when a check fails.
     pub fn from_scheme(scheme: &Scheme) -> Result<Self, StencilError> {
-        let (lattice, arity) = match scheme.split() {
-            Split::Quad => (Lattice::Quad, 2),
-            Split::Triangle => (Lattice::Triangle, 2),
-            Split::Sqrt3 => (Lattice::Triangle, 3),
-            Split::Dual | Split::Midedge => {
-                return Err(SchemeError::SplitNotSupported {
-                    scheme: scheme.name().to_owned(),
-                    what: "scaling relations on the regular grid",
-                    split: if scheme.split() == Split::Dual { "dual" } else { "mid-edge" },
-                    reason: "its refined points lie on a shifted lattice, not on (1/a)Z²",
-                }
-                .into());
-            }
+        let (lattice, arity, half) = match scheme.split() {
+            Split::Quad => (Lattice::Quad, 2, false),
+            Split::Triangle => (Lattice::Triangle, 2, false),
+            Split::Sqrt3 => (Lattice::Triangle, 3, false),
+            Split::Dual | Split::Midedge => (Lattice::Quad, 2, true),
         };
         let name = scheme.name().to_owned();
         let fail = |reason: String| StencilError::SurfaceMask { scheme: name.clone(), reason };
-        let steps = scheme.steps_per_cycle();
+        let dual = scheme.dual_form();
+        let (refined, steps) = match &dual {
+            Some(dual) => (dual, 1),
+            None => (scheme, scheme.steps_per_cycle()),
+        };
         let mesh = Mesh::build(lattice.torus(TORUS)).map_err(|e| SchemeError::Internal(e.to_string()))?;
-        let refiner = Refiner::new(&mesh, scheme, steps, &RefineOptions::DEFAULT)?;
+        let refiner = Refiner::new(&mesh, refined, steps, &RefineOptions::DEFAULT)?;
         // Rows of the last level over the torus's vertices, composed exactly.
         let mut rows: Vec<BTreeMap<usize, Rational>> =
             (0..mesh.vertex_count()).map(|v| BTreeMap::from([(v, Rational::one())])).collect();
@@ -236,11 +238,15 @@ impl SurfaceMask {
                     *p = &*p + &(w * &Rational::from_integer(x));
                 }
             }
-            let scaled = [&position[0], &position[1]].map(|p| p * &Rational::from_integer(a));
+            // ψ's shift a·p + (a − 1)·(½, ½) where the control points sit at half-integers.
+            let shift = if half { Rational::new(a - 1, 2).expect("a nonzero denominator") } else { Rational::zero() };
+            let scaled = [&position[0], &position[1]].map(|p| &(p * &Rational::from_integer(a)) + &shift);
             if scaled.iter().any(|p| !p.denom().is_one()) {
                 return Err(fail(format!(
-                    "a refined point lies at ({}, {}), off the lattice (1/{a})Z²",
-                    position[0], position[1]
+                    "a refined point lies at ({}, {}), off the lattice (1/{a})Z²{}",
+                    position[0],
+                    position[1],
+                    if half { " + (1/4, 1/4)" } else { "" }
                 )));
             }
             let k = scaled.map(|p| p.to_f64() as i64);
@@ -270,7 +276,15 @@ impl SurfaceMask {
         let symmetries = (lattice.automorphisms().into_iter())
             .filter(|m| weights.iter().all(|(k, w)| lookup.get(&apply(m, *k)) == Some(&w)))
             .collect();
-        Ok(Self { name, lattice, arity, steps, weights, hull, symmetries })
+        Ok(Self { name, lattice, arity, steps, weights, half, hull, symmetries })
+    }
+
+    /// Where the control points sit relative to the lattice `ℤ²`: `(0, 0)`, or `(½, ½)` for the
+    /// dual splits, whose [`weights`](Self::weights) are those of the basis function of the
+    /// control point at `(½, ½)` (so that the shifts are integers).
+    pub fn control_offset(&self) -> [Rational; 2] {
+        let h = if self.half { Rational::new(1, 2).expect("a nonzero denominator") } else { Rational::zero() };
+        [h.clone(), h]
     }
 
     /// [`from_scheme`](Self::from_scheme), computed once per scheme and process.
@@ -855,8 +869,10 @@ pub fn regular_patch_stencil(scheme: &Scheme, point: Dyadic) -> Result<ExactSten
         reason: "the regular patch's control points are not at lattice positions".into(),
     };
     let [pu, pv] = matrices.shapes[0].parameters.as_ref().ok_or_else(not_lattice)?;
+    let offset = mask.control_offset().map(|h| h.to_f64());
     let control: Vec<[i64; 2]> = (pu.iter().zip(pv))
         .map(|(&x, &y)| {
+            let (x, y) = (x - offset[0], y - offset[1]);
             let (rx, ry) = (x.round(), y.round());
             ((x - rx).abs() < 1e-9 && (y - ry).abs() < 1e-9).then_some([rx as i64, ry as i64])
         })

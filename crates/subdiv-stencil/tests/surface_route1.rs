@@ -9,9 +9,21 @@ use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
 use subdiv_stencil::surface_basis::{SurfaceBasisGrid, SurfaceMask, regular_patch_stencil};
 use subdiv_stencil::{Dyadic, Rational, StencilError, SurfaceStencil, surface_stencil};
 
-/// The schemes both routes serve at the regular patch.
-const BOTH: [Builtin; 5] =
-    [Builtin::CatmullClark, Builtin::Loop, Builtin::Butterfly, Builtin::SwQuad, Builtin::Kobbelt];
+/// The schemes both routes serve at the regular patch (the dual splits' route 1 on the lattice
+/// shifted by (½, ½), their route 3 over the dual quad).
+const BOTH: [Builtin; 7] = [
+    Builtin::CatmullClark,
+    Builtin::Loop,
+    Builtin::Butterfly,
+    Builtin::SwQuad,
+    Builtin::Kobbelt,
+    Builtin::DooSabin,
+    Builtin::Midedge,
+];
+
+fn r(p: i64, q: i64) -> Rational {
+    Rational::new(p, q).unwrap()
+}
 
 fn max_difference(a: &[f64], b: &[f64]) -> f64 {
     assert_eq!(a.len(), b.len());
@@ -182,12 +194,46 @@ fn sqrt3_edge_midpoint_has_the_papers_normalisation() {
     assert!(s.du.iter().sum::<Rational>().is_zero());
 }
 
+/// The dual splits on whole grids: route 1 on the shifted lattice against route 3 over the dual
+/// quad, every point of (1/n)Z² in the patch for n up to 7.
+#[test]
+fn dual_routes_1_and_3_agree_on_whole_grids() {
+    for builtin in [Builtin::DooSabin, Builtin::Midedge] {
+        let scheme = builtin.scheme();
+        let m = PatchMatrices::of(scheme, PatchType::regular(scheme), BoundaryInterpolation::EdgeOnly).unwrap();
+        for n in [1, 2, 3, 5, 7] {
+            for j in 0..=n {
+                for i in 0..=n {
+                    let point = Dyadic::new(i, j, n);
+                    let route1 = regular_patch_stencil(scheme, point).unwrap().to_f64();
+                    let route3 = surface_stencil(&m, 0, point).unwrap();
+                    let (what, d) = worst_component(&route1, &route3);
+                    assert!(d < 1e-12, "{} at {point:?}, {what}: routes differ by {d:e}", builtin.name());
+                }
+            }
+        }
+    }
+}
+
+/// Doo-Sabin's route 1 is the biquadratic B-spline: its mask (of the basis shifted by
+/// (½, ½)) is the tensor product of (1, 3, 3, 1)/4 with itself.
+#[test]
+fn doo_sabin_route_1_is_the_biquadratic_b_spline() {
+    let ds = SurfaceMask::from_scheme(Builtin::DooSabin.scheme()).unwrap();
+    let chaikin = [r(1, 4), r(3, 4), r(3, 4), r(1, 4)];
+    let mut expected: Vec<([i64; 2], Rational)> = Vec::new();
+    for j in 0..4 {
+        for i in 0..4 {
+            expected.push(([i - 1, j - 1], &chaikin[i as usize] * &chaikin[j as usize]));
+        }
+    }
+    expected.sort_by_key(|(k, _)| *k);
+    assert_eq!(ds.weights(), expected.as_slice());
+    assert_eq!(ds.control_offset(), [r(1, 2), r(1, 2)]);
+}
+
 #[test]
 fn unsupported_splits_and_rates_are_typed_errors() {
-    assert!(matches!(
-        SurfaceMask::from_scheme(Builtin::DooSabin.scheme()),
-        Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported { .. }))
-    ));
     let cc = SurfaceMask::from_scheme(Builtin::CatmullClark.scheme()).unwrap();
     assert!(matches!(SurfaceBasisGrid::new(&cc, 0), Err(StencilError::Rate { .. })));
     assert!(matches!(
