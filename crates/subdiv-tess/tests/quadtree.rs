@@ -234,10 +234,10 @@ fn bad_input_gives_typed_errors() {
     let shallow =
         QuadtreeOptions { max_depth: 3, ..QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)) };
     assert!(matches!(tess.tessellate(&shallow), Err(TessError::DepthLimit { .. })));
-    // A dual split has no faces to split; an interpolating triangle scheme's sub-patch matrices
-    // are no convex combinations (no hull bound).
+    // √3 has no sub-patch matrices; an interpolating triangle scheme's sub-patch matrices are no
+    // convex combinations (no hull bound).
     let icosahedron = Mesh::build(shapes::icosahedron()).unwrap();
-    for scheme in [Builtin::DooSabin, Builtin::Butterfly] {
+    for scheme in [Builtin::Sqrt3, Builtin::Butterfly] {
         let refused = QuadtreeTessellator::new(scheme.scheme(), &icosahedron);
         assert!(matches!(refused, Err(TessError::Scheme { .. })), "{scheme:?}: {refused:?}");
     }
@@ -578,6 +578,20 @@ fn non_polynomial_pieces_are_within_tolerance() {
     guarantee_under(Builtin::SwQuad, &Mesh::build(shapes::cube()).unwrap(), 9, &[1e-2]);
     let refused = dual_guarantee_under(Builtin::SwQuad, &model, 3, 1e-2);
     assert!(matches!(&refused, Err(TessError::Unsupported { .. })), "{refused:?}");
+}
+
+/// The dual splits (Doo-Sabin, and mid-edge by its two steps): their patches around face
+/// corners are convex combinations that reproduce linear functions, bounded as `sw-quad`'s
+/// non-polynomial pieces are; the bound holds and is watertight.
+#[test]
+fn dual_split_pieces_are_within_tolerance() {
+    let model = Mesh::build(shapes::default_model()).unwrap();
+    let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
+    for scheme in [Builtin::DooSabin, Builtin::Midedge] {
+        let ratio = guarantee_under(scheme, &model, 9, &[1e-2, 3e-3]);
+        assert!(ratio > 0.01, "{scheme:?}: worst distance / ε = {ratio}");
+        guarantee_under(scheme, &prism, 9, &[1e-2]);
+    }
 }
 
 /// A screen-space error bound: at the centroid and edge midpoints of every output triangle, the

@@ -305,23 +305,24 @@ pub struct QuadtreeStats {
 }
 
 impl QuadtreeTessellator {
-    /// Prepares `mesh` under `scheme`, a primal quad or triangle split whose patches the bounds
-    /// hold for (checked on its matrices: every patch away from an extraordinary corner is a
-    /// bicubic, or a quartic triangle, every sub-patch matrix at one a convex combination):
-    /// Catmull-Clark, with its creases, corners and semi-sharp features, bilinear, and Loop
-    /// likewise; closed and open meshes and holes (a
+    /// Prepares `mesh` under `scheme`, whose patches the bounds hold for (checked on its
+    /// matrices: every patch away from an extraordinary corner is a bicubic, a quartic triangle,
+    /// or convex combinations that reproduce linear functions, every sub-patch matrix at one a
+    /// convex combination): Catmull-Clark, with its creases, corners and semi-sharp features,
+    /// bilinear, and Loop likewise, `sw-quad`, and the dual splits (Doo-Sabin, mid-edge: their
+    /// patches around face corners); closed and open meshes and holes (a
     /// border's pieces are bicubics, or convex sub-patches at an extraordinary border vertex, as
     /// inside; a face without a surface has no root, so its neighbours end at it as at a
     /// boundary).
     ///
     /// # Errors
-    /// [`TessError::Scheme`] for a scheme other than a primal quad or triangle split or whose
-    /// patches are not as above; as [`PatchLevels::descending`].
+    /// [`TessError::Scheme`] for √3 (no sub-patch matrices) or a scheme whose patches are not
+    /// as above (Butterfly's, Kobbelt's: not convex); as [`PatchLevels::descending`].
     pub fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
-        if !matches!(scheme.split(), Split::Quad | Split::Triangle) {
+        if scheme.split() == Split::Sqrt3 {
             return Err(TessError::Scheme {
                 scheme: scheme.name().to_string(),
-                reason: "the quadtree tessellator needs a primal quad or triangle split (Catmull-Clark, Loop)".into(),
+                reason: "the quadtree tessellator needs sub-patch matrices, which the √3 split has not".into(),
             });
         }
         // Semi-sharp features spent by refinement: every piece bicubic or extraordinary.
