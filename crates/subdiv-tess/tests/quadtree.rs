@@ -580,9 +580,11 @@ fn non_polynomial_pieces_are_within_tolerance() {
     assert!(matches!(&refused, Err(TessError::Unsupported { .. })), "{refused:?}");
 }
 
-/// The dual splits (Doo-Sabin, and mid-edge by its two steps): their patches around face
-/// corners are convex combinations that reproduce linear functions, bounded as `sw-quad`'s
-/// non-polynomial pieces are; the bound holds and is watertight.
+/// The dual splits (Doo-Sabin, and mid-edge by its two steps), patches around face corners:
+/// Doo-Sabin's regular ones are biquadratic (bicubics to the classification), mid-edge's the
+/// Zwart-Powell element, piecewise quadratic on the quad's triangles, so bounded as `sw-quad`'s
+/// non-polynomial pieces are; the bound holds and is watertight. The dual method's rates take
+/// Doo-Sabin (second derivatives of its bicubics) and refuse mid-edge.
 #[test]
 fn dual_split_pieces_are_within_tolerance() {
     let model = Mesh::build(shapes::default_model()).unwrap();
@@ -592,6 +594,10 @@ fn dual_split_pieces_are_within_tolerance() {
         assert!(ratio > 0.01, "{scheme:?}: worst distance / ε = {ratio}");
         guarantee_under(scheme, &prism, 9, &[1e-2]);
     }
+    let ratio = dual_guarantee_under(Builtin::DooSabin, &model, 9, 1e-2).unwrap();
+    eprintln!("Doo-Sabin, dual at 1e-2: worst sampled distance / ε {ratio:.3}");
+    let refused = dual_guarantee_under(Builtin::Midedge, &model, 3, 1e-2);
+    assert!(matches!(&refused, Err(TessError::Unsupported { .. })), "{refused:?}");
 }
 
 /// A screen-space error bound: at the centroid and edge midpoints of every output triangle, the
