@@ -26,20 +26,28 @@ fn finish(mesh: &Mesh, stencils: Stencils, mut soup: PolygonSoup) -> Result<(Mes
 /// Doo-Sabin: the point of corner `h` is `own · origin(h) + Σ_j corner(n, j) · v_j` over the
 /// face's vertices `v_j`, `j` counted from `h`'s corner.
 pub(crate) fn doo_sabin(mesh: &Mesh, own: &Expr, corner: &Expr) -> Result<(Mesh, Stencils), SchemeError> {
-    let max_face = mesh.face_ids().map(|f| mesh.face_size(f)).max().unwrap_or(0);
-    let weights: Vec<(f64, Vec<f64>)> =
-        (0..=max_face).map(|n| (own.eval(n, 0), (0..n).map(|j| corner.eval(n, j)).collect())).collect();
+    // The weights of each face size the mesh has (only those: an n-gon's take n evaluations).
+    let mut weights: Vec<Option<Vec<f64>>> = Vec::new();
+    for f in mesh.face_ids() {
+        let n = mesh.face_size(f);
+        if weights.len() <= n {
+            weights.resize(n + 1, None);
+        }
+        weights[n].get_or_insert_with(|| {
+            let mut w: Vec<f64> = (0..n).map(|j| corner.eval(n, j)).collect();
+            w[0] += own.eval(n, 0);
+            w
+        });
+    }
     let mut stencils = Stencils::with_capacity(mesh.half_edge_count(), 4 * mesh.half_edge_count(), mesh.vertex_count());
     for f in mesh.face_ids() {
         let vertices = mesh.face_vertices(f);
         let n = vertices.len();
-        let (own, corners) = &weights[n];
+        let w = weights[n].as_ref().expect("every face size was weighed");
         for i in 0..n {
-            let mut row = Row::default();
-            row.add(vertices[i].raw(), *own);
-            for (j, w) in corners.iter().enumerate() {
-                row.add(vertices[(i + j) % n].raw(), *w);
-            }
+            // A face's corners are distinct vertices: no search for equal parents (an n-gon's
+            // rows cost n², not n³).
+            let row = Row::of_distinct((0..n).map(|j| (vertices[(i + j) % n].raw(), w[j])));
             stencils.push(&row);
         }
     }

@@ -29,6 +29,14 @@ impl Row {
         row
     }
 
+    /// A row of entries whose parents are distinct (a face's corners, say): no search for
+    /// equal parents, which made the rows of an n-gon's points cost n³.
+    pub(crate) fn of_distinct(entries: impl IntoIterator<Item = (u32, f64)>) -> Self {
+        let row = Self(entries.into_iter().collect());
+        debug_assert!(row.0.iter().enumerate().all(|(i, (v, _))| row.0[..i].iter().all(|(u, _)| u != v)));
+        row
+    }
+
     pub(crate) fn add(&mut self, vertex: u32, weight: f64) {
         match self.0.iter_mut().find(|(v, _)| *v == vertex) {
             Some((_, w)) => *w += weight,

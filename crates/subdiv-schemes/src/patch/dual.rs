@@ -74,17 +74,27 @@ pub fn dual_quad_corners(mesh: &Mesh, start: HalfEdgeId) -> Option<[HalfEdgeId; 
 /// ```
 pub fn dual_patch(mesh: &Mesh, start: HalfEdgeId) -> Option<Patch> {
     let around = dual_quad_corners(mesh, start)?;
+    let size: usize = around.iter().map(|&h| mesh.face_size(mesh.face(h))).sum();
     let mut vertices = vec![mesh.origin(start)];
-    let mut signature = vec![DUAL_SIGNATURE];
+    let mut signature = Vec::with_capacity(size + 5);
+    signature.push(DUAL_SIGNATURE);
+    // Places by vertex: a scan for small patches, a map past a few dozen points (a patch at an
+    // n-gon has n + 5, and an n-gon has n patches around it).
+    let large = size > 64;
+    let mut places: HashMap<VertexId, u32> = if large { HashMap::from([(vertices[0], 0)]) } else { HashMap::new() };
     for h in around {
         signature.push(mesh.face_size(mesh.face(h)) as u32);
         let mut k = h;
         loop {
             let v = mesh.origin(k);
-            let place = vertices.iter().position(|&x| x == v).unwrap_or_else(|| {
+            let found = if large { places.get(&v).map(|&p| p as usize) } else { vertices.iter().position(|&x| x == v) };
+            let place = found.unwrap_or_else(|| {
                 vertices.push(v);
                 vertices.len() - 1
             });
+            if large {
+                places.entry(v).or_insert(place as u32);
+            }
             signature.push(place as u32);
             k = mesh.next(k);
             if k == h {
@@ -217,8 +227,12 @@ pub(super) fn derive(scheme: &Scheme, valence: usize) -> Result<PatchMatrices, S
     for (shape, influence) in shapes.iter_mut().zip(influence) {
         shape.influence = influence;
     }
+    // Only a shape without an extraordinary face reproduces linear functions of parameters
+    // (at an n-gon the solve fails, after a least-squares system of 4n rows: most of a large
+    // n-gon's preparation).
     for s in 0..shapes.len() {
-        shapes[s].parameters = parameter_coordinates(&shapes, s);
+        let regular = shapes[s].signature.len() == 1 + 4 * 5 && shapes[s].size == 9;
+        shapes[s].parameters = if regular { parameter_coordinates(&shapes, s) } else { None };
     }
     Ok(PatchMatrices::from_shapes(scheme, PatchType::interior(valence), 1, 4, shapes))
 }
