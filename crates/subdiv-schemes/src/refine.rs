@@ -396,19 +396,21 @@ fn check_input(mesh: &Mesh, scheme: &Scheme) -> Result<(), SchemeError> {
         feature,
         element,
     };
-    if let Some(e) = mesh.edges().find(|&e| mesh.is_boundary_edge(e)) {
+    if !scheme.has_boundary_rules()
+        && let Some(e) = mesh.edges().find(|&e| mesh.is_boundary_edge(e))
+    {
         let [a, b] = mesh.edge_vertices(e);
-        return Err(unsupported("boundaries", format!("edge {a}-{b}")));
+        return Err(unsupported("boundaries", format!("edge {}-{}", a.raw(), b.raw())));
     }
     if let Some(e) = mesh.edges().find(|&e| mesh.edge_sharpness(e) > 0.0) {
         let [a, b] = mesh.edge_vertices(e);
-        return Err(unsupported("creases", format!("edge {a}-{b}")));
+        return Err(unsupported("creases", format!("edge {}-{}", a.raw(), b.raw())));
     }
     if let Some(v) = mesh.vertices().find(|&v| mesh.vertex_sharpness(v) > 0.0) {
-        return Err(unsupported("corners", format!("vertex {v}")));
+        return Err(unsupported("corners", v.to_string()));
     }
     if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {
-        return Err(unsupported("holes", format!("face {f}")));
+        return Err(unsupported("holes", f.to_string()));
     }
     Ok(())
 }

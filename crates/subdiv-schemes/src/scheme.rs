@@ -67,6 +67,9 @@ pub enum Rules {
     FourPointQuad {
         /// The four-point tension `w`: `-w, 1/2 + w, 1/2 + w, -w` (1/16 for Kobbelt's scheme).
         weight: Expr,
+        /// The rule at boundaries; absent, the scheme takes closed meshes only.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        boundary: Option<FourPointBoundary>,
     },
     /// Primal split of every triangle into four (Loop, modified Butterfly).
     Triangle {
@@ -95,6 +98,18 @@ pub enum Rules {
         /// The new position of an old vertex (the face points are centroids).
         vertex: VertexMask,
     },
+}
+
+/// A four-point quad scheme's rule at boundaries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum FourPointBoundary {
+    /// A boundary edge's point by the four-point rule along the boundary (the scheme's weight),
+    /// so that the boundary is the four-point curve of the boundary polygon, which ends at a
+    /// corner (a boundary vertex of one face: rounding it would fold the tangent plane there);
+    /// a point a rule needs beyond the boundary or a corner is extrapolated linearly (`2p − q`
+    /// from the last two points of its line), the four-point curve's end rule.
+    FourPoint,
 }
 
 /// The face point of a primal quad split.
@@ -442,6 +457,12 @@ impl Scheme {
         matches!(self.rules, Rules::Quad { crease: Some(_), .. } | Rules::Triangle { crease: Some(_), .. })
     }
 
+    /// Whether the scheme takes boundaries: by its crease rules, or a four-point quad scheme's
+    /// [`FourPointBoundary`] rule.
+    pub fn has_boundary_rules(&self) -> bool {
+        self.has_crease_rules() || matches!(self.rules, Rules::FourPointQuad { boundary: Some(_), .. })
+    }
+
     /// The scheme as a dual split, where it is one or where its cycle of steps
     /// ([`steps_per_cycle`](Self::steps_per_cycle)) is: a dual scheme itself, and mid-edge, whose
     /// two steps make a point per face corner, the middle of the corner's two edge points (½ of
@@ -560,7 +581,7 @@ impl Scheme {
                 vertex_check(vertex, true)?;
                 crease_check(crease)?;
             }
-            Rules::FourPointQuad { weight } => {
+            Rules::FourPointQuad { weight, .. } => {
                 let w = weight.eval(4, 0);
                 check("weight", 4, &[-2.0 * w, 2.0 * (0.5 + w)])?;
             }

@@ -65,7 +65,7 @@ pub fn perturbed_schemes() -> impl Strategy<Value = Scheme> {
     prop_oneof![
         (0u32..=8).prop_map(|i| {
             let mut scheme = Builtin::Kobbelt.scheme().clone();
-            if let Rules::FourPointQuad { weight } = &mut scheme.rules {
+            if let Rules::FourPointQuad { weight, .. } = &mut scheme.rules {
                 *weight = formula(&format!("{i}/64"));
             }
             scheme.name = format!("kobbelt-w{i}/64");

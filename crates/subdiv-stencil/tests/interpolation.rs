@@ -130,6 +130,18 @@ fn kobbelt_passes_through_its_refined_vertices_at_valences_3_to_8() {
         let soup = jittered(quads_of(bipyramid(k)), 0.1);
         passes_through_refined_vertices(kobbelt, &format!("bipyramid {k} in quads"), soup, 2);
     }
+    // Boundaries (its four-point boundary rule): an open grid (corners of one face), and the
+    // cube without a face (boundary vertices of two faces, interior ones of valence 3).
+    passes_through_refined_vertices(kobbelt, "open grid", jittered(shapes::quad_grid(4, 3), 0.1), 3);
+    let cube = shapes::cube();
+    let mut open_cube = PolygonSoup::new();
+    for &p in cube.positions() {
+        open_cube.push_vertex(p);
+    }
+    for face in cube.faces().skip(1) {
+        open_cube.push_face(face.iter().copied());
+    }
+    passes_through_refined_vertices(kobbelt, "open cube", jittered(open_cube, 0.1), 3);
 }
 
 /// The curves: `Σ p_i φ(m / 2^L − i)` on a closed polygon is the level-`L` point `m`.

@@ -42,6 +42,8 @@ enum Kind {
     },
     FourPoint {
         weight: f64,
+        /// Whether boundaries take the four-point rule along them ([`FourPointBoundary`]).
+        boundary: bool,
     },
     Triangle {
         endpoint: f64,
@@ -74,8 +76,8 @@ impl Masks {
                     crease: crease_pair(crease),
                 }
             }
-            Rules::FourPointQuad { weight } => Self {
-                kind: Kind::FourPoint { weight: weight.eval(4, 0) },
+            Rules::FourPointQuad { weight, boundary } => Self {
+                kind: Kind::FourPoint { weight: weight.eval(4, 0), boundary: boundary.is_some() },
                 vertex: vec![(1.0, 0.0, 0.0); max_valence + 1],
                 crease: None,
             },
@@ -287,7 +289,7 @@ fn stencil_rows(mesh: &Mesh, masks: &Masks, options: Options, numbering: &Number
         stencils.push(&vertex_row(mesh, masks, faces, options.crease_method, v));
     }
     match &masks.kind {
-        Kind::FourPoint { weight } => {
+        Kind::FourPoint { weight, .. } => {
             for f in mesh.face_ids() {
                 stencils.push(&four_point_face(mesh, &edge_rows, *weight, f));
             }
@@ -351,6 +353,29 @@ fn refine_channels(
 fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdgeId) -> Row {
     let (a, b) = (mesh.origin(h), mesh.dest(h));
     let Some(t) = mesh.twin(h) else {
+        if let Kind::FourPoint { weight, boundary: true } = masks.kind {
+            // Along the boundary: a' before a, b' after b on the boundary loop; at a corner (a
+            // boundary vertex of one face) the boundary curve ends, and the point beyond it is
+            // extrapolated, 2a − b (otherwise the curve would round the corner and fold the
+            // surface's tangent plane there).
+            let mut row = Row::default();
+            let corner = |v: VertexId| mesh.vertex_faces(v).count() == 1;
+            if corner(a) {
+                add(&mut row, a, -2.0 * weight);
+                add(&mut row, b, weight);
+            } else {
+                add(&mut row, *mesh.one_ring(a).last().expect("a boundary vertex"), -weight);
+            }
+            add(&mut row, a, 0.5 + weight);
+            add(&mut row, b, 0.5 + weight);
+            if corner(b) {
+                add(&mut row, b, -2.0 * weight);
+                add(&mut row, a, weight);
+            } else {
+                add(&mut row, mesh.one_ring(b)[0], -weight);
+            }
+            return row;
+        }
         return midpoint(a, b);
     };
     let mut row = Row::default();
@@ -365,7 +390,7 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdg
                 faces.add(&mut row, g1, face_weight);
             }
         }
-        Kind::FourPoint { weight } => {
+        Kind::FourPoint { weight, .. } => {
             let w = *weight;
             row.add_row(&beyond(mesh, t), -w);
             add(&mut row, a, 0.5 + w);
@@ -440,7 +465,14 @@ fn fan_from(mesh: &Mesh, h: HalfEdgeId) -> SmallVec<[VertexId; 8]> {
 /// q_{i+1}` over `dest(h)`'s neighbours `q`, `q_i = origin(h)`, which is the opposite neighbour
 /// when `k = 4`.
 fn beyond(mesh: &Mesh, h: HalfEdgeId) -> Row {
-    let back = mesh.twin(h).expect("the four-point scheme takes closed meshes only");
+    let end = mesh.dest(h);
+    if mesh.is_boundary_vertex(end) {
+        let mut row = Row::default();
+        row.add(end.raw(), 2.0);
+        row.add(mesh.origin(h).raw(), -1.0);
+        return row;
+    }
+    let back = mesh.twin(h).expect("an edge into an interior vertex has a twin");
     let fan = fan_from(mesh, back);
     let k = fan.len();
     let mut row = Row::default();
@@ -462,17 +494,25 @@ fn beyond(mesh: &Mesh, h: HalfEdgeId) -> Row {
 /// directions and averaged (the two agree on a regular grid).
 fn four_point_face(mesh: &Mesh, edge_rows: &[Row], w: f64, f: FaceId) -> Row {
     let halves: SmallVec<[HalfEdgeId; 4]> = mesh.face_half_edges(f).collect();
-    let across = |h: HalfEdgeId| {
-        let t = mesh.twin(h).expect("the four-point scheme takes closed meshes only");
-        mesh.next(mesh.next(t))
-    };
     let edge = |h: HalfEdgeId| &edge_rows[mesh.edge(h).index()];
+    // The edge point beyond side `h`, or at a boundary side 2 E(h) − E(opposite).
+    let across = |h: HalfEdgeId, opposite: HalfEdgeId| -> Row {
+        match mesh.twin(h) {
+            Some(t) => edge(mesh.next(mesh.next(t))).clone(),
+            None => {
+                let mut row = Row::default();
+                row.add_row(edge(h), 2.0);
+                row.add_row(edge(opposite), -1.0);
+                row
+            }
+        }
+    };
     let mut row = Row::default();
     for (first, second) in [(halves[0], halves[2]), (halves[1], halves[3])] {
-        row.add_row(edge(across(first)), -w / 2.0);
+        row.add_row(&across(first, second), -w / 2.0);
         row.add_row(edge(first), (0.5 + w) / 2.0);
         row.add_row(edge(second), (0.5 + w) / 2.0);
-        row.add_row(edge(across(second)), -w / 2.0);
+        row.add_row(&across(second, first), -w / 2.0);
     }
     row
 }
