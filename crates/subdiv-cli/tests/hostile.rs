@@ -2,11 +2,9 @@
 //! exit status 2 before anything is allocated, allowed once the limit is raised), and
 //! coordinates at the ends of f64's range.
 
-use std::process::{Command, Output};
+mod common;
 
-fn subdiv(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_subdiv")).args(args).output().expect("the binary runs")
-}
+use common::subdiv;
 
 /// Checks that `args` fail with status 2 and one line on stderr containing each of `expect`.
 fn refused(args: &[&str], expect: &[&str]) {

@@ -284,6 +284,31 @@ pub fn default_model() -> PolygonSoup {
     soup
 }
 
+/// `soup` with every vertex moved by a fixed pseudo-random offset of up to `amount / 2` per
+/// coordinate (xorshift from a fixed seed: the same mesh on every run), so that tests meet no
+/// symmetry that would hide a mistake.
+///
+/// ```
+/// use subdiv_mesh::shapes;
+///
+/// let a = shapes::jittered(shapes::cube(), 0.1);
+/// assert_eq!(a.positions(), shapes::jittered(shapes::cube(), 0.1).positions());
+/// assert!(a.positions().iter().zip(shapes::cube().positions()).all(|(p, q)| (*p - *q).abs().max_element() <= 0.05));
+/// ```
+pub fn jittered(mut soup: PolygonSoup, amount: f64) -> PolygonSoup {
+    let mut state = 0x9e37_79b9_7f4a_7c15_u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+    };
+    for p in soup.positions_mut() {
+        *p += DVec3::new(next(), next(), next()) * amount;
+    }
+    soup
+}
+
 /// `positions` twisted about the vertical (y) axis through their bounding box's centre, by an
 /// angle growing linearly from 0 at the box's bottom to `top` radians at its top (heights and
 /// distances to the axis are kept): the built-in deformation that animates a cage in

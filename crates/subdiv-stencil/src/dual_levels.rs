@@ -46,17 +46,23 @@ pub(crate) fn dual_levels(
     let mut stencils = refiner.levels().to_vec();
     let first = refiner.into_mesh();
     let internal = |detail: &str| StencilError::Internal(format!("dual levels: {detail}"));
-    let sizes = |m: &Mesh, start: HalfEdgeId| -> Result<[usize; 4], StencilError> {
-        let around = dual_quad_corners(m, start).ok_or_else(|| internal("a dual quad without four faces"))?;
-        Ok(around.map(|h| m.face_size(m.face(h))))
+    // A dual quad's four half-edges around its centre, counter-clockwise from its start, and
+    // its faces' sizes.
+    let around = |m: &Mesh, start: HalfEdgeId| {
+        dual_quad_corners(m, start).ok_or_else(|| internal("a dual quad without four faces"))
     };
+    let sizes = |m: &Mesh, around: [HalfEdgeId; 4]| around.map(|h| m.face_size(m.face(h)));
     let extraordinary = |sizes: [usize; 4]| sizes.iter().filter(|&&n| n != 4).count();
-    let starts: Vec<HalfEdgeId> = (0..base.half_edge_count() as u32)
-        .map(|h| dual_corner_start(&first, HalfEdgeId::new(h)).ok_or_else(|| internal("an open corner")))
+    // Per corner of the input, its dual quad on level 1.
+    let quads: Vec<[HalfEdgeId; 4]> = (0..base.half_edge_count() as u32)
+        .map(|h| {
+            let start = dual_corner_start(&first, HalfEdgeId::new(h)).ok_or_else(|| internal("an open corner"))?;
+            around(&first, start)
+        })
         .collect::<Result<_, _>>()?;
     let mut twice = false;
-    for &s in &starts {
-        let sizes = sizes(&first, s)?;
+    for &quad in &quads {
+        let sizes = sizes(&first, quad);
         if let Some(&n) = sizes.iter().find(|&&n| n > options.max_patch_valence) {
             return Err(StencilError::Scheme(SchemeError::ValenceNotSupported {
                 scheme: scheme.name.clone(),
@@ -74,11 +80,10 @@ pub(crate) fn dual_levels(
     } else {
         None
     };
-    // The patch of the dual quad at `start` on `m`, and the corner of the quad it starts at.
-    let patch = |m: &Mesh, start: HalfEdgeId| -> Result<(Resolution, u8), StencilError> {
-        let sizes = sizes(m, start)?;
+    // The patch of the dual quad `around` on `m`, and the corner of the quad it starts at.
+    let patch = |m: &Mesh, around: [HalfEdgeId; 4]| -> Result<(Resolution, u8), StencilError> {
+        let sizes = sizes(m, around);
         let rotation = (0..4).find(|&c| sizes[c] != 4).unwrap_or(0);
-        let around = dual_quad_corners(m, start).ok_or_else(|| internal("a dual quad without four faces"))?;
         let found = dual_patch(m, around[rotation]).ok_or_else(|| internal("a dual quad without four faces"))?;
         let matrices = PatchMatrices::of(
             scheme,
@@ -92,30 +97,31 @@ pub(crate) fn dual_levels(
         Ok((Resolution::Patch(found), rotation as u8))
     };
     let mut level0 = Level::new(base, None);
-    let mut level1 = Level::new(first, Some(starts.len()));
-    let mut level2 = second.map(|m| Level::new(m, Some(4 * starts.len())));
+    let mut level1 = Level::new(first, Some(quads.len()));
+    let mut level2 = second.map(|m| Level::new(m, Some(4 * quads.len())));
     for f in level0.mesh.face_ids() {
         let size = level0.mesh.face_size(f);
         // A face's corners are consecutive half-edges.
         let corner0 = level0.mesh.face_half_edges(f).next().ok_or_else(|| internal("a face without corners"))?;
         level0.faces[f.index()] = Some(Resolution::Children(corner0.index()..corner0.index() + size));
         for (j, h) in level0.mesh.face_half_edges(f).enumerate() {
-            let s = starts[h.index()];
+            let quad = quads[h.index()];
             // The dual quad's frame starts at the corner's vertex: corner j of a quad's child.
             let rho = if size == 4 { j } else { 0 };
-            if extraordinary(sizes(&level1.mesh, s)?) <= 1 {
-                let (resolution, r) = patch(&level1.mesh, s)?;
+            if extraordinary(sizes(&level1.mesh, quad)) <= 1 {
+                let (resolution, r) = patch(&level1.mesh, quad)?;
                 level1.set(h.index(), resolution, (rho + usize::from(r)) % 4);
                 continue;
             }
             let level2 = level2.as_mut().ok_or_else(|| internal("the second level was not refined"))?;
-            let children = dual_child_starts(&level1.mesh, s, &level2.mesh).ok_or_else(|| internal("an open child"))?;
+            let children =
+                dual_child_starts(&level1.mesh, quad[0], &level2.mesh).ok_or_else(|| internal("an open child"))?;
             let first_child = 4 * h.index();
             level1.faces[h.index()] = Some(Resolution::Children(first_child..first_child + 4));
             // The face's child c, at its corner c (its own axes), is the dual quad's child at
             // the quad's corner c − rho.
             for c in 0..4 {
-                let (resolution, r) = patch(&level2.mesh, children[(c + 4 - rho) % 4])?;
+                let (resolution, r) = patch(&level2.mesh, around(&level2.mesh, children[(c + 4 - rho) % 4])?)?;
                 level2.set(first_child + c, resolution, (rho + usize::from(r)) % 4);
             }
         }
@@ -134,19 +140,9 @@ mod tests {
 
     use super::*;
 
-    /// `soup` with every vertex moved by a fixed pseudo-random offset, so no symmetry helps.
-    fn jittered(mut soup: PolygonSoup, amount: f64) -> Mesh {
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
-        for p in soup.positions_mut() {
-            *p += DVec3::new(next(), next(), next()) * amount;
-        }
-        Mesh::build(soup).unwrap()
+    /// `soup` with every vertex moved a little (`shapes::jittered`), built.
+    fn jittered(soup: PolygonSoup, amount: f64) -> Mesh {
+        Mesh::build(shapes::jittered(soup, amount)).unwrap()
     }
 
     fn doo_sabin(mesh: &Mesh) -> LimitEvaluator {

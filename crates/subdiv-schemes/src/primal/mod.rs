@@ -7,6 +7,8 @@
 //! order, then face points for quad schemes, then edge points); the positions come from
 //! `values.rs` (the masks applied to them) or from [`stencil_rows`] when stencils are wanted.
 
+use std::borrow::Cow;
+
 use smallvec::SmallVec;
 use subdiv_mesh::{EdgeId, FaceId, HalfEdgeId, Mesh, PrimalSplit, VertexId};
 
@@ -496,14 +498,14 @@ fn four_point_face(mesh: &Mesh, edge_rows: &[Row], w: f64, f: FaceId) -> Row {
     let halves: SmallVec<[HalfEdgeId; 4]> = mesh.face_half_edges(f).collect();
     let edge = |h: HalfEdgeId| &edge_rows[mesh.edge(h).index()];
     // The edge point beyond side `h`, or at a boundary side 2 E(h) − E(opposite).
-    let across = |h: HalfEdgeId, opposite: HalfEdgeId| -> Row {
+    let across = |h: HalfEdgeId, opposite: HalfEdgeId| -> Cow<'_, Row> {
         match mesh.twin(h) {
-            Some(t) => edge(mesh.next(mesh.next(t))).clone(),
+            Some(t) => Cow::Borrowed(edge(mesh.next(mesh.next(t)))),
             None => {
                 let mut row = Row::default();
                 row.add_row(edge(h), 2.0);
                 row.add_row(edge(opposite), -1.0);
-                row
+                Cow::Owned(row)
             }
         }
     };

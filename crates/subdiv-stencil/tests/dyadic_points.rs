@@ -1,32 +1,25 @@
-//! Interpolating schemes pass through every refined vertex: the limit at the dyadic points of
-//! level `L` is the level-`L` vertices, `L = 1..3`, extraordinary vertices included. An
-//! independent check of the exact evaluators (which never refine the mesh to approximate): the
-//! refinement engine's points on one side, the sub-patch matrices' eigenvectors and the descent
-//! on the other — Butterfly's extraordinary rule, Kobbelt's virtual points at valences other
-//! than 4 (whose patches reach past three rings), the four- and six-point curves.
+//! The exact evaluators against refinement at the dyadic points of level `L` (`L = 1..3`,
+//! extraordinary vertices and boundaries included): an independent check, the refinement
+//! engine's points and closed forms on one side, the sub-patch matrices' eigenvectors and the
+//! descent on the other.
+//!
+//! - Interpolating schemes pass through every refined vertex: the limit at the dyadic points is
+//!   the level-`L` vertices — Butterfly's extraordinary rule, Kobbelt's virtual points at
+//!   valences other than 4 (whose patches reach past three rings) and its boundary rule, the
+//!   four- and six-point curves.
+//! - Approximating schemes are refinement followed by the limit mask (the dominant left
+//!   eigenvector of the local subdivision matrix, in closed form: Catmull-Clark's
+//!   `(k² v + 4 Σ e + Σ f) / (k (k + 5))`, Loop's `(1 − k χ) v + χ Σ n` with
+//!   `χ = 1 / (3 / (8 β) + k)`, and the cubic B-spline's `(p + 4 v + n) / 6` along a boundary).
 
 use std::collections::HashMap;
 
 use glam::DVec3;
+use subdiv_mesh::shapes::jittered;
 use subdiv_mesh::{Mesh, PolygonSoup, VertexId, shapes};
 use subdiv_schemes::{Builtin, CurveScheme, PolygonKind, RefineOptions, Scheme, refine_uniform};
 use subdiv_stencil::LimitEvaluator;
 use subdiv_stencil::curve::basis_grid;
-
-/// Every vertex moved by a fixed pseudo-random offset, so that no symmetry helps.
-fn jittered(mut soup: PolygonSoup, amount: f64) -> PolygonSoup {
-    let mut state = 0x2545_f491_4f6c_dd1d_u64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-    };
-    for p in soup.positions_mut() {
-        *p += DVec3::new(next(), next(), next()) * amount;
-    }
-    soup
-}
 
 /// Two apexes of valence `k` over a ring of `k` vertices of valence 4, triangles.
 fn bipyramid(k: usize) -> PolygonSoup {
@@ -89,14 +82,22 @@ impl Points {
     }
 }
 
-/// Every grid point `(i, j) / 2^L` of every face (sub-faces of N-gons) is a level-`L` vertex, and
-/// every level-`L` vertex is such a grid point.
-fn passes_through_refined_vertices(scheme: &Scheme, name: &str, soup: PolygonSoup, levels: usize) {
+/// Every grid point `(i, j) / 2^L` of every face (sub-faces of N-gons) is the image of a
+/// level-`L` vertex under `image` (its position for an interpolating scheme, its limit mask's
+/// point for an approximating one), and every vertex's image is such a grid point's limit.
+fn grid_is_refinement(
+    scheme: &Scheme,
+    name: &str,
+    soup: PolygonSoup,
+    levels: usize,
+    image: impl Fn(&Mesh, VertexId) -> DVec3,
+) {
     let mesh = Mesh::build(soup).unwrap();
     let eval = LimitEvaluator::new(scheme, &mesh, &RefineOptions::DEFAULT).unwrap();
     for level in 1..=levels {
         let refined = refine_uniform(&mesh, scheme, level, &RefineOptions::DEFAULT).unwrap();
-        let vertices = Points::new(refined.positions(), 1e-6);
+        let images: Vec<DVec3> = refined.vertices().map(|v| image(&refined, v)).collect();
+        let vertices = Points::new(&images, 1e-6);
         let mut limit = Vec::new();
         for f in mesh.face_ids() {
             for (g, point) in eval.grid(f, 1 << level).unwrap() {
@@ -106,11 +107,16 @@ fn passes_through_refined_vertices(scheme: &Scheme, name: &str, soup: PolygonSou
             }
         }
         let limit = Points::new(&limit, 1e-6);
-        for (v, &p) in refined.positions().iter().enumerate() {
+        for (v, &p) in images.iter().enumerate() {
             let gap = limit.distance(p);
             assert!(gap < 1e-12, "{scheme} {name} level {level}: vertex {v} is {gap:e} from every grid point");
         }
     }
+}
+
+/// [`grid_is_refinement`] for an interpolating scheme: the vertices themselves.
+fn passes_through_refined_vertices(scheme: &Scheme, name: &str, soup: PolygonSoup, levels: usize) {
+    grid_is_refinement(scheme, name, soup, levels, |mesh, v| mesh.position(v));
 }
 
 #[test]
@@ -175,4 +181,51 @@ fn four_and_six_point_curves_pass_through_their_refined_points() {
             }
         }
     }
+}
+
+/// The limit position of `v` under Catmull-Clark (quads) or Loop (triangles).
+fn limit_position(mesh: &Mesh, v: VertexId, loop_: bool) -> DVec3 {
+    let p = mesh.position(v);
+    if mesh.is_boundary_vertex(v) {
+        // The boundary is the cubic B-spline of the boundary polygon (edge-only rule).
+        let ring = mesh.one_ring(v);
+        let (first, last) = (ring[0], ring[ring.len() - 1]);
+        return (mesh.position(first) + 4.0 * p + mesh.position(last)) / 6.0;
+    }
+    let k = mesh.valence(v) as f64;
+    if loop_ {
+        let c = 3.0 / 8.0 + (std::f64::consts::TAU / k).cos() / 4.0;
+        let beta = (5.0 / 8.0 - c * c) / k;
+        let chi = 1.0 / (3.0 / (8.0 * beta) + k);
+        let sum: DVec3 = mesh.one_ring(v).iter().map(|&n| mesh.position(n)).sum();
+        return (1.0 - k * chi) * p + chi * sum;
+    }
+    let (mut edges, mut faces) = (DVec3::ZERO, DVec3::ZERO);
+    for h in mesh.outgoing(v) {
+        edges += mesh.position(mesh.dest(h));
+        faces += mesh.position(mesh.origin(mesh.next(mesh.next(h))));
+    }
+    (k * k * p + 4.0 * edges + faces) / (k * (k + 5.0))
+}
+
+/// [`grid_is_refinement`] for Catmull-Clark or Loop: each vertex moved by its limit mask.
+fn limit_masks_give_the_grid(scheme: &Scheme, name: &str, soup: PolygonSoup, levels: usize) {
+    let loop_ = scheme.regular_valence() == 6;
+    grid_is_refinement(scheme, name, soup, levels, |mesh, v| limit_position(mesh, v, loop_));
+}
+
+#[test]
+fn catmull_clark_is_refinement_then_its_limit_mask() {
+    let cc = Builtin::CatmullClark.scheme();
+    limit_masks_give_the_grid(cc, "cube", jittered(shapes::cube(), 0.1), 3);
+    limit_masks_give_the_grid(cc, "default model", jittered(shapes::default_model(), 0.05), 2);
+    limit_masks_give_the_grid(cc, "open grid", jittered(shapes::quad_grid(3, 2), 0.1), 3);
+}
+
+#[test]
+fn loop_is_refinement_then_its_limit_mask() {
+    let lp = Builtin::Loop.scheme();
+    limit_masks_give_the_grid(lp, "tetrahedron", jittered(shapes::tetrahedron(), 0.1), 3);
+    limit_masks_give_the_grid(lp, "octahedron", jittered(shapes::octahedron(), 0.1), 3);
+    limit_masks_give_the_grid(lp, "icosahedron", jittered(shapes::icosahedron(), 0.1), 3);
 }
