@@ -322,44 +322,56 @@ fn a_users_surface_scheme_goes_through_every_command() {
     }
 }
 
-/// Kobbelt on an open grid (its four-point boundary rule, corners of one face included):
-/// `eval --grid 4`, and `tessellate --rate 8` keeping the one boundary loop, every vertex on the
-/// surface.
+/// The interpolating schemes on open grids (their four-point boundary rule, corners of one face
+/// included): Kobbelt on quads, the Butterfly on triangles; `eval --grid 4`, and `tessellate
+/// --rate 8` keeping the one boundary loop, every vertex on the surface.
 #[test]
-fn kobbelt_takes_open_meshes() {
+fn interpolating_schemes_take_open_meshes() {
     let dir = tempfile::tempdir().unwrap();
-    let grid = dir.path().join("grid.obj");
-    let mut soup = subdiv::mesh::shapes::quad_grid(4, 3);
-    for (k, p) in soup.positions_mut().iter_mut().enumerate() {
-        p.z = 0.1 * ((k * 7) % 5) as f64;
-    }
-    subdiv::io::write_obj(&grid, &soup).unwrap();
     let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
-    let out = subdiv(&["eval", &path(&grid), "--scheme", "kobbelt", "--grid", "4"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + 12 * 25);
-    let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
-    let args = ["tessellate", &path(&grid), "--scheme", "kobbelt", "--rate", "8", "--polygons"];
-    let out = subdiv(&[&args[..], &["--params", &path(&csv), "-o", &path(&obj)]].concat());
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
-    assert_eq!(tess.boundary_loops().len(), 1);
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let points: String = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let r: Vec<&str> = l.split(',').collect();
-            format!("{} {} {}\n", r[1], r[2], r[3])
-        })
-        .collect();
-    std::fs::write(&samples, points).unwrap();
-    let out = subdiv(&["eval", &path(&grid), "--scheme", "kobbelt", "--samples", &path(&samples)]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    for (k, line) in String::from_utf8(out.stdout).unwrap().lines().skip(1).enumerate() {
-        let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-        let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
-        assert!(gap < 1e-12, "vertex {k} is {gap:e} off the surface");
+    let quads = subdiv::mesh::shapes::quad_grid(4, 3);
+    let mut triangles = subdiv::mesh::PolygonSoup::new();
+    for &p in quads.positions() {
+        triangles.push_vertex(p);
+    }
+    for face in quads.faces() {
+        triangles.push_face([face[0], face[1], face[2]]);
+        triangles.push_face([face[0], face[2], face[3]]);
+    }
+    for (scheme, mut soup) in [("kobbelt", quads), ("butterfly", triangles)] {
+        let faces = soup.faces().len();
+        for (k, p) in soup.positions_mut().iter_mut().enumerate() {
+            p.z = 0.1 * ((k * 7) % 5) as f64;
+        }
+        let grid = dir.path().join(format!("{scheme}.obj"));
+        subdiv::io::write_obj(&grid, &soup).unwrap();
+        let out = subdiv(&["eval", &path(&grid), "--scheme", scheme, "--grid", "4"]);
+        assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
+        let per_face = if scheme == "kobbelt" { 25 } else { 15 };
+        assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + faces * per_face, "{scheme}");
+        let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
+        let args = ["tessellate", &path(&grid), "--scheme", scheme, "--rate", "8", "--polygons"];
+        let out = subdiv(&[&args[..], &["--params", &path(&csv), "-o", &path(&obj)]].concat());
+        assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
+        let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+        assert_eq!(tess.boundary_loops().len(), 1, "{scheme}");
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let points: String = text
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let r: Vec<&str> = l.split(',').collect();
+                format!("{} {} {}\n", r[1], r[2], r[3])
+            })
+            .collect();
+        std::fs::write(&samples, points).unwrap();
+        let out = subdiv(&["eval", &path(&grid), "--scheme", scheme, "--samples", &path(&samples)]);
+        assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
+        for (k, line) in String::from_utf8(out.stdout).unwrap().lines().skip(1).enumerate() {
+            let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
+            assert!(gap < 1e-12, "{scheme}: vertex {k} is {gap:e} off the surface");
+        }
     }
 }
 

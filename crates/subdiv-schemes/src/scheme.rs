@@ -80,6 +80,11 @@ pub enum Rules {
         /// Rules along creases and boundaries (see [`Rules::Quad`]).
         #[serde(default, skip_serializing_if = "Option::is_none")]
         crease: Option<CreaseMask>,
+        /// The rule at boundaries of an interpolating scheme without crease rules (the modified
+        /// Butterfly's); the four-point tension is `-wing`. At most one of `crease` and
+        /// `boundary`.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        boundary: Option<FourPointBoundary>,
     },
     /// Dual split: a new point per face corner; new faces per face, per edge and per vertex
     /// (Doo-Sabin). Closed meshes.
@@ -100,15 +105,22 @@ pub enum Rules {
     },
 }
 
-/// A four-point quad scheme's rule at boundaries.
+/// An interpolating scheme's rule at boundaries (Kobbelt's four-point quad scheme, the
+/// modified Butterfly).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum FourPointBoundary {
-    /// A boundary edge's point by the four-point rule along the boundary (the scheme's weight),
-    /// so that the boundary is the four-point curve of the boundary polygon, which ends at a
-    /// corner (a boundary vertex of one face: rounding it would fold the tangent plane there);
-    /// a point a rule needs beyond the boundary or a corner is extrapolated linearly (`2p − q`
-    /// from the last two points of its line), the four-point curve's end rule.
+    /// A boundary edge's point by the four-point rule along the boundary (the scheme's
+    /// tension), so that the boundary is the four-point curve of the boundary polygon, which
+    /// ends at a corner (a boundary vertex of one face: rounding it would fold the tangent plane
+    /// there); a point a rule needs beyond the boundary or a corner is extrapolated linearly
+    /// (`2p − q` from the last two points of its line), the four-point curve's end rule.
+    ///
+    /// Interior edges of a triangle scheme: the extraordinary rule from each interior end of
+    /// valence other than 6 (averaged over both), otherwise the regular ten-point rule, a wing
+    /// across a boundary side reflected through that side's middle (`a + b − c` for the side
+    /// `ab` of triangle `abc`), as OpenMesh's modified Butterfly does; boundary vertices count
+    /// as regular.
     FourPoint,
 }
 
@@ -457,10 +469,14 @@ impl Scheme {
         matches!(self.rules, Rules::Quad { crease: Some(_), .. } | Rules::Triangle { crease: Some(_), .. })
     }
 
-    /// Whether the scheme takes boundaries: by its crease rules, or a four-point quad scheme's
+    /// Whether the scheme takes boundaries: by its crease rules, or an interpolating scheme's
     /// [`FourPointBoundary`] rule.
     pub fn has_boundary_rules(&self) -> bool {
-        self.has_crease_rules() || matches!(self.rules, Rules::FourPointQuad { boundary: Some(_), .. })
+        self.has_crease_rules()
+            || matches!(
+                self.rules,
+                Rules::FourPointQuad { boundary: Some(_), .. } | Rules::Triangle { boundary: Some(_), .. }
+            )
     }
 
     /// The scheme as a dual split, where it is one or where its cycle of steps
@@ -585,7 +601,16 @@ impl Scheme {
                 let w = weight.eval(4, 0);
                 check("weight", 4, &[-2.0 * w, 2.0 * (0.5 + w)])?;
             }
-            Rules::Triangle { edge, vertex, crease } => {
+            Rules::Triangle { edge, vertex, crease, boundary } => {
+                if crease.is_some() && boundary.is_some() {
+                    return Err(SchemeError::InvalidScheme {
+                        scheme: self.name.clone(),
+                        rule: "boundary".into(),
+                        detail: "a scheme with crease rules takes boundaries by them; give `crease` or \
+                                 `boundary`, not both"
+                            .into(),
+                    });
+                }
                 let regular =
                     [2.0 * edge.endpoint.eval(6, 0), 2.0 * edge.opposite.eval(6, 0), 4.0 * edge.wing.eval(6, 0)];
                 check("edge", 6, &regular)?;

@@ -93,8 +93,14 @@ fn unsupported_splits_and_valences_are_typed_errors() {
         let err = PatchMatrices::compute(cc, PatchType::boundary(faces, index), EDGE_ONLY).unwrap_err();
         assert!(matches!(err, SchemeError::ValenceNotSupported { .. }));
     }
-    // Butterfly has no boundary rules.
-    let err = PatchMatrices::compute(Builtin::Butterfly.scheme(), PatchType::boundary(3, 0), EDGE_ONLY).unwrap_err();
+    // Butterfly has a boundary rule; without it, no boundary patches.
+    let butterfly = Builtin::Butterfly.scheme();
+    assert!(PatchMatrices::compute(butterfly, PatchType::boundary(3, 0), EDGE_ONLY).is_ok());
+    let mut closed = butterfly.clone();
+    if let subdiv_schemes::Rules::Triangle { boundary, .. } = &mut closed.rules {
+        *boundary = None;
+    }
+    let err = PatchMatrices::compute(&closed, PatchType::boundary(3, 0), EDGE_ONLY).unwrap_err();
     assert!(matches!(err, SchemeError::FeatureNotSupported { feature: "boundaries", .. }), "{err}");
     // Kobbelt's virtual points reach past three rings around a valence-5 vertex, not past four.
     let m = PatchMatrices::compute(Builtin::Kobbelt.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap();

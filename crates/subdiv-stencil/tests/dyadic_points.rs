@@ -5,8 +5,8 @@
 //!
 //! - Interpolating schemes pass through every refined vertex: the limit at the dyadic points is
 //!   the level-`L` vertices — Butterfly's extraordinary rule, Kobbelt's virtual points at
-//!   valences other than 4 (whose patches reach past three rings) and its boundary rule, the
-//!   four- and six-point curves.
+//!   valences other than 4 (whose patches reach past three rings), both schemes' boundary
+//!   rules, the four- and six-point curves.
 //! - Approximating schemes are refinement followed by the limit mask (the dominant left
 //!   eigenvector of the local subdivision matrix, in closed form: Catmull-Clark's
 //!   `(k² v + 4 Σ e + Σ f) / (k (k + 5))`, Loop's `(1 − k χ) v + χ Σ n` with
@@ -126,6 +126,50 @@ fn butterfly_passes_through_its_refined_vertices_at_valences_3_to_8() {
         passes_through_refined_vertices(butterfly, &format!("bipyramid {k}"), jittered(bipyramid(k), 0.1), 3);
     }
     passes_through_refined_vertices(butterfly, "icosahedron", jittered(shapes::icosahedron(), 0.1), 3);
+    // Boundaries (its four-point boundary rule): a grid of triangles (corners of one and two
+    // faces), a bipyramid without its lower half (boundary vertices of two faces around an
+    // interior apex of valence k), an icosahedron without one vertex's faces.
+    let triangles = triangulated(shapes::quad_grid(4, 3));
+    passes_through_refined_vertices(butterfly, "open triangle grid", jittered(triangles, 0.1), 3);
+    for k in [3, 5, 8] {
+        let cap = without_faces(bipyramid(k), |i| i % 2 == 1);
+        passes_through_refined_vertices(butterfly, &format!("half bipyramid {k}"), jittered(cap, 0.1), 2);
+    }
+    let icosahedron = shapes::icosahedron();
+    let hole: Vec<bool> = icosahedron.faces().map(|f| f.contains(&VertexId::new(0))).collect();
+    let open = without_faces(icosahedron, |i| hole[i]);
+    passes_through_refined_vertices(butterfly, "open icosahedron", jittered(open, 0.1), 3);
+}
+
+/// `soup` without the faces `drop` picks (by index), and without the vertices left unused.
+fn without_faces(soup: PolygonSoup, drop: impl Fn(usize) -> bool) -> PolygonSoup {
+    let kept: Vec<&[VertexId]> = soup.faces().enumerate().filter(|&(i, _)| !drop(i)).map(|(_, f)| f).collect();
+    let mut index = vec![None; soup.positions().len()];
+    let mut out = PolygonSoup::new();
+    for face in &kept {
+        for v in face.iter() {
+            if index[v.index()].is_none() {
+                index[v.index()] = Some(out.push_vertex(soup.positions()[v.index()]));
+            }
+        }
+    }
+    for face in kept {
+        out.push_face(face.iter().map(|v| index[v.index()].expect("numbered above")));
+    }
+    out
+}
+
+/// Every quad of `soup` split into two triangles along its first diagonal.
+fn triangulated(soup: PolygonSoup) -> PolygonSoup {
+    let mut out = PolygonSoup::new();
+    for &p in soup.positions() {
+        out.push_vertex(p);
+    }
+    for face in soup.faces() {
+        out.push_face([face[0], face[1], face[2]]);
+        out.push_face([face[0], face[2], face[3]]);
+    }
+    out
 }
 
 #[test]
@@ -139,14 +183,7 @@ fn kobbelt_passes_through_its_refined_vertices_at_valences_3_to_8() {
     // Boundaries (its four-point boundary rule): an open grid (corners of one face), and the
     // cube without a face (boundary vertices of two faces, interior ones of valence 3).
     passes_through_refined_vertices(kobbelt, "open grid", jittered(shapes::quad_grid(4, 3), 0.1), 3);
-    let cube = shapes::cube();
-    let mut open_cube = PolygonSoup::new();
-    for &p in cube.positions() {
-        open_cube.push_vertex(p);
-    }
-    for face in cube.faces().skip(1) {
-        open_cube.push_face(face.iter().copied());
-    }
+    let open_cube = without_faces(shapes::cube(), |i| i == 0);
     passes_through_refined_vertices(kobbelt, "open cube", jittered(open_cube, 0.1), 3);
 }
 

@@ -53,6 +53,8 @@ enum Kind {
         wing: f64,
         /// `(centre, spokes)` per valence, for edges at an extraordinary vertex.
         extraordinary: Option<Vec<(f64, Vec<f64>)>>,
+        /// Whether boundaries take the four-point rule along them ([`FourPointBoundary`]).
+        boundary: bool,
     },
 }
 
@@ -83,7 +85,7 @@ impl Masks {
                 vertex: vec![(1.0, 0.0, 0.0); max_valence + 1],
                 crease: None,
             },
-            Rules::Triangle { edge, vertex, crease } => {
+            Rules::Triangle { edge, vertex, crease, boundary } => {
                 let TriangleEdgeMask { endpoint, opposite, wing, extraordinary } = edge;
                 let extraordinary = extraordinary.as_ref().map(|m: &ExtraordinaryEdgeMask| {
                     (0..=max_valence).map(|k| (m.centre.eval(k, 0), extraordinary_spokes(m, k))).collect()
@@ -95,6 +97,7 @@ impl Masks {
                         opposite: eval(opposite),
                         wing: eval(wing),
                         extraordinary,
+                        boundary: boundary.is_some(),
                     },
                     vertex: vertex_table(vertex),
                     crease: crease_pair(crease),
@@ -103,6 +106,16 @@ impl Masks {
             Rules::Dual { .. } | Rules::Midedge | Rules::Sqrt3 { .. } => {
                 unreachable!("primal::refine is only called for primal splits")
             }
+        }
+    }
+
+    /// The four-point tension along boundaries, where the scheme has the [`FourPointBoundary`]
+    /// rule: Kobbelt's weight, the Butterfly's `-wing`.
+    fn boundary_tension(&self) -> Option<f64> {
+        match self.kind {
+            Kind::FourPoint { weight, boundary: true } => Some(weight),
+            Kind::Triangle { wing, boundary: true, .. } => Some(-wing),
+            _ => None,
         }
     }
 
@@ -355,28 +368,8 @@ fn refine_channels(
 fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdgeId) -> Row {
     let (a, b) = (mesh.origin(h), mesh.dest(h));
     let Some(t) = mesh.twin(h) else {
-        if let Kind::FourPoint { weight, boundary: true } = masks.kind {
-            // Along the boundary: a' before a, b' after b on the boundary loop; at a corner (a
-            // boundary vertex of one face) the boundary curve ends, and the point beyond it is
-            // extrapolated, 2a − b (otherwise the curve would round the corner and fold the
-            // surface's tangent plane there).
-            let mut row = Row::default();
-            let corner = |v: VertexId| mesh.vertex_faces(v).count() == 1;
-            if corner(a) {
-                add(&mut row, a, -2.0 * weight);
-                add(&mut row, b, weight);
-            } else {
-                add(&mut row, *mesh.one_ring(a).last().expect("a boundary vertex"), -weight);
-            }
-            add(&mut row, a, 0.5 + weight);
-            add(&mut row, b, 0.5 + weight);
-            if corner(b) {
-                add(&mut row, b, -2.0 * weight);
-                add(&mut row, a, weight);
-            } else {
-                add(&mut row, mesh.one_ring(b)[0], -weight);
-            }
-            return row;
+        if let Some(weight) = masks.boundary_tension() {
+            return four_point_along_boundary(mesh, a, b, weight);
         }
         return midpoint(a, b);
     };
@@ -399,8 +392,10 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdg
             add(&mut row, b, 0.5 + w);
             row.add_row(&beyond(mesh, h), -w);
         }
-        Kind::Triangle { endpoint, opposite, wing, extraordinary } => {
-            let regular = |v: VertexId| mesh.valence(v) == 6;
+        Kind::Triangle { endpoint, opposite, wing, extraordinary, .. } => {
+            // Boundary vertices count as regular (the boundary rule's reading of the
+            // ten-point rule; closed meshes have none).
+            let regular = |v: VertexId| mesh.valence(v) == 6 || mesh.is_boundary_vertex(v);
             if let Some(table) = extraordinary
                 && !(regular(a) && regular(b))
             {
@@ -425,12 +420,45 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdg
             if *wing != 0.0 {
                 for x in [h, t] {
                     for side in [mesh.next(x), mesh.prev(x)] {
-                        let across = mesh.twin(side).expect("wings exist: the scheme takes closed meshes only");
-                        add(&mut row, mesh.origin(mesh.prev(across)), *wing);
+                        match mesh.twin(side) {
+                            Some(across) => add(&mut row, mesh.origin(mesh.prev(across)), *wing),
+                            None => {
+                                // Across a boundary side: the triangle's third vertex reflected
+                                // through the side's middle (only with a boundary rule: the
+                                // input check refuses boundaries otherwise).
+                                add(&mut row, mesh.origin(side), *wing);
+                                add(&mut row, mesh.dest(side), *wing);
+                                add(&mut row, mesh.origin(mesh.prev(side)), -*wing);
+                            }
+                        }
                     }
                 }
             }
         }
+    }
+    row
+}
+
+/// The point of boundary edge `a → b` by the four-point rule along the boundary: `a'` before
+/// `a`, `b'` after `b` on the boundary loop; at a corner (a boundary vertex of one face) the
+/// boundary curve ends, and the point beyond it is extrapolated, `2a − b` (otherwise the curve
+/// would round the corner and fold the surface's tangent plane there).
+fn four_point_along_boundary(mesh: &Mesh, a: VertexId, b: VertexId, weight: f64) -> Row {
+    let mut row = Row::default();
+    let corner = |v: VertexId| mesh.vertex_faces(v).count() == 1;
+    if corner(a) {
+        add(&mut row, a, -2.0 * weight);
+        add(&mut row, b, weight);
+    } else {
+        add(&mut row, *mesh.one_ring(a).last().expect("a boundary vertex"), -weight);
+    }
+    add(&mut row, a, 0.5 + weight);
+    add(&mut row, b, 0.5 + weight);
+    if corner(b) {
+        add(&mut row, b, -2.0 * weight);
+        add(&mut row, a, weight);
+    } else {
+        add(&mut row, mesh.one_ring(b)[0], -weight);
     }
     row
 }
