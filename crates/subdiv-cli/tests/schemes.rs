@@ -11,8 +11,16 @@ fn analyze_reports_the_subdominant_eigenvalue() {
     let report = json(&["analyze", "--scheme", "loop", "--valence", "6", "--json"]);
     let subdominant = report["subdominant"].as_f64().unwrap();
     assert!((subdominant - 0.5).abs() < 1e-12, "regular Loop has λ1 = 1/2, got {subdominant}");
-    assert_eq!(report["subdominant_real_double"], true);
+    assert_eq!(report["subdominant_real_pair"], true);
     assert_eq!(subdiv(&["analyze", "--valence", "2"]).status.code(), Some(2));
+    // A boundary vertex of Loop with three faces (the regular boundary) under its boundary rule.
+    let report = json(&["analyze", "--scheme", "loop", "--boundary-faces", "3", "--json"]);
+    assert_eq!((report["valence"].as_u64(), report["c1"].as_bool()), (Some(4), Some(true)));
+    assert_eq!(report["characteristic_map"]["outlines"], 1);
+    // The dual split has no boundary rules: a typed refusal, not a verdict.
+    let out = subdiv(&["analyze", "--scheme", "doo-sabin", "--boundary-faces", "2"]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("boundaries"));
 }
 
 #[test]

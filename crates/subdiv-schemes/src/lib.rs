@@ -20,7 +20,8 @@
 //!
 //! Analysis ([`Analysis`], [`LocalMatrix`], [`LocalSpectrum`]) derives each scheme's local
 //! subdivision matrix by running the engine on a canonical mesh and applies Reif's C1 test,
-//! characteristic map included; [`c1_table`] lists the verdicts at valences 3 to 16.
+//! characteristic map included, at interior and boundary vertices; [`c1_table`] lists the
+//! verdicts at valences 3 to 16 and boundary vertices of 1 to 15 faces.
 //! [`PatchMatrices`] derives the sub-patch matrices of the primal schemes the same way: for a
 //! regular patch, one at an extraordinary vertex of any valence, or one at a boundary vertex,
 //! the matrix that maps a face's control points to each of its sub-faces', every shape that
@@ -100,7 +101,7 @@ mod stencil_table;
 #[cfg(feature = "proptest")]
 pub mod strategies;
 
-pub use analysis::{Analysis, CharacteristicMap, LocalMatrix, LocalSpectrum};
+pub use analysis::{Analysis, Centre, CharacteristicMap, LocalMatrix, LocalSpectrum};
 pub use channel::ChannelSurface;
 pub use curve::{CurveError, CurveMatrix, CurveScheme, PolygonKind};
 pub use error::SchemeError;
@@ -124,7 +125,7 @@ pub use stencil::Stencils;
 pub use stencil_table::StencilTable;
 
 pub mod c1_table {
-    //! The C1 verdicts of every built-in surface scheme at valences 3 to 16, from
-    //! `subdiv analyze --table 16`.
+    //! The C1 verdicts of every built-in surface scheme at interior valences 3 to 16 and at
+    //! boundary vertices of 1 to 15 faces, from `subdiv analyze --table 16`.
     #![doc = include_str!("../C1_TABLE.md")]
 }

@@ -4,7 +4,7 @@
 use std::f64::consts::PI;
 
 use subdiv_mesh::BoundaryInterpolation;
-use subdiv_schemes::{Analysis, Builtin, LocalMatrix, LocalSpectrum, PatchMatrices, PatchType, SchemeError};
+use subdiv_schemes::{Analysis, Builtin, Centre, LocalMatrix, LocalSpectrum, PatchMatrices, PatchType, SchemeError};
 
 /// The derived matrices of `builtin` pass the spectral conditions at k = 3..=64 and their
 /// subdominant eigenvalue is `closed_form(k)` to 1e-12: the one-ring matrix, and the square
@@ -87,4 +87,39 @@ fn c1_verdicts() {
     }
     let bilinear = Analysis::of(Builtin::Bilinear.scheme(), 5).unwrap();
     assert!(!bilinear.spectrum.subdominant_strict && !bilinear.is_c1());
+}
+
+/// Boundary vertices: an eigenvector that is odd across the boundary vanishes on it, where the
+/// boundary rule and the interior rules of the mirrored mesh agree, so the largest interior
+/// eigenvalue of valence `2f` is the cross-boundary one at `f` faces; the boundary curve's `1/2`
+/// is there too (Catmull-Clark, Loop and sw-quad, whose boundaries are cubic B-splines). The
+/// regular boundary is C1 for every scheme with boundary rules but bilinear; the dual split
+/// has none, which is a typed error.
+#[test]
+fn boundary_vertices_have_the_mirrored_interior_eigenvalues() {
+    // 1e-7: where the two coincide (Loop at 6 faces: 1/2 twice, defective) they split by ~√ε.
+    let has = |values: &[(f64, f64)], x: f64| values.iter().any(|z| (z.0 - x).abs() < 1e-7 && z.1.abs() < 1e-6);
+    for b in [Builtin::CatmullClark, Builtin::Loop, Builtin::SwQuad] {
+        for faces in 2..=6 {
+            let boundary = LocalSpectrum::at(b.scheme(), Centre::Boundary(faces)).unwrap();
+            let interior = LocalSpectrum::of(b.scheme(), 2 * faces).unwrap();
+            assert!(has(&boundary.eigenvalues, interior.subdominant()), "{b}, {faces} faces: {boundary:?}");
+            assert!(has(&boundary.eigenvalues, 0.5), "{b}, {faces} faces: no 1/2");
+        }
+    }
+    let regular = [
+        (Builtin::CatmullClark, 2),
+        (Builtin::SwQuad, 2),
+        (Builtin::Kobbelt, 2),
+        (Builtin::Loop, 3),
+        (Builtin::Butterfly, 3),
+    ];
+    for (b, faces) in regular {
+        let analysis = Analysis::at(b.scheme(), Centre::Boundary(faces)).unwrap();
+        assert!(analysis.is_c1(), "{b}, {faces} faces: {analysis:?}");
+        assert_eq!(analysis.characteristic_map.as_ref().map(|m| m.outlines), Some(1));
+    }
+    assert!(!Analysis::at(Builtin::Bilinear.scheme(), Centre::Boundary(2)).unwrap().is_c1());
+    let err = Analysis::at(Builtin::DooSabin.scheme(), Centre::Boundary(2)).unwrap_err();
+    assert!(matches!(err, SchemeError::FeatureNotSupported { feature: "boundaries", .. }), "{err}");
 }
