@@ -6,7 +6,7 @@
 
 use glam::DVec3;
 use subdiv_mesh::{
-    BoundaryInterpolation, CreaseMethod, FaceId, FaceVaryingInterpolation, Mesh, Parallelism, Region,
+    BoundaryInterpolation, CreaseMethod, FaceId, FaceVaryingInterpolation, Mesh, Parallelism, Region, Sharpness,
     TriangleSubdivision,
 };
 
@@ -402,12 +402,16 @@ fn check_input(mesh: &Mesh, scheme: &Scheme) -> Result<(), SchemeError> {
         let [a, b] = mesh.edge_vertices(e);
         return Err(unsupported("boundaries", format!("edge {}-{}", a.raw(), b.raw())));
     }
-    if let Some(e) = mesh.edges().find(|&e| mesh.edge_sharpness(e) > 0.0) {
+    // A boundary rule takes infinitely sharp creases and corners (the rule on each side).
+    let takes = |s: f64| s <= 0.0 || (scheme.has_boundary_rules() && Sharpness::of(s) == Sharpness::Infinite);
+    let (creases, corners) =
+        if scheme.has_boundary_rules() { ("semi-sharp creases", "semi-sharp corners") } else { ("creases", "corners") };
+    if let Some(e) = mesh.edges().find(|&e| !takes(mesh.edge_sharpness(e))) {
         let [a, b] = mesh.edge_vertices(e);
-        return Err(unsupported("creases", format!("edge {}-{}", a.raw(), b.raw())));
+        return Err(unsupported(creases, format!("edge {}-{}", a.raw(), b.raw())));
     }
-    if let Some(v) = mesh.vertices().find(|&v| mesh.vertex_sharpness(v) > 0.0) {
-        return Err(unsupported("corners", v.to_string()));
+    if let Some(v) = mesh.vertices().find(|&v| !takes(mesh.vertex_sharpness(v))) {
+        return Err(unsupported(corners, v.to_string()));
     }
     if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {
         return Err(unsupported("holes", f.to_string()));

@@ -121,6 +121,12 @@ pub enum FourPointBoundary {
     /// across a boundary side reflected through that side's middle (`a + b − c` for the side
     /// `ab` of triangle `abc`), as OpenMesh's modified Butterfly does; boundary vertices count
     /// as regular.
+    ///
+    /// Infinitely sharp creases take the rule on each side, as Catmull-Clark and Loop do: a
+    /// crease is the four-point curve of its edges, ending at tagged corners, where other than
+    /// two creases (boundary edges included) meet, and where one face lies between two on a
+    /// side (as at a boundary vertex of one face), and the interior rules treat it as a
+    /// boundary. Semi-sharp creases and corners are refused (the rule has no fractional form).
     FourPoint,
 }
 

@@ -236,6 +236,24 @@ fn unsupported_input_is_a_typed_error() {
     let prism = Mesh::build(shapes::ngon_prism(5)).unwrap();
     let e = refine_uniform(&prism, Builtin::Kobbelt.scheme(), 1, &RefineOptions::DEFAULT).unwrap_err();
     assert!(matches!(e, SchemeError::FaceNotSupported { size: 5, expected: 4, .. }), "{e}");
+    // The four-point boundary rule takes infinitely sharp creases and corners, not semi-sharp
+    // ones; the dual splits take neither.
+    let tagged = |crease: f64, corner: f64| {
+        let mut soup = shapes::cube();
+        soup.tags
+            .creases
+            .push(subdiv_mesh::CreaseTag { vertices: [VertexId::new(0), VertexId::new(1)], sharpness: crease });
+        soup.tags.corners.push(CornerTag { vertex: VertexId::new(6), sharpness: corner });
+        Mesh::build(soup).unwrap()
+    };
+    let kobbelt = Builtin::Kobbelt.scheme();
+    assert!(refine_uniform(&tagged(10.0, 10.0), kobbelt, 1, &RefineOptions::DEFAULT).is_ok());
+    let e = refine_uniform(&tagged(2.5, 0.0), kobbelt, 1, &RefineOptions::DEFAULT).unwrap_err();
+    assert!(matches!(e, SchemeError::FeatureNotSupported { feature: "semi-sharp creases", .. }), "{e}");
+    let e = refine_uniform(&tagged(10.0, 1.5), kobbelt, 1, &RefineOptions::DEFAULT).unwrap_err();
+    assert!(matches!(e, SchemeError::FeatureNotSupported { feature: "semi-sharp corners", .. }), "{e}");
+    let e = refine_uniform(&tagged(10.0, 0.0), Builtin::DooSabin.scheme(), 1, &RefineOptions::DEFAULT).unwrap_err();
+    assert!(matches!(e, SchemeError::FeatureNotSupported { feature: "creases", .. }), "{e}");
 }
 
 /// Face and vertex counts of one step of each split on the cube (V 8, E 12, F 6) and the

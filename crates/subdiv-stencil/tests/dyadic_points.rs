@@ -16,7 +16,7 @@ use std::collections::HashMap;
 
 use glam::DVec3;
 use subdiv_mesh::shapes::jittered;
-use subdiv_mesh::{Mesh, PolygonSoup, VertexId, shapes};
+use subdiv_mesh::{CornerTag, CreaseTag, Mesh, PolygonSoup, Tags, VertexId, shapes};
 use subdiv_schemes::{Builtin, CurveScheme, PolygonKind, RefineOptions, Scheme, refine_uniform};
 use subdiv_stencil::LimitEvaluator;
 use subdiv_stencil::curve::basis_grid;
@@ -139,6 +139,19 @@ fn butterfly_passes_through_its_refined_vertices_at_valences_3_to_8() {
     let hole: Vec<bool> = icosahedron.faces().map(|f| f.contains(&VertexId::new(0))).collect();
     let open = without_faces(icosahedron, |i| hole[i]);
     passes_through_refined_vertices(butterfly, "open icosahedron", jittered(open, 0.1), 3);
+    // Infinitely sharp creases (the boundary rule on each side): the loop around vertex 0 of
+    // the icosahedron with a corner on it, and a dart (one sharp edge ending at a smooth vertex).
+    let mut soup = shapes::icosahedron();
+    let ring = Mesh::build(soup.clone()).unwrap().one_ring(VertexId::new(0)).to_vec();
+    for (i, &v) in ring.iter().enumerate() {
+        soup.tags
+            .creases
+            .push(CreaseTag { vertices: [v, ring[(i + 1) % ring.len()]], sharpness: Tags::INFINITELY_SHARP });
+    }
+    soup.tags.corners.push(CornerTag { vertex: ring[2], sharpness: Tags::INFINITELY_SHARP });
+    let far = Mesh::build(soup.clone()).unwrap().one_ring(VertexId::new(11)).to_vec();
+    soup.tags.creases.push(CreaseTag { vertices: [VertexId::new(11), far[0]], sharpness: Tags::INFINITELY_SHARP });
+    passes_through_refined_vertices(butterfly, "creased icosahedron", jittered(soup, 0.1), 3);
 }
 
 /// `soup` without the faces `drop` picks (by index), and without the vertices left unused.
@@ -185,6 +198,15 @@ fn kobbelt_passes_through_its_refined_vertices_at_valences_3_to_8() {
     passes_through_refined_vertices(kobbelt, "open grid", jittered(shapes::quad_grid(4, 3), 0.1), 3);
     let open_cube = without_faces(shapes::cube(), |i| i == 0);
     passes_through_refined_vertices(kobbelt, "open cube", jittered(open_cube, 0.1), 3);
+    // Infinitely sharp creases: the loop around the cube's face 0, one of its corners tagged.
+    let mut creased = shapes::cube();
+    let face: Vec<VertexId> = creased.faces().next().unwrap().to_vec();
+    for (i, &v) in face.iter().enumerate() {
+        let vertices = [v, face[(i + 1) % face.len()]];
+        creased.tags.creases.push(CreaseTag { vertices, sharpness: Tags::INFINITELY_SHARP });
+    }
+    creased.tags.corners.push(CornerTag { vertex: face[1], sharpness: Tags::INFINITELY_SHARP });
+    passes_through_refined_vertices(kobbelt, "creased cube", jittered(creased, 0.1), 3);
 }
 
 /// The curves: `Σ p_i φ(m / 2^L − i)` on a closed polygon is the level-`L` point `m`.

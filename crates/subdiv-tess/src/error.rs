@@ -48,11 +48,14 @@ pub enum TessError {
     },
     /// The output would exceed [`QuadtreeOptions::max_polygons`](crate::QuadtreeOptions).
     #[error(
-        "more than {limit} polygons (about twice as many vertices) needed for ε = {epsilon:e}; raise the tolerance \
-         or the limit (QuadtreeOptions::max_polygons; TessOptions::max_vertices, `subdiv tessellate --max-vertices`, \
-         allow half as many polygons as vertices)"
+        "at least {needed} polygons (about twice as many vertices) needed for ε = {epsilon:e}, more than the limit \
+         {limit}; raise the tolerance or the limit (QuadtreeOptions::max_polygons; TessOptions::max_vertices, \
+         `subdiv tessellate --max-vertices`, allow half as many polygons as vertices)"
     )]
     TooManyPolygons {
+        /// A lower bound on the polygons needed: predicted before the work (usually), or the
+        /// limit plus one when the work found it.
+        needed: usize,
         /// The limit.
         limit: usize,
         /// The absolute tolerance.

@@ -264,8 +264,9 @@ pub(crate) fn refine(
     };
     let mut child = mesh.split(split, positions, options.parallelism);
 
-    // Sharpness of the child level, where the parent has any.
-    if masks.crease.is_some() && sharp {
+    // Sharpness of the child level, where the parent has any (infinitely sharp creases and
+    // corners only, for the four-point boundary rule: the input check refuses the rest).
+    if (masks.crease.is_some() || masks.boundary_tension().is_some()) && sharp {
         for v in mesh.vertices() {
             child.set_vertex_sharpness(v, f64::from(crease::decrement(sharpness(mesh.vertex_sharpness(v)))));
         }
@@ -367,10 +368,12 @@ fn refine_channels(
 /// The smooth edge point of the edge of `h` (its rule away from creases).
 fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdgeId) -> Row {
     let (a, b) = (mesh.origin(h), mesh.dest(h));
+    if let Some(weight) = masks.boundary_tension()
+        && bounds(mesh, mesh.edge(h))
+    {
+        return four_point_along_crease(mesh, a, b, weight);
+    }
     let Some(t) = mesh.twin(h) else {
-        if let Some(weight) = masks.boundary_tension() {
-            return four_point_along_boundary(mesh, a, b, weight);
-        }
         return midpoint(a, b);
     };
     let mut row = Row::default();
@@ -393,9 +396,9 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdg
             row.add_row(&beyond(mesh, h), -w);
         }
         Kind::Triangle { endpoint, opposite, wing, extraordinary, .. } => {
-            // Boundary vertices count as regular (the boundary rule's reading of the
-            // ten-point rule; closed meshes have none).
-            let regular = |v: VertexId| mesh.valence(v) == 6 || mesh.is_boundary_vertex(v);
+            // Vertices on the boundary or a crease count as regular (the boundary rule's
+            // reading of the ten-point rule; closed smooth meshes have none).
+            let regular = |v: VertexId| mesh.valence(v) == 6 || on_crease(mesh, v);
             if let Some(table) = extraordinary
                 && !(regular(a) && regular(b))
             {
@@ -421,11 +424,13 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdg
                 for x in [h, t] {
                     for side in [mesh.next(x), mesh.prev(x)] {
                         match mesh.twin(side) {
-                            Some(across) => add(&mut row, mesh.origin(mesh.prev(across)), *wing),
-                            None => {
-                                // Across a boundary side: the triangle's third vertex reflected
-                                // through the side's middle (only with a boundary rule: the
-                                // input check refuses boundaries otherwise).
+                            Some(across) if !bounds(mesh, mesh.edge(side)) => {
+                                add(&mut row, mesh.origin(mesh.prev(across)), *wing);
+                            }
+                            _ => {
+                                // Across a boundary or crease side: the triangle's third vertex
+                                // reflected through the side's middle (only with a boundary
+                                // rule: the input check refuses boundaries otherwise).
                                 add(&mut row, mesh.origin(side), *wing);
                                 add(&mut row, mesh.dest(side), *wing);
                                 add(&mut row, mesh.origin(mesh.prev(side)), -*wing);
@@ -439,27 +444,62 @@ fn smooth_edge_row(mesh: &Mesh, masks: &Masks, faces: FacePoints<'_>, h: HalfEdg
     row
 }
 
-/// The point of boundary edge `a → b` by the four-point rule along the boundary: `a'` before
-/// `a`, `b'` after `b` on the boundary loop; at a corner (a boundary vertex of one face) the
-/// boundary curve ends, and the point beyond it is extrapolated, `2a − b` (otherwise the curve
-/// would round the corner and fold the surface's tangent plane there).
-fn four_point_along_boundary(mesh: &Mesh, a: VertexId, b: VertexId, weight: f64) -> Row {
+/// Whether edge `e` bounds the surface for the four-point boundary rule: a boundary edge, or
+/// one tagged infinitely sharp (the boundary rule then applies on each side of it).
+fn bounds(mesh: &Mesh, e: EdgeId) -> bool {
+    mesh.is_boundary_edge(e) || crease::is_infinite(sharpness(mesh.edge_sharpness(e)))
+}
+
+/// Whether `v` lies on the boundary or a crease, or is a tagged corner: the rules of the
+/// interior stop there as at a boundary.
+fn on_crease(mesh: &Mesh, v: VertexId) -> bool {
+    mesh.is_boundary_vertex(v)
+        || crease::is_infinite(sharpness(mesh.vertex_sharpness(v)))
+        || vertex_edges(mesh, v).iter().any(|&(e, _)| bounds(mesh, e))
+}
+
+/// The vertex before `a` on the boundary or crease curve through `b` and `a`, or `None` where
+/// the curve ends at `a`: a tagged corner, a vertex where other than two such curves' edges
+/// meet, or one with a single face between its two on either side (a boundary vertex of one
+/// face, a crease turning around one face: rounding it would fold the tangent plane there).
+fn curve_before(mesh: &Mesh, a: VertexId, b: VertexId) -> Option<VertexId> {
+    if crease::is_infinite(sharpness(mesh.vertex_sharpness(a))) {
+        return None;
+    }
+    let edges = vertex_edges(mesh, a);
+    let along: SmallVec<[usize; 4]> = (0..edges.len()).filter(|&i| bounds(mesh, edges[i].0)).collect();
+    let &[i, j] = along.as_slice() else {
+        return None;
+    };
+    // Faces between the two in fan order, and (around an interior vertex) on the other side.
+    let inner = j - i;
+    let outer = (!mesh.is_boundary_vertex(a)).then(|| edges.len() - inner);
+    if inner == 1 || outer == Some(1) {
+        return None;
+    }
+    match (edges[i].1, edges[j].1) {
+        (x, y) if x == b && y != b => Some(y),
+        (x, y) if y == b && x != b => Some(x),
+        _ => None,
+    }
+}
+
+/// The point of the boundary or crease edge `a → b` by the four-point rule along its curve:
+/// `a'` before `a`, `b'` after `b`; where the curve ends, the point beyond it is extrapolated
+/// (`2a − b`), the four-point curve's end rule.
+fn four_point_along_crease(mesh: &Mesh, a: VertexId, b: VertexId, weight: f64) -> Row {
     let mut row = Row::default();
-    let corner = |v: VertexId| mesh.vertex_faces(v).count() == 1;
-    if corner(a) {
-        add(&mut row, a, -2.0 * weight);
-        add(&mut row, b, weight);
-    } else {
-        add(&mut row, *mesh.one_ring(a).last().expect("a boundary vertex"), -weight);
+    for (end, other) in [(a, b), (b, a)] {
+        match curve_before(mesh, end, other) {
+            Some(outer) => add(&mut row, outer, -weight),
+            None => {
+                add(&mut row, end, -2.0 * weight);
+                add(&mut row, other, weight);
+            }
+        }
     }
     add(&mut row, a, 0.5 + weight);
     add(&mut row, b, 0.5 + weight);
-    if corner(b) {
-        add(&mut row, b, -2.0 * weight);
-        add(&mut row, a, weight);
-    } else {
-        add(&mut row, mesh.one_ring(b)[0], -weight);
-    }
     row
 }
 
@@ -496,7 +536,7 @@ fn fan_from(mesh: &Mesh, h: HalfEdgeId) -> SmallVec<[VertexId; 8]> {
 /// when `k = 4`.
 fn beyond(mesh: &Mesh, h: HalfEdgeId) -> Row {
     let end = mesh.dest(h);
-    if mesh.is_boundary_vertex(end) {
+    if on_crease(mesh, end) {
         let mut row = Row::default();
         row.add(end.raw(), 2.0);
         row.add(mesh.origin(h).raw(), -1.0);
@@ -525,11 +565,11 @@ fn beyond(mesh: &Mesh, h: HalfEdgeId) -> Row {
 fn four_point_face(mesh: &Mesh, edge_rows: &[Row], w: f64, f: FaceId) -> Row {
     let halves: SmallVec<[HalfEdgeId; 4]> = mesh.face_half_edges(f).collect();
     let edge = |h: HalfEdgeId| &edge_rows[mesh.edge(h).index()];
-    // The edge point beyond side `h`, or at a boundary side 2 E(h) − E(opposite).
+    // The edge point beyond side `h`, or at a boundary or crease side 2 E(h) − E(opposite).
     let across = |h: HalfEdgeId, opposite: HalfEdgeId| -> Cow<'_, Row> {
         match mesh.twin(h) {
-            Some(t) => Cow::Borrowed(edge(mesh.next(mesh.next(t)))),
-            None => {
+            Some(t) if !bounds(mesh, mesh.edge(h)) => Cow::Borrowed(edge(mesh.next(mesh.next(t)))),
+            _ => {
                 let mut row = Row::default();
                 row.add_row(edge(h), 2.0);
                 row.add_row(edge(opposite), -1.0);

@@ -26,6 +26,7 @@
 
 mod channels;
 mod pieces;
+mod predict;
 mod vertices;
 
 use std::sync::Arc;
@@ -666,6 +667,13 @@ impl QuadtreeTessellator {
         let max_depth = options.max_depth.min(DEPTH_LIMIT);
         let count = AtomicUsize::new(0);
         let parallel = options.parallelism.forks();
+        // The budget predicted before the work: a lower bound on the leaves, counted until it
+        // passes the limit (see `predict.rs`).
+        if let Some(needed) = self.polygons_at_least(options)?
+            && needed > options.max_polygons
+        {
+            return Err(TessError::TooManyPolygons { needed, limit: options.max_polygons, epsilon });
+        }
         let grown: Vec<(Vec<Leaf>, Corners)> = crate::par::try_map(parallel, &self.roots, |&root| {
             let (mut leaves, mut corners) = (Vec::new(), Corners::new());
             let piece = self.root_piece(root)?;
@@ -707,7 +715,8 @@ impl QuadtreeTessellator {
             }
         }
         if u32::try_from(creators.len()).is_err() {
-            return Err(TessError::TooManyPolygons { limit: options.max_polygons, epsilon });
+            let limit = options.max_polygons;
+            return Err(TessError::TooManyPolygons { needed: limit + 1, limit, epsilon });
         }
 
         // Every vertex evaluated once, exactly.
@@ -735,7 +744,8 @@ impl QuadtreeTessellator {
         });
         let corners: usize = rings.iter().flatten().map(|(ring, _)| ring.len()).sum();
         if u32::try_from(corners).is_err() {
-            return Err(TessError::TooManyPolygons { limit: options.max_polygons, epsilon });
+            let limit = options.max_polygons;
+            return Err(TessError::TooManyPolygons { needed: limit + 1, limit, epsilon });
         }
 
         // Channels: each vertex's values, and the seams' further sides (see `channels.rs`).
@@ -813,43 +823,11 @@ impl QuadtreeTessellator {
         leaves: &mut Vec<Leaf>,
         corners: &mut Corners,
     ) -> Result<(), TessError> {
-        // A level's face without a patch is bounded by the hull of its ring, where the rules
-        // between the levels are convex combinations; else it is always split.
-        let ring = match &piece {
-            Piece::Face { level, face } if self.convex_levels => self.face_ring(*level, *face),
-            _ => Vec::new(),
-        };
-        // The piece's own ε on the screen (none: wholly behind the near plane, flat at once).
-        let epsilon = match (&budget.screen, &piece) {
-            (None, _) => Some(budget.epsilon),
-            (Some(_), Piece::Face { .. }) if ring.is_empty() => Some(budget.epsilon),
-            (Some(screen), Piece::Face { .. }) => screen.epsilon(&ring),
-            (Some(screen), Piece::Extraordinary { points, .. } | Piece::Linear { points, .. }) => {
-                screen.epsilon(points)
-            }
-            (Some(screen), Piece::Regular(b)) => screen.epsilon(b.net.as_flattened()),
-            (Some(screen), Piece::Quartic(q)) => screen.epsilon(&q.net),
-        };
-        let flat = match (&piece, epsilon) {
-            (Piece::Face { .. }, _) if ring.is_empty() => false,
-            (_, None) => true,
-            (Piece::Face { .. }, Some(e)) => flatness::extraordinary_is_flat(&ring, e),
-            (Piece::Extraordinary { points, .. }, Some(e)) => flatness::extraordinary_is_flat(points, e),
-            (Piece::Linear { matrices, shape, points, .. }, Some(e)) => {
-                // Two levels down: the grandchildren's rings hug the piece (a footprint of about
-                // 1.5 times its side, against 3 for its own points), for a bound 4 times tighter.
-                let (samples, parameters) = linear_samples(matrices, *shape, points, LINEAR_LEVELS)
-                    .or_else(|| linear_samples(matrices, *shape, points, 0))
-                    .unwrap_or_default();
-                !samples.is_empty() && flatness::linear_is_flat(&samples, &parameters, e)
-            }
-            (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
-            (Piece::Quartic(q), Some(e)) => flatness::quartic_is_flat(q, e),
-        };
-        let epsilon = epsilon.unwrap_or(budget.epsilon);
+        let (flat, epsilon) = self.flatness(&piece, budget);
         if flat {
             if budget.count.fetch_add(1, Ordering::Relaxed) >= budget.options.max_polygons {
-                return Err(TessError::TooManyPolygons { limit: budget.options.max_polygons, epsilon });
+                let limit = budget.options.max_polygons;
+                return Err(TessError::TooManyPolygons { needed: limit + 1, limit, epsilon });
             }
             leaves.push(Leaf { extraordinary: matches!(piece, Piece::Extraordinary { .. }), ..node });
             return Ok(());
@@ -866,6 +844,44 @@ impl QuadtreeTessellator {
             corners.insert((node.depth, node.x, node.y), piece);
         }
         Ok(())
+    }
+
+    /// Whether `piece` is flat, and the `ε` it was measured against (its own on the screen).
+    fn flatness(&self, piece: &Piece, budget: &Budget<'_>) -> (bool, f64) {
+        // A level's face without a patch is bounded by the hull of its ring, where the rules
+        // between the levels are convex combinations; else it is always split.
+        let ring = match piece {
+            Piece::Face { level, face } if self.convex_levels => self.face_ring(*level, *face),
+            _ => Vec::new(),
+        };
+        // The piece's own ε on the screen (none: wholly behind the near plane, flat at once).
+        let epsilon = match (&budget.screen, piece) {
+            (None, _) => Some(budget.epsilon),
+            (Some(_), Piece::Face { .. }) if ring.is_empty() => Some(budget.epsilon),
+            (Some(screen), Piece::Face { .. }) => screen.epsilon(&ring),
+            (Some(screen), Piece::Extraordinary { points, .. } | Piece::Linear { points, .. }) => {
+                screen.epsilon(points)
+            }
+            (Some(screen), Piece::Regular(b)) => screen.epsilon(b.net.as_flattened()),
+            (Some(screen), Piece::Quartic(q)) => screen.epsilon(&q.net),
+        };
+        let flat = match (piece, epsilon) {
+            (Piece::Face { .. }, _) if ring.is_empty() => false,
+            (_, None) => true,
+            (Piece::Face { .. }, Some(e)) => flatness::extraordinary_is_flat(&ring, e),
+            (Piece::Extraordinary { points, .. }, Some(e)) => flatness::extraordinary_is_flat(points, e),
+            (Piece::Linear { matrices, shape, points, .. }, Some(e)) => {
+                // Two levels down: the grandchildren's rings hug the piece (a footprint of about
+                // 1.5 times its side, against 3 for its own points), for a bound 4 times tighter.
+                let (samples, parameters) = linear_samples(matrices, *shape, points, LINEAR_LEVELS)
+                    .or_else(|| linear_samples(matrices, *shape, points, 0))
+                    .unwrap_or_default();
+                !samples.is_empty() && flatness::linear_is_flat(&samples, &parameters, e)
+            }
+            (Piece::Regular(b), Some(e)) => flatness::regular_is_flat(b, e),
+            (Piece::Quartic(q), Some(e)) => flatness::quartic_is_flat(q, e),
+        };
+        (flat, epsilon.unwrap_or(budget.epsilon))
     }
 }
 
@@ -890,7 +906,7 @@ impl QuadtreeTessellator {
 }
 
 /// What a root's recursion may spend.
-struct Budget<'a> {
+pub(super) struct Budget<'a> {
     epsilon: f64,
     screen: Option<crate::rates::ScreenBound>,
     max_depth: u32,

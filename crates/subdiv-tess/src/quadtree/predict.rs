@@ -1,0 +1,193 @@
+//! The quadtree's budget predicted before the work: a lower bound on its leaves.
+//!
+//! The tree splits every node that is not flat. A regular (bicubic) node is flat only if each
+//! side's chord bound, `h² max‖S''‖ / 8` along the side, is within `ε`
+//! ([`flatness::regular_is_flat`] requires it), so a tree split exactly where that necessary
+//! condition fails is refined by the real one: its leaves are a lower bound on the real
+//! leaves, and when they pass the limit the real tessellation would too. Such a node costs
+//! the second derivatives at five points, against a Bézier split, four flatness tests and later
+//! the vertices' evaluation for a real one. Pieces that are not regular (faces without a patch,
+//! extraordinary corners) are split as the real build splits them: their chains are linear in
+//! the depth. Quartic and non-polynomial pieces count one leaf each (a weaker bound, never one
+//! above the truth). The count stops once it passes the limit, so a refusal costs about a tree
+//! of the limit's size in cheap nodes, not the tessellation.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::DVec3;
+
+use super::{Budget, Piece, QuadtreeOptions, QuadtreeTessellator, Root};
+use crate::TessError;
+use crate::bezier::{Bicubic, bernstein3};
+
+impl QuadtreeTessellator {
+    /// A lower bound on the polygons (leaves) that [`tessellate`](Self::tessellate) with
+    /// `options` outputs, found before the work and in a small part of its time (see the module
+    /// docs), counted until it passes [`QuadtreeOptions::max_polygons`]: the tessellation
+    /// refuses the options at once when it does. `None` for a screen-space bound, whose `ε`
+    /// differs from piece to piece.
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::{QuadtreeOptions, QuadtreeTessellator, Tolerance};
+    ///
+    /// let cube = Mesh::build(shapes::cube())?;
+    /// let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &cube)?;
+    /// let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4));
+    /// let at_least = tess.polygons_at_least(&options)?.unwrap();
+    /// let mesh = tess.tessellate(&options)?;
+    /// assert!(at_least <= mesh.polygon_count() && 10 * at_least >= 9 * mesh.polygon_count());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    ///
+    /// # Errors
+    /// [`TessError::Tolerance`] for a tolerance that is not positive and finite, and errors
+    /// of the pieces' derivation.
+    pub fn polygons_at_least(&self, options: &QuadtreeOptions) -> Result<Option<usize>, TessError> {
+        if options.screen.is_some() {
+            return Ok(None);
+        }
+        let epsilon = options.tolerance.absolute(self.diagonal)?;
+        let max_depth = options.max_depth.min(super::DEPTH_LIMIT);
+        let count = AtomicUsize::new(0);
+        crate::par::try_map(options.parallelism.forks(), &self.roots, |&root| {
+            let max_depth = max_depth.saturating_sub(root.depth());
+            let budget = Budget { epsilon, screen: None, max_depth, count: &count, options };
+            self.count_leaves(root, self.root_piece(root)?, 0, &budget)
+        })?;
+        Ok(Some(count.load(Ordering::Relaxed)))
+    }
+
+    /// Adds to `budget.count` a lower bound on the leaves of `piece`, a node at `depth`.
+    fn count_leaves(&self, root: Root, piece: Piece, depth: u32, budget: &Budget<'_>) -> Result<(), TessError> {
+        let limit = budget.options.max_polygons;
+        if budget.count.load(Ordering::Relaxed) > limit {
+            return Ok(());
+        }
+        match &piece {
+            Piece::Regular(b) => {
+                let levels = budget.max_depth.saturating_sub(depth);
+                SecondDerivatives::of(b).count_leaves(budget.epsilon, levels, budget.count, limit);
+                return Ok(());
+            }
+            Piece::Quartic(_) | Piece::Linear { .. } => {
+                budget.count.fetch_add(1, Ordering::Relaxed);
+                return Ok(());
+            }
+            Piece::Face { .. } | Piece::Extraordinary { .. } => {}
+        }
+        let (flat, _) = self.flatness(&piece, budget);
+        if flat || depth >= budget.max_depth {
+            budget.count.fetch_add(1, Ordering::Relaxed);
+            return Ok(());
+        }
+        for &domain in root.child_domains() {
+            self.count_leaves(root, self.child(root, &piece, domain)?, depth + 1, budget)?;
+        }
+        Ok(())
+    }
+}
+
+/// A bicubic's second derivatives along its two directions in Bézier form: `∂²/∂x²` of degree
+/// (1, 3), `xx[j][i]`, and `∂²/∂y²` of degree (3, 1), `yy[j][i]`.
+struct SecondDerivatives {
+    xx: [[DVec3; 2]; 4],
+    yy: [[DVec3; 4]; 2],
+}
+
+impl SecondDerivatives {
+    fn of(patch: &Bicubic) -> Self {
+        let n = &patch.net;
+        Self {
+            xx: std::array::from_fn(|j| std::array::from_fn(|i| 6.0 * (n[j][i] - 2.0 * n[j][i + 1] + n[j][i + 2]))),
+            yy: std::array::from_fn(|j| std::array::from_fn(|i| 6.0 * (n[j][i] - 2.0 * n[j + 1][i] + n[j + 2][i]))),
+        }
+    }
+
+    /// `max(‖∂²S/∂x²‖, ‖∂²S/∂y²‖)` at `(x, y)`.
+    fn largest(&self, x: f64, y: f64) -> f64 {
+        let (bx, by) = (bernstein3(x), bernstein3(y));
+        let (lx, ly) = ([1.0 - x, x], [1.0 - y, y]);
+        let mut xx = DVec3::ZERO;
+        let mut yy = DVec3::ZERO;
+        for j in 0..4 {
+            for i in 0..2 {
+                xx += lx[i] * by[j] * self.xx[j][i];
+                yy += bx[j] * ly[i] * self.yy[i][j];
+            }
+        }
+        xx.length().max(yy.length())
+    }
+
+    /// Adds to `count` the leaves of the tree over the unit square split wherever a node of
+    /// side `h` has `h² · max over its corners / 8 > epsilon` (a side's chord bound past `ε`:
+    /// then it is not flat), at most `levels` deep, stopping once `count` passes `limit`.
+    fn count_leaves(&self, epsilon: f64, levels: u32, count: &AtomicUsize, limit: usize) {
+        let corners = [self.largest(0.0, 0.0), self.largest(1.0, 0.0), self.largest(1.0, 1.0), self.largest(0.0, 1.0)];
+        let mut stack = vec![(0u32, 0.0, 0.0, corners)];
+        let mut local = 0usize;
+        while let Some((depth, x, y, c)) = stack.pop() {
+            let h = 0.5f64.powi(depth as i32);
+            let largest = c.iter().copied().fold(0.0, f64::max);
+            if depth >= levels || h * h * largest / 8.0 <= epsilon {
+                local += 1;
+                // Flushed in batches, so that other roots see the total grow.
+                if local == 4096 {
+                    if count.fetch_add(local, Ordering::Relaxed) + local > limit {
+                        return;
+                    }
+                    local = 0;
+                }
+                continue;
+            }
+            let (m, x1, y1) = (h / 2.0, x + h, y + h);
+            let (xm, ym) = (x + m, y + m);
+            let [c0, c1, c2, c3] = c;
+            let (bottom, right, top, left) =
+                (self.largest(xm, y), self.largest(x1, ym), self.largest(xm, y1), self.largest(x, ym));
+            let centre = self.largest(xm, ym);
+            stack.push((depth + 1, x, y, [c0, bottom, centre, left]));
+            stack.push((depth + 1, xm, y, [bottom, c1, right, centre]));
+            stack.push((depth + 1, xm, ym, [centre, right, c2, top]));
+            stack.push((depth + 1, x, ym, [left, centre, top, c3]));
+        }
+        count.fetch_add(local, Ordering::Relaxed);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bicubic that is `S(x, y) = (x, y, a x² + b y²)`: second derivatives `2a` and `2b`
+    /// everywhere, so the tree is uniform at the depth where `h² · 2 max(a, b) / 8 ≤ ε`.
+    fn paraboloid(a: f64, b: f64) -> Bicubic {
+        // The Bézier points of t ↦ t² on [0, 1] are 0, 0, 1/3, 1; of t ↦ t, k/3.
+        let square = [0.0, 0.0, 1.0 / 3.0, 1.0];
+        Bicubic {
+            net: std::array::from_fn(|j| {
+                std::array::from_fn(|i| DVec3::new(i as f64 / 3.0, j as f64 / 3.0, a * square[i] + b * square[j]))
+            }),
+        }
+    }
+
+    #[test]
+    fn a_uniform_second_derivative_gives_a_uniform_tree() {
+        let d = SecondDerivatives::of(&paraboloid(3.0, 1.0));
+        assert!((d.largest(0.3, 0.7) - 6.0).abs() < 1e-12);
+        // h² · 6 / 8 ≤ ε: h = 1/8 just above ε = 0.75 / 64, 64 leaves; h = 1/16 just below it.
+        for (epsilon, leaves) in [(0.75 / 64.0 * 1.01, 64), (0.75 / 64.0 * 0.99, 256), (1.0, 1)] {
+            let count = AtomicUsize::new(0);
+            d.count_leaves(epsilon, 24, &count, usize::MAX);
+            assert_eq!(count.load(Ordering::Relaxed), leaves, "ε = {epsilon}");
+        }
+        // The depth limit caps it; the count stops soon after passing the limit.
+        let count = AtomicUsize::new(0);
+        d.count_leaves(1e-12, 3, &count, usize::MAX);
+        assert_eq!(count.load(Ordering::Relaxed), 64);
+        let count = AtomicUsize::new(0);
+        d.count_leaves(1e-12, 24, &count, 10_000);
+        assert!((10_000..10_000 + 4096 + 4).contains(&count.load(Ordering::Relaxed)));
+    }
+}
