@@ -331,8 +331,9 @@ fn a_users_surface_scheme_goes_through_every_command() {
 }
 
 /// The interpolating schemes on open grids (their four-point boundary rule, corners of one face
-/// included): Kobbelt on quads, the Butterfly on triangles; `eval --grid 4`, and `tessellate
-/// --rate 8` keeping the one boundary loop, every vertex on the surface.
+/// included): Kobbelt on quads, the Butterfly on triangles; `eval --grid 4`, `tessellate --rate
+/// 8` keeping the one boundary loop, every vertex on the surface, and `render` where there is a
+/// device.
 #[test]
 fn interpolating_schemes_take_open_meshes() {
     let dir = tempfile::tempdir().unwrap();
@@ -379,6 +380,11 @@ fn interpolating_schemes_take_open_meshes() {
             let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
             let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
             assert!(gap < 1e-12, "{scheme}: vertex {k} is {gap:e} off the surface");
+        }
+        if subdiv_testkit::gpu().is_some() {
+            let png = dir.path().join(format!("{scheme}.png"));
+            let out = subdiv(&["render", &path(&grid), "--scheme", scheme, "--size", "64,48", "-o", &path(&png)]);
+            assert!(out.status.success() && png.exists(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
         }
     }
 }

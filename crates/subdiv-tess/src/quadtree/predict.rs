@@ -8,9 +8,11 @@
 //! the second derivatives at five points, against a Bézier split, four flatness tests and later
 //! the vertices' evaluation for a real one. Pieces that are not regular (faces without a patch,
 //! extraordinary corners) are split as the real build splits them: their chains are linear in
-//! the depth. Quartic and non-polynomial pieces count one leaf each (a weaker bound, never one
-//! above the truth). The count stops once it passes the limit, so a refusal costs about a tree
-//! of the limit's size in cheap nodes, not the tessellation.
+//! the depth. A quartic (Loop) node is flat only if each side's chord bound is within `ε`
+//! ([`flatness::quartic_is_flat`]), and that bound is at least the side's distance from its chord
+//! at the side's middle: the same tree over triangles, split where a middle strays further.
+//! Non-polynomial pieces count one leaf each (a weak bound, never one above the truth). The count stops once it passes the limit, so a refusal costs about a tree of the
+//! limit's size in cheap nodes, not the tessellation.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -19,6 +21,7 @@ use glam::DVec3;
 use super::{Budget, Piece, QuadtreeOptions, QuadtreeTessellator, Root};
 use crate::TessError;
 use crate::bezier::{Bicubic, bernstein3};
+use crate::quartic::Quartic;
 
 impl QuadtreeTessellator {
     /// A lower bound on the polygons (leaves) that [`tessellate`](Self::tessellate) with
@@ -71,7 +74,12 @@ impl QuadtreeTessellator {
                 SecondDerivatives::of(b).count_leaves(budget.epsilon, levels, budget.count, limit);
                 return Ok(());
             }
-            Piece::Quartic(_) | Piece::Linear { .. } => {
+            Piece::Quartic(q) => {
+                let levels = budget.max_depth.saturating_sub(depth);
+                quartic_leaves(q, budget.epsilon, levels, budget.count, limit);
+                return Ok(());
+            }
+            Piece::Linear { .. } => {
                 budget.count.fetch_add(1, Ordering::Relaxed);
                 return Ok(());
             }
@@ -156,6 +164,84 @@ impl SecondDerivatives {
     }
 }
 
+/// [`SecondDerivatives::count_leaves`] for a quartic triangle, split as the quadtree splits
+/// triangles (four children, the middle one turned half a turn), wherever a side's middle lies
+/// further than `epsilon` from its chord's middle: the quartic chord bound is at least the side's
+/// largest distance from its chord (it bounds that distance by Bézier coefficients).
+fn quartic_leaves(q: &Quartic, epsilon: f64, levels: u32, count: &AtomicUsize, limit: usize) {
+    let q = PowerForm::of(q);
+    // A node: depth, corner 0, turned or not, and its corners' points; its sides' middles are its
+    // children's corners (in `ChildDomain::of_face(3)`'s order), so each is evaluated once.
+    let top = [q.eval(0.0, 0.0), q.eval(1.0, 0.0), q.eval(0.0, 1.0)];
+    let mut stack = vec![(0u32, 0.0f64, 0.0f64, false, top)];
+    let mut local = 0usize;
+    while let Some((depth, x, y, flipped, [c0, c1, c2])) = stack.pop() {
+        let h = 0.5f64.powi(depth as i32);
+        let g = if flipped { -h } else { h };
+        let half = g / 2.0;
+        let (m01, m12, m20) = (q.eval(x + half, y), q.eval(x + half, y + half), q.eval(x, y + half));
+        let bent = [(c0, c1, m01), (c1, c2, m12), (c2, c0, m20)]
+            .iter()
+            .any(|&(a, b, m)| (m - (a + b) / 2.0).length() > epsilon);
+        if depth >= levels || !bent {
+            local += 1;
+            if local == 4096 {
+                if count.fetch_add(local, Ordering::Relaxed) + local > limit {
+                    return;
+                }
+                local = 0;
+            }
+            continue;
+        }
+        stack.push((depth + 1, x, y, flipped, [c0, m01, m20]));
+        stack.push((depth + 1, x + half, y, flipped, [m01, c1, m12]));
+        stack.push((depth + 1, x, y + half, flipped, [m20, m12, c2]));
+        stack.push((depth + 1, x + half, y + half, !flipped, [m12, m20, m01]));
+    }
+    count.fetch_add(local, Ordering::Relaxed);
+}
+
+/// A quartic triangle in the power basis, `Σ m[a][b] uᵃ vᵇ` (`a + b ≤ 4`): the predictor's
+/// evaluations, several times cheaper than the Bernstein form's.
+struct PowerForm {
+    m: [[DVec3; 5]; 5],
+}
+
+impl PowerForm {
+    /// The expansion of each Bernstein term `4!/(i! j! k!) uⁱ vʲ (1 − u − v)ᵏ`.
+    fn of(q: &Quartic) -> Self {
+        const FACTORIAL: [f64; 5] = [1.0, 1.0, 2.0, 6.0, 24.0];
+        let mut m = [[DVec3::ZERO; 5]; 5];
+        for j in 0..=4 {
+            for i in 0..=4 - j {
+                let k = 4 - i - j;
+                let c = FACTORIAL[4] / (FACTORIAL[i] * FACTORIAL[j] * FACTORIAL[k]);
+                for p in 0..=k {
+                    for r in 0..=k - p {
+                        let sign = if (p + r) % 2 == 0 { 1.0 } else { -1.0 };
+                        let multinomial = FACTORIAL[k] / (FACTORIAL[p] * FACTORIAL[r] * FACTORIAL[k - p - r]);
+                        m[i + p][j + r] += sign * c * multinomial * q.net[Quartic::index(i, j)];
+                    }
+                }
+            }
+        }
+        Self { m }
+    }
+
+    fn eval(&self, u: f64, v: f64) -> DVec3 {
+        let (mut out, mut vb) = (DVec3::ZERO, 1.0);
+        for b in 0..=4 {
+            let mut ua = vb;
+            for a in 0..=4 - b {
+                out += ua * self.m[a][b];
+                ua *= u;
+            }
+            vb *= v;
+        }
+        out
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -169,6 +255,15 @@ mod tests {
             net: std::array::from_fn(|j| {
                 std::array::from_fn(|i| DVec3::new(i as f64 / 3.0, j as f64 / 3.0, a * square[i] + b * square[j]))
             }),
+        }
+    }
+
+    #[test]
+    fn the_power_form_is_the_quartic() {
+        let q = Quartic { net: std::array::from_fn(|k| DVec3::new(k as f64, (k * k % 7) as f64, (k as f64).sin())) };
+        let p = PowerForm::of(&q);
+        for (u, v) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (0.2, 0.3), (0.6, 0.1)] {
+            assert!((p.eval(u, v) - q.eval(u, v)).length() < 1e-12, "({u}, {v})");
         }
     }
 
