@@ -134,18 +134,13 @@ impl SecondDerivatives {
     fn count_leaves(&self, epsilon: f64, levels: u32, count: &AtomicUsize, limit: usize) {
         let corners = [self.largest(0.0, 0.0), self.largest(1.0, 0.0), self.largest(1.0, 1.0), self.largest(0.0, 1.0)];
         let mut stack = vec![(0u32, 0.0, 0.0, corners)];
-        let mut local = 0usize;
+        let mut leaves = Leaves { count, limit, local: 0 };
         while let Some((depth, x, y, c)) = stack.pop() {
             let h = 0.5f64.powi(depth as i32);
             let largest = c.iter().copied().fold(0.0, f64::max);
             if depth >= levels || h * h * largest / 8.0 <= epsilon {
-                local += 1;
-                // Flushed in batches, so that other roots see the total grow.
-                if local == 4096 {
-                    if count.fetch_add(local, Ordering::Relaxed) + local > limit {
-                        return;
-                    }
-                    local = 0;
+                if !leaves.add() {
+                    return;
                 }
                 continue;
             }
@@ -160,7 +155,6 @@ impl SecondDerivatives {
             stack.push((depth + 1, xm, ym, [centre, right, c2, top]));
             stack.push((depth + 1, x, ym, [left, centre, top, c3]));
         }
-        count.fetch_add(local, Ordering::Relaxed);
     }
 }
 
@@ -174,7 +168,7 @@ fn quartic_leaves(q: &Quartic, epsilon: f64, levels: u32, count: &AtomicUsize, l
     // children's corners (in `ChildDomain::of_face(3)`'s order), so each is evaluated once.
     let top = [q.eval(0.0, 0.0), q.eval(1.0, 0.0), q.eval(0.0, 1.0)];
     let mut stack = vec![(0u32, 0.0f64, 0.0f64, false, top)];
-    let mut local = 0usize;
+    let mut leaves = Leaves { count, limit, local: 0 };
     while let Some((depth, x, y, flipped, [c0, c1, c2])) = stack.pop() {
         let h = 0.5f64.powi(depth as i32);
         let g = if flipped { -h } else { h };
@@ -184,12 +178,8 @@ fn quartic_leaves(q: &Quartic, epsilon: f64, levels: u32, count: &AtomicUsize, l
             .iter()
             .any(|&(a, b, m)| (m - (a + b) / 2.0).length() > epsilon);
         if depth >= levels || !bent {
-            local += 1;
-            if local == 4096 {
-                if count.fetch_add(local, Ordering::Relaxed) + local > limit {
-                    return;
-                }
-                local = 0;
+            if !leaves.add() {
+                return;
             }
             continue;
         }
@@ -198,7 +188,33 @@ fn quartic_leaves(q: &Quartic, epsilon: f64, levels: u32, count: &AtomicUsize, l
         stack.push((depth + 1, x, y + half, flipped, [m20, m12, c2]));
         stack.push((depth + 1, x + half, y + half, !flipped, [m12, m20, m01]));
     }
-    count.fetch_add(local, Ordering::Relaxed);
+}
+
+/// A tree's leaves, added to the shared count in batches (so that other roots see the total
+/// grow without contending on every leaf), the rest when dropped.
+struct Leaves<'a> {
+    count: &'a AtomicUsize,
+    limit: usize,
+    local: usize,
+}
+
+impl Leaves<'_> {
+    /// Counts one leaf; `false` once the total has passed the limit (stop counting).
+    fn add(&mut self) -> bool {
+        self.local += 1;
+        if self.local < 4096 {
+            return true;
+        }
+        let total = self.count.fetch_add(self.local, Ordering::Relaxed) + self.local;
+        self.local = 0;
+        total <= self.limit
+    }
+}
+
+impl Drop for Leaves<'_> {
+    fn drop(&mut self) {
+        self.count.fetch_add(self.local, Ordering::Relaxed);
+    }
 }
 
 /// A quartic triangle in the power basis, `Σ m[a][b] uᵃ vᵇ` (`a + b ≤ 4`): the predictor's
