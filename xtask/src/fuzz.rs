@@ -1,6 +1,9 @@
-//! `cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug]`: every fuzz target
-//! (or those named) for N seconds each (default 60; a release build unless `--debug`, which
-//! CI's short pass takes because its tests have built the debug dependencies already), each in a child process whose watchdog ends an input
+//! `cargo xtask fuzz [--seconds N] [--target T]... [--seed S] [--debug | --coverage]`: every fuzz
+//! target (or those named) for N seconds each (default 60; a release build unless `--debug`,
+//! which CI's short pass takes because its tests have built the debug dependencies already, or
+//! `--coverage`: a release build instrumented for edge coverage, `subdiv_fuzz::coverage`, in
+//! `target/fuzz-coverage`, whose runs keep the inputs that reach new edges), each in a child
+//! process whose watchdog ends an input
 //! running past 10 s and whose resident memory this process watches (killed past 2 GiB; an
 //! address-space limit does not work: faer reserves a large gemm buffer per thread).
 //! A finding is reduced (each candidate run in a fresh child) and kept as
@@ -23,10 +26,12 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     let mut seed = 1u64;
     let mut targets = Vec::new();
     let mut debug = false;
+    let mut coverage = false;
     let mut rest = args.iter();
     while let Some(arg) = rest.next() {
-        if arg == "--debug" {
-            debug = true;
+        if arg == "--debug" || arg == "--coverage" {
+            debug |= arg == "--debug";
+            coverage |= arg == "--coverage";
             continue;
         }
         let value = rest.next().ok_or_else(|| format!("{arg} needs a value"))?;
@@ -43,13 +48,20 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
     if targets.is_empty() {
         targets = Target::ALL.to_vec();
     }
-    let (profile, build): (&str, &[&str]) = if debug {
-        ("debug", &["build", "-p", "subdiv-fuzz"])
+    if debug && coverage {
+        return Err("--debug and --coverage are two different builds: pick one".into());
+    }
+    let binary = if coverage {
+        instrumented_build()?
     } else {
-        ("release", &["build", "--release", "-p", "subdiv-fuzz"])
+        let (profile, build): (&str, &[&str]) = if debug {
+            ("debug", &["build", "-p", "subdiv-fuzz"])
+        } else {
+            ("release", &["build", "--release", "-p", "subdiv-fuzz"])
+        };
+        crate::cargo(build)?;
+        crate::root().join("target").join(profile).join("subdiv-fuzz")
     };
-    crate::cargo(build)?;
-    let binary = crate::root().join("target").join(profile).join("subdiv-fuzz");
     let scratch = std::env::temp_dir().join(format!("subdiv-fuzz-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).map_err(|e| format!("{}: {e}", scratch.display()))?;
     let mut findings = Vec::new();
@@ -86,6 +98,31 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
             findings.len()
         ))
     }
+}
+
+/// The fuzz binary instrumented for edge coverage: built for the host named as an explicit
+/// target (so that `RUSTFLAGS` reach the binary and its crates, not build scripts or procedural
+/// macros, which rustc loads without the instrumentation's entry point), in a target folder of
+/// its own (the flags rebuild every crate).
+fn instrumented_build() -> Result<PathBuf, String> {
+    let version = Command::new("rustc").arg("-vV").output().map_err(|e| format!("cannot run rustc: {e}"))?;
+    let version = String::from_utf8_lossy(&version.stdout).into_owned();
+    let host =
+        version.lines().find_map(|l| l.strip_prefix("host: ")).ok_or("`rustc -vV` names no host")?.trim().to_string();
+    let folder = crate::root().join("target").join("fuzz-coverage");
+    let args = ["build", "--release", "-p", "subdiv-fuzz", "--target", &host];
+    eprintln!("$ RUSTFLAGS=\"{}\" cargo {}", subdiv_fuzz::coverage::RUSTFLAGS, args.join(" "));
+    let status = Command::new(env!("CARGO"))
+        .args(args)
+        .env("RUSTFLAGS", subdiv_fuzz::coverage::RUSTFLAGS)
+        .env("CARGO_TARGET_DIR", &folder)
+        .current_dir(crate::root())
+        .status()
+        .map_err(|e| format!("cannot run cargo: {e}"))?;
+    if !status.success() {
+        return Err(format!("the instrumented build failed ({status})"));
+    }
+    Ok(folder.join(host).join("release").join("subdiv-fuzz"))
 }
 
 /// The fuzz binary, on one thread, without backtraces.

@@ -1,12 +1,13 @@
-//! Running a target on mutations of its corpus (no coverage instrumentation on stable Rust:
-//! an input joins the corpus when it reaches an outcome no input reached before, the outcome
-//! being the target's label of what happened).
+//! Running a target on mutations of its corpus: an input joins the corpus when it reaches an
+//! outcome no input reached before (the target's label of what happened), or, in a build
+//! instrumented for [`Coverage`], a hit-count class of an edge counter that no input reached.
 
 use std::collections::HashSet;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::{Duration, Instant};
 
 use crate::Target;
+use crate::coverage::Coverage;
 
 /// What a fuzz run did.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
@@ -18,6 +19,8 @@ pub struct Report {
     /// Distinct outcomes reached (counted again after the set is forgotten at
     /// [`MAX_OUTCOMES`]).
     pub outcomes: usize,
+    /// Edge counters that fired (0 in a build without coverage instrumentation).
+    pub edges: usize,
     /// The slowest input's wall time (on a busy machine more than its processor time).
     pub slowest: Duration,
     /// The most processor time one input took (Linux; zero elsewhere): what the fuzz binary's
@@ -39,6 +42,7 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
     let mut outcomes: HashSet<u64> = HashSet::new();
     let mut outcomes_seen = 0usize;
     let mut report = Report::default();
+    let mut coverage = Coverage::new();
     let start = Instant::now();
     let mut next = 0usize;
     while start.elapsed() < duration {
@@ -52,8 +56,10 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
         };
         let cpu = processor_time();
         before(&input, cpu);
+        coverage.reset();
         let run = Instant::now();
         let outcome = catch_unwind(AssertUnwindSafe(|| target.run(&input)));
+        let new_edges = coverage.observe();
         report.slowest = report.slowest.max(run.elapsed());
         if let (Some(before), Some(after)) = (cpu, processor_time()) {
             report.slowest_cpu = report.slowest_cpu.max(after.saturating_sub(before));
@@ -66,7 +72,8 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
                     outcomes_seen += outcomes.len();
                     outcomes.clear();
                 }
-                if outcomes.insert(hash(label.as_bytes())) && next >= corpus.len() {
+                let new_outcome = outcomes.insert(hash(label.as_bytes()));
+                if (new_outcome || new_edges) && next >= corpus.len() {
                     if corpus.len() < MAX_CORPUS {
                         corpus.push(input);
                     } else {
@@ -90,6 +97,7 @@ pub fn fuzz(target: Target, duration: Duration, seed: u64, mut before: impl FnMu
     }
     report.corpus = corpus.len();
     report.outcomes = outcomes_seen + outcomes.len();
+    report.edges = coverage.edges();
     report
 }
 

@@ -9,6 +9,8 @@
 
 // A command-line child process: its report goes to stdout, its reasons to stderr.
 #![allow(clippy::print_stdout, clippy::print_stderr)]
+// The coverage instrumentation's entry point (below) is the one unsafe item of the workspace.
+#![allow(unsafe_code)]
 
 use std::process::ExitCode;
 use std::sync::Mutex;
@@ -59,6 +61,14 @@ fn start(epoch: Instant, cpu: Option<Duration>) {
     STARTED.store((epoch.elapsed().as_millis() as u64).max(1), Ordering::Relaxed);
 }
 
+/// SanitizerCoverage's registration of an object's 8-bit counters (`[start, stop)`), called
+/// by the constructors of code built with `subdiv_fuzz::coverage::RUSTFLAGS`. It lives in the
+/// binary, not the library, so that the linker finds it whichever archive refers to it.
+#[unsafe(no_mangle)]
+pub extern "C" fn __sanitizer_cov_8bit_counters_init(start: *mut u8, stop: *mut u8) {
+    subdiv_fuzz::coverage::register(start as usize, stop as usize);
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let target = args.get(1).and_then(|t| Target::from_name(t));
@@ -87,11 +97,12 @@ fn main() -> ExitCode {
             });
             STARTED.store(0, Ordering::Relaxed);
             println!(
-                "{{\"target\":\"{}\",\"executions\":{},\"corpus\":{},\"outcomes\":{},\"slowest_ms\":{},\"slowest_cpu_ms\":{},\"finding\":{}}}",
+                "{{\"target\":\"{}\",\"executions\":{},\"corpus\":{},\"outcomes\":{},\"edges\":{},\"slowest_ms\":{},\"slowest_cpu_ms\":{},\"finding\":{}}}",
                 target.name(),
                 report.executions,
                 report.corpus,
                 report.outcomes,
+                report.edges,
                 report.slowest.as_millis(),
                 report.slowest_cpu.as_millis(),
                 report.finding.as_ref().map_or("null".to_string(), |(_, m)| format!("{m:?}")),
