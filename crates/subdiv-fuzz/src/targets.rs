@@ -7,7 +7,7 @@ use arbitrary::Unstructured;
 use subdiv::mesh::{BoundaryInterpolation, CreaseTag, Mesh, PolygonSoup, VertexId, shapes};
 use subdiv::schemes::{Builtin, CurveScheme, PatchMatrices, PatchType, Scheme};
 use subdiv::stencil::{Address, Dyadic, StencilEvaluator};
-use subdiv::{FaceId, Rates, Surface, TessOptions, Tolerance};
+use subdiv::{Camera, FaceId, Method, Rates, Surface, TessOptions, Tolerance};
 
 /// An entry point of the library, fuzzed on arbitrary bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -15,16 +15,20 @@ pub enum Target {
     /// `subdiv_io::read_obj`, then `Mesh::build` and, for small meshes, one level of
     /// refinement and a tessellation at rate 2.
     Obj,
-    /// `subdiv_io::parse_gltf` without a folder (no file is read), then `Mesh::build`.
+    /// `subdiv_io::parse_gltf` on a real folder: the input is the JSON, then optionally a
+    /// zero byte and the bytes of `buffer.bin`, which is written beside it and read through
+    /// the JSON's URIs; then `Mesh::build`.
     Gltf,
     /// `Scheme::from_toml_str` and `CurveScheme::from_toml_str`; a scheme that parses refines
-    /// a cube (quad splits) or an octahedron (triangle splits) once.
+    /// a cube (quad splits) or an octahedron (triangle splits) once, and derives its sub-patch
+    /// matrices at an extraordinary vertex (valence 3 to 5, from the input's hash).
     Scheme,
     /// `Dyadic::from_str` (`U,V`), then its address and the stencil of a valence-5
     /// Catmull-Clark patch there.
     Parameter,
     /// Small random meshes (shapes, jitter, creases, holes) under every built-in scheme:
-    /// build, refine, evaluate, tessellate (rates and tolerances) and the grid.
+    /// build, refine, evaluate, tessellate (both methods, every rate policy, up to a small
+    /// vertex budget so that the budgets' refusals are reached) and the grid.
     Pipeline,
 }
 
@@ -66,7 +70,13 @@ impl Target {
                     ])
                     .collect()
             }
-            Self::Gltf => vec![GLTF_TRIANGLE.to_vec(), GLTF_QUAD_INDEXED.to_vec()],
+            Self::Gltf => {
+                // The triangle again, its positions in `buffer.bin` after the zero byte.
+                let json = GLTF_TRIANGLE_FILE.to_vec();
+                let positions: Vec<u8> =
+                    [0.0f32, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0].iter().flat_map(|x| x.to_le_bytes()).collect();
+                vec![GLTF_TRIANGLE.to_vec(), GLTF_QUAD_INDEXED.to_vec(), [json, vec![0], positions].concat()]
+            }
             Self::Scheme => Builtin::ALL
                 .iter()
                 .map(|b| b.scheme().to_toml_string().into_bytes())
@@ -149,7 +159,19 @@ fn obj(data: &[u8]) -> String {
 }
 
 fn gltf(data: &[u8]) -> String {
-    let read = subdiv::io::parse_gltf(data, "fuzz.gltf", None);
+    // One folder per process, its buffer file rewritten for each input.
+    static FOLDER: OnceLock<std::path::PathBuf> = OnceLock::new();
+    let folder = FOLDER.get_or_init(|| {
+        let folder = std::env::temp_dir().join(format!("subdiv-fuzz-gltf-{}", std::process::id()));
+        std::fs::create_dir_all(&folder).expect("a scratch folder can be made");
+        folder
+    });
+    let (json, buffer) = match data.iter().position(|&b| b == 0) {
+        Some(at) => (&data[..at], &data[at + 1..]),
+        None => (data, &[][..]),
+    };
+    std::fs::write(folder.join("buffer.bin"), buffer).expect("the scratch buffer can be written");
+    let read = subdiv::io::parse_gltf(json, "fuzz.gltf", Some(folder));
     let outcome = label("read", &read);
     match read {
         Ok(soup) => format!("{outcome}; {}", label("build", &Mesh::build(soup))),
@@ -167,6 +189,10 @@ fn scheme(data: &[u8]) -> String {
             if scheme.split() == subdiv::schemes::Split::Triangle { shapes::octahedron() } else { shapes::cube() };
         let surface = Surface::build(cage, &scheme).expect("a shape builds");
         outcome += &format!("; {}", label("refine", &surface.refine(1)));
+        // The sub-patch derivation runs the engine on a canonical mesh of this valence.
+        let valence = 3 + (crate::driver::hash(data) % 3) as usize;
+        let matrices = PatchMatrices::compute(&scheme, PatchType::interior(valence), BoundaryInterpolation::EdgeOnly);
+        outcome += &format!("; {}", label("patches", &matrices));
     }
     outcome
 }
@@ -240,12 +266,26 @@ fn pipeline_from(u: &mut Unstructured<'_>) -> arbitrary::Result<String> {
         }
         outcome += &format!("; {}", label("evaluate", &point));
     }
-    let rates = match u.int_in_range(0..=2)? {
-        0 => Rates::Uniform(u.int_in_range(1..=6)?),
-        1 => Rates::Tolerance(Tolerance::Relative([1e-1, 1e-2, 1e-3][u.int_in_range(0..=2)?])),
-        _ => Rates::PerFace((0..surface.mesh().face_count()).map(|_| u.int_in_range(1..=5)).collect::<Result<_, _>>()?),
+    // Every policy, rates up to 64 and tolerances down to 1e-6 against a small budget: what
+    // the budgets refuse is refused before the work, so these stay quick.
+    let camera = Camera::look_at(
+        subdiv::mesh::DVec3::from(u.arbitrary::<[i8; 3]>()?.map(f64::from)),
+        subdiv::mesh::DVec3::ZERO,
+        subdiv::mesh::DVec3::Z,
+    );
+    let viewport = [u.int_in_range(1..=4096)?, u.int_in_range(1..=4096)?];
+    let rates = match u.int_in_range(0..=4)? {
+        0 => Rates::Uniform(u.int_in_range(1..=64)?),
+        1 => Rates::Tolerance(Tolerance::Relative([1e-1, 1e-2, 1e-3, 1e-6][u.int_in_range(0..=3)?])),
+        2 => Rates::Screen { camera, viewport, pixels_per_edge: [0.5, 4.0, 64.0][u.int_in_range(0..=2)?] },
+        3 => Rates::ScreenError { camera, viewport, pixels: [0.1, 1.0, 16.0][u.int_in_range(0..=2)?] },
+        _ => {
+            Rates::PerFace((0..surface.mesh().face_count()).map(|_| u.int_in_range(1..=64)).collect::<Result<_, _>>()?)
+        }
     };
-    let tessellation = surface.tessellate(&TessOptions::DEFAULT.with_rates(rates));
+    let method = if u.arbitrary()? { Method::Quadtree } else { Method::Dual };
+    let options = TessOptions::DEFAULT.with_rates(rates).with_method(method).with_max_vertices(PIPELINE_MAX_VERTICES);
+    let tessellation = surface.tessellate(&options);
     if let Ok(t) = &tessellation {
         check_tessellation(&t.mesh);
     }
@@ -253,6 +293,12 @@ fn pipeline_from(u: &mut Unstructured<'_>) -> arbitrary::Result<String> {
     outcome += &format!("; {}", label("grid", &surface.evaluate_grid(u.int_in_range(1..=4)?)));
     Ok(outcome)
 }
+
+/// The most vertices a pipeline input's tessellation may have: past it the budget refuses.
+const PIPELINE_MAX_VERTICES: usize = 200_000;
+
+/// One triangle whose positions are in `buffer.bin` beside it (seed of [`Target::Gltf`]).
+const GLTF_TRIANGLE_FILE: &[u8] = br#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":36,"uri":"buffer.bin"}],"bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","max":[1,1,0],"min":[0,0,0]}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0}"#;
 
 /// One triangle, its positions in a `data:` URI (seed of [`Target::Gltf`]).
 const GLTF_TRIANGLE: &[u8] = br#"{"asset":{"version":"2.0"},"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],"bufferViews":[{"buffer":0,"byteLength":36}],"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","max":[1,1,0],"min":[0,0,0]}],"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],"nodes":[{"mesh":0}],"scenes":[{"nodes":[0]}],"scene":0}"#;

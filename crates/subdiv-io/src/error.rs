@@ -13,7 +13,7 @@ use subdiv_mesh::MeshError;
 #[non_exhaustive]
 pub enum IoError {
     /// The operating system could not read or write a file.
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {source}", shown(path))]
     Io {
         /// The file.
         path: PathBuf,
@@ -21,7 +21,7 @@ pub enum IoError {
         source: std::io::Error,
     },
     /// The file name has no extension this crate reads.
-    #[error("{}: unknown mesh format; expected a .obj, .gltf or .glb file", path.display())]
+    #[error("{}: unknown mesh format; expected a .obj, .gltf or .glb file", shown(path))]
     UnknownFormat {
         /// The file.
         path: PathBuf,
@@ -169,7 +169,10 @@ pub enum IoError {
     },
     /// A glTF buffer URI leads out of the glTF file's folder (a `../` escape, an absolute path,
     /// a symlink), and [`GltfOptions::allow_outside_uris`](crate::GltfOptions) is off.
-    #[error("{file}: {location}.uri '{uri}': outside the glTF's folder; pass --allow-outside-uris to allow")]
+    #[error(
+        "{file}: {location}.uri '{}': outside the glTF's folder; pass --allow-outside-uris to allow",
+        one_line(uri)
+    )]
     UriOutsideFolder {
         /// The glTF file.
         file: String,
@@ -179,7 +182,7 @@ pub enum IoError {
         uri: String,
     },
     /// A glTF buffer URI names something that is not a regular file (a device, FIFO, directory).
-    #[error("{file}: {location}.uri '{uri}': {} is not a regular file", path.display())]
+    #[error("{file}: {location}.uri '{}': {} is not a regular file", one_line(uri), shown(path))]
     NotARegularFile {
         /// The glTF file.
         file: String,
@@ -301,9 +304,41 @@ fn texcoord_rule(index: i64, count: usize) -> String {
     }
 }
 
+/// `text` on one line: control characters (a newline in a file name or a URI) written as their
+/// escapes, so that every message stays one line whatever names it carries.
+pub(crate) fn one_line(text: &str) -> std::borrow::Cow<'_, str> {
+    if text.chars().any(char::is_control) {
+        text.chars().map(|c| if c.is_control() { c.escape_default().to_string() } else { c.to_string() }).collect()
+    } else {
+        std::borrow::Cow::Borrowed(text)
+    }
+}
+
+/// A path as a message shows it: [`one_line`] of its display.
+pub(crate) fn shown(path: &std::path::Path) -> String {
+    one_line(&path.display().to_string()).into_owned()
+}
+
 fn at(file: &str, line: Option<usize>) -> String {
     match line {
         Some(line) => format!("{file}:{line}"),
         None => file.to_owned(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A newline in a URI or a file name (the fuzzer's glTF finding) stays one line, escaped;
+    /// other text, non-ASCII included, is shown as it is.
+    #[test]
+    fn names_with_control_characters_stay_on_one_line() {
+        let e = IoError::UriOutsideFolder { file: "a.gltf".into(), location: "buffers[0]".into(), uri: "x\ny".into() };
+        assert_eq!(e.to_string().lines().count(), 1);
+        assert!(e.to_string().contains(r"'x\ny'"), "{e}");
+        let e = IoError::Io { path: PathBuf::from("dir/\tfile\r\n.bin"), source: std::io::ErrorKind::NotFound.into() };
+        assert!(e.to_string().starts_with(r"dir/\tfile\r\n.bin: "), "{e}");
+        assert_eq!(one_line("héllo wörld"), "héllo wörld");
     }
 }

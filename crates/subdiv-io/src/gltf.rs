@@ -116,7 +116,7 @@ pub fn load_gltf_with(path: impl AsRef<Path>, options: &GltfOptions) -> Result<P
     let mut bytes = Vec::new();
     std::io::BufReader::new(file).read_to_end(&mut bytes).map_err(io)?;
     let dir = path.parent().map(|d| if d.as_os_str().is_empty() { Path::new(".") } else { d });
-    parse_gltf_with(&bytes, &path.display().to_string(), dir, options)
+    parse_gltf_with(&bytes, &crate::error::shown(path), dir, options)
 }
 
 /// [`parse_gltf_with`] with [`GltfOptions::DEFAULT`].

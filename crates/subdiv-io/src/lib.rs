@@ -127,7 +127,7 @@ pub fn load_mesh(path: impl AsRef<Path>, options: &BuildOptions) -> Result<Mesh,
     match Format::of(path)? {
         Format::Obj => ObjFile::load(path)?.build(options),
         Format::Gltf => Mesh::build_with(load_gltf(path)?, options).map_err(|source| IoError::Mesh {
-            file: path.display().to_string(),
+            file: crate::error::shown(path),
             line: None,
             source,
         }),

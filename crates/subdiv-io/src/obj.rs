@@ -141,7 +141,7 @@ impl ObjFile {
     pub fn load(path: impl AsRef<Path>) -> Result<Self, IoError> {
         let path = path.as_ref();
         let file = File::open(path).map_err(|source| IoError::Io { path: path.to_owned(), source })?;
-        Self::read(BufReader::new(file), &path.display().to_string())
+        Self::read(BufReader::new(file), &crate::error::shown(path))
     }
 
     /// Turns a [`MeshError`] about this file's soup into an [`IoError::Mesh`] that names its line.
