@@ -615,6 +615,30 @@ fn non_polynomial_pieces_are_within_tolerance() {
     assert!(matches!(&refused, Err(TessError::Unsupported { .. })), "{refused:?}");
 }
 
+/// Along an infinitely sharp crease of a non-polynomial scheme every vertex is special (each
+/// piece on the crease keeps itself at its corner 0), so a vertex at a piece's far corner on the
+/// crease never reaches a linear piece by descending: it hung the fuzzer's pipeline (sw-quad on
+/// a creased triangle torus, whose sub-face roots end on the crease at their corner 1). Each
+/// vertex is the exact limit point of its parameter.
+#[test]
+fn vertices_at_the_far_end_of_a_non_polynomial_crease_are_evaluated() {
+    let mut soup = shapes::triangle_torus(3, 3);
+    let face = soup.face(FaceId::new(0)).to_vec();
+    soup.tags.creases.push(subdiv_mesh::CreaseTag { vertices: [face[0], face[1]], sharpness: 10.0 });
+    let mesh = Mesh::build(soup).unwrap();
+    let scheme = Builtin::SwQuad.scheme();
+    let tess = QuadtreeTessellator::new(scheme, &mesh).unwrap();
+    let evaluator = LimitEvaluator::new(scheme, &mesh, &RefineOptions::DEFAULT).unwrap();
+    for relative in [1.0, 1e-2] {
+        let out = tess.tessellate(&QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(relative))).unwrap();
+        assert_watertight(&out);
+        for (p, s) in out.positions.iter().zip(&out.parameters) {
+            let exact = evaluator.eval(s.face, s.u, s.v).unwrap();
+            assert!((exact.position - *p).length() < 1e-12, "{relative}: {s:?}");
+        }
+    }
+}
+
 /// The dual splits (Doo-Sabin, and mid-edge by its two steps), patches around face corners:
 /// Doo-Sabin's regular ones are biquadratic (bicubics to the classification), mid-edge's the
 /// Zwart-Powell element, piecewise quadratic on the quad's triangles, so bounded as `sw-quad`'s
