@@ -37,9 +37,15 @@ fn stencil_prints_the_papers_four_point_numbers() {
     let weights = report["stencils"][0]["position"].as_array().unwrap();
     assert_eq!(weights.len(), 18);
     assert!((weights.iter().map(|w| w.as_f64().unwrap()).sum::<f64>() - 1.0).abs() < 1e-12);
-    // Off the grid, or a scheme without sub-patch matrices: status 2.
+    // √3 through its ternary split: at a vertex of valence 5, Kobbelt's limit weight
+    // 1 / (1 + 3kβ) on the vertex, β = (4 − 2 cos(2π/5)) / 45, over its 24 control points.
+    let report = json(&["stencil", "--scheme", "sqrt3", "--valence", "5", "--at", "0,0", "--json"]);
+    let weights = report["stencils"][0]["position"].as_array().unwrap();
+    assert_eq!(weights.len(), 24);
+    let beta = (4.0 - 2.0 * (std::f64::consts::TAU / 5.0).cos()) / 45.0;
+    assert!((weights[0].as_f64().unwrap() - 1.0 / (1.0 + 15.0 * beta)).abs() < 1e-12, "{weights:?}");
+    // Off the grid: status 2.
     assert_eq!(subdiv(&["stencil", "--scheme", "four-point", "--n", "3", "--at", "1/2"]).status.code(), Some(2));
-    assert_eq!(subdiv(&["stencil", "--scheme", "sqrt3", "--at", "0,0"]).status.code(), Some(2));
     // Exact surface stencils: sw-quad at valence 5 (paper 000 Fig. 6), and a refusal for Loop at
     // valence 5, whose weights involve cos(2π/5).
     let report = json(&["stencil", "--scheme", "sw-quad", "--valence", "5", "--at", "1/3,0", "--exact", "--json"]);

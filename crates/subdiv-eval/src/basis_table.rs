@@ -283,7 +283,7 @@ fn decode(bytes: &[u8], matrices: Arc<PatchMatrices>, shape: usize) -> Result<Ei
             let children = (0..r.len(3)?)
                 .map(|_| {
                     let d = r.take(3)?;
-                    let domain = ChildDomain { offset: [d[0], d[1]], flipped: d[2] != 0 };
+                    let domain = ChildDomain::binary([d[0], d[1]], d[2] != 0);
                     Ok(Child { domain, to_power: r.f64s()?, modes: read_complexes(&mut r)? })
                 })
                 .collect::<Result<Vec<_>, Corrupt>>()?;

@@ -141,8 +141,13 @@ impl FitKey {
                     order.len() - 1
                 });
                 words.push(local as u64);
-                let ChildDomain { offset, flipped } = child.domain;
-                words.push(u64::from(offset[0]) | u64::from(offset[1]) << 8 | u64::from(flipped) << 16);
+                let ChildDomain { offset, flipped, scale } = child.domain;
+                words.push(
+                    u64::from(offset[0])
+                        | u64::from(offset[1]) << 8
+                        | u64::from(flipped) << 16
+                        | u64::from(scale) << 24,
+                );
                 words.extend((0..child.rows()).flat_map(|r| child.row(r).iter().map(|x| x.to_bits())));
             }
         }

@@ -30,9 +30,11 @@ use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
 mod derivation;
 mod dual;
+mod ternary;
 
 use derivation::{Derivation, canonical_start};
 pub use dual::{dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners};
+pub use ternary::ternary_child_starts;
 
 /// The largest patch radius tried, in rings of faces: the smallest radius whose patches are
 /// closed under refinement is 1 for Catmull-Clark, Loop, sw-quad and bilinear, 2 for Butterfly
@@ -155,37 +157,77 @@ impl PatchType {
 }
 
 /// Where a child's domain lies in its parent's: the child's parameters are
-/// `sign · (2·(u, v) − offset)`, with `sign = −1` for the flipped middle triangle.
+/// `sign · (scale·(u, v) − offset)`, with `sign = −1` for a flipped (upside-down) triangle.
+/// `scale` is 2 for the binary splits (a quad's quarters, a triangle's four children) and 3 for
+/// the ternary one (√3's two steps: a triangle's nine children).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct ChildDomain {
     /// The offset, in units of the child's size.
     pub offset: [u8; 2],
-    /// Whether the child is turned by half a turn (the middle child of a triangle).
+    /// Whether the child is turned by half a turn (a triangle upside down in its parent).
     pub flipped: bool,
+    /// How many children fit along a side of the parent: 2 or 3.
+    pub scale: u8,
 }
 
 impl ChildDomain {
+    /// A child of a binary split (scale 2).
+    pub const fn binary(offset: [u8; 2], flipped: bool) -> Self {
+        Self { offset, flipped, scale: 2 }
+    }
+
     /// The child's parameters of the parent's point `(u, v)`.
     pub fn to_child(self, u: f64, v: f64) -> (f64, f64) {
-        let sign = if self.flipped { -1.0 } else { 1.0 };
-        (sign * (2.0 * u - f64::from(self.offset[0])), sign * (2.0 * v - f64::from(self.offset[1])))
+        let (sign, scale) = (if self.flipped { -1.0 } else { 1.0 }, f64::from(self.scale));
+        (sign * (scale * u - f64::from(self.offset[0])), sign * (scale * v - f64::from(self.offset[1])))
     }
 
     /// The parent's parameters of the child's point `(u, v)`.
     pub fn to_parent(self, u: f64, v: f64) -> (f64, f64) {
-        let sign = if self.flipped { -1.0 } else { 1.0 };
-        ((sign * u + f64::from(self.offset[0])) / 2.0, (sign * v + f64::from(self.offset[1])) / 2.0)
+        let (sign, scale) = (if self.flipped { -1.0 } else { 1.0 }, f64::from(self.scale));
+        ((sign * u + f64::from(self.offset[0])) / scale, (sign * v + f64::from(self.offset[1])) / scale)
     }
 
-    /// The children of a face of `size` sides (3: triangles, anything else: quads), in the
-    /// engine's order.
+    /// The children of a face of `size` sides (3: triangles, anything else: quads) under a
+    /// binary split, in the engine's order.
     pub fn of_face(size: usize) -> &'static [ChildDomain] {
         const fn at(u: u8, v: u8, flipped: bool) -> ChildDomain {
-            ChildDomain { offset: [u, v], flipped }
+            ChildDomain::binary([u, v], flipped)
         }
         const QUAD: [ChildDomain; 4] = [at(0, 0, false), at(1, 0, false), at(1, 1, false), at(0, 1, false)];
         const TRIANGLE: [ChildDomain; 4] = [at(0, 0, false), at(1, 0, false), at(0, 1, false), at(1, 1, true)];
         if size == 3 { &TRIANGLE } else { &QUAD }
+    }
+
+    /// The nine children of a triangle under the ternary split (√3's two steps), in the order
+    /// of [`PatchShape::children`]: the upright cells `(i, j)` (`i + j ≤ 2`, row by row, so the
+    /// child at corner 0 is first), then the three upside-down ones, whose corner 0 is the
+    /// lattice point `(i + 1, j + 1)` of cell `(i, j)`.
+    ///
+    /// ```
+    /// use subdiv_schemes::ChildDomain;
+    ///
+    /// let children = ChildDomain::ternary();
+    /// // The parent's centroid (1/3, 1/3) is corner 0 of the first upside-down child.
+    /// assert_eq!(children[6].to_child(1.0 / 3.0, 1.0 / 3.0), (0.0, 0.0));
+    /// assert_eq!(children[6].to_parent(1.0, 0.0), (0.0, 1.0 / 3.0));
+    /// ```
+    pub fn ternary() -> &'static [ChildDomain; 9] {
+        const fn at(u: u8, v: u8, flipped: bool) -> ChildDomain {
+            ChildDomain { offset: [u, v], flipped, scale: 3 }
+        }
+        const TERNARY: [ChildDomain; 9] = [
+            at(0, 0, false),
+            at(1, 0, false),
+            at(2, 0, false),
+            at(0, 1, false),
+            at(1, 1, false),
+            at(0, 2, false),
+            at(1, 1, true),
+            at(2, 1, true),
+            at(1, 2, true),
+        ];
+        &TERNARY
     }
 }
 
@@ -357,8 +399,7 @@ impl PatchMatrices {
     /// Computes the matrices without the cache.
     ///
     /// # Errors
-    /// [`SchemeError::SplitNotSupported`] for the √3 split (a ternary split two steps at a
-    /// time), [`SchemeError::FeatureNotSupported`] for boundary
+    /// [`SchemeError::FeatureNotSupported`] for boundary
     /// patches of schemes without boundary rules; [`SchemeError::ValenceNotSupported`] below valence 3, with no faces, or when no
     /// patch radius up to [`MAX_PATCH_RADIUS`] is closed under refinement (a user's scheme whose
     /// rules reach further).
@@ -374,7 +415,7 @@ impl PatchMatrices {
                 let dual = scheme.dual_form().expect("dual and mid-edge schemes have a dual form");
                 return Self::compute_dual(&dual, patch_type);
             }
-            split @ Split::Sqrt3 => return Err(split_not_supported(scheme, split)),
+            Split::Sqrt3 => return Self::compute_ternary(scheme, patch_type),
         };
         let (valence, invalid) = match patch_type {
             PatchType::Derived { .. } => {
@@ -457,6 +498,29 @@ impl PatchMatrices {
         }
     }
 
+    /// The ternary split's matrices (√3's two steps): smooth interior types only (the split
+    /// takes closed meshes without sharpness), valence 3 or more.
+    fn compute_ternary(scheme: &Scheme, patch_type: PatchType) -> Result<Self, SchemeError> {
+        match patch_type {
+            PatchType::Interior { valence, sharp } if valence >= 3 && sharp.is_smooth() => {
+                ternary::derive(scheme, valence)
+            }
+            PatchType::Interior { valence, .. } => Err(SchemeError::ValenceNotSupported {
+                scheme: scheme.name.clone(),
+                valence,
+                reason: "a √3 patch needs valence 3 or more, and no sharp features",
+            }),
+            PatchType::Boundary { faces, .. } => Err(SchemeError::ValenceNotSupported {
+                scheme: scheme.name.clone(),
+                valence: faces + 1,
+                reason: "the √3 split has no boundary rules, so no boundary patches",
+            }),
+            PatchType::Derived { .. } => {
+                Err(SchemeError::Internal("the √3 split has no derived configurations".to_string()))
+            }
+        }
+    }
+
     /// The matrices of the configuration of `start`'s face in `mesh` (a level of a real mesh,
     /// its boundary rule applied), with patches of `radius` rings, derived from the face's
     /// neighbourhood as the canonical patches are from theirs, over as many more levels as
@@ -533,6 +597,12 @@ impl PatchMatrices {
         }
     }
 
+    /// How many children fit along a side of a face: 2 for the binary splits, 3 for √3's
+    /// ternary one ([`ChildDomain::scale`]).
+    pub fn scale(&self) -> u8 {
+        self.shapes.first().and_then(|s| s.children.first()).map_or(2, |c| c.domain.scale)
+    }
+
     /// The [`Scheme::identity`] of the scheme the matrices are of: with the patch type, what
     /// tables derived from them (eigenbases) are keyed by.
     pub fn scheme_identity(&self) -> u64 {
@@ -555,13 +625,13 @@ impl PatchMatrices {
 fn split_not_supported(scheme: &Scheme, split: Split) -> SchemeError {
     SchemeError::SplitNotSupported {
         scheme: scheme.name.clone(),
-        what: "sub-patch matrices",
+        what: "one step's sub-patches",
         split: match split {
             Split::Sqrt3 => "√3",
             _ => "this",
         },
-        reason: "two of its steps split each triangle in nine (a ternary split), and sub-patch matrices \
-                 are made for binary splits",
+        reason: "one step's triangles straddle the old ones; two steps split each triangle in nine \
+                 (`ternary_child_starts`)",
     }
 }
 

@@ -318,7 +318,7 @@ fn decode(bytes: &[u8], patch_type: PatchType, scheme: &Scheme) -> Result<PatchM
             .map(|_| {
                 let shape = r.u32()? as usize;
                 let d = r.take(3)?;
-                let domain = ChildDomain { offset: [d[0], d[1]], flipped: d[2] != 0 };
+                let domain = ChildDomain::binary([d[0], d[1]], d[2] != 0);
                 let (rows, columns) = (r.u32()? as usize, r.u32()? as usize);
                 if columns != size || rows > bytes.len() {
                     return Err(r.corrupt("a child matrix whose size is not its shapes'"));

@@ -74,10 +74,9 @@ fn every_sub_patch_row_is_affine() {
 
 #[test]
 fn unsupported_splits_and_valences_are_typed_errors() {
-    let err = PatchMatrices::compute(Builtin::Sqrt3.scheme(), PatchType::interior(5), EDGE_ONLY).unwrap_err();
-    assert!(matches!(err, SchemeError::SplitNotSupported { what: "sub-patch matrices", .. }), "{err}");
-    // The dual splits' patches: interior, around faces of 3 or more sides.
-    for builtin in [Builtin::DooSabin, Builtin::Midedge] {
+    // The dual splits' patches: interior, around faces of 3 or more sides; √3's ternary ones
+    // interior, at valence 3 or more.
+    for builtin in [Builtin::DooSabin, Builtin::Midedge, Builtin::Sqrt3] {
         for patch_type in [PatchType::interior(2), PatchType::boundary(2, 0)] {
             let err = PatchMatrices::compute(builtin.scheme(), patch_type, EDGE_ONLY).unwrap_err();
             assert!(matches!(err, SchemeError::ValenceNotSupported { .. }), "{err}");

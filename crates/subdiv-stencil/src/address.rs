@@ -129,7 +129,7 @@ impl Address {
         check_domain(face_size, point)?;
         let q = point.denominator;
         let next = |(a, b): (i64, i64)| {
-            let (child, a, b) = step(face_size, a, b, q);
+            let (child, a, b) = step(face_size, 2, a, b, q);
             (child, (a, b))
         };
         let (steps, end) =
@@ -214,10 +214,14 @@ pub(crate) fn check_domain(face_size: usize, point: Dyadic) -> Result<(), Stenci
     Ok(())
 }
 
-/// One level of an address: the child of a face of `face_size` sides holding the point
-/// `(a, b) / q` (on a border the first in the engine's order), and the point in the child's
+/// One level of an address: the child of a face of `face_size` sides, split `scale` times
+/// along each side (2, or 3 for the ternary split of triangles), holding the point `(a, b) / q`
+/// (on a border one of the children holding it, always the same), and the point in the child's
 /// domain, over the same denominator.
-pub(crate) fn step(face_size: usize, a: i64, b: i64, q: i64) -> (u8, i64, i64) {
+pub(crate) fn step(face_size: usize, scale: u8, a: i64, b: i64, q: i64) -> (u8, i64, i64) {
+    if scale == 3 {
+        return ternary_step(a, b, q);
+    }
     let child = if face_size == 3 {
         if 2 * (a + b) <= q {
             0
@@ -236,9 +240,27 @@ pub(crate) fn step(face_size: usize, a: i64, b: i64, q: i64) -> (u8, i64, i64) {
             (false, true) => 3,
         }
     };
-    let ChildDomain { offset, flipped } = ChildDomain::of_face(face_size)[child];
+    let ChildDomain { offset, flipped, .. } = ChildDomain::of_face(face_size)[child];
     let sign = if flipped { -1 } else { 1 };
     (child as u8, sign * (2 * a - i64::from(offset[0]) * q), sign * (2 * b - i64::from(offset[1]) * q))
+}
+
+/// [`step`] of the ternary split ([`ChildDomain::ternary`]): the lattice cell `(i, j)` of
+/// `3·(a, b)/q`, upright where the point's offset in it sums to at most 1, else upside down.
+fn ternary_step(a: i64, b: i64, q: i64) -> (u8, i64, i64) {
+    let (mut i, j) = ((3 * a / q).min(2), (3 * b / q).min(2));
+    if i + j == 3 {
+        // A lattice point of the long side: corner 1 of the upright cell to its left.
+        i -= 1;
+    }
+    let (x, y) = (3 * a - i * q, 3 * b - j * q);
+    if x + y <= q {
+        let child = [[0, 3, 5], [1, 4, 5], [2, 4, 5]][i as usize][j as usize];
+        (child, x, y)
+    } else {
+        let child = 6 + i + 2 * j;
+        (child as u8, q - x, q - y)
+    }
 }
 
 #[cfg(test)]
@@ -258,6 +280,25 @@ mod tests {
         assert_eq!((a.prefix, a.period), (vec![], vec![3]));
         assert!(Address::of(3, Dyadic::new(2, 2, 3)).is_err());
         assert!(Address::of(4, Dyadic::new(0, 0, 0)).is_err());
+    }
+
+    #[test]
+    fn ternary_steps_land_in_the_child_s_domain() {
+        // Every point i/q, j/q of the triangle: the child's point, mapped back, is the point.
+        let q = 36;
+        for j in 0..=q {
+            for i in 0..=q - j {
+                let (child, a, b) = step(3, 3, i, j, q);
+                assert!(a >= 0 && b >= 0 && a + b <= q, "({i}, {j}) -> child {child} at ({a}, {b})");
+                let d = ChildDomain::ternary()[usize::from(child)];
+                let (u, v) = d.to_parent(a as f64 / q as f64, b as f64 / q as f64);
+                assert!((u - i as f64 / q as f64).abs() < 1e-15 && (v - j as f64 / q as f64).abs() < 1e-15);
+            }
+        }
+        // The centroid is corner 0 of the middle upright child; 1/4 = 0.0202…₃ alternates.
+        assert_eq!(step(3, 3, 1, 1, 3), (4, 0, 0));
+        assert_eq!(step(3, 3, 1, 0, 4), (0, 3, 0));
+        assert_eq!(step(3, 3, 3, 0, 4), (2, 1, 0));
     }
 
     #[test]

@@ -116,7 +116,7 @@ impl FaceDomain {
             Self::Quad | Self::Triangle => {
                 // The address's first step: the same choice on borders as the stencils make.
                 let size = if self == Self::Triangle { 3 } else { 4 };
-                let (child, a, b) = step(size, u, v, q);
+                let (child, a, b) = step(size, 2, u, v, q);
                 let flipped = ChildDomain::of_face(size)[usize::from(child)].flipped;
                 (usize::from(child), Dyadic::new(a, b, q), if flipped { -2.0 } else { 2.0 })
             }

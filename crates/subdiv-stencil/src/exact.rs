@@ -150,7 +150,8 @@ fn exact_stencil(
         }
     };
     let period = walk.len() - first;
-    let lambda = Rational::new(if flips % 2 == 1 { -1 } else { 1 }, num_bigint::BigInt::from(1) << period)
+    let scale = num_bigint::BigInt::from(matrices.scale());
+    let lambda = Rational::new(if flips % 2 == 1 { -1 } else { 1 }, num_traits::Pow::pow(&scale, period))
         .expect("a nonzero denominator");
     // Whether the surface has parameter derivatives at the cycle's point: the same test as the
     // floating-point route's (the derivative pair must dominate the cycle's spectrum).
@@ -173,8 +174,8 @@ fn exact_stencil(
         }
         _ => None,
     };
-    // Back through the prefix, last step first: w ← w · A (derivatives ×±2).
-    let two = Rational::from_integer(2);
+    // Back through the prefix, last step first: w ← w · A (derivatives ×±2, or ±3).
+    let two = Rational::from_integer(i64::from(matrices.scale()));
     for k in (0..first).rev() {
         position = times(&position, exact[k]);
         let scale = if sub(walk[k]).domain.flipped { -&two } else { two.clone() };

@@ -373,7 +373,7 @@ mod tests {
         assert!(matches!(eval.eval(FaceId::new(0), 1.0, 1.5), Err(StencilError::OutsideFace { face: 0, .. })));
         assert!(matches!(eval.eval(FaceId::new(0), f64::INFINITY, 0.0), Err(StencilError::OutsideFace { .. })));
 
-        // The dual split takes no holes; √3 has no sub-patch matrices.
+        // The dual split takes no holes; √3 has no levels yet.
         let doo_sabin = LimitEvaluator::new(Builtin::DooSabin.scheme(), &mesh, &RefineOptions::DEFAULT);
         assert!(matches!(
             doo_sabin,

@@ -5,7 +5,7 @@
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{
     DerivedConfigurations, FoundPatch, LocalRefinement, MAX_PATCH_RADIUS, MeshPatches, RefineOptions, Refiner, Scheme,
-    Split, Stencils, child_faces,
+    SchemeError, Split, Stencils, child_faces,
 };
 
 use crate::{Dyadic, FaceDomain, PatchFrame, StencilError};
@@ -163,8 +163,8 @@ impl PatchLevels {
     /// they cannot refine).
     ///
     /// # Errors
-    /// [`StencilError::Scheme`] for a scheme without sub-patch matrices (√3:
-    /// `SplitNotSupported`; Kobbelt next to valences other than 3, 4: `ValenceNotSupported`), a
+    /// [`StencilError::Scheme`] for √3 (`SplitNotSupported`: its levels are not built yet), a
+    /// scheme without sub-patch matrices for a valence (`ValenceNotSupported`), a
     /// face the scheme does not take, or boundaries a scheme has no rules for;
     /// [`StencilError::NoPatch`] if a face finds no patch within 16 levels (an internal error).
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, StencilError> {
@@ -199,10 +199,14 @@ impl PatchLevels {
                 let (levels, stencils) = crate::dual_levels::dual_levels(&dual, mesh, options)?;
                 return Ok(Self { split: scheme.split(), levels, stencils });
             }
-            // MeshPatches says why not.
-            _ => {
-                MeshPatches::new(scheme, mesh, options)?;
-                4
+            Split::Sqrt3 => {
+                return Err(StencilError::Scheme(SchemeError::SplitNotSupported {
+                    scheme: scheme.name().to_string(),
+                    what: "levels of patches over a mesh",
+                    split: "√3",
+                    reason: "the levels refine a face one binary step at a time, and √3 splits it in nine over \
+                             two steps; its patches' stencils come from `PatchMatrices` (base-3 addresses)",
+                }));
             }
         };
         // Level 0 with the boundary rule applied (boundary edges sharp, holes of `none`), without

@@ -38,9 +38,10 @@ pub(crate) const TOLERANCE: f64 = 1e-9;
 /// lengthened by whole periods until the period maps a shape to itself. Then the position
 /// stencil is the left eigenvector of the period's square matrix `M_τ` for eigenvalue 1
 /// (normalised to sum 1), carried back through the prefix's matrices. The derivative stencils
-/// are the left eigenvectors for `±2^−|τ|`, normalised on the linear functions `u` and `v` of
-/// the periodic shape ([`PatchShape::parameters`](subdiv_schemes::PatchShape::parameters)),
-/// times `±2^|σ|`. At a point that is its own extraordinary vertex (the period keeps an
+/// are the left eigenvectors for `±s^−|τ|` (`s` the split's scale, 2 or 3:
+/// [`PatchMatrices::scale`]), normalised on the linear functions `u` and `v` of the periodic
+/// shape ([`PatchShape::parameters`](subdiv_schemes::PatchShape::parameters)),
+/// times `±s^|σ|`. At a point that is its own extraordinary vertex (the period keeps an
 /// irregular shape) the tangents come from the leading eigenvectors that the face sees instead
 /// (see [`SurfaceStencil::exact_derivatives`]). Every eigenproblem is solved on the control
 /// points that influence the face
@@ -149,7 +150,7 @@ pub(crate) fn address_walk(
 ) -> Result<Walk<State>, StencilError> {
     let next = |state: State| {
         let Dyadic { u, v, denominator: q } = state.point;
-        let (child, u, v) = step(matrices.face_size, u, v, q);
+        let (child, u, v) = step(matrices.face_size, matrices.scale(), u, v, q);
         let shape = matrices.shapes[state.shape].children[usize::from(child)].shape;
         (child, State::new(shape, Dyadic::new(u, v, q)))
     };
@@ -344,7 +345,8 @@ fn times(w: &[f64], sub: &SubPatch, scale: f64) -> Vec<f64> {
 /// grow `2^k`-fold; nor the points that do not influence the face, whose own eigenvalues the
 /// iteration would pick up.
 fn derivative_back(w: &[f64], sub: &SubPatch, influence: &[u32]) -> Vec<f64> {
-    let full = times(w, sub, if sub.domain.flipped { -2.0 } else { 2.0 });
+    let scale = f64::from(sub.domain.scale);
+    let full = times(w, sub, if sub.domain.flipped { -scale } else { scale });
     let mut out = vec![0.0; full.len()];
     influence.iter().for_each(|&k| out[k as usize] = full[k as usize]);
     let mean = out.iter().sum::<f64>() / influence.len() as f64;

@@ -854,8 +854,7 @@ impl Builder<'_> {
 /// # Errors
 /// [`StencilError::OutsideDomain`] for a point outside the face, [`StencilError::Rate`] for a
 /// reduced denominator above [`MAX_SURFACE_BASIS_RATE`], the errors of [`SurfaceMask::of`] and
-/// [`PatchMatrices::of`] (√3 has no sub-patch matrices: use [`SurfaceBasisGrid::stencil_at`]),
-/// and [`StencilError::SurfaceMask`] if the patch's parameters are not lattice points.
+/// [`PatchMatrices::of`], and [`StencilError::SurfaceMask`] if the patch's parameters are not lattice points.
 pub fn regular_patch_stencil(scheme: &Scheme, point: Dyadic) -> Result<ExactStencil, StencilError> {
     check_domain(if scheme.regular_valence() == 6 { 3 } else { 4 }, point)?;
     let Dyadic { u, v, denominator: rate } = point.reduced();

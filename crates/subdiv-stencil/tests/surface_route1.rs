@@ -240,9 +240,33 @@ fn unsupported_splits_and_rates_are_typed_errors() {
         regular_patch_stencil(Builtin::Loop.scheme(), Dyadic::new(2, 2, 3)),
         Err(StencilError::OutsideDomain { .. })
     ));
-    // Route 3 has no sub-patch matrices for √3; route 1 says so through the same error.
-    assert!(matches!(
-        regular_patch_stencil(Builtin::Sqrt3.scheme(), Dyadic::new(1, 0, 2)),
-        Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported { .. }))
-    ));
+}
+
+/// √3 on whole grids: route 1 (its two steps, arity 3) against route 3 over the ternary
+/// split's regular patch (base-3 addresses), every point of the triangle at denominators with
+/// and without a terminating ternary expansion; and route 3 at the middle of an edge is the
+/// paper's stencil, 1/2256 · {740, 740, 312, 312, 28 ×4, 18 ×2, 1 ×4}.
+#[test]
+fn sqrt3_routes_1_and_3_agree_on_whole_grids() {
+    let scheme = Builtin::Sqrt3.scheme();
+    let m = PatchMatrices::of(scheme, PatchType::regular(scheme), BoundaryInterpolation::EdgeOnly).unwrap();
+    for n in [1, 2, 3, 4, 5, 6, 9] {
+        for j in 0..=n {
+            for i in 0..=n - j {
+                let point = Dyadic::new(i, j, n);
+                let route1 = regular_patch_stencil(scheme, point).unwrap().to_f64();
+                let route3 = surface_stencil(&m, 0, point).unwrap();
+                let (what, d) = worst_component(&route1, &route3);
+                assert!(d < 1e-12, "√3 at {point:?}, {what}: routes differ by {d:e}");
+            }
+        }
+    }
+    let middle = surface_stencil(&m, 0, Dyadic::new(1, 0, 2)).unwrap();
+    let mut weights: Vec<f64> = middle.position.iter().map(|w| w * 2256.0).filter(|w| w.abs() > 1e-9).collect();
+    weights.sort_by(|a, b| b.total_cmp(a));
+    let expected = [740.0, 740.0, 312.0, 312.0, 28.0, 28.0, 28.0, 28.0, 18.0, 18.0, 1.0, 1.0, 1.0, 1.0];
+    assert_eq!(weights.len(), expected.len(), "{weights:?}");
+    for (w, e) in weights.iter().zip(expected) {
+        assert!((w - e).abs() < 1e-9, "{weights:?}");
+    }
 }

@@ -329,3 +329,55 @@ fn stencils_at_dyadic_points_are_refinement() {
         assert!(checked > 20, "{builtin}: {checked} points");
     }
 }
+
+/// √3 through its ternary split: at an extraordinary vertex of valence `k` the limit is
+/// Kobbelt's closed form — the vertex rule `p' = (1 − kβ) p + kβ q̄` and the ring's mean moving
+/// to `(p + 2 q̄) / 3` (its new neighbours are the centroids of its faces) keep
+/// `(p + 3kβ q̄) / (1 + 3kβ)` — and the normal there is the limit of the normals nearby, on a
+/// jittered bipyramid refined four √3 steps (so each face's patch holds one irregular vertex).
+#[test]
+fn sqrt3_limit_at_extraordinary_vertices_is_the_closed_form() {
+    let sqrt3 = Builtin::Sqrt3.scheme();
+    for k in [3, 4, 5, 7, 8] {
+        let mut soup = PolygonSoup::new();
+        for i in 0..k {
+            let a = std::f64::consts::TAU * i as f64 / k as f64;
+            soup.push_vertex(DVec3::new(a.cos(), a.sin(), 0.0));
+        }
+        soup.push_vertex(DVec3::new(0.1, -0.05, 1.0));
+        soup.push_vertex(-DVec3::Z);
+        let ring = |i: usize| VertexId::new((i % k) as u32);
+        let (top, bottom) = (VertexId::new(k as u32), VertexId::new(k as u32 + 1));
+        for i in 0..k {
+            soup.push_face([top, ring(i), ring(i + 1)]);
+            soup.push_face([bottom, ring(i + 1), ring(i)]);
+        }
+        let coarse = Mesh::build(soup).unwrap();
+        let mesh = refine_uniform(&coarse, sqrt3, 4, &RefineOptions::DEFAULT).unwrap();
+        let apex = VertexId::new(k as u32);
+        let face = mesh.vertex_faces(apex).next().unwrap();
+        let start = mesh.face_half_edges(face).find(|&h| mesh.origin(h) == apex).unwrap();
+        let found = patches(Builtin::Sqrt3, &mesh).at(&mesh, start).unwrap_or_else(|| panic!("k = {k}: no patch"));
+        let points = positions(&mesh, &found);
+        let (m, shape) = (found.matrices, found.shape);
+        let s = surface_stencil(&m, shape, Dyadic::new(0, 0, 1)).unwrap();
+        check_sums(&s, &format!("k = {k}"));
+        let beta = (4.0 - 2.0 * (std::f64::consts::TAU / k as f64).cos()) / (9.0 * k as f64);
+        let ring_mean = mesh.one_ring(apex).iter().map(|&v| mesh.position(v)).sum::<DVec3>() / k as f64;
+        let a = 3.0 * k as f64 * beta;
+        let closed = (mesh.position(apex) + a * ring_mean) / (1.0 + a);
+        assert_close(apply(&s.position, &points), closed, 1e-13, &format!("k = {k}: limit at the vertex"));
+        let normal = |p: Dyadic| {
+            let s = surface_stencil(&m, shape, p).unwrap();
+            apply(&s.du, &points).cross(apply(&s.dv, &points)).normalize()
+        };
+        let near = normal(Dyadic::new(1, 1, 3i64.pow(16)));
+        assert!(normal(Dyadic::new(0, 0, 1)).dot(near) > 1.0 - 1e-6, "k = {k}");
+        // Every stencil of a grid sums to 1, its tangents to 0 (base-3 addresses of eighths).
+        for j in 0..=8 {
+            for i in 0..=8 - j {
+                check_sums(&surface_stencil(&m, shape, Dyadic::new(i, j, 8)).unwrap(), &format!("k = {k}"));
+            }
+        }
+    }
+}

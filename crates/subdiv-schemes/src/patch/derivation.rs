@@ -323,14 +323,15 @@ pub(super) fn parameter_coordinates(shapes: &[PatchShape], shape: usize) -> Opti
     for &s in &reach {
         for child in &shapes[s].children {
             let sign = if child.domain.flipped { -1.0 } else { 1.0 };
+            let scale = f64::from(child.domain.scale);
             for &r in &shapes[child.shape].influence {
                 let r = r as usize;
                 for &c in &shapes[s].influence {
                     a[(row, unknown[s][c as usize].expect("an influencing point"))] += child.get(r, c as usize);
                 }
-                a[(row, unknown[child.shape][r].expect("an influencing point"))] -= sign / 2.0;
-                b[(row, 0)] = f64::from(child.domain.offset[0]) / 2.0;
-                b[(row, 1)] = f64::from(child.domain.offset[1]) / 2.0;
+                a[(row, unknown[child.shape][r].expect("an influencing point"))] -= sign / scale;
+                b[(row, 0)] = f64::from(child.domain.offset[0]) / scale;
+                b[(row, 1)] = f64::from(child.domain.offset[1]) / scale;
                 row += 1;
             }
         }

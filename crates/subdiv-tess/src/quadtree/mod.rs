@@ -504,7 +504,7 @@ impl QuadtreeTessellator {
         let mut piece = self.root_piece(root)?;
         let full = root.full();
         // The child at that corner: a quad's quarter, a triangle's corner child.
-        let domain = ChildDomain { offset: [u8::from(x == full), u8::from(y == full)], flipped: false };
+        let domain = ChildDomain::binary([u8::from(x == full), u8::from(y == full)], false);
         // A piece of depth d keeps its corner at the root's: children at the same corner.
         for _ in 0..=DEPTH_LIMIT + 40 {
             match &piece {

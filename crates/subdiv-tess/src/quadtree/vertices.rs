@@ -118,7 +118,7 @@ impl QuadtreeTessellator {
         if !at_corner {
             return Ok(false);
         }
-        let domain = ChildDomain { offset: [u8::from(x == full), u8::from(y == full)], flipped: false };
+        let domain = ChildDomain::binary([u8::from(x == full), u8::from(y == full)], false);
         Ok(matches!(self.child(root, piece, domain)?, Piece::Extraordinary { .. }))
     }
 
