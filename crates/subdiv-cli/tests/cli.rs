@@ -243,13 +243,14 @@ fn eval_writes_osd_limit_csv_and_rejects_bad_samples() {
         assert!(stderr.contains(expect), "{content:?}: expected {expect:?} in {stderr:?}");
         assert!(!rejected.exists() && output.stdout.is_empty(), "{content:?}: nothing written");
     }
-    // A scheme whose meshes do not evaluate yet, and a mesh a scheme cannot take: typed errors.
-    let octahedron = dir.path().join("octahedron.obj");
-    subdiv::io::write_obj(&octahedron, &subdiv::mesh::shapes::octahedron()).unwrap();
-    let output = subdiv(&["eval", "--scheme", "sqrt3", "--grid", "1", octahedron.to_str().unwrap()]);
+    // A scheme without boundary rules on an open mesh, and a mesh a scheme cannot take: typed
+    // errors.
+    let open = dir.path().join("open.obj");
+    subdiv::io::write_obj(&open, &subdiv::mesh::shapes::quad_grid(1, 1)).unwrap();
+    let output = subdiv(&["eval", "--scheme", "doo-sabin", "--grid", "1", open.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("levels of patches over a mesh are not available for the √3 split"), "{stderr}");
+    assert!(stderr.contains("has no rules for boundaries"), "{stderr}");
     let output = subdiv(&["eval", "--scheme", "loop", "--grid", "1"]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("loop takes only 3-sided faces"));

@@ -336,6 +336,54 @@ fn a_users_surface_scheme_goes_through_every_command() {
     }
 }
 
+/// A √3 variant with another smoothing weight (β = (5 − 3 cos(2π/k)) / (12k), 1/24 where
+/// Kobbelt has 1/18 at valence 6) goes through every command too: its patches are ternary like
+/// √3's, derived from the file.
+#[test]
+fn a_users_sqrt3_variant_goes_through_every_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let original = r#"spoke = "(4 - 2*cos(2*pi/k))/(9*k)""#;
+    let text = String::from_utf8(subdiv(&["scheme", "sqrt3"]).stdout).unwrap();
+    assert!(text.contains(original), "{text}");
+    let text = text
+        .replace("name = \"sqrt3\"", "name = \"my-sqrt3\"")
+        .replace(original, r#"spoke = "(5 - 3*cos(2*pi/k))/(12*k)""#);
+    let file = dir.path().join("my-sqrt3.toml");
+    std::fs::write(&file, &text).unwrap();
+    let cage = dir.path().join("icosahedron.obj");
+    subdiv::io::write_obj(&cage, &subdiv::mesh::shapes::icosahedron()).unwrap();
+    let (file, cage) = (file.to_str().unwrap(), cage.to_str().unwrap());
+    let output = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let [fine, limit, glb, basis, png] = ["fine.obj", "limit.csv", "t.glb", "basis.png", "r.png"].map(output);
+    let mut commands = vec![
+        vec!["refine", cage, "--levels", "2", "-o", &fine],
+        vec!["analyze", "--valence", "5"],
+        vec!["stencil", "--valence", "5", "--at", "1/3,1/4"],
+        vec!["eval", cage, "--grid", "4", "-o", &limit],
+        vec!["tessellate", cage, "--rate", "8", "-o", &glb],
+        vec!["plot-basis", "--n", "9", "-o", &basis],
+    ];
+    if subdiv_testkit::gpu().is_some() {
+        commands.push(vec!["render", cage, "--size", "64,48", "-o", &png]);
+    }
+    for args in commands {
+        let mut all = args.clone();
+        all.extend(["--scheme-file", file]);
+        let out = subdiv(&all);
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    for name in ["fine.obj", "limit.csv", "t.glb", "basis.png"] {
+        assert!(dir.path().join(name).exists(), "{name}");
+    }
+    // Its surface is not √3's.
+    let limit = |scheme: &[&str]| {
+        let mut args = vec!["eval", cage, "--grid", "1"];
+        args.extend_from_slice(scheme);
+        String::from_utf8(subdiv(&args).stdout).unwrap()
+    };
+    assert_ne!(limit(&["--scheme-file", file]), limit(&["--scheme", "sqrt3"]));
+}
+
 /// The interpolating schemes on open grids (their four-point boundary rule, corners of one face
 /// included): Kobbelt on quads, the Butterfly on triangles; `eval --grid 4`, `tessellate --rate
 /// 8` keeping the one boundary loop, every vertex on the surface, and `render` where there is a
@@ -392,6 +440,64 @@ fn interpolating_schemes_take_open_meshes() {
             let out = subdiv(&["render", &path(&grid), "--scheme", scheme, "--size", "64,48", "-o", &path(&png)]);
             assert!(out.status.success() && png.exists(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
         }
+    }
+}
+
+/// √3 on a closed cage of triangles with vertices of valences 4 to 6 and 5-valent apexes:
+/// `eval --grid 4`, `tessellate --rate 8` closed (no boundary loop) with every vertex on the
+/// surface (its parameters evaluated again, to 1e-12), `render` where there is a device, and
+/// `--method eigen` refused with the reason.
+#[test]
+fn sqrt3_evaluates_and_tessellates_closed_meshes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let prism = capped_prism(5);
+    let mut soup = subdiv::mesh::PolygonSoup::new();
+    for &p in prism.positions() {
+        soup.push_vertex(p);
+    }
+    for face in prism.faces() {
+        soup.push_face([face[0], face[1], face[2]]);
+        if face.len() == 4 {
+            soup.push_face([face[0], face[2], face[3]]);
+        }
+    }
+    let faces = soup.faces().len();
+    let cage = dir.path().join("cage.obj");
+    subdiv::io::write_obj(&cage, &soup).unwrap();
+    let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "4"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + faces * 15);
+    let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
+    let args = ["tessellate", &path(&cage), "--scheme", "sqrt3", "--rate", "8"];
+    let out = subdiv(&[&args[..], &["--params", &path(&csv), "-o", &path(&obj)]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+    assert!(tess.boundary_loops().is_empty(), "the tessellation of a closed cage is closed");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let points: String = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let r: Vec<&str> = l.split(',').collect();
+            format!("{} {} {}\n", r[1], r[2], r[3])
+        })
+        .collect();
+    std::fs::write(&samples, points).unwrap();
+    let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--samples", &path(&samples)]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for (k, line) in String::from_utf8(out.stdout).unwrap().lines().skip(1).enumerate() {
+        let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
+        assert!(gap < 1e-12, "vertex {k} is {gap:e} off the surface");
+    }
+    let refused = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "2", "--method", "eigen"]);
+    assert_eq!(refused.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&refused.stderr).contains("evaluate through exact stencils"));
+    if subdiv_testkit::gpu().is_some() {
+        let png = dir.path().join("sqrt3.png");
+        let out = subdiv(&["render", &path(&cage), "--scheme", "sqrt3", "--size", "64,48", "-o", &path(&png)]);
+        assert!(out.status.success() && png.exists(), "{}", String::from_utf8_lossy(&out.stderr));
     }
 }
 

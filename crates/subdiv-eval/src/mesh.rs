@@ -6,7 +6,11 @@ use std::fmt::Write as _;
 use std::sync::Arc;
 use subdiv_mesh::{DVec3, FaceId, Mesh};
 
-use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme};
+use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme, Split};
+
+/// Why √3's faces take the exact stencils.
+const TERNARY: &str = "√3's patches split in nine (ternary), and eigenbases are made for the binary splits; \
+                       its faces evaluate through exact stencils (--method stencil, or auto)";
 use subdiv_stencil::{Dyadic, FaceDomain, LimitEvaluator, LimitPoint, PatchLevels, Resolved, StencilError};
 
 use crate::surface::{PatchPoint, PatchPoint2};
@@ -115,6 +119,9 @@ impl EigenEvaluator {
                 Route::Hole
             } else if method == Method::Stencil {
                 Route::Stencil { reason: None }
+            } else if scheme.split() == Split::Sqrt3 {
+                // The eigenbases are built for binary splits (their powers of ½).
+                Route::Stencil { reason: Some(TERNARY.to_string()) }
             } else {
                 let (nodes, surfaces) = (tree.nodes.len(), tree.surfaces.len());
                 let node = tree.push_placeholder();

@@ -156,6 +156,8 @@ fn procedural_meshes_match_the_cpu() {
         // Patches around face corners, on levels 1 and 2.
         (Builtin::DooSabin, "Doo-Sabin pentagonal prism", shapes::ngon_prism(5)),
         (Builtin::Midedge, "mid-edge default model", shapes::default_model()),
+        // Ternary levels (two √3 steps of the whole mesh each).
+        (Builtin::Sqrt3, "√3 icosahedron", shapes::icosahedron()),
     ] {
         let mesh = Mesh::build(soup).unwrap();
         for rate in [1, 5, 16] {

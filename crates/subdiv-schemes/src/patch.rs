@@ -34,7 +34,7 @@ mod ternary;
 
 use derivation::{Derivation, canonical_start};
 pub use dual::{dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners};
-pub use ternary::ternary_child_starts;
+pub use ternary::{ternary_child_starts, ternary_refine};
 
 /// The largest patch radius tried, in rings of faces: the smallest radius whose patches are
 /// closed under refinement is 1 for Catmull-Clark, Loop, sw-quad and bilinear, 2 for Butterfly

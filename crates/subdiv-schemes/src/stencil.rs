@@ -195,6 +195,26 @@ impl Stencils {
         out
     }
 
+    /// Two levels as one: `next`'s rows (over this level's children) over this level's
+    /// parents.
+    ///
+    /// # Panics
+    /// When `next` is not over this level's children.
+    pub(crate) fn then(&self, next: &Stencils) -> Stencils {
+        assert_eq!(next.parent_count, self.child_count(), "the next level is over this level's children");
+        let mut out = Stencils::with_capacity(next.child_count(), 0, self.parent_count);
+        for child in 0..next.child_count() {
+            let mut row = Row::default();
+            for (w, a) in next.row(child) {
+                for (x, b) in self.row(w) {
+                    row.add(x as u32, a * b);
+                }
+            }
+            out.push(&row);
+        }
+        out
+    }
+
     /// Number of rows: the refined level's vertices.
     pub fn child_count(&self) -> usize {
         self.runs.last().map_or(0, |run| run.rows_end as usize)

@@ -29,6 +29,9 @@ pub enum FaceDomain {
     Quad,
     /// The triangle `u, v ≥ 0, u + v ≤ 1` (triangles under a triangle split).
     Triangle,
+    /// The same triangle split in nine (√3, whose two steps are one ternary split): children
+    /// as [`ChildDomain::ternary`] lays them out.
+    Ternary,
     /// An N-gon under a quad split (triangles included): `size` quad sub-faces, sub-face `s`
     /// the lower-left half `[0, ½]²` of the unit tile at `(s mod columns, s div columns)`, where
     /// `columns = ⌈√size⌉` (`Bfr::Parameterization::QUAD_SUBFACES`).
@@ -51,6 +54,7 @@ impl FaceDomain {
                 Some(Self::SubFaces { size, columns: (1..).find(|c| c * c >= size).unwrap_or(size) })
             }
             (Split::Triangle, 3) => Some(Self::Triangle),
+            (Split::Sqrt3, 3) => Some(Self::Ternary),
             _ => None,
         }
     }
@@ -63,7 +67,7 @@ impl FaceDomain {
         }
         match self {
             Self::Quad => u <= q && v <= q,
-            Self::Triangle => u <= q - v,
+            Self::Triangle | Self::Ternary => u <= q - v,
             Self::SubFaces { size, columns } => {
                 let (tu, tv) = (u / q, v / q);
                 let tile =
@@ -82,7 +86,7 @@ impl FaceDomain {
         }
         match self {
             Self::Quad => u <= 1.0 && v <= 1.0,
-            Self::Triangle => u + v <= 1.0,
+            Self::Triangle | Self::Ternary => u + v <= 1.0,
             Self::SubFaces { size, columns } => {
                 let (tu, tv) = (u.floor(), v.floor());
                 tu < columns as f64
@@ -97,7 +101,7 @@ impl FaceDomain {
     pub fn describe(self) -> String {
         match self {
             Self::Quad => "[0, 1]²".to_string(),
-            Self::Triangle => "u, v ≥ 0, u + v ≤ 1".to_string(),
+            Self::Triangle | Self::Ternary => "u, v ≥ 0, u + v ≤ 1".to_string(),
             Self::SubFaces { size, columns } => format!(
                 "the {size} sub-face tiles of a {size}-gon: (s mod {columns} + a/2, s div {columns} + b/2) \
                  for sub-face s < {size} and a, b in [0, 1]"
@@ -107,7 +111,8 @@ impl FaceDomain {
 
     /// The child of a face with this domain that holds `p`, and `p` in the child's parameters,
     /// with the factor `f` of the step's derivatives (`∂/∂u = f · ∂/∂u_child`, likewise `v`):
-    /// 2, or −2 for the middle triangle. On a border between children the first in the
+    /// 2, or −2 for the middle triangle (3 and −3 under the ternary split). On a border
+    /// between children the first in the
     /// engine's order that holds the point wins (either gives the same value). `p` must be
     /// [contained](Self::contains).
     pub fn child_of(self, p: Dyadic) -> (usize, Dyadic, f64) {
@@ -119,6 +124,11 @@ impl FaceDomain {
                 let (child, a, b) = step(size, 2, u, v, q);
                 let flipped = ChildDomain::of_face(size)[usize::from(child)].flipped;
                 (usize::from(child), Dyadic::new(a, b, q), if flipped { -2.0 } else { 2.0 })
+            }
+            Self::Ternary => {
+                let (child, a, b) = step(3, 3, u, v, q);
+                let flipped = ChildDomain::ternary()[usize::from(child)].flipped;
+                (usize::from(child), Dyadic::new(a, b, q), if flipped { -3.0 } else { 3.0 })
             }
             Self::SubFaces { columns, .. } => {
                 let (tu, tv) = (u / q, v / q);
@@ -159,6 +169,15 @@ impl FaceDomain {
                 let (cu, cv) = domain.to_child(u, v);
                 (child, cu, cv, if domain.flipped { -2.0 } else { 2.0 })
             }
+            Self::Ternary => {
+                // The exact step on the point's nearest multiple of 2^-52 (exact for the
+                // dyadic parameters callers give).
+                let q = 1i64 << 52;
+                let p = |x: f64| (x * q as f64).round() as i64;
+                let (child, a, b) = step(3, 3, p(u), p(v), q);
+                let domain = ChildDomain::ternary()[usize::from(child)];
+                (usize::from(child), a as f64 / q as f64, b as f64 / q as f64, if domain.flipped { -3.0 } else { 3.0 })
+            }
             Self::SubFaces { columns, .. } => {
                 let (tu, tv) = (u.floor().max(0.0), v.floor().max(0.0));
                 let sub = tv as usize * columns + tu as usize;
@@ -171,7 +190,7 @@ impl FaceDomain {
     /// (quads and triangles: the point itself).
     pub fn from_sub_face(self, sub: usize, a: Dyadic) -> Dyadic {
         match self {
-            Self::Quad | Self::Triangle => a,
+            Self::Quad | Self::Triangle | Self::Ternary => a,
             Self::SubFaces { columns, .. } => {
                 let q = 2 * a.denominator;
                 let (tu, tv) = ((sub % columns) as i64, (sub / columns) as i64);
@@ -209,7 +228,7 @@ impl FaceDomain {
         };
         out.clear();
         match self {
-            Self::Triangle => out.extend([[1.0 - u - v, -1.0, -1.0], [u, 1.0, 0.0], [v, 0.0, 1.0]]),
+            Self::Triangle | Self::Ternary => out.extend([[1.0 - u - v, -1.0, -1.0], [u, 1.0, 0.0], [v, 0.0, 1.0]]),
             Self::Quad => out.extend(bilinear(u, v)),
             Self::SubFaces { size: n, .. } => {
                 let (sub, a, b, scale) = self.child_of_f64(u, v);
@@ -242,7 +261,7 @@ impl FaceDomain {
         let side = u64::from(n) + 1;
         match self {
             Self::Quad => side * side,
-            Self::Triangle => side * (side + 1) / 2,
+            Self::Triangle | Self::Ternary => side * (side + 1) / 2,
             Self::SubFaces { size, .. } => size as u64 * side * side,
         }
     }
@@ -257,7 +276,7 @@ impl FaceDomain {
         };
         match self {
             Self::Quad => Grid::Primal.points(4, n).into_iter().map(exact).collect(),
-            Self::Triangle => Grid::Primal.points(3, n).into_iter().map(exact).collect(),
+            Self::Triangle | Self::Ternary => Grid::Primal.points(3, n).into_iter().map(exact).collect(),
             Self::SubFaces { size, columns } => {
                 let square = Grid::Primal.points(4, n);
                 (0..size)
@@ -336,6 +355,48 @@ impl PatchFrame {
         let d = self.determinant() as f64;
         // ([e1 e2]⁻¹)ᵀ = (adj / det)ᵀ.
         [[d * self.e2[1] as f64, -d * self.e1[1] as f64], [-d * self.e2[0] as f64, d * self.e1[0] as f64]]
+    }
+}
+
+/// The exponent of the lattice `(1/3^k) ℤ²` that [`FaceDomain::exact_point`] rounds a ternary
+/// face's f64 parameters to: `3^−33 ≈ 1.8e−16`, below the spacing of f64 values near 1, and
+/// `3^33 ≈ 5.6e15` leaves the address arithmetic room in 64 bits.
+pub const TERNARY_DIGITS: u32 = 33;
+
+impl FaceDomain {
+    /// The f64 parameters `(u, v)` as the exact point the evaluators take: the fraction over
+    /// `2^k` that they are ([`dyadic_from_f64`]), except on a [ternary](Self::Ternary) face,
+    /// where a dyadic point's base-3 address has a period of up to `2^(k−2)` levels (`1/2^52`:
+    /// 2^50): there the nearest point of `(1/3^33) ℤ²` in the triangle, whose address ends after
+    /// [`TERNARY_DIGITS`] levels at a corner, within `1e−16` of `(u, v)`. `None` where
+    /// [`dyadic_from_f64`] has none, or (ternary) outside the triangle.
+    ///
+    /// ```
+    /// use subdiv_stencil::{Dyadic, FaceDomain};
+    ///
+    /// assert_eq!(FaceDomain::Triangle.exact_point(0.25, 0.5), Some(Dyadic::new(1, 2, 4)));
+    /// let p = FaceDomain::Ternary.exact_point(0.3, 0.2).unwrap();
+    /// assert_eq!(p.denominator, 3i64.pow(33));
+    /// assert!((p.to_f64().0 - 0.3).abs() < 1e-16);
+    /// assert_eq!(FaceDomain::Ternary.exact_point(1.0 / 3.0, 0.0).map(|p| p.reduced()), Some(Dyadic::new(1, 0, 3)));
+    /// ```
+    pub fn exact_point(self, u: f64, v: f64) -> Option<Dyadic> {
+        if self != Self::Ternary {
+            return dyadic_from_f64(u, v);
+        }
+        if !self.contains_f64(u, v) {
+            return None;
+        }
+        let q = 3i64.pow(TERNARY_DIGITS);
+        let (mut a, mut b) = ((u * q as f64).round() as i64, (v * q as f64).round() as i64);
+        // Rounding may step past the long side.
+        let over = (a + b - q).max(0);
+        if a >= b {
+            a -= over;
+        } else {
+            b -= over;
+        }
+        Some(Dyadic::new(a, b, q))
     }
 }
 

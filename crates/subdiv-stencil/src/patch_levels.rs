@@ -5,7 +5,7 @@
 use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{
     DerivedConfigurations, FoundPatch, LocalRefinement, MAX_PATCH_RADIUS, MeshPatches, RefineOptions, Refiner, Scheme,
-    SchemeError, Split, Stencils, child_faces,
+    Split, Stencils, child_faces, ternary_refine,
 };
 
 use crate::{Dyadic, FaceDomain, PatchFrame, StencilError};
@@ -148,6 +148,19 @@ impl Next {
             .collect::<Result<_, StencilError>>()?;
         Ok(Self { mesh: local.mesh, stencils: local.stencils, children })
     }
+
+    /// √3's next level: two steps of the whole of `current` (it has no rules for a part's
+    /// border) as one ternary split, face `f`'s children at `9f..9f + 9`.
+    fn ternary(
+        scheme: &Scheme,
+        current: &Mesh,
+        refine: &[FaceId],
+        options: &RefineOptions,
+    ) -> Result<Self, StencilError> {
+        let (mesh, stencils) = ternary_refine(scheme, current, options)?;
+        let children = refine.iter().map(|f| 9 * f.index()..9 * f.index() + 9).collect();
+        Ok(Self { mesh, stencils, children })
+    }
 }
 
 impl PatchLevels {
@@ -163,8 +176,8 @@ impl PatchLevels {
     /// they cannot refine).
     ///
     /// # Errors
-    /// [`StencilError::Scheme`] for √3 (`SplitNotSupported`: its levels are not built yet), a
-    /// scheme without sub-patch matrices for a valence (`ValenceNotSupported`), a
+    /// [`StencilError::Scheme`] for a scheme without sub-patch matrices for a valence
+    /// (`ValenceNotSupported`), a
     /// face the scheme does not take, or boundaries a scheme has no rules for;
     /// [`StencilError::NoPatch`] if a face finds no patch within 16 levels (an internal error).
     pub fn new(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<Self, StencilError> {
@@ -192,21 +205,12 @@ impl PatchLevels {
     ) -> Result<Self, StencilError> {
         let patch_size = match scheme.split() {
             Split::Quad => 4,
-            Split::Triangle => 3,
+            Split::Triangle | Split::Sqrt3 => 3,
             // Mid-edge's levels are those of its two steps as one (`Scheme::dual_form`).
             Split::Dual | Split::Midedge => {
                 let dual = scheme.dual_form().expect("dual and mid-edge schemes have a dual form");
                 let (levels, stencils) = crate::dual_levels::dual_levels(&dual, mesh, options)?;
                 return Ok(Self { split: scheme.split(), levels, stencils });
-            }
-            Split::Sqrt3 => {
-                return Err(StencilError::Scheme(SchemeError::SplitNotSupported {
-                    scheme: scheme.name().to_string(),
-                    what: "levels of patches over a mesh",
-                    split: "√3",
-                    reason: "the levels refine a face one binary step at a time, and √3 splits it in nine over \
-                             two steps; its patches' stencils come from `PatchMatrices` (base-3 addresses)",
-                }));
             }
         };
         // Level 0 with the boundary rule applied (boundary edges sharp, holes of `none`), without
@@ -257,7 +261,11 @@ impl PatchLevels {
                 Some(1) => 1,
                 radius => radius.unwrap_or(MAX_PATCH_RADIUS) + 1,
             };
-            let next = Next::of(scheme, &current, &refine, rings, options)?;
+            let next = if scheme.split() == Split::Sqrt3 {
+                Next::ternary(scheme, &current, &refine, options)?
+            } else {
+                Next::of(scheme, &current, &refine, rings, options)?
+            };
             let mut next_wanted = Vec::new();
             for (&f, children) in refine.iter().zip(next.children) {
                 next_wanted.extend(children.clone().map(|c| FaceId::new(c as u32)));
@@ -317,6 +325,8 @@ impl PatchLevels {
                     FaceDomain::of(self.split, l.mesh.face_size(face)).unwrap_or(FaceDomain::Quad)
                 } else if self.split == Split::Triangle {
                     FaceDomain::Triangle
+                } else if self.split == Split::Sqrt3 {
+                    FaceDomain::Ternary
                 } else {
                     FaceDomain::Quad
                 },

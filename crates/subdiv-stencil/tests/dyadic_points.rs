@@ -288,3 +288,70 @@ fn loop_is_refinement_then_its_limit_mask() {
     limit_masks_give_the_grid(lp, "octahedron", jittered(shapes::octahedron(), 0.1), 3);
     limit_masks_give_the_grid(lp, "icosahedron", jittered(shapes::icosahedron(), 0.1), 3);
 }
+
+/// √3 through its ternary levels: every grid point `(i, j) / 3^L` of every face is the limit of
+/// a vertex of `2L` √3 steps, moved by Kobbelt's limit mask `(p + 3kβ q̄) / (1 + 3kβ)` (`q̄` the
+/// mean of its `k` neighbours, β the vertex rule's weight), and every such vertex's limit is a
+/// grid point, `L = 1, 2`: vertices of valences 3-8 (the bipyramids' apexes and rings), on
+/// jittered cages.
+#[test]
+fn sqrt3_grid_points_are_refined_vertices_moved_to_their_limits() {
+    let sqrt3 = Builtin::Sqrt3.scheme();
+    let limit = |mesh: &Mesh, v: VertexId| {
+        let ring = mesh.one_ring(v);
+        let k = ring.len() as f64;
+        let beta = (4.0 - 2.0 * (std::f64::consts::TAU / k).cos()) / (9.0 * k);
+        let mean = ring.iter().map(|&w| mesh.position(w)).sum::<DVec3>() / k;
+        (mesh.position(v) + 3.0 * k * beta * mean) / (1.0 + 3.0 * k * beta)
+    };
+    let cages = [
+        ("bipyramid 3", jittered(bipyramid(3), 0.1)),
+        ("bipyramid 5", jittered(bipyramid(5), 0.1)),
+        ("bipyramid 8", jittered(bipyramid(8), 0.1)),
+        ("icosahedron", jittered(shapes::icosahedron(), 0.1)),
+    ];
+    for (name, soup) in cages {
+        let mesh = Mesh::build(soup).unwrap();
+        let eval = LimitEvaluator::new(sqrt3, &mesh, &RefineOptions::DEFAULT).unwrap();
+        for level in 1..=2 {
+            let refined = refine_uniform(&mesh, sqrt3, 2 * level, &RefineOptions::DEFAULT).unwrap();
+            let images: Vec<DVec3> = refined.vertices().map(|v| limit(&refined, v)).collect();
+            let vertices = Points::new(&images, 1e-6);
+            let mut grid = Vec::new();
+            for f in mesh.face_ids() {
+                for (g, point) in eval.grid(f, 3u32.pow(level as u32)).unwrap() {
+                    let gap = vertices.distance(point.position);
+                    assert!(gap < 1e-12, "{name} level {level} face {f} at {g:?}: {gap:e} from every vertex");
+                    grid.push(point.position);
+                }
+            }
+            let grid = Points::new(&grid, 1e-6);
+            for (v, &p) in images.iter().enumerate() {
+                let gap = grid.distance(p);
+                assert!(gap < 1e-12, "{name} level {level}: vertex {v} is {gap:e} from every grid point");
+            }
+        }
+        // The derivatives (×±3 per ternary level) are the positions' central differences.
+        let h = 1.0 / 65536.0;
+        for f in mesh.face_ids() {
+            for (u, v) in [(0.3, 0.2), (0.1, 0.6), (0.05, 0.05)] {
+                let p = eval.eval(f, u, v).unwrap();
+                let du =
+                    (eval.eval(f, u + h, v).unwrap().position - eval.eval(f, u - h, v).unwrap().position) / (2.0 * h);
+                let dv =
+                    (eval.eval(f, u, v + h).unwrap().position - eval.eval(f, u, v - h).unwrap().position) / (2.0 * h);
+                assert!(p.exact_derivatives, "{name} face {f} at ({u}, {v})");
+                assert!(
+                    (p.du - du).length() < 1e-6 * p.du.length().max(1.0),
+                    "{name} {f} ({u}, {v}): {} vs {du}",
+                    p.du
+                );
+                assert!(
+                    (p.dv - dv).length() < 1e-6 * p.dv.length().max(1.0),
+                    "{name} {f} ({u}, {v}): {} vs {dv}",
+                    p.dv
+                );
+            }
+        }
+    }
+}

@@ -477,9 +477,8 @@ fn bad_input_is_a_typed_error() {
     assert!(matches!(tess.update_cage(&cage), Err(TessError::CagePosition { vertex: 3, .. })));
     let error = TessError::CagePosition { vertex: 3, value: "x".into() }.to_string();
     assert!(error.contains("vertex 3"), "{error}");
-    // √3 has no sub-patch matrices: the patch levels' typed error.
-    let ico = Mesh::build(shapes::icosahedron()).unwrap();
-    let sqrt3 = DualTessellator::new(Builtin::Sqrt3.scheme(), &ico, &DualOptions::default());
+    // √3 takes closed meshes of triangles: the patch levels' typed error for a quad.
+    let sqrt3 = DualTessellator::new(Builtin::Sqrt3.scheme(), &cube, &DualOptions::default());
     assert!(matches!(sqrt3, Err(TessError::Surface(_))), "{sqrt3:?}");
 }
 
@@ -634,7 +633,9 @@ fn split_normal_checks(builtin: Builtin, mesh: &Mesh, out: &TessMesh, name: &str
             .flat_map(|face| {
                 let sides: Vec<fn(f64) -> (f64, f64)> = match evaluator.domain(face).unwrap() {
                     subdiv_stencil::FaceDomain::Quad => vec![|t| (t, 0.0), |t| (1.0, t), |t| (t, 1.0), |t| (0.0, t)],
-                    subdiv_stencil::FaceDomain::Triangle => vec![|t| (t, 0.0), |t| (0.0, t), |t| (t, 1.0 - t)],
+                    subdiv_stencil::FaceDomain::Triangle | subdiv_stencil::FaceDomain::Ternary => {
+                        vec![|t| (t, 0.0), |t| (0.0, t), |t| (t, 1.0 - t)]
+                    }
                     subdiv_stencil::FaceDomain::SubFaces { .. } => panic!("{name}: no N-gons in these meshes"),
                 };
                 let points: Vec<(f64, f64)> = sides.iter().flat_map(|side| ts.iter().map(|&t| side(t))).collect();

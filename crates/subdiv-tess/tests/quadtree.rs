@@ -269,8 +269,8 @@ fn bad_input_gives_typed_errors() {
     let shallow =
         QuadtreeOptions { max_depth: 3, ..QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4)) };
     assert!(matches!(tess.tessellate(&shallow), Err(TessError::DepthLimit { .. })));
-    // √3 has no sub-patch matrices; an interpolating triangle scheme's sub-patch matrices are no
-    // convex combinations (no hull bound).
+    // √3's nodes split in nine, not four; an interpolating triangle scheme's sub-patch matrices
+    // are no convex combinations (no hull bound).
     let icosahedron = Mesh::build(shapes::icosahedron()).unwrap();
     for scheme in [Builtin::Sqrt3, Builtin::Butterfly] {
         let refused = QuadtreeTessellator::new(scheme.scheme(), &icosahedron);

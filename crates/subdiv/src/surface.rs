@@ -735,9 +735,9 @@ mod tests {
         assert!(s.evaluate(FaceId::new(0), f64::NAN, 0.5).is_err());
         assert!(matches!(s.evaluate_grid(0), Err(Error::Grid { n: 0, .. })));
         assert!(matches!(s.evaluate_grid(crate::MAX_GRID + 1), Err(Error::Grid { .. })));
-        // A scheme without sub-patch matrices (√3).
+        // A scheme that does not take the mesh (√3, quads).
         assert!(matches!(
-            Surface::new(Mesh::build(shapes::octahedron()).unwrap(), Builtin::Sqrt3.scheme()).evaluate(
+            Surface::new(Mesh::build(shapes::cube()).unwrap(), Builtin::Sqrt3.scheme()).evaluate(
                 FaceId::new(0),
                 0.5,
                 0.5

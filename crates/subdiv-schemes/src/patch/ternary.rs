@@ -115,6 +115,60 @@ pub fn ternary_child_starts(
     Some(starts)
 }
 
+/// Two √3 steps of `mesh` (closed, triangles) as one ternary split, numbered like the binary
+/// splits' levels: the nine children of face `f` are faces `9f..9f + 9`, in
+/// [`ChildDomain::ternary`]'s order, each starting at its corner 0 (so a child's parameters are
+/// its domain's map of the parent's); the vertices as two steps of `refine` number them. With
+/// the rows of the refined vertices over `mesh`'s.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::{Builtin, RefineOptions, ternary_refine};
+///
+/// let octahedron = Mesh::build(shapes::octahedron())?;
+/// let (refined, rows) = ternary_refine(Builtin::Sqrt3.scheme(), &octahedron, &RefineOptions::DEFAULT)?;
+/// assert_eq!(refined.face_count(), 9 * 8);
+/// assert_eq!((rows.parent_count(), rows.child_count()), (6, refined.vertex_count()));
+/// // Face 0's first child keeps its corner 0 (the vertex, moved twice).
+/// assert_eq!(refined.face_vertices(subdiv_mesh::FaceId::new(0))[0], octahedron.face_vertices(subdiv_mesh::FaceId::new(0))[0]);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// # Errors
+/// As refinement (√3 takes closed meshes of triangles without sharpness);
+/// [`SchemeError::SplitNotSupported`] for a scheme of another split.
+pub fn ternary_refine(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<(Mesh, Stencils), SchemeError> {
+    if scheme.split() != crate::Split::Sqrt3 {
+        return Err(SchemeError::SplitNotSupported {
+            scheme: scheme.name.clone(),
+            what: "ternary levels",
+            split: "this",
+            reason: "only √3's two steps split a triangle in nine",
+        });
+    }
+    let refiner = Refiner::new(mesh, scheme, 2, options)?;
+    let rows = refiner.levels()[0].then(&refiner.levels()[1]);
+    let levels = Refiner::new(mesh, scheme, 1, options)?;
+    let mid = levels.into_mesh();
+    let fine = refiner.into_mesh();
+    let mut soup =
+        subdiv_mesh::PolygonSoup::with_capacity(fine.vertex_count(), fine.face_count(), 3 * fine.face_count());
+    for v in fine.vertices() {
+        soup.push_vertex(fine.position(v));
+    }
+    for f in mesh.face_ids() {
+        let start = mesh.face_half_edges(f).next().expect("faces have corners");
+        let starts = ternary_child_starts(mesh, start, &mid, &fine).ok_or_else(|| {
+            SchemeError::Internal(format!("{}: the nine children of {f} were not found", scheme.name))
+        })?;
+        for h in starts {
+            soup.push_face([fine.origin(h), fine.dest(h), fine.dest(fine.next(h))]);
+        }
+    }
+    let refined = Mesh::build(soup).map_err(|e| SchemeError::Internal(e.to_string()))?;
+    Ok((refined, rows))
+}
+
 /// The ternary split's matrices of the smooth interior type of `valence` (3 or more): the
 /// canonical pillow of triangles refined two √3 steps a level, at the smallest radius whose
 /// children's rows stay inside their parents.

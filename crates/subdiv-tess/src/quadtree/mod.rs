@@ -319,13 +319,15 @@ impl QuadtreeTessellator {
     /// boundary).
     ///
     /// # Errors
-    /// [`TessError::Scheme`] for √3 (no sub-patch matrices) or a scheme whose patches are not
+    /// [`TessError::Scheme`] for √3 (ternary patches) or a scheme whose patches are not
     /// as above (Butterfly's, Kobbelt's: not convex); as [`PatchLevels::descending`].
     pub fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
         if scheme.split() == Split::Sqrt3 {
             return Err(TessError::Scheme {
                 scheme: scheme.name().to_string(),
-                reason: "the quadtree tessellator needs sub-patch matrices, which the √3 split has not".into(),
+                reason: "the quadtree splits a node in four, and √3's patches split in nine (a ternary split); \
+                         its surface tessellates with the dual method's rates"
+                    .into(),
             });
         }
         // Semi-sharp features spent by refinement: every piece bicubic or extraordinary.

@@ -179,7 +179,9 @@ pub(crate) fn open_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
         let domain = evaluator.domain(f).unwrap();
         let p = match domain {
             subdiv_stencil::FaceDomain::Quad => [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)][c],
-            subdiv_stencil::FaceDomain::Triangle => [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)][c],
+            subdiv_stencil::FaceDomain::Triangle | subdiv_stencil::FaceDomain::Ternary => {
+                [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0)][c]
+            }
             d @ subdiv_stencil::FaceDomain::SubFaces { .. } => {
                 d.from_sub_face(c, subdiv_stencil::Dyadic::new(0, 0, 1)).to_f64()
             }

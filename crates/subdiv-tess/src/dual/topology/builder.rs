@@ -335,7 +335,7 @@ impl<'a> Builder<'a> {
                 }
                 self.buf.ring = ring;
             }
-            FaceDomain::Triangle => {
+            FaceDomain::Triangle | FaceDomain::Ternary => {
                 let q = i64::from(3 * n);
                 for j in 0..n {
                     for i in 0..n - j {
@@ -443,7 +443,7 @@ impl<'a> Builder<'a> {
                     row.push(RowPoint { vertex, num: den + num, den: 2 * den, near: true, extra: None });
                 }
             }
-            FaceDomain::Triangle => {
+            FaceDomain::Triangle | FaceDomain::Ternary => {
                 let n = m;
                 let up = |i: u32, j: u32| base + 2 * n * j - j * j + 2 * i;
                 for k in 0..n {
@@ -489,7 +489,7 @@ impl<'a> Builder<'a> {
                 2 => Dyadic::new(d - t, d, d),
                 _ => Dyadic::new(0, d - t, d),
             },
-            FaceDomain::Triangle => match c {
+            FaceDomain::Triangle | FaceDomain::Ternary => match c {
                 0 => Dyadic::new(t, 0, d),
                 1 => Dyadic::new(d - t, t, d),
                 _ => Dyadic::new(0, d - t, d),
@@ -512,7 +512,9 @@ impl<'a> Builder<'a> {
             FaceDomain::Quad => {
                 [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(1, 1, 1), Dyadic::new(0, 1, 1)][c]
             }
-            FaceDomain::Triangle => [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(0, 1, 1)][c],
+            FaceDomain::Triangle | FaceDomain::Ternary => {
+                [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(0, 1, 1)][c]
+            }
             FaceDomain::SubFaces { .. } => cells.domain.from_sub_face(c, Dyadic::new(0, 0, 1)).reduced(),
         }
     }
@@ -524,7 +526,7 @@ impl<'a> Builder<'a> {
         match cells.domain {
             FaceDomain::Quad => quad_side(base, m, c).0,
             FaceDomain::SubFaces { .. } => base + (c as u32) * m * m,
-            FaceDomain::Triangle => {
+            FaceDomain::Triangle | FaceDomain::Ternary => {
                 let up = |i: u32, j: u32| base + 2 * m * j - j * j + 2 * i;
                 [up(0, 0), up(m - 1, 0), up(0, m - 1)][c]
             }

@@ -39,7 +39,7 @@ impl Builder<'_> {
         match corner {
             RingCorner::Vertex { corner: c, .. } => match domain {
                 FaceDomain::SubFaces { .. } => domain.from_sub_face(c as usize, Dyadic::new(a, b, 1 << (e - 1))),
-                FaceDomain::Triangle => {
+                FaceDomain::Triangle | FaceDomain::Ternary => {
                     let d = 1i64 << e;
                     let (u, v) = match c {
                         0 => (a, b),
