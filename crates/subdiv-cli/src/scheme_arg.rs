@@ -95,7 +95,8 @@ pub(crate) fn parse_builtin(name: &str) -> Result<Builtin, String> {
 #[derive(Debug, clap::Args)]
 pub(crate) struct PrintArgs {
     /// The built-in scheme to print: a surface scheme, or a curve scheme (cubic-bspline,
-    /// chaikin, four-point, six-point, sw-curve, nonuniform-cubic-bspline: TOML only).
+    /// chaikin, four-point, six-point, sw-curve, nonuniform-cubic-bspline and its matrix-mask
+    /// form nonuniform-cubic-bspline-matrix: TOML only).
     #[arg(value_parser = parse_any_builtin)]
     name: String,
     /// Print RON instead of TOML.

@@ -17,9 +17,9 @@ use crate::scheme_arg::SchemeFile;
 #[derive(Debug, clap::Args)]
 pub(crate) struct StencilArgs {
     /// A built-in curve scheme (cubic-bspline, chaikin, four-point, six-point, sw-curve,
-    /// nonuniform-cubic-bspline: paper 000 §2's, uniform away from the origin) or
-    /// surface scheme (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear, doo-sabin,
-    /// midedge).
+    /// nonuniform-cubic-bspline: paper 000 §2's, uniform away from the origin, and
+    /// nonuniform-cubic-bspline-matrix, the same as §3's matrix mask) or surface scheme
+    /// (catmull-clark, loop, butterfly, kobbelt, sw-quad, bilinear, doo-sabin, midedge, sqrt3).
     #[arg(long, default_value = "catmull-clark")]
     scheme: String,
     /// A user-defined scheme: a curve scheme's TOML file (`arity`, `offset`, `mask`), or a

@@ -255,6 +255,18 @@ fn local_curve_schemes_are_files_that_stencil_evaluates() {
         .map(|w| (w["point"].as_i64().unwrap(), w["weight"].as_str().unwrap().to_string()))
         .collect();
     assert_eq!(weights, [(-1, "1/15".to_string()), (0, "3/5".to_string()), (1, "1/3".to_string())]);
+    // The same scheme as the paper's vector-valued one (its matrix mask, the mirrored knots).
+    let matrix = ["stencil", "--scheme", "nonuniform-cubic-bspline-matrix", "--at", "0", "--exact", "--json"];
+    let mirrored: Vec<(i64, String)> = json(&matrix)["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|w| (-w["point"].as_i64().unwrap(), w["weight"].as_str().unwrap().to_string()))
+        .rev()
+        .collect();
+    assert_eq!(mirrored, weights);
+    let text = String::from_utf8(subdiv(&["scheme", "nonuniform-cubic-bspline-matrix"]).stdout).unwrap();
+    assert!(text.contains("[[matrix]]") && text.contains("components"), "{text}");
     let text = String::from_utf8(subdiv(&["scheme", "nonuniform-cubic-bspline"]).stdout).unwrap();
     assert!(text.contains("[[rows]]") && text.contains("29/40"), "{text}");
     let dir = tempfile::tempdir().unwrap();

@@ -94,6 +94,14 @@ pub enum CurveError {
         /// What is wrong.
         reason: String,
     },
+    /// A vector-valued (matrix) mask does not define a local scheme.
+    #[error("curve scheme `{scheme}`: matrix mask: {reason}")]
+    MatrixMask {
+        /// The scheme's name.
+        scheme: String,
+        /// What is wrong.
+        reason: String,
+    },
     /// A TOML scheme file does not parse (syntax, missing or unknown field, bad weight): where
     /// and why, in one line.
     #[error("cannot read the curve scheme (TOML): {0}")]

@@ -106,7 +106,7 @@ pub use channel::ChannelSurface;
 pub use curve::{CurveError, CurveMatrix, CurveScheme, PolygonKind};
 pub use error::SchemeError;
 pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};
-pub use local_curve::{LocalCurveScheme, LocalRow};
+pub use local_curve::{LocalCurveScheme, LocalRow, MatrixEntry};
 pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches};
 pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{

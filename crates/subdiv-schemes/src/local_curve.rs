@@ -7,8 +7,10 @@ use serde::{Deserialize, Deserializer};
 use crate::curve::{CurveError, CurveScheme, Weight};
 
 /// The built-in local curve schemes: the name and the file.
-const BUILTINS: [(&str, &str); 1] =
-    [("nonuniform-cubic-bspline", include_str!("../schemes/curves/nonuniform-cubic-bspline.toml"))];
+const BUILTINS: [(&str, &str); 2] = [
+    ("nonuniform-cubic-bspline", include_str!("../schemes/curves/nonuniform-cubic-bspline.toml")),
+    ("nonuniform-cubic-bspline-matrix", include_str!("../schemes/curves/nonuniform-cubic-bspline-matrix.toml")),
+];
 
 /// A stationary curve scheme with a special point at the origin: new point `k` (at `x = k /
 /// arity`) is the uniform [`CurveScheme`]'s rule unless [`rows`](Self::rows) gives one of its
@@ -46,19 +48,66 @@ pub struct LocalRow {
     pub weights: Vec<f64>,
 }
 
+/// One entry `s_gh(z)` of a matrix mask ([`LocalCurveScheme::from_matrix_mask`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MatrixEntry {
+    /// `g`: the component of the new points.
+    pub row: usize,
+    /// `h`: the component of the old points.
+    pub column: usize,
+    /// The exponent of the first weight.
+    pub lowest: i64,
+    /// The weights of `z^lowest, z^(lowest + 1), …`.
+    pub weights: Vec<f64>,
+}
+
+/// A component's range `(from, to)` (inclusive, `None`: unbounded): `"..=-2"`, `"-1"`,
+/// `"2.."`, `"3..=5"`.
+fn parse_range(text: &str) -> Option<(Option<i64>, Option<i64>)> {
+    let text = text.trim();
+    match text.split_once("..") {
+        None => text.parse().ok().map(|i| (Some(i), Some(i))),
+        Some((lo, hi)) => {
+            let lo = if lo.is_empty() { None } else { Some(lo.trim().parse().ok()?) };
+            let hi = match hi.strip_prefix('=') {
+                Some(hi) => Some(hi.trim().parse().ok()?),
+                None if hi.is_empty() => None,
+                None => return None,
+            };
+            Some((lo, hi))
+        }
+    }
+}
+
 /// The largest `|index|` of a special row's point or weight.
 const MAX_LOCAL_INDEX: i64 = 64;
 
-/// The serialized form, before validation.
+/// The serialized form, before validation: the uniform rule with its special rows, or the
+/// vector-valued form (components and a matrix mask).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawLocalCurveScheme {
     name: String,
     #[serde(default = "crate::curve::binary")]
     arity: u32,
-    offset: usize,
-    mask: Vec<Weight>,
+    offset: Option<usize>,
+    mask: Option<Vec<Weight>>,
+    #[serde(default)]
     rows: Vec<RawRow>,
+    components: Option<Vec<String>>,
+    #[serde(default)]
+    matrix: Vec<RawEntry>,
+}
+
+/// One entry `s_gh(z)` of a matrix mask: the weights of component `column`'s old points in
+/// component `row`'s new points, by exponent from `lowest` up.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawEntry {
+    row: usize,
+    column: usize,
+    lowest: i64,
+    weights: Vec<Weight>,
 }
 
 #[derive(Deserialize)]
@@ -72,7 +121,31 @@ struct RawRow {
 impl<'de> Deserialize<'de> for LocalCurveScheme {
     fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
         let raw = RawLocalCurveScheme::deserialize(deserializer)?;
-        let uniform = CurveScheme::new(raw.name, raw.arity, raw.offset, raw.mask.into_iter().map(|w| w.0).collect())
+        if let Some(components) = raw.components {
+            if raw.mask.is_some() || raw.offset.is_some() || !raw.rows.is_empty() {
+                return Err(serde::de::Error::custom(
+                    "a matrix mask (components and [[matrix]]) gives the uniform rule and the rows itself: \
+                     no mask, offset or [[rows]] beside it",
+                ));
+            }
+            let entries = raw
+                .matrix
+                .into_iter()
+                .map(|e| MatrixEntry {
+                    row: e.row,
+                    column: e.column,
+                    lowest: e.lowest,
+                    weights: e.weights.into_iter().map(|w| w.0).collect(),
+                })
+                .collect();
+            return Self::from_matrix_mask(raw.name, raw.arity, &components, entries).map_err(serde::de::Error::custom);
+        }
+        let (Some(offset), Some(mask)) = (raw.offset, raw.mask) else {
+            return Err(serde::de::Error::custom(
+                "a local scheme has `offset` and `mask` (or `components` and [[matrix]])",
+            ));
+        };
+        let uniform = CurveScheme::new(raw.name, raw.arity, offset, mask.into_iter().map(|w| w.0).collect())
             .map_err(serde::de::Error::custom)?;
         let rows = raw
             .rows
@@ -85,7 +158,7 @@ impl<'de> Deserialize<'de> for LocalCurveScheme {
 
 impl LocalCurveScheme {
     /// The names of the built-in local schemes.
-    pub const BUILTIN_NAMES: [&'static str; BUILTINS.len()] = [BUILTINS[0].0];
+    pub const BUILTIN_NAMES: [&'static str; BUILTINS.len()] = [BUILTINS[0].0, BUILTINS[1].0];
 
     /// The built-in scheme called `name`.
     pub fn builtin(name: &str) -> Option<Self> {
@@ -136,6 +209,129 @@ impl LocalCurveScheme {
             }
         }
         Ok(Self { uniform, rows })
+    }
+
+    /// The scheme of a vector-valued (matrix) mask over position classes, paper 000 §3: the
+    /// old points are split into `components`, consecutive ranges of indices covering all of
+    /// them (`"..=-2"`, `"-1"`, `"2.."`, `"3..=5"`), and new point `i` of component `g` is
+    /// `Σ_h Σ_e s_gh[e] · p_j` over the old points `j` of component `h` with `i = arity·j + e`
+    /// (`p_{k+1}[z] = s[z] p_k[z^arity]`). The two unbounded components must share their
+    /// diagonal entry, the uniform mask; every other new point whose rule differs from it
+    /// becomes a row of its own. Each entry must send its component's points into its row's
+    /// component (which catches a mistyped exponent).
+    ///
+    /// ```
+    /// use subdiv_schemes::{LocalCurveScheme, MatrixEntry};
+    ///
+    /// // The paper's mask: new point 0 is 5/24, 29/40, 1/15 of the old points −1, 0, 1.
+    /// let paper = LocalCurveScheme::builtin("nonuniform-cubic-bspline-matrix").unwrap();
+    /// assert_eq!(paper.weight(0, -1), 5.0 / 24.0);
+    /// // The cubic B-spline's mask on the old points up to −1 reaches the new point 0, which is
+    /// // not among the new points up to −1: refused.
+    /// let b = |row, column| MatrixEntry { row, column, lowest: -2, weights: vec![0.125, 0.5, 0.75, 0.5, 0.125] };
+    /// let components = ["..=-1", "0.."].map(String::from);
+    /// let refused = LocalCurveScheme::from_matrix_mask("halves".into(), 2, &components, vec![b(0, 0), b(1, 1)]);
+    /// assert!(refused.unwrap_err().to_string().contains("sends old point -1 to new point 0"));
+    /// ```
+    ///
+    /// # Errors
+    /// [`CurveError::MatrixMask`] naming the entry or component and the rule; as
+    /// [`CurveScheme::new`] and [`new`](Self::new).
+    pub fn from_matrix_mask(
+        name: String,
+        arity: u32,
+        components: &[String],
+        entries: Vec<MatrixEntry>,
+    ) -> Result<Self, CurveError> {
+        let bad = |reason: String| CurveError::MatrixMask { scheme: name.clone(), reason };
+        let ranges = components
+            .iter()
+            .map(|c| {
+                parse_range(c)
+                    .ok_or_else(|| bad(format!("component {c:?} is not a range such as \"..=-2\", \"0\" or \"2..\"")))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let n = ranges.len();
+        let consecutive = n >= 2
+            && ranges[0].0.is_none()
+            && ranges[n - 1].1.is_none()
+            && ranges.windows(2).all(|w| matches!((w[0].1, w[1].0), (Some(hi), Some(lo)) if lo == hi + 1))
+            && ranges[1..n - 1].iter().all(|(lo, hi)| matches!((lo, hi), (Some(lo), Some(hi)) if lo <= hi));
+        if !consecutive {
+            return Err(bad("the components are consecutive ranges of indices, from all below to all above".into()));
+        }
+        let component =
+            |i: i64| ranges.iter().position(|&(lo, hi)| lo.is_none_or(|lo| lo <= i) && hi.is_none_or(|hi| i <= hi));
+        let mut matrix: Vec<Vec<Option<MatrixEntry>>> = vec![vec![None; n]; n];
+        for e in entries {
+            if e.row >= n || e.column >= n {
+                return Err(bad(format!("entry ({}, {}) names a component beyond the {n} there are", e.row, e.column)));
+            }
+            if e.weights.iter().any(|w| !w.is_finite()) || e.lowest.abs() > MAX_LOCAL_INDEX {
+                return Err(bad(format!("entry ({}, {}) has finite weights, exponents within ±64", e.row, e.column)));
+            }
+            let (g, h) = (e.row, e.column);
+            if matrix[g][h].replace(e).is_some() {
+                return Err(bad(format!("entry ({g}, {h}) is given twice")));
+            }
+        }
+        let (first, last) = (matrix[0][0].clone(), matrix[n - 1][n - 1].clone());
+        let uniform = match (first, last) {
+            (Some(a), Some(b)) if a.lowest == b.lowest && a.weights == b.weights => a,
+            _ => return Err(bad("the two unbounded components share their diagonal entry: the uniform mask".into())),
+        };
+        let offset = usize::try_from(-uniform.lowest)
+            .map_err(|_| bad("the uniform mask's lowest exponent is 0 or below".into()))?;
+        let uniform = CurveScheme::new(name.clone(), arity, offset, uniform.weights)?;
+        let a = i64::from(arity);
+        // Where the components are not the uniform ones: the bounded components, and the
+        // exponents' reach around them.
+        let bounded = ranges.iter().flat_map(|&(lo, hi)| [lo, hi]).flatten().map(i64::abs).max().unwrap_or(0);
+        let reach =
+            matrix.iter().flatten().flatten().map(|e| e.lowest.abs() + e.weights.len() as i64).max().unwrap_or(0);
+        let window = a * (bounded + reach) + reach;
+        // Each entry sends its column's points into its row's component.
+        for e in matrix.iter().flatten().flatten() {
+            let (lo, hi) = ranges[e.column];
+            let (lo, hi) = (lo.unwrap_or(-window), hi.unwrap_or(window));
+            for j in lo..=hi {
+                for (k, &w) in e.weights.iter().enumerate() {
+                    let i = a * j + e.lowest + k as i64;
+                    if w != 0.0 && component(i) != Some(e.row) {
+                        return Err(bad(format!(
+                            "entry ({}, {}) sends old point {j} to new point {i}, which is not in component {}",
+                            e.row, e.column, e.row
+                        )));
+                    }
+                }
+            }
+        }
+        let mut rows = Vec::new();
+        for i in -window..=window {
+            let g = component(i).expect("the components cover every index");
+            let mut weights = std::collections::BTreeMap::new();
+            for (h, entry) in matrix[g].iter().enumerate() {
+                let Some(e) = entry else { continue };
+                for (k, &w) in e.weights.iter().enumerate() {
+                    let offset = i - e.lowest - k as i64;
+                    if offset.rem_euclid(a) == 0 && component(offset / a) == Some(h) {
+                        *weights.entry(offset / a).or_insert(0.0) += w;
+                    }
+                }
+            }
+            let (Some((&lo, _)), Some((&hi, _))) = (weights.first_key_value(), weights.last_key_value()) else {
+                return Err(bad(format!("new point {i} has no rule")));
+            };
+            let span = (lo.min(i / a - reach)..=hi.max(i / a + reach)).collect::<Vec<_>>();
+            if span.iter().any(|&j| weights.get(&j).copied().unwrap_or(0.0) != uniform.weight(i, j)) {
+                let weights = (lo..=hi).map(|j| weights.get(&j).copied().unwrap_or(0.0)).collect();
+                rows.push(LocalRow { point: i, first: lo, weights });
+            }
+        }
+        if rows.iter().any(|r| r.point.abs() == window) {
+            return Err(bad("the special rows do not end within the components' reach".into()));
+        }
+        Self::new(uniform, rows)
     }
 
     /// Reads a scheme from TOML.

@@ -5,7 +5,7 @@
 
 use glam::{DMat3, DVec3};
 use proptest::prelude::*;
-use subdiv_schemes::{CurveError, CurveScheme, NonUniformCubicBSpline, PolygonKind};
+use subdiv_schemes::{CurveError, CurveScheme, LocalCurveScheme, NonUniformCubicBSpline, PolygonKind};
 
 fn builtins() -> Vec<CurveScheme> {
     CurveScheme::BUILTIN_NAMES.iter().map(|name| CurveScheme::builtin(name).unwrap()).collect()
@@ -361,6 +361,45 @@ fn the_nonuniform_matrix_of_the_paper() {
             assert!((weight - expected[column]).abs() < 1e-15, "row {row} column {column}: {weight}");
         }
     }
+}
+
+/// The same scheme as a vector-valued one (paper 000 §3): the matrix-mask file gives the paper's
+/// 5×5 matrix weight for weight, and is the rows file mirrored; the transcription's garbled
+/// entry (4, 3), `z/2 + 29/40 + 1/(8z²)`, is refused by the check that each entry keeps its
+/// components.
+#[test]
+fn the_paper_s_matrix_mask_is_the_nonuniform_scheme() {
+    let paper = [
+        [1.0 / 8.0, 25.0 / 32.0, 3.0 / 32.0, 0.0, 0.0],
+        [0.0, 5.0 / 8.0, 3.0 / 8.0, 0.0, 0.0],
+        [0.0, 5.0 / 24.0, 29.0 / 40.0, 1.0 / 15.0, 0.0],
+        [0.0, 0.0, 3.0 / 5.0, 2.0 / 5.0, 0.0],
+        [0.0, 0.0, 3.0 / 20.0, 29.0 / 40.0, 1.0 / 8.0],
+    ];
+    let matrix = LocalCurveScheme::builtin("nonuniform-cubic-bspline-matrix").unwrap();
+    for (i, row) in paper.iter().enumerate() {
+        for (j, &w) in row.iter().enumerate() {
+            assert_eq!(matrix.weight(i as i64 - 2, j as i64 - 2), w, "row {i} column {j}");
+        }
+    }
+    let rows = LocalCurveScheme::builtin("nonuniform-cubic-bspline").unwrap();
+    for i in -12..=12 {
+        for j in -8..=8 {
+            assert_eq!(matrix.weight(i, j), rows.weight(-i, -j), "new point {i}, old point {j}");
+        }
+    }
+    let text = LocalCurveScheme::builtin_toml("nonuniform-cubic-bspline-matrix").unwrap();
+    let garbled = text.replace(
+        "row = 4\ncolumn = 3\nlowest = 0\nweights = [\"29/40\", \"1/2\", \"1/8\"]",
+        "row = 4\ncolumn = 3\nlowest = -2\nweights = [\"1/8\", \"0\", \"29/40\", \"1/2\"]",
+    );
+    assert_ne!(garbled, text);
+    let error = LocalCurveScheme::from_toml_str(&garbled).unwrap_err().to_string();
+    assert!(error.contains("entry (4, 3) sends old point 1 to new point 0"), "{error}");
+    // Both forms at once, or neither: refused.
+    let both = format!("offset = 2\n{text}");
+    let error = LocalCurveScheme::from_toml_str(&both).unwrap_err().to_string();
+    assert!(error.contains("no mask, offset or [[rows]] beside it"), "{error}");
 }
 
 /// Eigenvalues as sorted by the library, compared with the expected real values.
