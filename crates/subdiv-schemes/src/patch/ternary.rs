@@ -146,11 +146,12 @@ pub fn ternary_refine(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> 
             reason: "only √3's two steps split a triangle in nine",
         });
     }
-    let refiner = Refiner::new(mesh, scheme, 2, options)?;
-    let rows = refiner.levels()[0].then(&refiner.levels()[1]);
-    let levels = Refiner::new(mesh, scheme, 1, options)?;
-    let mid = levels.into_mesh();
-    let fine = refiner.into_mesh();
+    let first = Refiner::new(mesh, scheme, 1, options)?;
+    let rows = first.levels()[0].clone();
+    let mid = first.into_mesh();
+    let second = Refiner::new(&mid, scheme, 1, options)?;
+    let rows = rows.then(&second.levels()[0]);
+    let fine = second.into_mesh();
     let mut soup =
         subdiv_mesh::PolygonSoup::with_capacity(fine.vertex_count(), fine.face_count(), 3 * fine.face_count());
     for v in fine.vertices() {
