@@ -2,6 +2,24 @@
 
 use subdiv_stencil::StencilError;
 
+/// The error bound a tessellation was asked for, as its refusals state it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ErrorBound {
+    /// An absolute distance `ε` in the mesh's units.
+    Absolute(f64),
+    /// Pixels on the screen ([`ScreenError`](crate::rates::ScreenError)).
+    Pixels(f64),
+}
+
+impl std::fmt::Display for ErrorBound {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::Absolute(epsilon) => write!(f, "ε = {epsilon:e}"),
+            Self::Pixels(pixels) => write!(f, "{pixels} pixels of error on the screen"),
+        }
+    }
+}
+
 /// Why a tessellation failed.
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
@@ -48,7 +66,7 @@ pub enum TessError {
     },
     /// The output would exceed [`QuadtreeOptions::max_polygons`](crate::QuadtreeOptions).
     #[error(
-        "at least {needed} polygons (about twice as many vertices) needed for ε = {epsilon:e}, more than the limit \
+        "at least {needed} polygons (about twice as many vertices) needed for {bound}, more than the limit \
          {limit}; raise the tolerance or the limit (QuadtreeOptions::max_polygons; TessOptions::max_vertices, \
          `subdiv tessellate --max-vertices`, allow half as many polygons as vertices)"
     )]
@@ -58,8 +76,8 @@ pub enum TessError {
         needed: usize,
         /// The limit.
         limit: usize,
-        /// The absolute tolerance.
-        epsilon: f64,
+        /// The error bound asked for.
+        bound: ErrorBound,
     },
     /// A screen-space rate policy with a degenerate camera or viewport.
     #[error("screen-space rates: {reason}")]

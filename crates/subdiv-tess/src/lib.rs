@@ -69,7 +69,7 @@ pub mod rates;
 pub mod sink;
 
 pub use dual::{DualOptions, DualTessellator, EvaluationPlan, FlatMesh, MAX_DUAL_RATE};
-pub use error::TessError;
+pub use error::{ErrorBound, TessError};
 pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessChannels, TessMesh};
 pub use normal::unit_normal;

@@ -241,12 +241,43 @@ fn predicted_polygons_are_a_close_lower_bound() {
         let tess = QuadtreeTessellator::new(scheme.scheme(), &mesh).unwrap();
         for relative in [1e-2, 1e-3, 1e-4] {
             let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(relative));
-            let at_least = tess.polygons_at_least(&options).unwrap().unwrap();
+            let at_least = tess.polygons_at_least(&options).unwrap();
             let polygons = tess.tessellate(&options).unwrap().polygon_count();
             assert!(at_least <= polygons, "{scheme} at {relative}: {at_least} > {polygons}");
             assert!(at_least as f64 >= closeness * polygons as f64, "{scheme} at {relative}: {at_least} of {polygons}");
         }
     }
+}
+
+/// Screen-space bounds are predicted too (each node's `ε` from points of its surface, at least
+/// the build's from its hull): a lower bound on the polygons, close on the built-in model and
+/// Loop's icosahedron seen near and far, and a refusal before the work.
+#[test]
+fn predicted_screen_space_polygons_are_a_lower_bound() {
+    use glam::DVec3;
+    use subdiv_tess::rates::{Camera, ScreenError};
+    let near = Camera::look_at(DVec3::new(0.5, -3.0, 1.5), DVec3::ZERO, DVec3::Z);
+    for (scheme, soup) in [(Builtin::CatmullClark, shapes::default_model()), (Builtin::Loop, shapes::icosahedron())] {
+        let mesh = Mesh::build(soup).unwrap();
+        let tess = QuadtreeTessellator::new(scheme.scheme(), &mesh).unwrap();
+        for (camera, pixels) in [(near, 0.75), (near, 0.1), (Camera { eye: 3.0 * near.eye, ..near }, 0.5)] {
+            let screen = ScreenError { camera, viewport: [640, 480], pixels };
+            let options = QuadtreeOptions::DEFAULT.with_screen(Some(screen));
+            let at_least = tess.polygons_at_least(&options).unwrap();
+            let polygons = tess.tessellate(&options).unwrap().polygon_count();
+            assert!(at_least <= polygons, "{scheme} at {pixels} px: {at_least} > {polygons}");
+            assert!(4 * at_least >= 3 * polygons, "{scheme} at {pixels} px: {at_least} of {polygons}");
+        }
+    }
+    let cube = Mesh::build(shapes::cube()).unwrap();
+    let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &cube).unwrap();
+    let screen = ScreenError { camera: near, viewport: [4096, 4096], pixels: 0.01 };
+    let options = QuadtreeOptions::DEFAULT.with_screen(Some(screen)).with_max_polygons(10_000);
+    let refused = tess.tessellate(&options);
+    assert!(
+        matches!(refused, Err(TessError::TooManyPolygons { needed, limit: 10_000, .. }) if needed > 10_000),
+        "{refused:?}"
+    );
 }
 
 #[test]

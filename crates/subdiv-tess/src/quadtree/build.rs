@@ -26,7 +26,7 @@ impl QuadtreeTessellator {
         if flat {
             if budget.count.fetch_add(1, Ordering::Relaxed) >= budget.options.max_polygons {
                 let limit = budget.options.max_polygons;
-                return Err(TessError::TooManyPolygons { needed: limit + 1, limit, epsilon });
+                return Err(TessError::TooManyPolygons { needed: limit + 1, limit, bound: budget.bound() });
             }
             leaves.push(Leaf { extraordinary: matches!(piece, Piece::Extraordinary { .. }), ..node });
             return Ok(());
@@ -101,6 +101,21 @@ impl QuadtreeTessellator {
         seen.sort_unstable();
         seen.dedup();
         seen.into_iter().map(|v| mesh.position(v)).collect()
+    }
+}
+
+impl Budget<'_> {
+    /// The bound asked for, as a refusal states it.
+    pub(super) fn bound(&self) -> crate::ErrorBound {
+        error_bound(self.screen.as_ref(), self.epsilon)
+    }
+}
+
+/// The bound asked for, as a refusal states it: the screen's pixels, else `epsilon`.
+pub(super) fn error_bound(screen: Option<&crate::rates::ScreenBound>, epsilon: f64) -> crate::ErrorBound {
+    match screen {
+        Some(screen) => crate::ErrorBound::Pixels(screen.pixels),
+        None => crate::ErrorBound::Absolute(epsilon),
     }
 }
 

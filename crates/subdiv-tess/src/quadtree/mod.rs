@@ -668,15 +668,15 @@ impl QuadtreeTessellator {
     ) -> Result<QuadtreeStats, TessError> {
         let epsilon = options.tolerance.absolute(self.diagonal)?;
         let screen = options.screen.as_ref().map(crate::rates::ScreenError::bound).transpose()?;
+        let bound = build::error_bound(screen.as_ref(), epsilon);
         let max_depth = options.max_depth.min(DEPTH_LIMIT);
         let count = AtomicUsize::new(0);
         let parallel = options.parallelism.forks();
         // The budget predicted before the work: a lower bound on the leaves, counted until it
         // passes the limit (see `predict.rs`).
-        if let Some(needed) = self.polygons_at_least(options)?
-            && needed > options.max_polygons
-        {
-            return Err(TessError::TooManyPolygons { needed, limit: options.max_polygons, epsilon });
+        let needed = self.polygons_at_least(options)?;
+        if needed > options.max_polygons {
+            return Err(TessError::TooManyPolygons { needed, limit: options.max_polygons, bound });
         }
         let grown: Vec<(Vec<Leaf>, Corners)> = crate::par::try_map(parallel, &self.roots, |&root| {
             let (mut leaves, mut corners) = (Vec::new(), Corners::new());
@@ -720,7 +720,7 @@ impl QuadtreeTessellator {
         }
         if u32::try_from(creators.len()).is_err() {
             let limit = options.max_polygons;
-            return Err(TessError::TooManyPolygons { needed: limit + 1, limit, epsilon });
+            return Err(TessError::TooManyPolygons { needed: limit + 1, limit, bound });
         }
 
         // Every vertex evaluated once, exactly.
@@ -749,7 +749,7 @@ impl QuadtreeTessellator {
         let corners: usize = rings.iter().flatten().map(|(ring, _)| ring.len()).sum();
         if u32::try_from(corners).is_err() {
             let limit = options.max_polygons;
-            return Err(TessError::TooManyPolygons { needed: limit + 1, limit, epsilon });
+            return Err(TessError::TooManyPolygons { needed: limit + 1, limit, bound });
         }
 
         // Channels: each vertex's values, and the seams' further sides (see `channels.rs`).

@@ -13,6 +13,12 @@
 //! at the side's middle: the same tree over triangles, split where a middle strays further.
 //! Non-polynomial pieces count one leaf each (a weak bound, never one above the truth). The count stops once it passes the limit, so a refusal costs about a tree of the
 //! limit's size in cheap nodes, not the tessellation.
+//!
+//! A screen-space bound gives each node its own `ε` from the hull of its control points: the
+//! nearest depth and the widest angle off the axis ([`ScreenBound::epsilon`]). A node's corners
+//! (and a triangle's sides' middles) lie in its hull, so their depth is no nearer and their angle no wider: the `ε` they
+//! give is at least the build's, a node the build finds flat is flat here too, and the count
+//! stays a lower bound. (A node whose points are all behind the near plane counts one leaf.)
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -22,13 +28,14 @@ use super::{Budget, Piece, QuadtreeOptions, QuadtreeTessellator, Root};
 use crate::TessError;
 use crate::bezier::{Bicubic, bernstein3};
 use crate::quartic::Quartic;
+use crate::rates::ScreenBound;
 
 impl QuadtreeTessellator {
     /// A lower bound on the polygons (leaves) that [`tessellate`](Self::tessellate) with
     /// `options` outputs, found before the work and in a small part of its time (see the module
     /// docs), counted until it passes [`QuadtreeOptions::max_polygons`]: the tessellation
-    /// refuses the options at once when it does. `None` for a screen-space bound, whose `ε`
-    /// differs from piece to piece.
+    /// refuses the options at once when it does (screen-space bounds included: see the module
+    /// docs).
     ///
     /// ```
     /// use subdiv_mesh::{shapes, Mesh};
@@ -38,28 +45,26 @@ impl QuadtreeTessellator {
     /// let cube = Mesh::build(shapes::cube())?;
     /// let tess = QuadtreeTessellator::new(Builtin::CatmullClark.scheme(), &cube)?;
     /// let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(1e-4));
-    /// let at_least = tess.polygons_at_least(&options)?.unwrap();
+    /// let at_least = tess.polygons_at_least(&options)?;
     /// let mesh = tess.tessellate(&options)?;
     /// assert!(at_least <= mesh.polygon_count() && 10 * at_least >= 9 * mesh.polygon_count());
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     ///
     /// # Errors
-    /// [`TessError::Tolerance`] for a tolerance that is not positive and finite, and errors
-    /// of the pieces' derivation.
-    pub fn polygons_at_least(&self, options: &QuadtreeOptions) -> Result<Option<usize>, TessError> {
-        if options.screen.is_some() {
-            return Ok(None);
-        }
+    /// [`TessError::Tolerance`] for a tolerance that is not positive and finite, the screen
+    /// bound's errors, and errors of the pieces' derivation.
+    pub fn polygons_at_least(&self, options: &QuadtreeOptions) -> Result<usize, TessError> {
         let epsilon = options.tolerance.absolute(self.diagonal)?;
+        let screen = options.screen.as_ref().map(crate::rates::ScreenError::bound).transpose()?;
         let max_depth = options.max_depth.min(super::DEPTH_LIMIT);
         let count = AtomicUsize::new(0);
         crate::par::try_map(options.parallelism.forks(), &self.roots, |&root| {
             let max_depth = max_depth.saturating_sub(root.depth());
-            let budget = Budget { epsilon, screen: None, max_depth, count: &count, options };
+            let budget = Budget { epsilon, screen, max_depth, count: &count, options };
             self.count_leaves(root, self.root_piece(root)?, 0, &budget)
         })?;
-        Ok(Some(count.load(Ordering::Relaxed)))
+        Ok(count.load(Ordering::Relaxed))
     }
 
     /// Adds to `budget.count` a lower bound on the leaves of `piece`, a node at `depth`.
@@ -71,12 +76,14 @@ impl QuadtreeTessellator {
         match &piece {
             Piece::Regular(b) => {
                 let levels = budget.max_depth.saturating_sub(depth);
-                SecondDerivatives::of(b).count_leaves(budget.epsilon, levels, budget.count, limit);
+                let epsilon = Epsilon { fixed: budget.epsilon, screen: budget.screen.as_ref() };
+                SecondDerivatives::of(b).count_leaves(b, epsilon, levels, budget.count, limit);
                 return Ok(());
             }
             Piece::Quartic(q) => {
                 let levels = budget.max_depth.saturating_sub(depth);
-                quartic_leaves(q, budget.epsilon, levels, budget.count, limit);
+                let epsilon = Epsilon { fixed: budget.epsilon, screen: budget.screen.as_ref() };
+                quartic_leaves(q, epsilon, levels, budget.count, limit);
                 return Ok(());
             }
             Piece::Linear { .. } => {
@@ -94,6 +101,24 @@ impl QuadtreeTessellator {
             self.count_leaves(root, self.child(root, &piece, domain)?, depth + 1, budget)?;
         }
         Ok(())
+    }
+}
+
+/// The `ε` a node of the prediction is measured against: the tolerance's, or a screen bound's
+/// from points of the node's surface (at least the build's, from its hull; `None`: all behind
+/// the near plane, a leaf).
+#[derive(Clone, Copy)]
+struct Epsilon<'a> {
+    fixed: f64,
+    screen: Option<&'a ScreenBound>,
+}
+
+impl Epsilon<'_> {
+    fn of(self, points: &[DVec3]) -> Option<f64> {
+        match self.screen {
+            None => Some(self.fixed),
+            Some(screen) => screen.epsilon(points),
+        }
     }
 }
 
@@ -129,16 +154,23 @@ impl SecondDerivatives {
     }
 
     /// Adds to `count` the leaves of the tree over the unit square split wherever a node of
-    /// side `h` has `h² · max over its corners / 8 > epsilon` (a side's chord bound past `ε`:
-    /// then it is not flat), at most `levels` deep, stopping once `count` passes `limit`.
-    fn count_leaves(&self, epsilon: f64, levels: u32, count: &AtomicUsize, limit: usize) {
-        let corners = [self.largest(0.0, 0.0), self.largest(1.0, 0.0), self.largest(1.0, 1.0), self.largest(0.0, 1.0)];
+    /// side `h` has `h² · max over its corners / 8 > ε` (a side's chord bound past `ε`: then it
+    /// is not flat), at most `levels` deep, stopping once `count` passes `limit`. `patch` is the
+    /// bicubic, whose points give a screen bound's `ε` per node.
+    fn count_leaves(&self, patch: &Bicubic, epsilon: Epsilon<'_>, levels: u32, count: &AtomicUsize, limit: usize) {
+        // A node: depth, corner 0, and per corner the largest second derivative and (for a
+        // screen bound) the point; a split node's sides' middles and centre are its children's
+        // corners, so each is evaluated once.
+        let screen = epsilon.screen.is_some();
+        let at = |x: f64, y: f64| (self.largest(x, y), if screen { patch.eval(x, y) } else { DVec3::ZERO });
+        let corners = [at(0.0, 0.0), at(1.0, 0.0), at(1.0, 1.0), at(0.0, 1.0)];
         let mut stack = vec![(0u32, 0.0, 0.0, corners)];
         let mut leaves = Leaves { count, limit, local: 0 };
         while let Some((depth, x, y, c)) = stack.pop() {
             let h = 0.5f64.powi(depth as i32);
-            let largest = c.iter().copied().fold(0.0, f64::max);
-            if depth >= levels || h * h * largest / 8.0 <= epsilon {
+            let largest = c.iter().map(|c| c.0).fold(0.0, f64::max);
+            let e = if screen { epsilon.of(&c.map(|c| c.1)) } else { Some(epsilon.fixed) };
+            if depth >= levels || e.is_none_or(|e| h * h * largest / 8.0 <= e) {
                 if !leaves.add() {
                     return;
                 }
@@ -147,9 +179,8 @@ impl SecondDerivatives {
             let (m, x1, y1) = (h / 2.0, x + h, y + h);
             let (xm, ym) = (x + m, y + m);
             let [c0, c1, c2, c3] = c;
-            let (bottom, right, top, left) =
-                (self.largest(xm, y), self.largest(x1, ym), self.largest(xm, y1), self.largest(x, ym));
-            let centre = self.largest(xm, ym);
+            let (bottom, right, top, left) = (at(xm, y), at(x1, ym), at(xm, y1), at(x, ym));
+            let centre = at(xm, ym);
             stack.push((depth + 1, x, y, [c0, bottom, centre, left]));
             stack.push((depth + 1, xm, y, [bottom, c1, right, centre]));
             stack.push((depth + 1, xm, ym, [centre, right, c2, top]));
@@ -162,7 +193,7 @@ impl SecondDerivatives {
 /// triangles (four children, the middle one turned half a turn), wherever a side's middle lies
 /// further than `epsilon` from its chord's middle: the quartic chord bound is at least the side's
 /// largest distance from its chord (it bounds that distance by Bézier coefficients).
-fn quartic_leaves(q: &Quartic, epsilon: f64, levels: u32, count: &AtomicUsize, limit: usize) {
+fn quartic_leaves(q: &Quartic, epsilon: Epsilon<'_>, levels: u32, count: &AtomicUsize, limit: usize) {
     let q = PowerForm::of(q);
     // A node: depth, corner 0, turned or not, and its corners' points; its sides' middles are its
     // children's corners (in `ChildDomain::of_face(3)`'s order), so each is evaluated once.
@@ -174,9 +205,9 @@ fn quartic_leaves(q: &Quartic, epsilon: f64, levels: u32, count: &AtomicUsize, l
         let g = if flipped { -h } else { h };
         let half = g / 2.0;
         let (m01, m12, m20) = (q.eval(x + half, y), q.eval(x + half, y + half), q.eval(x, y + half));
-        let bent = [(c0, c1, m01), (c1, c2, m12), (c2, c0, m20)]
-            .iter()
-            .any(|&(a, b, m)| (m - (a + b) / 2.0).length() > epsilon);
+        let bent = epsilon.of(&[c0, c1, c2, m01, m12, m20]).is_some_and(|e| {
+            [(c0, c1, m01), (c1, c2, m12), (c2, c0, m20)].iter().any(|&(a, b, m)| (m - (a + b) / 2.0).length() > e)
+        });
         if depth >= levels || !bent {
             if !leaves.add() {
                 return;
@@ -285,20 +316,21 @@ mod tests {
 
     #[test]
     fn a_uniform_second_derivative_gives_a_uniform_tree() {
-        let d = SecondDerivatives::of(&paraboloid(3.0, 1.0));
+        let patch = paraboloid(3.0, 1.0);
+        let d = SecondDerivatives::of(&patch);
         assert!((d.largest(0.3, 0.7) - 6.0).abs() < 1e-12);
         // h² · 6 / 8 ≤ ε: h = 1/8 just above ε = 0.75 / 64, 64 leaves; h = 1/16 just below it.
         for (epsilon, leaves) in [(0.75 / 64.0 * 1.01, 64), (0.75 / 64.0 * 0.99, 256), (1.0, 1)] {
             let count = AtomicUsize::new(0);
-            d.count_leaves(epsilon, 24, &count, usize::MAX);
+            d.count_leaves(&patch, Epsilon { fixed: epsilon, screen: None }, 24, &count, usize::MAX);
             assert_eq!(count.load(Ordering::Relaxed), leaves, "ε = {epsilon}");
         }
         // The depth limit caps it; the count stops soon after passing the limit.
         let count = AtomicUsize::new(0);
-        d.count_leaves(1e-12, 3, &count, usize::MAX);
+        d.count_leaves(&patch, Epsilon { fixed: 1e-12, screen: None }, 3, &count, usize::MAX);
         assert_eq!(count.load(Ordering::Relaxed), 64);
         let count = AtomicUsize::new(0);
-        d.count_leaves(1e-12, 24, &count, 10_000);
+        d.count_leaves(&patch, Epsilon { fixed: 1e-12, screen: None }, 24, &count, 10_000);
         assert!((10_000..10_000 + 4096 + 4).contains(&count.load(Ordering::Relaxed)));
     }
 }

@@ -203,7 +203,7 @@ pub(crate) struct ScreenBound {
     frame: [DVec3; 3],
     focal: f64,
     near: f64,
-    pixels: f64,
+    pub(crate) pixels: f64,
 }
 
 impl ScreenError {
