@@ -365,7 +365,7 @@ impl QuadtreeTessellator {
             scratch: Scratch::default(),
         };
         tess.classify_shapes(scheme)?;
-        if tess.shapes.values().any(|k| matches!(k, ShapeKind::Linear)) {
+        if tess.shapes.values().any(|k| matches!(k, ShapeKind::Linear { .. })) {
             tess.limit =
                 Some(subdiv_stencil::LimitEvaluator::new(scheme, mesh, &subdiv_schemes::RefineOptions::DEFAULT)?);
         }

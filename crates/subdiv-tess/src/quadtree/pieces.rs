@@ -20,12 +20,17 @@ pub(super) enum ShapeKind {
     /// A shape that is no polynomial (a non-polynomial scheme's, such as `sw-quad`'s regular
     /// patch) but whose matrices, from it on, are convex combinations that reproduce linear
     /// functions of its control points' parameters: bounded by how far its control points are
-    /// from an affine function of their parameters ([`flatness::linear_is_flat`]).
-    Linear,
+    /// from an affine function of their parameters ([`flatness::linear_is_flat`]). With the
+    /// position stencils of its square's points `(i/2, j/2)`, `sides[j][i]` (quads), which the
+    /// budget's prediction tests its nodes' sides with.
+    Linear { sides: Option<Box<SidePoints>> },
     /// The extraordinary vertex at corner 0: the child kept at the corner, and the vertex's
     /// limit position and tangent-direction stencils.
     Extraordinary { position: Vec<f64>, du: Vec<f64>, dv: Vec<f64> },
 }
+
+/// Position stencils at the points `(i/2, j/2)` of a square shape, `[j][i]`.
+pub(super) type SidePoints = [[Vec<f64>; 3]; 3];
 
 /// A set of sub-patch matrices and one of its shapes, identified by address.
 pub(super) type ShapeKey = (usize, usize);
@@ -301,7 +306,22 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
         let corner_only = matches!(matrices.keeping(shape), Some((_, keep)) if keep.domain.offset == [0, 0])
             && shapes[shape].children.iter().any(|c| c.shape != shape);
         if linear[shape] && !corner_only {
-            out.insert((id, shape), ShapeKind::Linear);
+            let mut at = |i: usize, j: usize| {
+                evaluator.stencil(shape, Dyadic::new(i as i64, j as i64, 2)).ok().map(|s| s.position.clone())
+            };
+            let sides = (!triangle)
+                .then(|| -> Option<SidePoints> {
+                    let mut rows: [[Vec<f64>; 3]; 3] = Default::default();
+                    for (j, row) in rows.iter_mut().enumerate() {
+                        for (i, cell) in row.iter_mut().enumerate() {
+                            *cell = at(i, j)?;
+                        }
+                    }
+                    Some(rows)
+                })
+                .flatten()
+                .map(Box::new);
+            out.insert((id, shape), ShapeKind::Linear { sides });
             continue;
         }
         let s = &shapes[shape];
@@ -428,7 +448,7 @@ impl QuadtreeTessellator {
                     Some(ShapeKind::Extraordinary { .. }) => {
                         Ok(Piece::Extraordinary { matrices: patch.matrices.clone(), shape: patch.shape, points, frame })
                     }
-                    Some(ShapeKind::Linear) => {
+                    Some(ShapeKind::Linear { .. }) => {
                         Ok(Piece::Linear { matrices: patch.matrices.clone(), shape: patch.shape, points, frame })
                     }
                     None => Err(TessError::Internal(format!("shape of level {level} {face} not classified"))),
@@ -487,7 +507,7 @@ impl QuadtreeTessellator {
                         points: child,
                         frame: *frame,
                     }),
-                    Some(ShapeKind::Linear) => {
+                    Some(ShapeKind::Linear { .. }) => {
                         Ok(Piece::Linear { matrices: matrices.clone(), shape: sub.shape, points: child, frame: *frame })
                     }
                     None => Err(TessError::Internal("child shape not classified".into())),

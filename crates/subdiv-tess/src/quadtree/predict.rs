@@ -11,7 +11,11 @@
 //! the depth. A quartic (Loop) node is flat only if each side's chord bound is within `ε`
 //! ([`flatness::quartic_is_flat`]), and that bound is at least the side's distance from its chord
 //! at the side's middle: the same tree over triangles, split where a middle strays further.
-//! Non-polynomial pieces count one leaf each (a weak bound, never one above the truth). The count stops once it passes the limit, so a refusal costs about a tree of the
+//! A non-polynomial (linear) piece is flat only if its surface lies within `ε/2` of an affine
+//! map ([`flatness::linear_is_flat`] bounds that distance by twice its control points'), so a
+//! side's middle lies within `ε` of its chord's: the tree splits where a middle strays further,
+//! from the shape's position stencils at the node's corners and sides' middles (square pieces;
+//! triangles count one leaf each, a weak bound). The count stops once it passes the limit, so a refusal costs about a tree of the
 //! limit's size in cheap nodes, not the tessellation.
 //!
 //! A screen-space bound gives each node its own `ε` from the hull of its control points: the
@@ -24,7 +28,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use glam::DVec3;
 
-use super::{Budget, Piece, QuadtreeOptions, QuadtreeTessellator, Root};
+use subdiv_stencil::Dyadic;
+
+use super::{Budget, Piece, QuadtreeOptions, QuadtreeTessellator, Root, ShapeKind};
 use crate::TessError;
 use crate::bezier::{Bicubic, bernstein3};
 use crate::quartic::Quartic;
@@ -86,13 +92,32 @@ impl QuadtreeTessellator {
                 quartic_leaves(q, epsilon, levels, budget.count, limit);
                 return Ok(());
             }
-            Piece::Linear { .. } => {
-                budget.count.fetch_add(1, Ordering::Relaxed);
-                return Ok(());
+            Piece::Linear { matrices, shape, points, frame } => {
+                let key = (std::sync::Arc::as_ptr(matrices) as usize, *shape);
+                let Some(ShapeKind::Linear { sides: Some(sides) }) = self.shapes.get(&key) else {
+                    budget.count.fetch_add(1, Ordering::Relaxed);
+                    return Ok(());
+                };
+                // The surface at the node's point (i/2, j/2), through the frame.
+                let at = |i: i64, j: i64| -> DVec3 {
+                    let p = frame.to_patch(Dyadic::new(i, j, 2));
+                    let w = &sides[p.v as usize][p.u as usize];
+                    w.iter().zip(points).map(|(&w, &p)| w * p).sum()
+                };
+                let corners = [at(0, 0), at(2, 0), at(2, 2), at(0, 2)];
+                let middles = [at(1, 0), at(2, 1), at(1, 2), at(0, 1)];
+                let epsilon = Epsilon { fixed: budget.epsilon, screen: budget.screen.as_ref() }.of(&corners);
+                let bent = epsilon.is_some_and(|e| {
+                    (0..4).any(|k| (middles[k] - (corners[k] + corners[(k + 1) % 4]) / 2.0).length() > e)
+                });
+                if !bent || depth >= budget.max_depth {
+                    budget.count.fetch_add(1, Ordering::Relaxed);
+                    return Ok(());
+                }
             }
             Piece::Face { .. } | Piece::Extraordinary { .. } => {}
         }
-        let (flat, _) = self.flatness(&piece, budget);
+        let flat = matches!(piece, Piece::Face { .. } | Piece::Extraordinary { .. }) && self.flatness(&piece, budget).0;
         if flat || depth >= budget.max_depth {
             budget.count.fetch_add(1, Ordering::Relaxed);
             return Ok(());
