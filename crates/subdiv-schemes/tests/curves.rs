@@ -334,19 +334,22 @@ proptest! {
     }
 }
 
+/// Paper 000 §2's matrix (rows: the new points −2..=2; columns: the old points −2..=2).
+const PAPER_MATRIX: [[f64; 5]; 5] = [
+    [1.0 / 8.0, 25.0 / 32.0, 3.0 / 32.0, 0.0, 0.0],
+    [0.0, 5.0 / 8.0, 3.0 / 8.0, 0.0, 0.0],
+    [0.0, 5.0 / 24.0, 29.0 / 40.0, 1.0 / 15.0, 0.0],
+    [0.0, 0.0, 3.0 / 5.0, 2.0 / 5.0, 0.0],
+    [0.0, 0.0, 3.0 / 20.0, 29.0 / 40.0, 1.0 / 8.0],
+];
+
 /// The matrix of Schaefer–Warren §2: the non-uniform cubic B-spline refined around a knot with
 /// intervals 1 on one side and 2 on the other, restricted to the two-ring of the origin. The
 /// paper states the knots as `t_i = i` for `i > 0` and `t_i = 2i` for `i < 0`; its matrix is the
 /// one for the mirrored knots (`t_i = 2i` for `i > 0`), which is what we compare with.
 #[test]
 fn the_nonuniform_matrix_of_the_paper() {
-    let paper = [
-        [1.0 / 8.0, 25.0 / 32.0, 3.0 / 32.0, 0.0, 0.0],
-        [0.0, 5.0 / 8.0, 3.0 / 8.0, 0.0, 0.0],
-        [0.0, 5.0 / 24.0, 29.0 / 40.0, 1.0 / 15.0, 0.0],
-        [0.0, 0.0, 3.0 / 5.0, 2.0 / 5.0, 0.0],
-        [0.0, 0.0, 3.0 / 20.0, 29.0 / 40.0, 1.0 / 8.0],
-    ];
+    let paper = PAPER_MATRIX;
     // Points -6..=6; point 0 at knot 0; unit intervals to its left, 2 to its right.
     let (n, centre) = (13usize, 6usize);
     let intervals: Vec<f64> = (0..=n).map(|k| if k <= centre { 1.0 } else { 2.0 }).collect();
@@ -369,13 +372,7 @@ fn the_nonuniform_matrix_of_the_paper() {
 /// components.
 #[test]
 fn the_paper_s_matrix_mask_is_the_nonuniform_scheme() {
-    let paper = [
-        [1.0 / 8.0, 25.0 / 32.0, 3.0 / 32.0, 0.0, 0.0],
-        [0.0, 5.0 / 8.0, 3.0 / 8.0, 0.0, 0.0],
-        [0.0, 5.0 / 24.0, 29.0 / 40.0, 1.0 / 15.0, 0.0],
-        [0.0, 0.0, 3.0 / 5.0, 2.0 / 5.0, 0.0],
-        [0.0, 0.0, 3.0 / 20.0, 29.0 / 40.0, 1.0 / 8.0],
-    ];
+    let paper = PAPER_MATRIX;
     let matrix = LocalCurveScheme::builtin("nonuniform-cubic-bspline-matrix").unwrap();
     for (i, row) in paper.iter().enumerate() {
         for (j, &w) in row.iter().enumerate() {

@@ -221,6 +221,43 @@ impl<'a> Derivation<'a> {
     }
 }
 
+/// The shapes found so far, by signature, and those whose children are still to be found,
+/// breadth first: the closure of the dual and ternary derivations (their patches are found by
+/// dependency, without mirrors).
+#[derive(Default)]
+pub(super) struct ShapeQueue {
+    pub(super) shapes: Vec<PatchShape>,
+    by_signature: HashMap<Vec<u32>, usize>,
+    pending: VecDeque<(usize, usize, HalfEdgeId, Vec<VertexId>)>,
+}
+
+impl ShapeQueue {
+    /// The shape of `patch` (on `level`, starting at `start`): a known one, or a new one queued
+    /// for its children.
+    pub(super) fn register(&mut self, patch: Patch, level: usize, start: HalfEdgeId) -> usize {
+        if let Some(&s) = self.by_signature.get(&patch.signature) {
+            return s;
+        }
+        let s = self.shapes.len();
+        self.by_signature.insert(patch.signature.clone(), s);
+        self.shapes.push(PatchShape {
+            size: patch.vertices.len(),
+            signature: patch.signature,
+            children: Vec::new(),
+            influence: Vec::new(),
+            parameters: None,
+            mirror: None,
+        });
+        self.pending.push_back((s, level, start, patch.vertices));
+        s
+    }
+
+    /// The next shape whose children are to be found: its index, level, start and vertices.
+    pub(super) fn next(&mut self) -> Option<(usize, usize, HalfEdgeId, Vec<VertexId>)> {
+        self.pending.pop_front()
+    }
+}
+
 /// The canonical patch's start: its face at the centre, vertex 0, in sector `index` (see
 /// `canonical`).
 pub(super) fn canonical_start(mesh: &Mesh, patch_type: PatchType) -> HalfEdgeId {

@@ -20,12 +20,12 @@
 //! quad with two such faces (the first level's, beside a vertex of valence `k` and a face of
 //! `n` sides) is split once more: each child has one at most.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 
 use subdiv_mesh::{HalfEdgeId, Mesh, Patch, VertexId};
 
-use super::derivation::{influence_sets, parameter_coordinates};
-use super::{ChildDomain, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, ZERO_WEIGHT};
+use super::derivation::{ShapeQueue, influence_sets, parameter_coordinates};
+use super::{ChildDomain, PatchMatrices, PatchType, SharpFeatures, SubPatch, ZERO_WEIGHT};
 use crate::{RefineOptions, Refiner, Scheme, SchemeError, Stencils};
 
 /// The first word of a dual patch's signature, which no primal signature starts with.
@@ -163,31 +163,11 @@ pub(super) fn derive(scheme: &Scheme, valence: usize) -> Result<PatchMatrices, S
     let mut levels = Levels { scheme, meshes: vec![first], stencils: Vec::new() };
     let start = dual_corner_start(&levels.meshes[0], corner).ok_or_else(|| internal("the centre is open".into()))?;
 
-    let mut shapes: Vec<PatchShape> = Vec::new();
-    let mut by_signature: HashMap<Vec<u32>, usize> = HashMap::new();
-    let mut pending = VecDeque::new();
-    let mut register = |patch: Patch, level: usize, start: HalfEdgeId, pending: &mut VecDeque<_>| {
-        if let Some(&s) = by_signature.get(&patch.signature) {
-            return s;
-        }
-        let s = shapes.len();
-        by_signature.insert(patch.signature.clone(), s);
-        shapes.push(PatchShape {
-            size: patch.vertices.len(),
-            signature: patch.signature,
-            children: Vec::new(),
-            influence: Vec::new(),
-            parameters: None,
-            mirror: None,
-        });
-        pending.push_back((s, level, start, patch.vertices));
-        s
-    };
+    let mut queue = ShapeQueue::default();
     let patch =
         dual_patch(&levels.meshes[0], start).ok_or_else(|| internal("the corner point is not a dual quad".into()))?;
-    register(patch, 0, start, &mut pending);
-    let mut children_of = Vec::new();
-    while let Some((shape, level, start, vertices)) = pending.pop_front() {
+    queue.register(patch, 0, start);
+    while let Some((shape, level, start, vertices)) = queue.next() {
         if level == MAX_LEVELS {
             return Err(internal(format!("the shapes do not close up within {MAX_LEVELS} levels")));
         }
@@ -214,14 +194,12 @@ pub(super) fn derive(scheme: &Scheme, valence: usize) -> Result<PatchMatrices, S
             }
             let domain = ChildDomain::of_face(4)[c];
             let rows = patch.vertices.len();
-            let child_shape = register(patch, level + 1, child_start, &mut pending);
+            let child_shape = queue.register(patch, level + 1, child_start);
             children.push(SubPatch::from_entries(child_shape, domain, rows, entries));
         }
-        children_of.push((shape, children));
+        queue.shapes[shape].children = children;
     }
-    for (shape, children) in children_of {
-        shapes[shape].children = children;
-    }
+    let mut shapes = queue.shapes;
     // The surface over a dual quad is the limit of its centre's descendants.
     let influence = influence_sets(&shapes, 1);
     for (shape, influence) in shapes.iter_mut().zip(influence) {

@@ -12,14 +12,12 @@
 //! like the binary splits' (the smallest radius whose rows stay inside), and the evaluators take
 //! them with base-3 addresses.
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 
-use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, Patch, VertexId};
+use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
 
-use super::derivation::{canonical_start, influence_sets, parameter_coordinates};
-use super::{
-    ChildDomain, MAX_PATCH_RADIUS, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, ZERO_WEIGHT,
-};
+use super::derivation::{ShapeQueue, canonical_start, influence_sets, parameter_coordinates};
+use super::{ChildDomain, MAX_PATCH_RADIUS, PatchMatrices, PatchType, SharpFeatures, SubPatch, ZERO_WEIGHT};
 use crate::{RefineOptions, Refiner, Scheme, SchemeError, Stencils};
 
 /// Ternary levels after which the shapes must have closed up.
@@ -202,29 +200,9 @@ fn derive_at(
     let internal = |e: &str| SchemeError::Internal(format!("{}: ternary patch derivation: {e}", scheme.name));
     let mut meshes = vec![base];
     let mut levels: Vec<Level> = Vec::new();
-    let mut shapes: Vec<PatchShape> = Vec::new();
-    let mut by_signature: HashMap<Vec<u32>, usize> = HashMap::new();
-    let mut pending: VecDeque<(usize, usize, HalfEdgeId, Vec<VertexId>)> = VecDeque::new();
-    let mut register = |patch: Patch, level: usize, start: HalfEdgeId, pending: &mut VecDeque<_>| {
-        if let Some(&s) = by_signature.get(&patch.signature) {
-            return s;
-        }
-        let s = shapes.len();
-        by_signature.insert(patch.signature.clone(), s);
-        shapes.push(PatchShape {
-            size: patch.vertices.len(),
-            signature: patch.signature,
-            children: Vec::new(),
-            influence: Vec::new(),
-            parameters: None,
-            mirror: None,
-        });
-        pending.push_back((s, level, start, patch.vertices));
-        s
-    };
-    register(meshes[0].patch(start, radius), 0, start, &mut pending);
-    let mut children_of = Vec::new();
-    while let Some((shape, level, start, vertices)) = pending.pop_front() {
+    let mut queue = ShapeQueue::default();
+    queue.register(meshes[0].patch(start, radius), 0, start);
+    while let Some((shape, level, start, vertices)) = queue.next() {
         if level == MAX_LEVELS {
             return Err(internal(&format!("the shapes do not close up within {MAX_LEVELS} levels")));
         }
@@ -251,14 +229,12 @@ fn derive_at(
                 }
             }
             let rows = patch.vertices.len();
-            let child_shape = register(patch, level + 1, child_start, &mut pending);
+            let child_shape = queue.register(patch, level + 1, child_start);
             children.push(SubPatch::from_entries(child_shape, domain, rows, entries));
         }
-        children_of.push((shape, children));
+        queue.shapes[shape].children = children;
     }
-    for (shape, children) in children_of {
-        shapes[shape].children = children;
-    }
+    let mut shapes = queue.shapes;
     let influence = influence_sets(&shapes, 3);
     for (shape, influence) in shapes.iter_mut().zip(influence) {
         shape.influence = influence;
