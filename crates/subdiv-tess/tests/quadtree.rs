@@ -261,6 +261,7 @@ fn predicted_linear_pieces_are_a_lower_bound() {
             let options = QuadtreeOptions::DEFAULT.with_tolerance(Tolerance::Relative(relative));
             let at_least = tess.polygons_at_least(&options).unwrap();
             let polygons = tess.tessellate(&options).unwrap().polygon_count();
+            eprintln!("{scheme} cube at {relative}: predicted {at_least} of {polygons} polygons");
             assert!(at_least <= polygons, "{scheme} at {relative}: {at_least} > {polygons}");
             assert!(8 * at_least >= polygons, "{scheme} at {relative}: {at_least} of {polygons}");
         }

@@ -41,6 +41,8 @@ impl QuadtreeTessellator {
         // A point moves away from the special corner of every extraordinary piece, so it
         // reaches a polynomial or linear piece within a few levels of the depth where it is a
         // node's corner; the bound only turns a mistake into an error instead of a hang.
+        // Whether the last piece was extraordinary with the point at a corner of its node.
+        let mut cornered = false;
         for _ in 0..=DEPTH_LIMIT + FULL_BITS + 8 {
             let corner = match &piece {
                 Piece::Regular(b) => {
@@ -58,7 +60,10 @@ impl QuadtreeTessellator {
                     let p = limit.eval(root.face, u, v)?;
                     return Ok((p.position, crate::unit_normal(p.du.cross(p.dv))));
                 }
-                Piece::Face { .. } => None,
+                Piece::Face { .. } => {
+                    cornered = false;
+                    None
+                }
                 Piece::Extraordinary { matrices, shape, points, frame } => {
                     let corner = frame.to_face(Dyadic::new(0, 0, 1));
                     let corner = (corner.u * full, corner.v * full);
@@ -71,15 +76,17 @@ impl QuadtreeTessellator {
                         // The patch frame keeps the face's orientation (determinant 1).
                         return Ok((apply(position), crate::unit_normal(apply(du).cross(apply(dv)))));
                     }
-                    if self.stays_at_a_corner(root, &piece, (x, y))? {
-                        // Another corner of a piece whose child there is special at its own
-                        // corner 0 again (a non-polynomial scheme's crease, whose every vertex
-                        // is special): descending would keep the point at a far corner for
+                    let at_node_corner = (x == 0 || x == full) && (y == 0 || y == full);
+                    if at_node_corner && cornered {
+                        // A second extraordinary piece in a row with the point at another corner
+                        // than its special one (a non-polynomial scheme's crease, whose every
+                        // vertex is special): descending would keep it at a far corner for
                         // ever, so its stencil comes from the address's eigenvectors.
                         let at = frame.to_patch(Dyadic::new(x, y, full).reduced());
                         let s = subdiv_stencil::surface_stencil(matrices, *shape, at)?;
                         return Ok((apply(&s.position), crate::unit_normal(apply(&s.du).cross(apply(&s.dv)))));
                     }
+                    cornered = at_node_corner;
                     Some(corner)
                 }
             };
@@ -107,19 +114,6 @@ impl QuadtreeTessellator {
             };
         }
         Err(TessError::Internal(format!("{}: the point ({x}, {y}) reached no piece that evaluates it", root.face)))
-    }
-
-    /// Whether `(x, y)` is a corner of the node of the extraordinary `piece` other than its
-    /// special one, and the child holding it is extraordinary too: the child's special corner
-    /// is then elsewhere again, and so on down.
-    fn stays_at_a_corner(&self, root: Root, piece: &Piece, (x, y): (i64, i64)) -> Result<bool, TessError> {
-        let full = root.full();
-        let at_corner = (x == 0 || x == full) && (y == 0 || y == full) && (!root.triangle || x + y <= full);
-        if !at_corner {
-            return Ok(false);
-        }
-        let domain = ChildDomain::binary([u8::from(x == full), u8::from(y == full)], false);
-        Ok(matches!(self.child(root, piece, domain)?, Piece::Extraordinary { .. }))
     }
 
     /// A normal where the limit tangents are parallel (a valence-2 vertex between two faces
