@@ -17,8 +17,17 @@ fn analyze_reports_the_subdominant_eigenvalue() {
     let report = json(&["analyze", "--scheme", "loop", "--boundary-faces", "3", "--json"]);
     assert_eq!((report["valence"].as_u64(), report["c1"].as_bool()), (Some(4), Some(true)));
     assert_eq!(report["characteristic_map"]["outlines"], 1);
-    // The dual split has no boundary rules: a typed refusal, not a verdict.
-    let out = subdiv(&["analyze", "--scheme", "doo-sabin", "--boundary-faces", "2"]);
+    // Doo-Sabin's regular boundary vertex under Chaikin's rule; a scheme without boundary
+    // rules: a typed refusal, not a verdict.
+    let report = json(&["analyze", "--scheme", "doo-sabin", "--boundary-faces", "2", "--json"]);
+    assert_eq!(report["c1"].as_bool(), Some(true));
+    assert!((report["subdominant"].as_f64().unwrap() - 0.75).abs() < 1e-9, "{report}");
+    let out = subdiv(&["analyze", "--scheme", "butterfly", "--boundary-faces", "2"]);
+    assert!(out.status.success());
+    let closed_only = tempfile::tempdir().unwrap();
+    let file = closed_only.path().join("x.toml");
+    std::fs::write(&file, "name = \"x\"\n[rules.sqrt3]\nvertex = { spoke = \"1/(3*k)\" }\n").unwrap();
+    let out = subdiv(&["analyze", "--scheme-file", file.to_str().unwrap(), "--boundary-faces", "2"]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("boundaries"));
 }

@@ -33,6 +33,14 @@ const MAX_RADIUS: usize = 4;
 /// extended, so that a few refinements leave a dense ring whose every vertex is known.
 const EXTENSION: usize = 3;
 
+/// Steps of a dual split before its neighbourhood of a boundary vertex of three faces or more
+/// repeats out to `MAX_RADIUS + 1 + EXTENSION` rings. The vertex's face (on the boundary) has
+/// boundary vertices of three faces at its ends, which make a triangle each at the next step,
+/// whose own ends do the same: a train of triangles along the boundary, each one ring further
+/// out in its level than the one before, twice as far at the next level. Five steps put the
+/// rings within the characteristic map's radius in their final pattern.
+const DUAL_BOUNDARY_STEPS: usize = 5;
+
 /// The vertex an analysis is about.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Centre {
@@ -155,7 +163,10 @@ impl Canonical {
     /// The canonical mesh for neighbourhoods of radius up to `largest_radius`: the pillow has
     /// two rings more, so that no such neighbourhood reaches its rim.
     fn new(scheme: &Scheme, at: Centre, largest_radius: usize) -> Result<Self, SchemeError> {
-        let rings = largest_radius + 2;
+        // A dual split doubles the rings of faces around the centre at every step: its boundary
+        // centres, refined `DUAL_BOUNDARY_STEPS` times first, need few.
+        let dual_boundary = matches!(scheme.split(), Split::Dual | Split::Midedge) && matches!(at, Centre::Boundary(_));
+        let rings = if dual_boundary { 3 } else { largest_radius + 2 };
         let invalid = match at {
             Centre::Interior(k) if k < 3 => Some("analysis needs valence 3 or more"),
             Centre::Boundary(0) => Some("a boundary vertex needs one face or more"),
@@ -187,13 +198,36 @@ impl Canonical {
         };
         let pillow = Mesh::build(soup).map_err(|e| SchemeError::Internal(e.to_string()))?;
         let centre_is_face = matches!(scheme.split(), Split::Dual | Split::Midedge);
-        let mesh = if centre_is_face {
-            Refiner::new(&pillow, scheme, 1, &RefineOptions::DEFAULT)?.into_mesh()
+        // Mid-edge takes open meshes two steps at a time: its boundary is its dual form's.
+        let scheme = match (scheme.split(), at) {
+            (Split::Midedge, Centre::Boundary(_)) => &scheme.dual_form().expect("mid-edge has a dual form"),
+            _ => scheme,
+        };
+        let first_steps = if dual_boundary { DUAL_BOUNDARY_STEPS } else { 1 };
+        let (mesh, centres) = if scheme.split() == Split::Dual {
+            // The centre face on the first level is the one nearest the origin (the vertex's
+            // face; at a boundary vertex of one or two faces, which has none, the face of its
+            // corner or of its interior edge, whose children shrink onto its limit), and on each
+            // further level its own face's child, found by the split's numbering.
+            let mut mesh = Refiner::new(&pillow, scheme, 1, &RefineOptions::DEFAULT)?.into_mesh();
+            let mut face = centre_face(&mesh);
+            for _ in 1..first_steps {
+                let next = Refiner::new(&mesh, scheme, 1, &RefineOptions::DEFAULT)?.into_mesh();
+                face = own_child(&mesh, face, &next)?;
+                mesh = next;
+            }
+            let refined = Refiner::new(&mesh, scheme, 1, &RefineOptions::DEFAULT)?.into_mesh();
+            let centres =
+                [mesh.face_vertices(face).to_vec(), refined.face_vertices(own_child(&mesh, face, &refined)?).to_vec()];
+            (mesh, Some(centres))
+        } else if centre_is_face {
+            (Refiner::new(&pillow, scheme, first_steps, &RefineOptions::DEFAULT)?.into_mesh(), None)
         } else {
-            pillow
+            (pillow, None)
         };
         let refiner = Refiner::new(&mesh, scheme, scheme.steps_per_cycle(), &RefineOptions::DEFAULT)?;
-        let centres = [centre(&mesh, centre_is_face), centre(refiner.mesh(), centre_is_face)];
+        let centres =
+            centres.unwrap_or_else(|| [centre(&mesh, centre_is_face), centre(refiner.mesh(), centre_is_face)]);
         Ok(Self { scheme: scheme.clone(), centre: at, mesh, refiner, centre_is_face, centres })
     }
 
@@ -356,6 +390,16 @@ fn first_spoke(mesh: &Mesh, centre: &[VertexId]) -> Option<subdiv_mesh::HalfEdge
 /// The centre of a canonical mesh: vertex 0, or the extraordinary face's vertices.
 fn centre(mesh: &Mesh, is_face: bool) -> Vec<VertexId> {
     if is_face { mesh.face_vertices(centre_face(mesh)).to_vec() } else { vec![VertexId::new(0)] }
+}
+
+/// The face a dual step makes of `face` of `parent` in `child`: its corners are the child's
+/// vertices numbered by `face`'s half-edges.
+fn own_child(parent: &Mesh, face: FaceId, child: &Mesh) -> Result<FaceId, SchemeError> {
+    let corners: Vec<VertexId> = parent.face_half_edges(face).map(|h| VertexId::new(h.raw())).collect();
+    child
+        .vertex_faces(corners[0])
+        .find(|&f| child.face_size(f) == corners.len() && child.face_vertices(f).iter().all(|v| corners.contains(v)))
+        .ok_or_else(|| SchemeError::Internal(format!("the dual step made no face of {face}'s corners")))
 }
 
 /// The face of `mesh` whose centroid is nearest the origin: the extraordinary face of a dual

@@ -119,8 +119,8 @@ pub use refine::{
     LocalRefinement, MAX_PATCH_VALENCE, RefineOptions, Refiner, refine, refine_uniform, refine_uniform_with_progress,
 };
 pub use scheme::{
-    Builtin, CreaseMask, ExtraordinaryEdgeMask, FaceMask, FourPointBoundary, MAX_NAME_LENGTH, QuadEdgeMask, Rules,
-    Scheme, Split, TriangleEdgeMask, VertexMask,
+    Builtin, CreaseMask, DualBoundary, ExtraordinaryEdgeMask, FaceMask, FourPointBoundary, MAX_NAME_LENGTH,
+    QuadEdgeMask, Rules, Scheme, Split, Sqrt3Boundary, TriangleEdgeMask, VertexMask,
 };
 pub use stencil::Stencils;
 pub use stencil_table::StencilTable;

@@ -7,12 +7,12 @@
 use glam::DVec3;
 use subdiv_mesh::{
     BoundaryInterpolation, CreaseMethod, FaceId, FaceVaryingInterpolation, Mesh, Parallelism, Region, Sharpness,
-    TriangleSubdivision,
+    TriangleSubdivision, VertexId,
 };
 
 use crate::crease::INFINITE;
 use crate::primal::{ChannelLevel, ChannelRules};
-use crate::scheme::{Rules, Scheme};
+use crate::scheme::{Rules, Scheme, Split};
 use crate::stencil::Stencils;
 use crate::stencil_table::StencilTable;
 use crate::{SchemeError, dual, primal};
@@ -153,9 +153,9 @@ pub fn refine_uniform_with_progress(
     scheme: &Scheme,
     levels: usize,
     options: &RefineOptions,
-    progress: impl FnMut(usize),
+    mut progress: impl FnMut(usize),
 ) -> Result<Mesh, SchemeError> {
-    refine_levels(mesh, scheme, levels, options, false, progress).map(|(mesh, _)| mesh)
+    refine_levels(mesh, scheme, levels, options, false, &mut progress).map(|(mesh, _)| mesh)
 }
 
 /// The loop of [`refine_uniform_with_progress`] and [`Refiner::with_progress`]: `levels` levels,
@@ -166,21 +166,52 @@ fn refine_levels(
     levels: usize,
     options: &RefineOptions,
     stencils: bool,
-    mut progress: impl FnMut(usize),
+    progress: &mut dyn FnMut(usize),
 ) -> Result<(Mesh, Vec<Stencils>), SchemeError> {
     check_input(mesh, scheme)?;
+    if let Some(pairs) = midedge_pairs(mesh, scheme, levels)? {
+        return refine_levels(mesh, &pairs, levels / 2, options, stencils, &mut |pair| {
+            progress(2 * pair - 1);
+            progress(2 * pair);
+        });
+    }
     let rules = options.rules_for(mesh);
     let mut current = if scheme.has_crease_rules() { prepared(mesh, options) } else { mesh.clone() };
     let mut all = Vec::with_capacity(if stencils { levels } else { 0 });
     // The channels' face-varying topology, carried from level to level.
     let mut channels = Vec::new();
     for level in 0..levels {
-        let (child, level_stencils) = refine_once(&current, scheme, rules, &mut channels, stencils)?;
+        let (child, level_stencils) = refine_once(&current, scheme, level, rules, &mut channels, stencils)?;
         current = child;
         all.extend(level_stencils);
         progress(level + 1);
     }
     Ok((current, all))
+}
+
+/// Mid-edge refines an open mesh two steps at a time, as its two-step dual form
+/// ([`Scheme::dual_form`]) with Chaikin's boundary rule: a single step has no boundary rule that
+/// keeps the boundary refining (the polygon of a boundary's edge middles has as many vertices
+/// as the boundary). The dual form, for an open mesh under mid-edge; `None` otherwise.
+///
+/// # Errors
+/// [`SchemeError::FeatureNotSupported`] for an odd number of steps on an open mesh.
+fn midedge_pairs(mesh: &Mesh, scheme: &Scheme, levels: usize) -> Result<Option<Scheme>, SchemeError> {
+    if !matches!(scheme.rules, Rules::Midedge) {
+        return Ok(None);
+    }
+    let Some(e) = mesh.edges().find(|&e| mesh.is_boundary_edge(e)) else {
+        return Ok(None);
+    };
+    if levels % 2 == 1 {
+        let [a, b] = mesh.edge_vertices(e);
+        return Err(SchemeError::FeatureNotSupported {
+            scheme: scheme.name.clone(),
+            feature: "boundaries in an odd number of steps (it refines open meshes two steps at a time)",
+            element: format!("edge {}-{}", a.raw(), b.raw()),
+        });
+    }
+    Ok(scheme.dual_form())
 }
 
 /// Uniform refinement split as OpenSubdiv's `Far` splits it: the topology of every level and
@@ -226,9 +257,9 @@ impl Refiner {
         scheme: &Scheme,
         levels: usize,
         options: &RefineOptions,
-        progress: impl FnMut(usize),
+        mut progress: impl FnMut(usize),
     ) -> Result<Self, SchemeError> {
-        let (mesh, levels) = refine_levels(mesh, scheme, levels, options, true, progress)?;
+        let (mesh, levels) = refine_levels(mesh, scheme, levels, options, true, &mut progress)?;
         Ok(Self { levels, mesh, parallelism: options.parallelism })
     }
 
@@ -356,10 +387,12 @@ pub fn refine(mesh: &Mesh, scheme: &Scheme, options: &RefineOptions) -> Result<M
 
 /// One level of any scheme, with its stencils when `stencils` asks for them; `channels` holds
 /// the face-varying topology of `mesh`'s channels (empty at the base level) and is replaced by
-/// the child's.
+/// the child's. `level` counts the steps before this one (√3 refines boundaries every second
+/// step).
 fn refine_once(
     mesh: &Mesh,
     scheme: &Scheme,
+    level: usize,
     options: Options,
     channels: &mut Vec<ChannelLevel>,
     stencils: bool,
@@ -368,9 +401,9 @@ fn refine_once(
         Rules::Quad { .. } | Rules::Triangle { .. } | Rules::FourPointQuad { .. } => {
             return primal::refine(mesh, scheme, options, channels, stencils);
         }
-        Rules::Dual { own, corner } => dual::doo_sabin(mesh, own, corner)?,
+        Rules::Dual { own, corner, boundary } => dual::doo_sabin(mesh, own, corner, *boundary)?,
         Rules::Midedge => dual::midedge(mesh)?,
-        Rules::Sqrt3 { vertex } => dual::sqrt3(mesh, vertex)?,
+        Rules::Sqrt3 { vertex, boundary } => dual::sqrt3(mesh, vertex, boundary.is_some() && level % 2 == 1)?,
     };
     Ok((child, stencils.then_some(level_stencils)))
 }
@@ -402,15 +435,24 @@ fn check_input(mesh: &Mesh, scheme: &Scheme) -> Result<(), SchemeError> {
         let [a, b] = mesh.edge_vertices(e);
         return Err(unsupported("boundaries", format!("edge {}-{}", a.raw(), b.raw())));
     }
-    // A boundary rule takes infinitely sharp creases and corners (the rule on each side).
-    let takes = |s: f64| s <= 0.0 || (scheme.has_boundary_rules() && Sharpness::of(s) == Sharpness::Infinite);
+    // An interpolating scheme's boundary rule takes infinitely sharp creases and corners (the
+    // rule on each side).
+    let by_boundary = scheme.creases_by_boundary_rule();
+    let takes = |s: f64| s <= 0.0 || (by_boundary && Sharpness::of(s) == Sharpness::Infinite);
     let (creases, corners) =
-        if scheme.has_boundary_rules() { ("semi-sharp creases", "semi-sharp corners") } else { ("creases", "corners") };
+        if by_boundary { ("semi-sharp creases", "semi-sharp corners") } else { ("creases", "corners") };
     if let Some(e) = mesh.edges().find(|&e| !takes(mesh.edge_sharpness(e))) {
         let [a, b] = mesh.edge_vertices(e);
         return Err(unsupported(creases, format!("edge {}-{}", a.raw(), b.raw())));
     }
-    if let Some(v) = mesh.vertices().find(|&v| !takes(mesh.vertex_sharpness(v))) {
+    // The dual splits keep a boundary vertex of one face as a corner: a tag there says so.
+    let corner_already = |v: VertexId| {
+        matches!(scheme.split(), Split::Dual | Split::Midedge)
+            && Sharpness::of(mesh.vertex_sharpness(v)) == Sharpness::Infinite
+            && mesh.is_boundary_vertex(v)
+            && mesh.outgoing(v).nth(1).is_none()
+    };
+    if let Some(v) = mesh.vertices().find(|&v| !takes(mesh.vertex_sharpness(v)) && !corner_already(v)) {
         return Err(unsupported(corners, v.to_string()));
     }
     if let Some(f) = mesh.face_ids().find(|&f| mesh.is_hole(f)) {

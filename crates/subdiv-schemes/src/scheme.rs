@@ -87,22 +87,58 @@ pub enum Rules {
         boundary: Option<FourPointBoundary>,
     },
     /// Dual split: a new point per face corner; new faces per face, per edge and per vertex
-    /// (Doo-Sabin). Closed meshes.
+    /// (Doo-Sabin).
     Dual {
         /// Weight of the corner's own vertex, on top of `corner` at `j = 0`.
         own: Expr,
         /// Weight of the face's vertex `j` corners after the new point's corner, in an n-gon.
         corner: Expr,
+        /// The rule at boundaries; absent, the scheme takes closed meshes only.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        boundary: Option<DualBoundary>,
     },
     /// Mid-edge split: a new point at the middle of every edge; new faces per face and per
     /// vertex (Peters and Reif's simplest scheme). Closed meshes.
     Midedge,
     /// Kobbelt's √3 split of triangles: a point per face, joined to its corners, old edges
-    /// flipped. Closed meshes.
+    /// flipped.
     Sqrt3 {
         /// The new position of an old vertex (the face points are centroids).
         vertex: VertexMask,
+        /// The rule at boundaries; absent, the scheme takes closed meshes only.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        boundary: Option<Sqrt3Boundary>,
     },
+}
+
+/// A dual scheme's rule at boundaries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum DualBoundary {
+    /// Chaikin's corner cutting along the boundary (Doo and Sabin 1978 §4, Nasri 1987): a
+    /// corner on one boundary edge takes ¾ of its vertex and ¼ of the edge's far end, so the
+    /// boundary polygon is refined by Chaikin's rule alone and the surface's boundary is its
+    /// quadratic B-spline; a corner on two boundary edges (a boundary vertex of one face)
+    /// stays at its vertex, where the curve keeps a corner. Boundary edges have no edge
+    /// face, and a boundary vertex has a vertex face where it has three faces or more.
+    /// Infinitely sharp creases and corners are refused (they would leave faces of zero
+    /// width between the sides).
+    Chaikin,
+}
+
+/// The √3 split's rule at boundaries.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Sqrt3Boundary {
+    /// Kobbelt's (2000, §5): the steps alternate between keeping the boundary (its vertices
+    /// stay, its triangles split as the others, boundary edges unflipped) and refining it by
+    /// the ternary cubic B-spline rule (each boundary edge split in three, `(16, 10, 1)/27`
+    /// and `(1, 10, 16)/27` of its ends and their outer neighbours; boundary vertices
+    /// `(4, 19, 4)/27` along the boundary; a boundary triangle fanned from its far corner), so
+    /// that two steps refine the boundary polygon once by three and its limit is the cubic
+    /// B-spline of the polygon. A refinement starts with a keeping step. Creases, corners and
+    /// holes are refused.
+    TernaryCubic,
 }
 
 /// An interpolating scheme's rule at boundaries (Kobbelt's four-point quad scheme, the
@@ -481,8 +517,20 @@ impl Scheme {
         self.has_crease_rules()
             || matches!(
                 self.rules,
-                Rules::FourPointQuad { boundary: Some(_), .. } | Rules::Triangle { boundary: Some(_), .. }
+                Rules::FourPointQuad { boundary: Some(_), .. }
+                    | Rules::Triangle { boundary: Some(_), .. }
+                    | Rules::Dual { boundary: Some(_), .. }
+                    | Rules::Midedge
+                    | Rules::Sqrt3 { boundary: Some(_), .. }
             )
+    }
+
+    /// Whether the scheme takes infinitely sharp creases and corners by its boundary rule
+    /// (the rule on each side), without crease rules of its own: the interpolating schemes'
+    /// [`FourPointBoundary`]. The dual splits' boundary rules do not (a crease would leave
+    /// faces of zero width between its sides).
+    pub(crate) fn creases_by_boundary_rule(&self) -> bool {
+        matches!(self.rules, Rules::FourPointQuad { boundary: Some(_), .. } | Rules::Triangle { boundary: Some(_), .. })
     }
 
     /// The scheme as a dual split, where it is one or where its cycle of steps
@@ -519,6 +567,7 @@ impl Scheme {
                     rules: Rules::Dual {
                         own: "1/2".parse().expect("a constant"),
                         corner: corner.parse().expect("a valid formula"),
+                        boundary: Some(DualBoundary::Chaikin),
                     },
                 })
             }
@@ -642,7 +691,7 @@ impl Scheme {
                 vertex_check(vertex, false)?;
                 crease_check(crease)?;
             }
-            Rules::Dual { own, corner } => {
+            Rules::Dual { own, corner, .. } => {
                 for n in checked_face_sizes() {
                     let mut weights = vec![own.eval(n, 0)];
                     weights.extend((0..n).map(|j| corner.eval(n, j)));
@@ -650,7 +699,7 @@ impl Scheme {
                 }
             }
             Rules::Midedge => {}
-            Rules::Sqrt3 { vertex } => vertex_check(vertex, false)?,
+            Rules::Sqrt3 { vertex, .. } => vertex_check(vertex, false)?,
         }
         Ok(())
     }

@@ -218,14 +218,26 @@ fn stencil_rows_sum_to_one_and_reproduce_the_refined_positions() {
 fn unsupported_input_is_a_typed_error() {
     use subdiv_schemes::SchemeError;
     let grid = Mesh::build(shapes::quad_grid(2, 2)).unwrap();
-    // Kobbelt has a boundary rule (the four-point rule along the boundary); the dual splits none.
+    // Kobbelt and Doo-Sabin have boundary rules; mid-edge takes boundaries two steps at a time;
+    // a dual scheme file without `boundary` takes none.
     assert!(refine_uniform(&grid, Builtin::Kobbelt.scheme(), 1, &RefineOptions::DEFAULT).is_ok());
-    for builtin in [Builtin::DooSabin, Builtin::Midedge] {
-        match refine_uniform(&grid, builtin.scheme(), 1, &RefineOptions::DEFAULT) {
-            Err(SchemeError::FeatureNotSupported { feature: "boundaries", element, .. }) => {
+    assert!(refine_uniform(&grid, Builtin::DooSabin.scheme(), 1, &RefineOptions::DEFAULT).is_ok());
+    let closed_dual = subdiv_schemes::Scheme::from_toml_str(
+        "name = \"x\"\n[rules.dual]\nown = \"1/4\"\ncorner = \"(3 + 2*cos(2*pi*j/n))/(4*n)\"\n",
+    )
+    .unwrap();
+    for (scheme, feature) in [
+        (&closed_dual, "boundaries"),
+        (
+            Builtin::Midedge.scheme(),
+            "boundaries in an odd number of steps (it refines open meshes two steps at a time)",
+        ),
+    ] {
+        match refine_uniform(&grid, scheme, 1, &RefineOptions::DEFAULT) {
+            Err(SchemeError::FeatureNotSupported { feature: f, element, .. }) if f == feature => {
                 assert!(element.starts_with("edge "), "{element}");
             }
-            other => panic!("{builtin}: {other:?}"),
+            other => panic!("{scheme}: {other:?}"),
         }
     }
     let cube = Mesh::build(shapes::cube()).unwrap();

@@ -4,7 +4,9 @@
 use std::f64::consts::PI;
 
 use subdiv_mesh::BoundaryInterpolation;
-use subdiv_schemes::{Analysis, Builtin, Centre, LocalMatrix, LocalSpectrum, PatchMatrices, PatchType, SchemeError};
+use subdiv_schemes::{
+    Analysis, Builtin, Centre, LocalMatrix, LocalSpectrum, PatchMatrices, PatchType, Scheme, SchemeError,
+};
 
 /// The derived matrices of `builtin` pass the spectral conditions at k = 3..=64 and their
 /// subdominant eigenvalue is `closed_form(k)` to 1e-12: the one-ring matrix, and the square
@@ -120,6 +122,31 @@ fn boundary_vertices_have_the_mirrored_interior_eigenvalues() {
         assert_eq!(analysis.characteristic_map.as_ref().map(|m| m.outlines), Some(1));
     }
     assert!(!Analysis::at(Builtin::Bilinear.scheme(), Centre::Boundary(2)).unwrap().is_c1());
-    let err = Analysis::at(Builtin::DooSabin.scheme(), Centre::Boundary(2)).unwrap_err();
+    let closed_only =
+        Scheme::from_toml_str("name = \"x\"\n[rules.dual]\nown = \"1/4\"\ncorner = \"(3 + 2*cos(2*pi*j/n))/(4*n)\"\n")
+            .unwrap();
+    let err = Analysis::at(&closed_only, Centre::Boundary(2)).unwrap_err();
     assert!(matches!(err, SchemeError::FeatureNotSupported { feature: "boundaries", .. }), "{err}");
+}
+
+/// The boundary rules of the splits that do not keep old vertices: Chaikin's along the
+/// boundary of Doo-Sabin and mid-edge (its `1/2` at a regular boundary vertex, and `1/2` with
+/// the boundary vertex's face at three faces or more), the ternary cubic B-spline's `1/3` per
+/// two √3 steps; the regular boundary vertex is C1 under all three. The cross-boundary
+/// eigenvalue is not the mirrored interior's (the boundary rules are not the interior rules
+/// of a mirrored mesh): `3/4` at Doo-Sabin's regular boundary vertex.
+#[test]
+fn dual_and_sqrt3_boundary_rules_refine_the_boundary_curve() {
+    let has = |values: &[(f64, f64)], x: f64| values.iter().any(|z| (z.0 - x).abs() < 1e-9 && z.1.abs() < 1e-9);
+    for (b, curve) in [(Builtin::DooSabin, 0.5), (Builtin::Midedge, 0.5), (Builtin::Sqrt3, 1.0 / 3.0)] {
+        for faces in 2..=4 {
+            let spectrum = LocalSpectrum::at(b.scheme(), Centre::Boundary(faces)).unwrap();
+            assert!(has(&spectrum.eigenvalues, curve), "{b}, {faces} faces: {spectrum:?}");
+        }
+        let regular = if b == Builtin::Sqrt3 { 3 } else { 2 };
+        let analysis = Analysis::at(b.scheme(), Centre::Boundary(regular)).unwrap();
+        assert!(analysis.is_c1(), "{b}, {regular} faces: {analysis:?}");
+    }
+    let doo_sabin = LocalSpectrum::at(Builtin::DooSabin.scheme(), Centre::Boundary(2)).unwrap();
+    assert!((doo_sabin.subdominant() - 0.75).abs() < 1e-9, "{doo_sabin:?}");
 }

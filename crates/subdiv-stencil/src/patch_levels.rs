@@ -203,6 +203,7 @@ impl PatchLevels {
         options: &RefineOptions,
         derived_from: Option<usize>,
     ) -> Result<Self, StencilError> {
+        refuse_open_non_primal(scheme, mesh)?;
         let patch_size = match scheme.split() {
             Split::Quad => 4,
             Split::Triangle | Split::Sqrt3 => 3,
@@ -401,4 +402,33 @@ pub(crate) fn internal(face: FaceId, detail: &str) -> StencilError {
 /// The child faces of `face` ([`child_faces`]; `split` is a primal one here).
 pub(crate) fn children(mesh: &Mesh, split: Split, face: FaceId) -> std::ops::Range<usize> {
     child_faces(split, mesh, face).unwrap_or(0..0)
+}
+
+/// The splits that do not keep old vertices refine open meshes (their boundary rules), but their
+/// limit surfaces there have no patches: refused by name instead of failing deep in the levels.
+fn refuse_open_non_primal(scheme: &Scheme, mesh: &Mesh) -> Result<(), StencilError> {
+    let (split, reason) = match scheme.split() {
+        Split::Dual | Split::Midedge => (
+            "dual",
+            "next to a boundary the limit surface is made of partial dual quads (a boundary vertex's \
+             corner pieces, some of zero area), which have no sub-patch matrices yet; `refine` takes \
+             the mesh",
+        ),
+        Split::Sqrt3 => (
+            "√3",
+            "two steps split a boundary triangle into sheared cells rather than the ternary split's nine, \
+             which have no sub-patch matrices yet; `refine` takes the mesh",
+        ),
+        Split::Quad | Split::Triangle => return Ok(()),
+    };
+    // Without boundary rules the refinement refuses the mesh, naming the rule it lacks.
+    if scheme.has_boundary_rules() && mesh.edges().any(|e| mesh.is_boundary_edge(e)) {
+        return Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported {
+            scheme: scheme.name.clone(),
+            what: "limit surfaces of open meshes",
+            split,
+            reason,
+        }));
+    }
+    Ok(())
 }
