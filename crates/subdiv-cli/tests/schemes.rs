@@ -469,56 +469,70 @@ fn interpolating_schemes_take_open_meshes() {
 /// surface (its parameters evaluated again, to 1e-12), `render` where there is a device, and
 /// `--method eigen` refused with the reason.
 #[test]
-fn sqrt3_evaluates_and_tessellates_closed_meshes() {
+fn sqrt3_evaluates_and_tessellates_closed_and_open_meshes() {
     let dir = tempfile::tempdir().unwrap();
     let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
     let prism = capped_prism(5);
-    let mut soup = subdiv::mesh::PolygonSoup::new();
-    for &p in prism.positions() {
-        soup.push_vertex(p);
-    }
-    for face in prism.faces() {
-        soup.push_face([face[0], face[1], face[2]]);
-        if face.len() == 4 {
-            soup.push_face([face[0], face[2], face[3]]);
+    // The prism's quads split in two; open: without the top cap (its centre is the last vertex),
+    // a boundary of vertices of four faces.
+    let (mut closed, mut open) = (subdiv::mesh::PolygonSoup::new(), subdiv::mesh::PolygonSoup::new());
+    let top = subdiv::mesh::VertexId::new(prism.positions().len() as u32 - 1);
+    for (k, &p) in prism.positions().iter().enumerate() {
+        closed.push_vertex(p);
+        if k + 1 < prism.positions().len() {
+            open.push_vertex(p);
         }
     }
-    let faces = soup.faces().len();
-    let cage = dir.path().join("cage.obj");
-    subdiv::io::write_obj(&cage, &soup).unwrap();
-    let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "4"]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + faces * 15);
-    let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
-    let args = ["tessellate", &path(&cage), "--scheme", "sqrt3", "--rate", "8"];
-    let out = subdiv(&[&args[..], &["--params", &path(&csv), "-o", &path(&obj)]].concat());
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
-    assert!(tess.boundary_loops().is_empty(), "the tessellation of a closed cage is closed");
-    let text = std::fs::read_to_string(&csv).unwrap();
-    let points: String = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let r: Vec<&str> = l.split(',').collect();
-            format!("{} {} {}\n", r[1], r[2], r[3])
-        })
-        .collect();
-    std::fs::write(&samples, points).unwrap();
-    let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--samples", &path(&samples)]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    for (k, line) in String::from_utf8(out.stdout).unwrap().lines().skip(1).enumerate() {
-        let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-        let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
-        assert!(gap < 1e-12, "vertex {k} is {gap:e} off the surface");
+    for face in prism.faces() {
+        let mut triangles = vec![[face[0], face[1], face[2]]];
+        if face.len() == 4 {
+            triangles.push([face[0], face[2], face[3]]);
+        }
+        for t in triangles {
+            closed.push_face(t);
+            if !t.contains(&top) {
+                open.push_face(t);
+            }
+        }
     }
-    let refused = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "2", "--method", "eigen"]);
-    assert_eq!(refused.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&refused.stderr).contains("evaluate through exact stencils"));
-    if subdiv_testkit::gpu().is_some() {
-        let png = dir.path().join("sqrt3.png");
-        let out = subdiv(&["render", &path(&cage), "--scheme", "sqrt3", "--size", "64,48", "-o", &path(&png)]);
-        assert!(out.status.success() && png.exists(), "{}", String::from_utf8_lossy(&out.stderr));
+    for (name, soup, boundaries) in [("closed", closed, 0), ("open", open, 1)] {
+        let faces = soup.faces().len();
+        let cage = dir.path().join(format!("{name}.obj"));
+        subdiv::io::write_obj(&cage, &soup).unwrap();
+        let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "4"]);
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + faces * 15, "{name}");
+        let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
+        let args = ["tessellate", &path(&cage), "--scheme", "sqrt3", "--rate", "8"];
+        let out = subdiv(&[&args[..], &["--params", &path(&csv), "-o", &path(&obj)]].concat());
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+        assert_eq!(tess.boundary_loops().len(), boundaries, "{name}: watertight, the cage's boundaries only");
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let points: String = text
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let r: Vec<&str> = l.split(',').collect();
+                format!("{} {} {}\n", r[1], r[2], r[3])
+            })
+            .collect();
+        std::fs::write(&samples, points).unwrap();
+        let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--samples", &path(&samples)]);
+        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        for (k, line) in String::from_utf8(out.stdout).unwrap().lines().skip(1).enumerate() {
+            let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+            let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
+            assert!(gap < 1e-12, "{name}: vertex {k} is {gap:e} off the surface");
+        }
+        let refused = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "2", "--method", "eigen"]);
+        assert_eq!(refused.status.code(), Some(2));
+        assert!(String::from_utf8_lossy(&refused.stderr).contains("evaluate through exact stencils"));
+        if subdiv_testkit::gpu().is_some() {
+            let png = dir.path().join("sqrt3.png");
+            let out = subdiv(&["render", &path(&cage), "--scheme", "sqrt3", "--size", "64,48", "-o", &path(&png)]);
+            assert!(out.status.success() && png.exists(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
+        }
     }
 }
 

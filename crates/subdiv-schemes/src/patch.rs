@@ -475,8 +475,8 @@ impl PatchMatrices {
     }
 
     /// The dual split's matrices (of mid-edge: its two steps' dual form, [`Scheme::dual_form`]):
-    /// smooth interior types only (the split takes closed meshes without sharpness), valence 3
-    /// or more (an `n`-gon at corner 0; see [`dual_patch`]).
+    /// smooth interior types only (the split takes no sharpness, and its boundary pieces have no
+    /// patches yet), valence 3 or more (an `n`-gon at corner 0; see [`dual_patch`]).
     fn compute_dual(scheme: &Scheme, patch_type: PatchType) -> Result<Self, SchemeError> {
         match patch_type {
             PatchType::Interior { valence, sharp } if valence >= 3 && sharp.is_smooth() => {
@@ -490,7 +490,7 @@ impl PatchMatrices {
             PatchType::Boundary { faces, .. } => Err(SchemeError::ValenceNotSupported {
                 scheme: scheme.name.clone(),
                 valence: faces + 1,
-                reason: "the dual split has no boundary rules, so no boundary patches",
+                reason: "the dual split's boundary pieces are partial dual quads, which have no patches yet",
             }),
             PatchType::Derived { .. } => {
                 Err(SchemeError::Internal("the dual split has no derived configurations".to_string()))
@@ -498,22 +498,33 @@ impl PatchMatrices {
         }
     }
 
-    /// The ternary split's matrices (√3's two steps): smooth interior types only (the split
-    /// takes closed meshes without sharpness), valence 3 or more.
+    /// The ternary split's matrices (√3's two steps): smooth types only (the split takes no
+    /// sharpness), interior of valence 3 or more, or at a boundary vertex (where the scheme has
+    /// its boundary rule).
     fn compute_ternary(scheme: &Scheme, patch_type: PatchType) -> Result<Self, SchemeError> {
         match patch_type {
             PatchType::Interior { valence, sharp } if valence >= 3 && sharp.is_smooth() => {
-                ternary::derive(scheme, valence)
+                ternary::derive(scheme, patch_type)
             }
             PatchType::Interior { valence, .. } => Err(SchemeError::ValenceNotSupported {
                 scheme: scheme.name.clone(),
                 valence,
                 reason: "a √3 patch needs valence 3 or more, and no sharp features",
             }),
+            PatchType::Boundary { faces, index, sharp } if faces >= 1 && index < faces && sharp.is_smooth() => {
+                if !scheme.has_boundary_rules() {
+                    return Err(SchemeError::FeatureNotSupported {
+                        scheme: scheme.name.clone(),
+                        feature: "boundaries",
+                        element: format!("a boundary vertex of {faces} faces"),
+                    });
+                }
+                ternary::derive(scheme, patch_type)
+            }
             PatchType::Boundary { faces, .. } => Err(SchemeError::ValenceNotSupported {
                 scheme: scheme.name.clone(),
                 valence: faces + 1,
-                reason: "the √3 split has no boundary rules, so no boundary patches",
+                reason: "a √3 boundary patch needs a face of the fan, and no sharp features",
             }),
             PatchType::Derived { .. } => {
                 Err(SchemeError::Internal("the √3 split has no derived configurations".to_string()))

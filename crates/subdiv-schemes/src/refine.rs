@@ -189,6 +189,26 @@ fn refine_levels(
     Ok((current, all))
 }
 
+/// Two √3 steps of `mesh` as the ternary split takes them — a step that keeps the boundary, then
+/// one that splits it ([`Sqrt3Boundary`](crate::Sqrt3Boundary)) — each mesh with its rows over
+/// the one before.
+///
+/// # Errors
+/// As [`refine_uniform`].
+pub(crate) fn sqrt3_steps(
+    mesh: &Mesh,
+    scheme: &Scheme,
+    options: &RefineOptions,
+) -> Result<[(Mesh, Stencils); 2], SchemeError> {
+    check_input(mesh, scheme)?;
+    let rules = options.rules_for(mesh);
+    let mut channels = Vec::new();
+    let missing = || SchemeError::Internal("a √3 step without its rows".into());
+    let (mid, first) = refine_once(mesh, scheme, 0, rules, &mut channels, true)?;
+    let (fine, second) = refine_once(&mid, scheme, 1, rules, &mut channels, true)?;
+    Ok([(mid, first.ok_or_else(missing)?), (fine, second.ok_or_else(missing)?)])
+}
+
 /// Mid-edge refines an open mesh two steps at a time, as its two-step dual form
 /// ([`Scheme::dual_form`]) with Chaikin's boundary rule: a single step has no boundary rule that
 /// keeps the boundary refining (the polygon of a boundary's edge middles has as many vertices

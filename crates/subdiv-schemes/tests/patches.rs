@@ -75,13 +75,17 @@ fn every_sub_patch_row_is_affine() {
 #[test]
 fn unsupported_splits_and_valences_are_typed_errors() {
     // The dual splits' patches: interior, around faces of 3 or more sides; √3's ternary ones
-    // interior, at valence 3 or more.
+    // at valence 3 or more, and at boundary vertices (Kobbelt's boundary rule).
     for builtin in [Builtin::DooSabin, Builtin::Midedge, Builtin::Sqrt3] {
-        for patch_type in [PatchType::interior(2), PatchType::boundary(2, 0)] {
-            let err = PatchMatrices::compute(builtin.scheme(), patch_type, EDGE_ONLY).unwrap_err();
-            assert!(matches!(err, SchemeError::ValenceNotSupported { .. }), "{err}");
-        }
+        let err = PatchMatrices::compute(builtin.scheme(), PatchType::interior(2), EDGE_ONLY).unwrap_err();
+        assert!(matches!(err, SchemeError::ValenceNotSupported { .. }), "{err}");
     }
+    for builtin in [Builtin::DooSabin, Builtin::Midedge] {
+        let err = PatchMatrices::compute(builtin.scheme(), PatchType::boundary(2, 0), EDGE_ONLY).unwrap_err();
+        assert!(matches!(err, SchemeError::ValenceNotSupported { .. }), "{err}");
+    }
+    let m = PatchMatrices::compute(Builtin::Sqrt3.scheme(), PatchType::boundary(3, 1), EDGE_ONLY).unwrap();
+    assert_eq!((m.face_size, m.radius), (3, 2));
     let cc = Builtin::CatmullClark.scheme();
     // Valence 2 exists for quads (two faces sharing two sides), not for triangles.
     let err = PatchMatrices::compute(cc, PatchType::interior(1), EDGE_ONLY).unwrap_err();

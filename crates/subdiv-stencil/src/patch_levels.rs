@@ -404,8 +404,8 @@ pub(crate) fn children(mesh: &Mesh, split: Split, face: FaceId) -> std::ops::Ran
     child_faces(split, mesh, face).unwrap_or(0..0)
 }
 
-/// The splits that do not keep old vertices refine open meshes (their boundary rules), but their
-/// limit surfaces there have no patches: refused by name instead of failing deep in the levels.
+/// The dual splits refine open meshes (their boundary rules), but their limit surfaces there
+/// have no patches: refused by name instead of failing deep in the levels.
 fn refuse_open_non_primal(scheme: &Scheme, mesh: &Mesh) -> Result<(), StencilError> {
     let (split, reason) = match scheme.split() {
         Split::Dual | Split::Midedge => (
@@ -414,12 +414,7 @@ fn refuse_open_non_primal(scheme: &Scheme, mesh: &Mesh) -> Result<(), StencilErr
              corner pieces, some of zero area), which have no sub-patch matrices yet; `refine` takes \
              the mesh",
         ),
-        Split::Sqrt3 => (
-            "√3",
-            "two steps split a boundary triangle into sheared cells rather than the ternary split's nine, \
-             which have no sub-patch matrices yet; `refine` takes the mesh",
-        ),
-        Split::Quad | Split::Triangle => return Ok(()),
+        Split::Quad | Split::Triangle | Split::Sqrt3 => return Ok(()),
     };
     // Without boundary rules the refinement refuses the mesh, naming the rule it lacks.
     if scheme.has_boundary_rules() && mesh.edges().any(|e| mesh.is_boundary_edge(e)) {

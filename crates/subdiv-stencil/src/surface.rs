@@ -107,6 +107,9 @@ pub struct StencilEvaluator<M: Borrow<PatchMatrices>> {
     stencils: Vec<SurfaceStencil>,
     stats: EvaluatorStats,
     max_address_steps: usize,
+    /// Whether only the position stencils are wanted (their derivatives left zero): the
+    /// characteristic map's probes, whose own fixed points may be irregular too.
+    positions_only: bool,
 }
 
 /// What a [`StencilEvaluator`] has solved so far: the sizes of the systems behind its stencils.
@@ -177,7 +180,17 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
             stencils: Vec::new(),
             stats: EvaluatorStats::default(),
             max_address_steps: MAX_ADDRESS_STEPS,
+            positions_only: false,
         }
+    }
+
+    /// The same evaluator computing positions only: the derivative stencils are left zero and
+    /// marked inexact. A face's probes for the tangents at an irregular fixed point take it, so
+    /// that a probe whose own fixed point is irregular (a corner on the boundary of a ternary
+    /// patch) does not ask for tangents in turn.
+    pub(crate) fn positions_only(mut self) -> Self {
+        self.positions_only = true;
+        self
     }
 
     /// The same evaluator, refusing points whose address walk passes `steps` levels
@@ -306,6 +319,15 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
             .map_err(|detail| fail(format!("eigenvalue 1: {detail}")))?
             .vectors
             .remove(0);
+        if self.positions_only {
+            let zero = vec![0.0; size];
+            return Ok(SurfaceStencil {
+                position: widen(position),
+                du: zero.clone(),
+                dv: zero,
+                exact_derivatives: false,
+            });
+        }
         let derivatives = match &periodic.parameters {
             Some([u, v]) => {
                 periodic_derivatives(&steps, u, v).map_err(|detail| fail(format!("derivatives: {detail}")))?

@@ -180,15 +180,15 @@ const TRIANGLE_PROBES: [(i64, i64); 5] = [(4, 0), (0, 4), (2, 2), (3, 1), (1, 3)
 /// The limit position stencils, on the control points `influence` lists, of the probe points
 /// of the face of `shape`: their values on an eigenvector are its limit function there, the
 /// characteristic map (which is 0 at the fixed point, whose position stencil is the left
-/// eigenvector for 1). The probes' own fixed points are regular corners, so this recurses no
-/// further.
+/// eigenvector for 1). Positions only: a probe's own fixed point may be irregular too (a
+/// corner on a ternary patch's boundary), and its tangents are not needed.
 pub(crate) fn face_probes(
     matrices: &PatchMatrices,
     shape: usize,
     influence: &[usize],
 ) -> Result<Vec<Vec<f64>>, StencilError> {
     let points: &[(i64, i64)] = if matrices.face_size == 3 { &TRIANGLE_PROBES } else { &QUAD_PROBES };
-    let mut evaluator = StencilEvaluator::new(matrices);
+    let mut evaluator = StencilEvaluator::new(matrices).positions_only();
     points
         .iter()
         .map(|&(u, v)| {

@@ -296,9 +296,48 @@ fn loop_is_refinement_then_its_limit_mask() {
 /// jittered cages.
 #[test]
 fn sqrt3_grid_points_are_refined_vertices_moved_to_their_limits() {
+    // A grid of `m × n` squares, each split along a diagonal, domed.
+    let triangulated_grid = |m: usize, n: usize| {
+        let mut soup = PolygonSoup::default();
+        for j in 0..=n {
+            for i in 0..=m {
+                let (x, y) = (i as f64, j as f64);
+                soup.push_vertex(DVec3::new(x, y, 0.2 * (x * y).sin()));
+            }
+        }
+        let id = |i: usize, j: usize| VertexId::new((j * (m + 1) + i) as u32);
+        for j in 0..n {
+            for i in 0..m {
+                soup.push_face([id(i, j), id(i + 1, j), id(i, j + 1)]);
+                soup.push_face([id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        soup
+    };
+    // The lower half of a bipyramid: a fan of `k` triangles around its apex, whose rim is the
+    // boundary (vertices of two faces).
+    let open_bipyramid = |k: usize| {
+        let closed = bipyramid(k);
+        let mut soup = PolygonSoup::default();
+        for &p in &closed.positions()[..k] {
+            soup.push_vertex(p);
+        }
+        soup.push_vertex(closed.positions()[k + 1]);
+        let (top, bottom) = (VertexId::new(k as u32), VertexId::new(k as u32 + 1));
+        for face in closed.faces().filter(|f| !f.contains(&top)) {
+            soup.push_face(face.iter().map(|&v| if v == bottom { top } else { v }));
+        }
+        soup
+    };
     let sqrt3 = Builtin::Sqrt3.scheme();
+    // Kobbelt's limit at an interior vertex; at a boundary vertex the boundary's cubic B-spline
+    // (the ternary cubic rule along the boundary), over its two boundary neighbours.
     let limit = |mesh: &Mesh, v: VertexId| {
         let ring = mesh.one_ring(v);
+        if mesh.is_boundary_vertex(v) {
+            let (p, q) = (mesh.position(ring[0]), mesh.position(ring[ring.len() - 1]));
+            return (p + 4.0 * mesh.position(v) + q) / 6.0;
+        }
         let k = ring.len() as f64;
         let beta = (4.0 - 2.0 * (std::f64::consts::TAU / k).cos()) / (9.0 * k);
         let mean = ring.iter().map(|&w| mesh.position(w)).sum::<DVec3>() / k;
@@ -309,6 +348,9 @@ fn sqrt3_grid_points_are_refined_vertices_moved_to_their_limits() {
         ("bipyramid 5", jittered(bipyramid(5), 0.1)),
         ("bipyramid 8", jittered(bipyramid(8), 0.1)),
         ("icosahedron", jittered(shapes::icosahedron(), 0.1)),
+        // Open: Kobbelt's boundary rule, boundary vertices of one to four faces.
+        ("triangulated grid", jittered(triangulated_grid(4, 3), 0.1)),
+        ("open bipyramid", jittered(open_bipyramid(5), 0.1)),
     ];
     for (name, soup) in cages {
         let mesh = Mesh::build(soup).unwrap();

@@ -10,7 +10,11 @@
 //! lattice's cells ([`ChildDomain::ternary`]), each found in the second level by its first
 //! side; their control points are rows over the parent's, so patches are closed under the split
 //! like the binary splits' (the smallest radius whose rows stay inside), and the evaluators take
-//! them with base-3 addresses.
+//! them with base-3 addresses. On an open mesh (Kobbelt's boundary rule: the first step keeps
+//! the boundary, the second splits each boundary edge in three and fans its triangle from the
+//! far corner, flipping the fan's sides with the neighbours) a boundary side's thirds are the
+//! split edge's two points and the nine cells are the same, so boundary patch types derive on
+//! open fans as the interior ones on pillows.
 
 use std::collections::HashMap;
 
@@ -18,7 +22,8 @@ use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
 
 use super::derivation::{ShapeQueue, canonical_start, influence_sets, parameter_coordinates};
 use super::{ChildDomain, MAX_PATCH_RADIUS, PatchMatrices, PatchType, SharpFeatures, SubPatch, ZERO_WEIGHT};
-use crate::{RefineOptions, Refiner, Scheme, SchemeError, Stencils};
+use crate::refine::sqrt3_steps;
+use crate::{RefineOptions, Scheme, SchemeError, Stencils};
 
 /// Ternary levels after which the shapes must have closed up.
 const MAX_LEVELS: usize = 4;
@@ -34,12 +39,8 @@ struct Level {
 
 impl Level {
     fn of(parent: &Mesh, scheme: &Scheme) -> Result<Self, SchemeError> {
-        let refiner = Refiner::new(parent, scheme, 1, &RefineOptions::DEFAULT)?;
-        let first = refiner.levels()[0].clone();
-        let mid = refiner.into_mesh();
-        let refiner = Refiner::new(&mid, scheme, 1, &RefineOptions::DEFAULT)?;
-        let second = refiner.levels()[0].clone();
-        Ok(Self { mid, mesh: refiner.into_mesh(), first, second })
+        let [(mid, first), (mesh, second)] = sqrt3_steps(parent, scheme, &RefineOptions::DEFAULT)?;
+        Ok(Self { mid, mesh, first, second })
     }
 
     /// The row of `vertex` of [`mesh`](Self::mesh) over the parent level's vertices.
@@ -76,13 +77,25 @@ pub fn ternary_child_starts(
     let centre = |mesh: &Mesh, f: FaceId| VertexId::new((mesh.vertex_count() + f.index()) as u32);
     let h = [start, parent.next(start), parent.next(parent.next(start))];
     let c = centre(parent, face);
-    // The second step's point of the first-level triangle at `origin(h)` across side `h`.
+    // The second step's point a third of the way along side `h`: of the first-level triangle
+    // at `origin(h)` across it; on a boundary side, the split boundary edge's point next to
+    // `origin(h)`, numbered in the place of its first-level triangle's centre.
     let point_at = |h: HalfEdgeId| -> Option<VertexId> {
-        let beyond = centre(parent, parent.face(parent.twin(h)?));
-        let t = half_edge(level_mid, parent.origin(h), beyond)?;
+        let t = match parent.twin(h) {
+            Some(twin) => half_edge(level_mid, parent.origin(h), centre(parent, parent.face(twin)))?,
+            None => half_edge(level_mid, parent.origin(h), parent.dest(h))?,
+        };
         Some(centre(level_mid, level_mid.face(t)))
     };
-    let point_after = |h: HalfEdgeId| point_at(parent.twin(h)?);
+    // Two thirds of the way: a third from the other end; on a boundary side, the next point
+    // along the boundary (a boundary vertex's fan starts at its boundary edge).
+    let point_after = |h: HalfEdgeId| match parent.twin(h) {
+        Some(twin) => point_at(twin),
+        None => {
+            let along = level.outgoing(point_at(h)?).next()?;
+            level.twin(along).is_none().then(|| level.dest(along))
+        }
+    };
     let v = h.map(|h| parent.origin(h));
     // The lattice points (i, j) of thirds.
     let p10 = point_at(h[0])?;
@@ -113,7 +126,7 @@ pub fn ternary_child_starts(
     Some(starts)
 }
 
-/// Two √3 steps of `mesh` (closed, triangles) as one ternary split, numbered like the binary
+/// Two √3 steps of `mesh` (triangles; open meshes by the scheme's boundary rule) as one ternary split, numbered like the binary
 /// splits' levels: the nine children of face `f` are faces `9f..9f + 9`, in
 /// [`ChildDomain::ternary`]'s order, each starting at its corner 0 (so a child's parameters are
 /// its domain's map of the parent's); the vertices as two steps of `refine` number them. With
@@ -133,7 +146,7 @@ pub fn ternary_child_starts(
 /// ```
 ///
 /// # Errors
-/// As refinement (√3 takes closed meshes of triangles without sharpness);
+/// As refinement (√3 takes triangles without sharpness, and boundaries by its rule);
 /// [`SchemeError::SplitNotSupported`] for a scheme of another split.
 pub fn ternary_refine(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> Result<(Mesh, Stencils), SchemeError> {
     if scheme.split() != crate::Split::Sqrt3 {
@@ -144,12 +157,8 @@ pub fn ternary_refine(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> 
             reason: "only √3's two steps split a triangle in nine",
         });
     }
-    let first = Refiner::new(mesh, scheme, 1, options)?;
-    let rows = first.levels()[0].clone();
-    let mid = first.into_mesh();
-    let second = Refiner::new(&mid, scheme, 1, options)?;
-    let rows = rows.then(&second.levels()[0]);
-    let fine = second.into_mesh();
+    let [(mid, first), (fine, second)] = sqrt3_steps(mesh, scheme, options)?;
+    let rows = first.then(&second);
     let mut soup =
         subdiv_mesh::PolygonSoup::with_capacity(fine.vertex_count(), fine.face_count(), 3 * fine.face_count());
     for v in fine.vertices() {
@@ -168,22 +177,33 @@ pub fn ternary_refine(scheme: &Scheme, mesh: &Mesh, options: &RefineOptions) -> 
     Ok((refined, rows))
 }
 
-/// The ternary split's matrices of the smooth interior type of `valence` (3 or more): the
-/// canonical pillow of triangles refined two √3 steps a level, at the smallest radius whose
-/// children's rows stay inside their parents.
-pub(super) fn derive(scheme: &Scheme, valence: usize) -> Result<PatchMatrices, SchemeError> {
+/// The ternary split's matrices of a smooth type (an interior vertex of valence 3 or more, or a
+/// boundary vertex of one face or more): the canonical pillow (open fan) of triangles refined two
+/// √3 steps a level, at the smallest radius whose children's rows stay inside their parents.
+pub(super) fn derive(scheme: &Scheme, patch_type: PatchType) -> Result<PatchMatrices, SchemeError> {
     let internal = |e: String| SchemeError::Internal(format!("{}: ternary patch derivation: {e}", scheme.name));
     for radius in 1..=MAX_PATCH_RADIUS {
-        let pillow = crate::canonical::pillow(valence, radius + 3, true, SharpFeatures::SMOOTH);
-        let base = Mesh::build(pillow).map_err(|e| internal(e.to_string()))?;
-        let start = canonical_start(&base, PatchType::interior(valence));
-        if let Some(found) = derive_at(scheme, base, start, radius, valence)? {
+        let rings = radius + 3;
+        let soup = match patch_type {
+            PatchType::Interior { valence, .. } => {
+                crate::canonical::pillow(valence, rings, true, SharpFeatures::SMOOTH)
+            }
+            PatchType::Boundary { faces, .. } => crate::canonical::open_fan(faces, rings, true, SharpFeatures::SMOOTH),
+            PatchType::Derived { .. } => return Err(internal("no derived configurations".into())),
+        };
+        let base = Mesh::build(soup).map_err(|e| internal(e.to_string()))?;
+        let start = canonical_start(&base, patch_type);
+        if let Some(found) = derive_at(scheme, base, start, radius, patch_type)? {
             return Ok(found);
         }
     }
     Err(SchemeError::ValenceNotSupported {
         scheme: scheme.name.clone(),
-        valence,
+        valence: match patch_type {
+            PatchType::Interior { valence, .. } => valence,
+            PatchType::Boundary { faces, .. } => faces + 1,
+            PatchType::Derived { .. } => 0,
+        },
         reason: "the limit surface over a face near this vertex depends on vertices beyond every patch radius up \
                  to 4",
     })
@@ -195,7 +215,7 @@ fn derive_at(
     base: Mesh,
     start: HalfEdgeId,
     radius: usize,
-    valence: usize,
+    patch_type: PatchType,
 ) -> Result<Option<PatchMatrices>, SchemeError> {
     let internal = |e: &str| SchemeError::Internal(format!("{}: ternary patch derivation: {e}", scheme.name));
     let mut meshes = vec![base];
@@ -242,7 +262,7 @@ fn derive_at(
     for s in 0..shapes.len() {
         shapes[s].parameters = parameter_coordinates(&shapes, s);
     }
-    Ok(Some(PatchMatrices::from_shapes(scheme, PatchType::interior(valence), radius, 3, shapes)))
+    Ok(Some(PatchMatrices::from_shapes(scheme, patch_type, radius, 3, shapes)))
 }
 
 #[cfg(test)]
@@ -254,7 +274,7 @@ mod tests {
     fn sqrt3_types_close_up_with_a_regular_shape() {
         let sqrt3 = Builtin::Sqrt3.scheme();
         for k in [3, 4, 5, 6, 7, 8] {
-            let m = derive(sqrt3, k).unwrap();
+            let m = derive(sqrt3, PatchType::interior(k)).unwrap();
             // Two rings: 3k + 9 control points at the vertex, 27 regular; ten shapes.
             assert_eq!((m.radius, m.shapes[0].size), (2, 3 * k + 9), "valence {k}");
             assert_eq!(m.shapes.len(), if k == 6 { 1 } else { 10 }, "valence {k}");
