@@ -13,6 +13,7 @@ mod args;
 mod eval;
 mod info;
 mod input;
+mod merge;
 mod plot;
 mod refine;
 mod render;
@@ -59,6 +60,9 @@ enum Command {
     /// Tessellate the limit surface so that every triangle lies within a tolerance of it
     /// (error-driven quadtree, watertight), written as GLB or OBJ.
     Tessellate(tessellate::TessellateArgs),
+    /// Join the parts `tessellate --faces A..B` wrote (OBJ) into one mesh, welding the points
+    /// their borders share (equal bit for bit): the whole tessellation, as one job would write it.
+    Merge(merge::MergeArgs),
     /// Render the limit surface offscreen on the GPU to PNG: shaded with its exact normals,
     /// optionally with the tessellation's wireframe and the control cage, framed automatically;
     /// --frames renders an animation of a twisted cage.
@@ -129,6 +133,7 @@ fn main() -> ExitCode {
         Command::PlotBasis(args) => plot::run(args, &mut out),
         Command::Tessellate(args) => tessellate::run(args, &mut out),
         Command::Render(args) => render::run(args, &mut out),
+        Command::Merge(args) => merge::run(args),
     };
     // A closed pipe (`subdiv info | head`) is not an error worth a message.
     let _ = out.flush();

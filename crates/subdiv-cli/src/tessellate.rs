@@ -95,6 +95,12 @@ pub(crate) struct TessellateArgs {
     /// `TEXCOORD_0`, OBJ `vt`).
     #[arg(long, value_name = "MODE", value_parser = crate::refine::parse_face_varying)]
     fvar_interpolation: Option<subdiv::mesh::FaceVaryingInterpolation>,
+    /// Dual: write only the part of the tessellation that faces A..B (from A, before B) own —
+    /// their cells, strips and vertex polygons — as a job of a batch: the points on the part's
+    /// border are the same bits as the neighbouring part's, and `subdiv merge` joins the parts
+    /// into the whole tessellation. OBJ output (what merge reads).
+    #[arg(long, value_name = "A..B", conflicts_with = "gpu")]
+    faces: Option<String>,
     /// Dual: evaluate the vertices on the GPU (wgpu, any Vulkan adapter) in f32 instead of on
     /// the CPU in f64; the same tessellation, positions, normals and texture coordinates to f32
     /// precision.
@@ -156,6 +162,10 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     if args.camera.is_some() && args.pixels.is_none() && args.pixel_error.is_none() {
         return Err(UserError("--camera goes with --pixels or --pixel-error".to_string()));
     }
+    let part = args.faces.as_deref().map(parse_face_range).transpose()?;
+    if part.is_some() && format != Format::Obj {
+        return Err(UserError("--faces writes a part for `subdiv merge`, which reads OBJ: write .obj".to_string()));
+    }
     let inputs: Vec<&std::path::Path> = args.mesh.as_deref().into_iter().collect();
     check_output(&inputs, &args.output)?;
     if let Some(params) = &args.params {
@@ -176,7 +186,11 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     // buffers go to the file as they are (a 1000 × 1000 grid at rate 2: 3.6 GB peak before,
     // 1.1 GB after; docs/perf-log.md).
     let lean = format == Format::Glb && args.params.is_none() && !args.gpu;
-    let (result, gpu_detail) = if args.gpu {
+    let (result, gpu_detail) = if let Some(faces) = part {
+        bar.say("dual-grid stitching, one part");
+        let result = surface.tessellate_part(&options, faces).map_err(|e| located(&e))?;
+        (Output::Mesh(Box::new(result)), String::new())
+    } else if args.gpu {
         let (result, detail) = gpu_tessellate(&mut surface, &options, args.fvar_interpolation, &bar, located)?;
         (Output::Mesh(Box::new(result)), detail)
     } else {
@@ -270,6 +284,17 @@ impl Output {
 
 /// The facade's options from the arguments: the rate policy (uniform at [`DEFAULT_RATE`]
 /// unless one is given), the method and the limits.
+/// `--faces A..B`: faces A to B − 1.
+fn parse_face_range(text: &str) -> Result<std::ops::Range<usize>, UserError> {
+    let bad = || UserError(format!("--faces {text:?}: expected A..B, the faces from A up to (not including) B"));
+    let (a, b) = text.split_once("..").ok_or_else(bad)?;
+    let (a, b): (usize, usize) = (a.trim().parse().map_err(|_| bad())?, b.trim().parse().map_err(|_| bad())?);
+    if a >= b {
+        return Err(bad());
+    }
+    Ok(a..b)
+}
+
 fn options(args: &TessellateArgs) -> Result<TessOptions, UserError> {
     let rates = if let Some(t) = args.tolerance {
         Rates::Tolerance(if args.relative { Tolerance::Relative(t) } else { Tolerance::Absolute(t) })

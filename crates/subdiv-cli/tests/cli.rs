@@ -676,3 +676,80 @@ fn tessellated_texture_coordinates_are_evals_at_their_params() {
         assert_eq!(back.positions().len(), rows.len(), "{file}");
     }
 }
+
+/// An OBJ tessellation as the numbers of its vertices and points (`vn` lines) and its faces,
+/// each a list of corners as text (position, normal, texture coordinates), turned to start at
+/// its least corner, sorted: equal for the same mesh whatever the order of its lines.
+fn obj_mesh(path: &std::path::Path) -> (usize, usize, Vec<Vec<[String; 3]>>) {
+    let text = std::fs::read_to_string(path).unwrap();
+    let (mut v, mut vn, mut vt, mut faces) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    for line in text.lines() {
+        let mut words = line.split_whitespace();
+        let rest = |w: std::str::SplitWhitespace<'_>| w.collect::<Vec<_>>().join(" ");
+        match words.next() {
+            Some("v") => v.push(rest(words)),
+            Some("vn") => vn.push(rest(words)),
+            Some("vt") => vt.push(rest(words)),
+            Some("f") => {
+                let mut corners: Vec<[String; 3]> = words
+                    .map(|c| {
+                        let i: Vec<&str> = c.split('/').collect();
+                        let at = |list: &Vec<String>, k: &str| {
+                            k.parse::<usize>().map_or(String::new(), |k| list[k - 1].clone())
+                        };
+                        [at(&v, i[0]), at(&vn, i[2]), at(&vt, i[1])]
+                    })
+                    .collect();
+                let least = (0..corners.len()).min_by_key(|&k| corners[k].clone()).unwrap();
+                corners.rotate_left(least);
+                faces.push(corners);
+            }
+            _ => {}
+        }
+    }
+    faces.sort();
+    (v.len(), vn.len(), faces)
+}
+
+#[test]
+fn face_range_parts_merge_to_the_one_job_tessellation() {
+    let Some(spot) = shared_mesh("keenan/spot_control_mesh.obj") else { return };
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let spot = spot.to_str().unwrap();
+    let whole = subdiv(&["tessellate", spot, "--rate", "8", "-o", &path("whole.obj")]);
+    assert!(whole.status.success(), "{}", String::from_utf8_lossy(&whole.stderr));
+    // Spot has 180 faces; the last range runs past them, as a batch of fixed ranges would.
+    let ranges = ["0..45", "45..90", "90..135", "135..200"];
+    let mut parts = Vec::new();
+    for (k, range) in ranges.iter().enumerate() {
+        let part = path(&format!("part{k}.obj"));
+        let out = subdiv(&["tessellate", spot, "--rate", "8", "--faces", range, "-o", &part]);
+        assert!(out.status.success(), "{range}: {}", String::from_utf8_lossy(&out.stderr));
+        parts.push(part);
+    }
+    let merged = path("merged.obj");
+    let args: Vec<&str> =
+        ["merge"].into_iter().chain(parts.iter().map(String::as_str)).chain(["-o", &merged]).collect();
+    let out = subdiv(&args);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let (whole, merged) = (obj_mesh(std::path::Path::new(&path("whole.obj"))), obj_mesh(std::path::Path::new(&merged)));
+    assert_eq!((whole.0, whole.1, whole.2.len()), (merged.0, merged.1, merged.2.len()));
+    assert!(whole.2 == merged.2, "the merged faces differ from the one job's");
+    // Into a GLB too; bad ranges and outputs are refused by name.
+    let out = subdiv(&[&args[..args.len() - 1], &[&path("merged.glb")]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    for (range, output, expect) in [
+        ("180..190", "p.obj", "starts at a face of the mesh"),
+        ("9..3", "p.obj", "expected A..B"),
+        ("0..10", "p.glb", "write .obj"),
+    ] {
+        let out = subdiv(&["tessellate", spot, "--faces", range, "-o", &path(output)]);
+        assert_eq!(out.status.code(), Some(2), "{range}");
+        assert!(
+            String::from_utf8_lossy(&out.stderr).contains(expect),
+            "{range}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+}

@@ -128,6 +128,95 @@ impl TessMesh {
     pub fn flat_vertex_count(&self) -> usize {
         self.positions.len() + self.normal_vertices.len()
     }
+
+    /// The part of the tessellation whose triangles and polygons belong to the input faces
+    /// `keep` takes, with the vertices and extra normals they use, in their order here (each
+    /// point's values as they are: a point on the part's border is the same bits as in the
+    /// other parts that use it).
+    ///
+    /// ```
+    /// use subdiv_mesh::{shapes, Mesh};
+    /// use subdiv_schemes::Builtin;
+    /// use subdiv_tess::{DualOptions, DualTessellator};
+    ///
+    /// let cube = Mesh::build(shapes::cube())?;
+    /// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &cube, &DualOptions::default())?;
+    /// let whole = tess.tessellate(&[4; 6])?;
+    /// let (low, high) = (whole.part(|f| f.index() < 3), whole.part(|f| f.index() >= 3));
+    /// assert_eq!(low.triangles.len() + high.triangles.len(), whole.triangles.len());
+    /// // The points along the border between the halves are in both.
+    /// assert!(low.positions.len() + high.positions.len() > whole.positions.len());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
+    pub fn part(&self, keep: impl Fn(FaceId) -> bool) -> TessMesh {
+        let vertices = self.positions.len();
+        let triangles: Vec<usize> = (0..self.triangles.len()).filter(|&t| keep(self.triangle_faces[t])).collect();
+        let polygons: Vec<usize> = (0..self.polygon_count()).filter(|&k| keep(self.polygon_faces[k])).collect();
+        // Old point (vertex, then extra normal) → new, `u32::MAX` where unused.
+        let mut used = vec![false; self.normals.len().max(vertices)];
+        for &t in &triangles {
+            for &v in &self.triangles[t] {
+                used[v as usize] = true;
+            }
+            for &n in &self.triangle_normals[t] {
+                used[n as usize] = true;
+            }
+        }
+        for &k in &polygons {
+            for &v in self.polygon(k) {
+                used[v as usize] = true;
+            }
+        }
+        let mut new = vec![u32::MAX; used.len()];
+        let mut out = TessMesh {
+            channels: TessChannels {
+                names: self.channels.names.clone(),
+                dimensions: self.channels.dimensions.clone(),
+                values: Vec::new(),
+            },
+            ..TessMesh::default()
+        };
+        let stride = self.channels.stride();
+        let mut next = 0u32;
+        for v in (0..vertices).filter(|&v| used[v]) {
+            new[v] = next;
+            next += 1;
+            out.positions.push(self.positions[v]);
+            out.normals.push(self.normals[v]);
+            out.parameters.push(self.parameters[v]);
+        }
+        for k in (vertices..self.normals.len()).filter(|&k| used[k]) {
+            new[k] = next;
+            next += 1;
+            out.normals.push(self.normals[k]);
+            out.normal_vertices.push(new[self.normal_vertices[k - vertices] as usize]);
+            out.normal_parameters.push(self.normal_parameters[k - vertices]);
+        }
+        if stride > 0 {
+            let points = (0..vertices).filter(|&v| used[v]).chain((vertices..self.normals.len()).filter(|&k| used[k]));
+            for k in points {
+                out.channels.values.extend_from_slice(self.channels.point(k));
+            }
+        }
+        let map = |corners: [u32; 3]| corners.map(|c| new[c as usize]);
+        for &t in &triangles {
+            out.triangles.push(map(self.triangles[t]));
+            out.triangle_normals.push(map(self.triangle_normals[t]));
+            out.triangle_faces.push(self.triangle_faces[t]);
+            if let Some(&p) = self.triangle_parameters.get(t) {
+                out.triangle_parameters.push(p);
+            }
+        }
+        if !polygons.is_empty() {
+            out.polygon_offsets.push(0);
+            for &k in &polygons {
+                out.polygon_vertices.extend(self.polygon(k).iter().map(|&v| new[v as usize]));
+                out.polygon_offsets.push(out.polygon_vertices.len() as u32);
+                out.polygon_faces.push(self.polygon_faces[k]);
+            }
+        }
+        out
+    }
 }
 
 /// Face-varying channels' values at a tessellation's points (see [`TessMesh`]'s channels).

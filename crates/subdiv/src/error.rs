@@ -83,6 +83,19 @@ pub enum Error {
         /// How to ask for less or raise the limit.
         raise: &'static str,
     },
+    /// A part of a tessellation asked for faces the mesh does not have, or of the quadtree
+    /// ([`Surface::tessellate_part`](crate::Surface::tessellate_part)).
+    #[error("faces {start}..{end} of {faces}: {reason}")]
+    FaceRange {
+        /// The first face asked for.
+        start: usize,
+        /// One past the last.
+        end: usize,
+        /// The mesh's face count.
+        faces: usize,
+        /// What is wrong.
+        reason: &'static str,
+    },
     /// A grid size outside `1..=`[`MAX_GRID`](crate::MAX_GRID).
     #[error("grid {n}: the grid size must be from 1 to {max}")]
     Grid {
