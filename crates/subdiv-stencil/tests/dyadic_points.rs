@@ -123,22 +123,22 @@ fn passes_through_refined_vertices(scheme: &Scheme, name: &str, soup: PolygonSou
 fn butterfly_passes_through_its_refined_vertices_at_valences_3_to_8() {
     let butterfly = Builtin::Butterfly.scheme();
     for k in 3..=8 {
-        passes_through_refined_vertices(butterfly, &format!("bipyramid {k}"), jittered(bipyramid(k), 0.1), 3);
+        passes_through_refined_vertices(butterfly, &format!("bipyramid {k}"), jittered(bipyramid(k), 0.1), 4);
     }
-    passes_through_refined_vertices(butterfly, "icosahedron", jittered(shapes::icosahedron(), 0.1), 3);
+    passes_through_refined_vertices(butterfly, "icosahedron", jittered(shapes::icosahedron(), 0.1), 4);
     // Boundaries (its four-point boundary rule): a grid of triangles (corners of one and two
     // faces), a bipyramid without its lower half (boundary vertices of two faces around an
     // interior apex of valence k), an icosahedron without one vertex's faces.
     let triangles = triangulated(shapes::quad_grid(4, 3));
-    passes_through_refined_vertices(butterfly, "open triangle grid", jittered(triangles, 0.1), 3);
+    passes_through_refined_vertices(butterfly, "open triangle grid", jittered(triangles, 0.1), 4);
     for k in [3, 5, 8] {
         let cap = without_faces(bipyramid(k), |i| i % 2 == 1);
-        passes_through_refined_vertices(butterfly, &format!("half bipyramid {k}"), jittered(cap, 0.1), 2);
+        passes_through_refined_vertices(butterfly, &format!("half bipyramid {k}"), jittered(cap, 0.1), 4);
     }
     let icosahedron = shapes::icosahedron();
     let hole: Vec<bool> = icosahedron.faces().map(|f| f.contains(&VertexId::new(0))).collect();
     let open = without_faces(icosahedron, |i| hole[i]);
-    passes_through_refined_vertices(butterfly, "open icosahedron", jittered(open, 0.1), 3);
+    passes_through_refined_vertices(butterfly, "open icosahedron", jittered(open, 0.1), 4);
     // Infinitely sharp creases (the boundary rule on each side): the loop around vertex 0 of
     // the icosahedron with a corner on it, and a dart (one sharp edge ending at a smooth vertex).
     let mut soup = shapes::icosahedron();
@@ -151,7 +151,7 @@ fn butterfly_passes_through_its_refined_vertices_at_valences_3_to_8() {
     soup.tags.corners.push(CornerTag { vertex: ring[2], sharpness: Tags::INFINITELY_SHARP });
     let far = Mesh::build(soup.clone()).unwrap().one_ring(VertexId::new(11)).to_vec();
     soup.tags.creases.push(CreaseTag { vertices: [VertexId::new(11), far[0]], sharpness: Tags::INFINITELY_SHARP });
-    passes_through_refined_vertices(butterfly, "creased icosahedron", jittered(soup, 0.1), 3);
+    passes_through_refined_vertices(butterfly, "creased icosahedron", jittered(soup, 0.1), 4);
 }
 
 /// `soup` without the faces `drop` picks (by index), and without the vertices left unused.
@@ -188,16 +188,16 @@ fn triangulated(soup: PolygonSoup) -> PolygonSoup {
 #[test]
 fn kobbelt_passes_through_its_refined_vertices_at_valences_3_to_8() {
     let kobbelt = Builtin::Kobbelt.scheme();
-    passes_through_refined_vertices(kobbelt, "cube", jittered(shapes::cube(), 0.1), 3);
+    passes_through_refined_vertices(kobbelt, "cube", jittered(shapes::cube(), 0.1), 4);
     for k in 3..=8 {
         let soup = jittered(quads_of(bipyramid(k)), 0.1);
-        passes_through_refined_vertices(kobbelt, &format!("bipyramid {k} in quads"), soup, 2);
+        passes_through_refined_vertices(kobbelt, &format!("bipyramid {k} in quads"), soup, 4);
     }
     // Boundaries (its four-point boundary rule): an open grid (corners of one face), and the
     // cube without a face (boundary vertices of two faces, interior ones of valence 3).
-    passes_through_refined_vertices(kobbelt, "open grid", jittered(shapes::quad_grid(4, 3), 0.1), 3);
+    passes_through_refined_vertices(kobbelt, "open grid", jittered(shapes::quad_grid(4, 3), 0.1), 4);
     let open_cube = without_faces(shapes::cube(), |i| i == 0);
-    passes_through_refined_vertices(kobbelt, "open cube", jittered(open_cube, 0.1), 3);
+    passes_through_refined_vertices(kobbelt, "open cube", jittered(open_cube, 0.1), 4);
     // Infinitely sharp creases: the loop around the cube's face 0, one of its corners tagged.
     let mut creased = shapes::cube();
     let face: Vec<VertexId> = creased.faces().next().unwrap().to_vec();
@@ -206,7 +206,7 @@ fn kobbelt_passes_through_its_refined_vertices_at_valences_3_to_8() {
         creased.tags.creases.push(CreaseTag { vertices, sharpness: Tags::INFINITELY_SHARP });
     }
     creased.tags.corners.push(CornerTag { vertex: face[1], sharpness: Tags::INFINITELY_SHARP });
-    passes_through_refined_vertices(kobbelt, "creased cube", jittered(creased, 0.1), 3);
+    passes_through_refined_vertices(kobbelt, "creased cube", jittered(creased, 0.1), 4);
 }
 
 /// The curves: `Σ p_i φ(m / 2^L − i)` on a closed polygon is the level-`L` point `m`.
