@@ -433,29 +433,8 @@ fn interpolating_schemes_take_open_meshes() {
         assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
         let per_face = if scheme == "kobbelt" { 25 } else { 15 };
         assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + faces * per_face, "{scheme}");
-        let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
-        let args = ["tessellate", &path(&grid), "--scheme", scheme, "--rate", "8", "--polygons"];
-        let out = subdiv(&[&args[..], &["--params", &path(&csv), "-o", &path(&obj)]].concat());
-        assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
-        let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+        let tess = tessellated_on_the_surface(dir.path(), &grid, scheme, &["--polygons"]);
         assert_eq!(tess.boundary_loops().len(), 1, "{scheme}");
-        let text = std::fs::read_to_string(&csv).unwrap();
-        let points: String = text
-            .lines()
-            .skip(1)
-            .map(|l| {
-                let r: Vec<&str> = l.split(',').collect();
-                format!("{} {} {}\n", r[1], r[2], r[3])
-            })
-            .collect();
-        std::fs::write(&samples, points).unwrap();
-        let out = subdiv(&["eval", &path(&grid), "--scheme", scheme, "--samples", &path(&samples)]);
-        assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
-        for (k, line) in String::from_utf8(out.stdout).unwrap().lines().skip(1).enumerate() {
-            let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-            let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
-            assert!(gap < 1e-12, "{scheme}: vertex {k} is {gap:e} off the surface");
-        }
         if subdiv_testkit::gpu().is_some() {
             let png = dir.path().join(format!("{scheme}.png"));
             let out = subdiv(&["render", &path(&grid), "--scheme", scheme, "--size", "64,48", "-o", &path(&png)]);
@@ -502,29 +481,8 @@ fn sqrt3_evaluates_and_tessellates_closed_and_open_meshes() {
         let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "4"]);
         assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
         assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + faces * 15, "{name}");
-        let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
-        let args = ["tessellate", &path(&cage), "--scheme", "sqrt3", "--rate", "8"];
-        let out = subdiv(&[&args[..], &["--params", &path(&csv), "-o", &path(&obj)]].concat());
-        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
-        let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+        let tess = tessellated_on_the_surface(dir.path(), &cage, "sqrt3", &[]);
         assert_eq!(tess.boundary_loops().len(), boundaries, "{name}: watertight, the cage's boundaries only");
-        let text = std::fs::read_to_string(&csv).unwrap();
-        let points: String = text
-            .lines()
-            .skip(1)
-            .map(|l| {
-                let r: Vec<&str> = l.split(',').collect();
-                format!("{} {} {}\n", r[1], r[2], r[3])
-            })
-            .collect();
-        std::fs::write(&samples, points).unwrap();
-        let out = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--samples", &path(&samples)]);
-        assert!(out.status.success(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
-        for (k, line) in String::from_utf8(out.stdout).unwrap().lines().skip(1).enumerate() {
-            let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-            let gap = (tess.positions()[k] - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
-            assert!(gap < 1e-12, "{name}: vertex {k} is {gap:e} off the surface");
-        }
         let refused = subdiv(&["eval", &path(&cage), "--scheme", "sqrt3", "--grid", "2", "--method", "eigen"]);
         assert_eq!(refused.status.code(), Some(2));
         assert!(String::from_utf8_lossy(&refused.stderr).contains("evaluate through exact stencils"));
@@ -534,6 +492,45 @@ fn sqrt3_evaluates_and_tessellates_closed_and_open_meshes() {
             assert!(out.status.success() && png.exists(), "{name}: {}", String::from_utf8_lossy(&out.stderr));
         }
     }
+}
+
+/// `cage` tessellated under `scheme` at rate 8 (with `extra` arguments) into OBJ with its
+/// `--params`: every output vertex is the limit point `eval --samples` gives at its parameters,
+/// to 1e-12. Returns the tessellation.
+fn tessellated_on_the_surface(
+    dir: &std::path::Path,
+    cage: &std::path::Path,
+    scheme: &str,
+    extra: &[&str],
+) -> subdiv::mesh::Mesh {
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let (obj, csv, samples) = (dir.join("t.obj"), dir.join("p.csv"), dir.join("s.txt"));
+    let args =
+        ["tessellate", &path(cage), "--scheme", scheme, "--rate", "8", "--params", &path(&csv), "-o", &path(&obj)];
+    let out = subdiv(&[&args[..], extra].concat());
+    assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
+    let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let points: String = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let r: Vec<&str> = l.split(',').collect();
+            format!("{} {} {}\n", r[1], r[2], r[3])
+        })
+        .collect();
+    std::fs::write(&samples, points).unwrap();
+    let out = subdiv(&["eval", &path(cage), "--scheme", scheme, "--samples", &path(&samples)]);
+    assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
+    // The vertices, then (on creases and seams) their split copies, each at its own parameters.
+    let evaluated = String::from_utf8(out.stdout).unwrap();
+    assert!(evaluated.lines().count() > tess.vertex_count(), "{scheme}: a parameter per vertex");
+    for (k, (line, p)) in evaluated.lines().skip(1).zip(tess.positions()).enumerate() {
+        let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
+        let gap = (*p - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
+        assert!(gap < 1e-12, "{scheme} {}: vertex {k} is {gap:e} off the surface", cage.display());
+    }
+    tess
 }
 
 /// An `n`-gon prism whose caps are fans of triangles around two vertices of valence `n`; the
@@ -586,39 +583,9 @@ fn dual_schemes_evaluate_tessellate_and_render() {
                 cage.face_ids().map(|f| if cage.face_size(f) == 4 { 25 } else { 25 * cage.face_size(f) }).sum();
             assert_eq!(rows, per_face, "{what}");
 
-            let (obj, csv, samples) = (dir.path().join("t.obj"), dir.path().join("p.csv"), dir.path().join("s.txt"));
-            let out = subdiv(&[
-                "tessellate",
-                &path(mesh),
-                "--scheme",
-                scheme,
-                "--rate",
-                "8",
-                "--polygons",
-                "--params",
-                &path(&csv),
-                "-o",
-                &path(&obj),
-            ]);
-            assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
-            let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
+            let tess = tessellated_on_the_surface(dir.path(), mesh, scheme, &["--polygons"]);
             assert_eq!(tess.boundary_edge_count(), 0, "{what}: watertight");
             assert_eq!(tess.genus(), Some(0), "{what}");
-            let text = std::fs::read_to_string(&csv).unwrap();
-            let params: Vec<Vec<f64>> =
-                text.lines().skip(1).map(|l| l.split(',').map(|x| x.parse().unwrap()).collect()).collect();
-            assert_eq!(params.len(), tess.vertex_count(), "{what}");
-            let points: String = params.iter().map(|r| format!("{} {:?} {:?}\n", r[1], r[2], r[3])).collect();
-            std::fs::write(&samples, points).unwrap();
-            let out = subdiv(&["eval", &path(mesh), "--scheme", scheme, "--samples", &path(&samples)]);
-            assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
-            let evaluated = String::from_utf8(out.stdout).unwrap();
-            for (k, line) in evaluated.lines().skip(1).enumerate() {
-                let e: Vec<f64> = line.split(',').map(|x| x.parse().unwrap()).collect();
-                let p = tess.positions()[k];
-                let gap = (p - subdiv::mesh::DVec3::new(e[3], e[4], e[5])).length();
-                assert!(gap < 1e-12, "{what}: vertex {k} is {gap:e} off the surface");
-            }
         }
     }
     if subdiv_testkit::gpu().is_none() {

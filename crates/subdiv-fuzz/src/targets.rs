@@ -257,7 +257,7 @@ fn pipeline_from(u: &mut Unstructured<'_>) -> arbitrary::Result<String> {
     // cut. Not √3: its patch derivations on open fans take seconds in the debug build, and CI's
     // short pass gives an input 10 s (8.4 s measured with it).
     if builtin.scheme().face_size() == Some(3) && builtin != Builtin::Sqrt3 {
-        soup = triangulated(&soup);
+        soup = shapes::triangulated(soup);
     }
     let built = Mesh::build(soup);
     let mut outcome = format!("{}; {}", builtin.name(), label("build", &built));
@@ -319,22 +319,6 @@ fn pipeline_from(u: &mut Unstructured<'_>) -> arbitrary::Result<String> {
     }
     outcome += &format!("; {}", label("grid", &surface.evaluate_grid(u.int_in_range(1..=4)?)));
     Ok(outcome)
-}
-
-/// `soup` with every face of more than three corners fanned from its first corner into
-/// triangles (tags kept: they name vertices, which stay).
-fn triangulated(soup: &PolygonSoup) -> PolygonSoup {
-    let mut out = PolygonSoup::new();
-    for &p in soup.positions() {
-        out.push_vertex(p);
-    }
-    out.tags = soup.tags.clone();
-    for face in soup.faces() {
-        for k in 1..face.len() - 1 {
-            out.push_face([face[0], face[k], face[k + 1]]);
-        }
-    }
-    out
 }
 
 /// The largest whole tessellation whose face-range part the pipeline target also makes.

@@ -172,23 +172,10 @@ fn procedural_meshes_match_the_cpu() {
     // tangent directions — at the grid's corners the eigenvectors of 1/3 and 1/9, the second a
     // curvature-sized term — which the GPU crosses in f32: 1.3e-5 measured on the cage, 6.3e-5
     // on its third twisted frame.
-    let open = Mesh::build(triangulated(shapes::jittered(shapes::quad_grid(4, 3), 0.3))).unwrap();
+    let open = Mesh::build(shapes::triangulated(shapes::jittered(shapes::quad_grid(4, 3), 0.3))).unwrap();
     for rate in [1, 5, 16] {
         check_to(&gpu, "√3 open grid", Builtin::Sqrt3, &open, &vec![rate; open.face_count()], 1e-4);
     }
-}
-
-/// `soup`'s quads split along their first diagonal.
-fn triangulated(soup: subdiv_mesh::PolygonSoup) -> subdiv_mesh::PolygonSoup {
-    let mut out = subdiv_mesh::PolygonSoup::new();
-    for &p in soup.positions() {
-        out.push_vertex(p);
-    }
-    for face in soup.faces() {
-        out.push_face([face[0], face[1], face[2]]);
-        out.push_face([face[0], face[2], face[3]]);
-    }
-    out
 }
 
 /// [`check_to`] on shared meshes, each at its three uniform rates.

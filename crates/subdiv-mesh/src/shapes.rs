@@ -16,7 +16,7 @@ use std::f64::consts::TAU;
 
 use glam::DVec3;
 
-use crate::{FaceId, Mesh, PolygonSoup, VertexId};
+use crate::{Channel, FaceId, Mesh, PolygonSoup, VertexId};
 
 /// The golden ratio, which places the icosahedron's vertices.
 const PHI: f64 = 1.618_033_988_749_895;
@@ -370,6 +370,59 @@ fn built(soup: PolygonSoup) -> Mesh {
         // The shapes above are valid by construction; reaching this is a bug in this module.
         Err(error) => unreachable!("procedural shape is invalid, please report: {error}"),
     }
+}
+
+/// `soup` with every face of more than three corners fanned into triangles from its first
+/// corner: the triangle schemes' version of a quad shape (an open grid of triangles from
+/// [`quad_grid`], say). Positions, crease and corner tags stay (they name vertices); a hole
+/// becomes its triangles; channels keep each corner's value.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+///
+/// let grid = Mesh::build(shapes::triangulated(shapes::quad_grid(3, 2)))?;
+/// assert_eq!(grid.face_count(), 12);
+/// assert!(grid.face_ids().all(|f| grid.face_size(f) == 3));
+/// assert_eq!(grid.boundary_loops().len(), 1);
+/// # Ok::<(), subdiv_mesh::MeshError>(())
+/// ```
+pub fn triangulated(soup: PolygonSoup) -> PolygonSoup {
+    let mut out = PolygonSoup::with_capacity(soup.positions().len(), 2 * soup.face_count(), 6 * soup.face_count());
+    for &p in soup.positions() {
+        out.push_vertex(p);
+    }
+    // Per face of `soup`, its first corner's index in the corner lists and its triangles' first.
+    let mut corner = 0;
+    let mut corners: Vec<(usize, usize)> = Vec::new();
+    let mut first_triangle = Vec::with_capacity(soup.face_count() + 1);
+    for face in soup.faces() {
+        first_triangle.push(out.face_count());
+        for k in 1..face.len().saturating_sub(1) {
+            out.push_face([face[0], face[k], face[k + 1]]);
+            corners.push((corner, k));
+        }
+        corner += face.len();
+    }
+    first_triangle.push(out.face_count());
+    out.tags = soup.tags.clone();
+    out.tags.holes = soup
+        .tags
+        .holes
+        .iter()
+        .filter(|h| h.index() + 1 < first_triangle.len())
+        .flat_map(|h| (first_triangle[h.index()]..first_triangle[h.index() + 1]).map(|t| FaceId::new(t as u32)))
+        .collect();
+    out.channels = soup
+        .channels
+        .iter()
+        .map(|c| {
+            let at = |i: usize| c.indices().get(i).copied().unwrap_or(0);
+            let indices =
+                corners.iter().flat_map(|&(first, k)| [at(first), at(first + k), at(first + k + 1)]).collect();
+            Channel::new(c.name(), c.dimension(), c.values().to_vec(), indices)
+        })
+        .collect();
+    out
 }
 
 #[cfg(test)]

@@ -129,7 +129,7 @@ fn butterfly_passes_through_its_refined_vertices_at_valences_3_to_8() {
     // Boundaries (its four-point boundary rule): a grid of triangles (corners of one and two
     // faces), a bipyramid without its lower half (boundary vertices of two faces around an
     // interior apex of valence k), an icosahedron without one vertex's faces.
-    let triangles = triangulated(shapes::quad_grid(4, 3));
+    let triangles = shapes::triangulated(shapes::quad_grid(4, 3));
     passes_through_refined_vertices(butterfly, "open triangle grid", jittered(triangles, 0.1), 4);
     for k in [3, 5, 8] {
         let cap = without_faces(bipyramid(k), |i| i % 2 == 1);
@@ -168,19 +168,6 @@ fn without_faces(soup: PolygonSoup, drop: impl Fn(usize) -> bool) -> PolygonSoup
     }
     for face in kept {
         out.push_face(face.iter().map(|v| index[v.index()].expect("numbered above")));
-    }
-    out
-}
-
-/// Every quad of `soup` split into two triangles along its first diagonal.
-fn triangulated(soup: PolygonSoup) -> PolygonSoup {
-    let mut out = PolygonSoup::new();
-    for &p in soup.positions() {
-        out.push_vertex(p);
-    }
-    for face in soup.faces() {
-        out.push_face([face[0], face[1], face[2]]);
-        out.push_face([face[0], face[2], face[3]]);
     }
     out
 }
@@ -298,19 +285,9 @@ fn loop_is_refinement_then_its_limit_mask() {
 fn sqrt3_grid_points_are_refined_vertices_moved_to_their_limits() {
     // A grid of `m × n` squares, each split along a diagonal, domed.
     let triangulated_grid = |m: usize, n: usize| {
-        let mut soup = PolygonSoup::default();
-        for j in 0..=n {
-            for i in 0..=m {
-                let (x, y) = (i as f64, j as f64);
-                soup.push_vertex(DVec3::new(x, y, 0.2 * (x * y).sin()));
-            }
-        }
-        let id = |i: usize, j: usize| VertexId::new((j * (m + 1) + i) as u32);
-        for j in 0..n {
-            for i in 0..m {
-                soup.push_face([id(i, j), id(i + 1, j), id(i, j + 1)]);
-                soup.push_face([id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
+        let mut soup = shapes::triangulated(shapes::quad_grid(m, n));
+        for p in soup.positions_mut() {
+            p.z = 0.2 * (p.x * p.y).sin();
         }
         soup
     };
