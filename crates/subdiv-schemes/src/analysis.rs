@@ -27,7 +27,7 @@ use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
 /// The largest neighbourhood radius (in rings of faces) the analysis tries before it gives up
 /// on finding one that refinement maps into itself.
-const MAX_RADIUS: usize = 4;
+pub(crate) const MAX_RADIUS: usize = 4;
 
 /// How many rings past the invariant neighbourhood the characteristic map's eigenvectors are
 /// extended, so that a few refinements leave a dense ring whose every vertex is known.
@@ -147,7 +147,7 @@ impl LocalMatrix {
 }
 
 /// The canonical mesh of one valence, refined as far as the analysis needs it.
-struct Canonical {
+pub(crate) struct Canonical {
     scheme: Scheme,
     centre: Centre,
     /// The parent mesh (the pillow, or for dual schemes the pillow refined once).
@@ -162,7 +162,7 @@ struct Canonical {
 impl Canonical {
     /// The canonical mesh for neighbourhoods of radius up to `largest_radius`: the pillow has
     /// two rings more, so that no such neighbourhood reaches its rim.
-    fn new(scheme: &Scheme, at: Centre, largest_radius: usize) -> Result<Self, SchemeError> {
+    pub(crate) fn new(scheme: &Scheme, at: Centre, largest_radius: usize) -> Result<Self, SchemeError> {
         // A dual split doubles the rings of faces around the centre at every step: its boundary
         // centres, refined `DUAL_BOUNDARY_STEPS` times first, need few.
         let dual_boundary = matches!(scheme.split(), Split::Dual | Split::Midedge) && matches!(at, Centre::Boundary(_));
@@ -231,8 +231,23 @@ impl Canonical {
         Ok(Self { scheme: scheme.clone(), centre: at, mesh, refiner, centre_is_face, centres })
     }
 
+    /// The split the matrix is read under (mid-edge's dual form at a boundary).
+    pub(crate) fn split(&self) -> Split {
+        self.scheme.split()
+    }
+
+    /// The parent mesh, whose vertices the matrix's columns are.
+    pub(crate) fn parent(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// The centre's vertices on the parent mesh (one, or a dual scheme's face's).
+    pub(crate) fn centre(&self) -> &[VertexId] {
+        &self.centres[0]
+    }
+
     /// The matrix of the smallest neighbourhood that refinement maps into itself.
-    fn closed(&self) -> Result<LocalMatrix, SchemeError> {
+    pub(crate) fn closed(&self) -> Result<LocalMatrix, SchemeError> {
         let first = if self.centre_is_face { 0 } else { 1 };
         for radius in first..=MAX_RADIUS {
             if let Some(matrix) = self.matrix(radius)? {
@@ -259,7 +274,7 @@ impl Canonical {
 
     /// The ordered neighbourhood of radius `radius` of the centre of the parent mesh, with each
     /// vertex's ring: by ring, then by angle from the first spoke, then by distance.
-    fn neighbourhood(&self, radius: usize) -> Vec<(VertexId, usize)> {
+    pub(crate) fn neighbourhood(&self, radius: usize) -> Vec<(VertexId, usize)> {
         let mesh = &self.mesh;
         let ring = mesh.face_rings(&self.centres[0], radius);
         let all = mesh.vertices().filter(|v| ring.contains_key(v));
@@ -373,7 +388,7 @@ fn angle(p: DVec3) -> f64 {
 /// The half-edge the walk of [`Canonical::refined_neighbourhood`] starts from: out of the centre
 /// vertex, towards the neighbour at the smallest angle; or on the centre face, from its corner
 /// at the smallest angle.
-fn first_spoke(mesh: &Mesh, centre: &[VertexId]) -> Option<subdiv_mesh::HalfEdgeId> {
+pub(crate) fn first_spoke(mesh: &Mesh, centre: &[VertexId]) -> Option<subdiv_mesh::HalfEdgeId> {
     let by_angle = |v: VertexId| angle(mesh.position(v));
     match centre {
         [v] => mesh.outgoing(*v).min_by(|&a, &b| by_angle(mesh.dest(a)).total_cmp(&by_angle(mesh.dest(b)))),

@@ -1,4 +1,5 @@
-//! The exact evaluators against refinement at the dyadic points of level `L` (`L = 1..3`,
+//! The exact evaluators against refinement at the dyadic points of level `L` (to 4 for the
+//! interpolating schemes, 3 for the approximating ones, 2 for √3's ternary levels;
 //! extraordinary vertices and boundaries included): an independent check, the refinement
 //! engine's points and closed forms on one side, the sub-patch matrices' eigenvectors and the
 //! descent on the other.
@@ -8,18 +9,22 @@
 //!   valences other than 4 (whose patches reach past three rings), both schemes' boundary
 //!   rules, the four- and six-point curves.
 //! - Approximating schemes are refinement followed by the limit mask (the dominant left
-//!   eigenvector of the local subdivision matrix, in closed form: Catmull-Clark's
-//!   `(k² v + 4 Σ e + Σ f) / (k (k + 5))`, Loop's `(1 − k χ) v + χ Σ n` with
-//!   `χ = 1 / (3 / (8 β) + k)`, and the cubic B-spline's `(p + 4 v + n) / 6` along a boundary).
+//!   eigenvector of the local subdivision matrix), in closed form where one is known
+//!   (Catmull-Clark's `(k² v + 4 Σ e + Σ f) / (k (k + 5))`, Loop's `(1 − k χ) v + χ Σ n` with
+//!   `χ = 1 / (3 / (8 β) + k)`, √3's, and the cubic B-spline's `(p + 4 v + n) / 6` along a
+//!   boundary) and derived for every approximating scheme ([`LimitMask`]: Catmull-Clark, Loop,
+//!   √3, sw-quad, bilinear, and the faces of Doo-Sabin and mid-edge).
 
 use std::collections::HashMap;
 
 use glam::DVec3;
 use subdiv_mesh::shapes::jittered;
 use subdiv_mesh::{CornerTag, CreaseTag, Mesh, PolygonSoup, Tags, VertexId, shapes};
-use subdiv_schemes::{Builtin, CurveScheme, PolygonKind, RefineOptions, Scheme, refine_uniform};
-use subdiv_stencil::LimitEvaluator;
+use subdiv_schemes::{
+    Builtin, Centre, CurveScheme, LimitMask, PolygonKind, RefineOptions, Scheme, Split, refine_uniform,
+};
 use subdiv_stencil::curve::basis_grid;
+use subdiv_stencil::{FaceDomain, LimitEvaluator};
 
 /// Two apexes of valence `k` over a ring of `k` vertices of valence 4, triangles.
 fn bipyramid(k: usize) -> PolygonSoup {
@@ -82,41 +87,48 @@ impl Points {
     }
 }
 
-/// Every grid point `(i, j) / 2^L` of every face (sub-faces of N-gons) is the image of a
-/// level-`L` vertex under `image` (its position for an interpolating scheme, its limit mask's
-/// point for an approximating one), and every vertex's image is such a grid point's limit.
+/// Every grid point `(i, j) / 2^L` of every face (an N-gon's sub-faces are its quarters:
+/// `(i, j) / 2^(L-1)` of each; √3's ternary faces `(i, j) / 3^L`) is one of the level-`L` images (`images` of the mesh refined `L`
+/// times by the scheme's cycle: the vertices for an interpolating scheme, the limit mask's
+/// points for an approximating one), and every image is such a grid point's limit.
 fn grid_is_refinement(
     scheme: &Scheme,
     name: &str,
     soup: PolygonSoup,
     levels: usize,
-    image: impl Fn(&Mesh, VertexId) -> DVec3,
+    images: impl Fn(&Mesh) -> Vec<DVec3>,
 ) {
     let mesh = Mesh::build(soup).unwrap();
     let eval = LimitEvaluator::new(scheme, &mesh, &RefineOptions::DEFAULT).unwrap();
     for level in 1..=levels {
-        let refined = refine_uniform(&mesh, scheme, level, &RefineOptions::DEFAULT).unwrap();
-        let images: Vec<DVec3> = refined.vertices().map(|v| image(&refined, v)).collect();
+        let steps = level * scheme.steps_per_cycle();
+        let refined = refine_uniform(&mesh, scheme, steps, &RefineOptions::DEFAULT).unwrap();
+        let images = images(&refined);
         let vertices = Points::new(&images, 1e-6);
         let mut limit = Vec::new();
         for f in mesh.face_ids() {
-            for (g, point) in eval.grid(f, 1 << level).unwrap() {
+            let rate = match eval.domain(f).unwrap() {
+                FaceDomain::SubFaces { .. } => 1 << (level - 1),
+                FaceDomain::Ternary => 3u32.pow(level as u32),
+                _ => 1 << level,
+            };
+            for (g, point) in eval.grid(f, rate).unwrap() {
                 let gap = vertices.distance(point.position);
-                assert!(gap < 1e-12, "{scheme} {name} level {level} face {f} at {g:?}: {gap:e} from every vertex");
+                assert!(gap < 1e-12, "{scheme} {name} level {level} face {f} at {g:?}: {gap:e} from every image");
                 limit.push(point.position);
             }
         }
         let limit = Points::new(&limit, 1e-6);
         for (v, &p) in images.iter().enumerate() {
             let gap = limit.distance(p);
-            assert!(gap < 1e-12, "{scheme} {name} level {level}: vertex {v} is {gap:e} from every grid point");
+            assert!(gap < 1e-12, "{scheme} {name} level {level}: image {v} is {gap:e} from every grid point");
         }
     }
 }
 
 /// [`grid_is_refinement`] for an interpolating scheme: the vertices themselves.
 fn passes_through_refined_vertices(scheme: &Scheme, name: &str, soup: PolygonSoup, levels: usize) {
-    grid_is_refinement(scheme, name, soup, levels, |mesh, v| mesh.position(v));
+    grid_is_refinement(scheme, name, soup, levels, |mesh| mesh.vertices().map(|v| mesh.position(v)).collect());
 }
 
 #[test]
@@ -257,7 +269,9 @@ fn limit_position(mesh: &Mesh, v: VertexId, loop_: bool) -> DVec3 {
 /// [`grid_is_refinement`] for Catmull-Clark or Loop: each vertex moved by its limit mask.
 fn limit_masks_give_the_grid(scheme: &Scheme, name: &str, soup: PolygonSoup, levels: usize) {
     let loop_ = scheme.regular_valence() == 6;
-    grid_is_refinement(scheme, name, soup, levels, |mesh, v| limit_position(mesh, v, loop_));
+    grid_is_refinement(scheme, name, soup, levels, |mesh| {
+        mesh.vertices().map(|v| limit_position(mesh, v, loop_)).collect()
+    });
 }
 
 #[test]
@@ -276,11 +290,64 @@ fn loop_is_refinement_then_its_limit_mask() {
     limit_masks_give_the_grid(lp, "icosahedron", jittered(shapes::icosahedron(), 0.1), 3);
 }
 
+/// The limit of every vertex of `mesh` (every face, under a dual split) by the scheme's mask
+/// derived at its valence ([`LimitMask`]: the local matrix's dominant left eigenvector, read
+/// off the refinement engine), one mask per kind of centre.
+fn derived_limits(scheme: &Scheme, mesh: &Mesh) -> Vec<DVec3> {
+    let mut masks: HashMap<Centre, LimitMask> = HashMap::new();
+    let mut limit = |centre: Centre, at: &dyn Fn(&LimitMask) -> Option<DVec3>, what: String| {
+        let mask = masks.entry(centre).or_insert_with(|| LimitMask::at(scheme, centre).unwrap());
+        at(mask).unwrap_or_else(|| panic!("{scheme}: {what}'s neighbourhood is not the canonical one"))
+    };
+    if matches!(scheme.split(), Split::Dual | Split::Midedge) {
+        let centre = |f| Centre::Interior(mesh.face_size(f));
+        return mesh.face_ids().map(|f| limit(centre(f), &|m| m.limit_at_face(mesh, f), format!("{f}"))).collect();
+    }
+    let centre = |v| match mesh.is_boundary_vertex(v) {
+        true => Centre::Boundary(mesh.vertex_faces(v).count()),
+        false => Centre::Interior(mesh.valence(v)),
+    };
+    mesh.vertices().map(|v| limit(centre(v), &|m| m.limit_at_vertex(mesh, v), format!("{v}"))).collect()
+}
+
+/// Every approximating scheme that refines dyadically is refinement followed by its derived
+/// limit mask at every grid point of levels 1 to 3, at valences
+/// 3 to 8 (the quad bipyramids' apexes; for the dual splits the faces those vertices become),
+/// N-gons (the pentagonal prism's and the dodecahedron's faces) and boundaries (the open grid's
+/// vertices of one and two faces, for the schemes that evaluate open meshes).
+#[test]
+fn approximating_schemes_are_refinement_then_their_derived_limit_masks() {
+    let closed = |k: usize| (format!("quad bipyramid {k}"), jittered(quads_of(bipyramid(k)), 0.05));
+    let mut meshes: Vec<(String, PolygonSoup)> = (3..=8).map(closed).collect();
+    meshes.push(("cube".into(), jittered(shapes::cube(), 0.1)));
+    let ngons = [("pentagonal prism", shapes::ngon_prism(5)), ("dodecahedron", shapes::dodecahedron())];
+    let open = ("open grid".to_string(), jittered(shapes::quad_grid(3, 2), 0.1));
+    for builtin in [Builtin::CatmullClark, Builtin::SwQuad, Builtin::Bilinear, Builtin::DooSabin, Builtin::Midedge] {
+        let scheme = builtin.scheme();
+        let mut cases = meshes.clone();
+        cases.extend(ngons.iter().map(|(n, s)| (n.to_string(), jittered(s.clone(), 0.05))));
+        if !matches!(scheme.split(), Split::Dual | Split::Midedge) {
+            cases.push(open.clone());
+        }
+        for (name, soup) in cases {
+            grid_is_refinement(scheme, &name, soup, 3, |mesh| derived_limits(scheme, mesh));
+        }
+    }
+    let lp = Builtin::Loop.scheme();
+    for k in 3..=8 {
+        grid_is_refinement(lp, &format!("bipyramid {k}"), jittered(bipyramid(k), 0.05), 3, |mesh| {
+            derived_limits(lp, mesh)
+        });
+    }
+    let open_triangles = jittered(shapes::triangulated(shapes::quad_grid(3, 2)), 0.1);
+    grid_is_refinement(lp, "triangulated grid", open_triangles, 3, |mesh| derived_limits(lp, mesh));
+}
+
 /// √3 through its ternary levels: every grid point `(i, j) / 3^L` of every face is the limit of
 /// a vertex of `2L` √3 steps, moved by Kobbelt's limit mask `(p + 3kβ q̄) / (1 + 3kβ)` (`q̄` the
-/// mean of its `k` neighbours, β the vertex rule's weight), and every such vertex's limit is a
-/// grid point, `L = 1, 2`: vertices of valences 3-8 (the bipyramids' apexes and rings), on
-/// jittered cages.
+/// mean of its `k` neighbours, β the vertex rule's weight) and by the mask derived from the
+/// local matrix, and every such vertex's limit is a grid point, `L = 1, 2`: vertices of
+/// valences 3-8 (the bipyramids' apexes and rings), on jittered cages.
 #[test]
 fn sqrt3_grid_points_are_refined_vertices_moved_to_their_limits() {
     // A grid of `m × n` squares, each split along a diagonal, domed.
@@ -330,26 +397,10 @@ fn sqrt3_grid_points_are_refined_vertices_moved_to_their_limits() {
         ("open bipyramid", jittered(open_bipyramid(5), 0.1)),
     ];
     for (name, soup) in cages {
+        grid_is_refinement(sqrt3, name, soup.clone(), 2, |m| m.vertices().map(|v| limit(m, v)).collect());
+        grid_is_refinement(sqrt3, name, soup.clone(), 2, |m| derived_limits(sqrt3, m));
         let mesh = Mesh::build(soup).unwrap();
         let eval = LimitEvaluator::new(sqrt3, &mesh, &RefineOptions::DEFAULT).unwrap();
-        for level in 1..=2 {
-            let refined = refine_uniform(&mesh, sqrt3, 2 * level, &RefineOptions::DEFAULT).unwrap();
-            let images: Vec<DVec3> = refined.vertices().map(|v| limit(&refined, v)).collect();
-            let vertices = Points::new(&images, 1e-6);
-            let mut grid = Vec::new();
-            for f in mesh.face_ids() {
-                for (g, point) in eval.grid(f, 3u32.pow(level as u32)).unwrap() {
-                    let gap = vertices.distance(point.position);
-                    assert!(gap < 1e-12, "{name} level {level} face {f} at {g:?}: {gap:e} from every vertex");
-                    grid.push(point.position);
-                }
-            }
-            let grid = Points::new(&grid, 1e-6);
-            for (v, &p) in images.iter().enumerate() {
-                let gap = grid.distance(p);
-                assert!(gap < 1e-12, "{name} level {level}: vertex {v} is {gap:e} from every grid point");
-            }
-        }
         // The derivatives (×±3 per ternary level) are the positions' central differences.
         let h = 1.0 / 65536.0;
         for f in mesh.face_ids() {
