@@ -243,8 +243,8 @@ fn eval_writes_osd_limit_csv_and_rejects_bad_samples() {
         assert!(stderr.contains(expect), "{content:?}: expected {expect:?} in {stderr:?}");
         assert!(!rejected.exists() && output.stdout.is_empty(), "{content:?}: nothing written");
     }
-    // A scheme without boundary rules on an open mesh, a scheme whose boundary pieces have no
-    // patches, and a mesh a scheme cannot take: typed errors.
+    // A scheme without boundary rules on an open mesh, a face whose limit under the dual
+    // split's boundary rule has no area, and a mesh a scheme cannot take: typed errors.
     let open = dir.path().join("open.obj");
     subdiv::io::write_obj(&open, &subdiv::mesh::shapes::quad_grid(1, 1)).unwrap();
     let output = subdiv(&["eval", "--scheme", "kobbelt", "--grid", "1", open.to_str().unwrap()]);
@@ -260,7 +260,7 @@ fn eval_writes_osd_limit_csv_and_rejects_bad_samples() {
     let output = subdiv(&["eval", "--scheme", "doo-sabin", "--grid", "1", open.to_str().unwrap()]);
     assert_eq!(output.status.code(), Some(2));
     let stderr = String::from_utf8_lossy(&output.stderr);
-    assert!(stderr.contains("limit surfaces of open meshes are not available"), "{stderr}");
+    assert!(stderr.contains("whose boundary sides leave no interior corner"), "{stderr}");
     let output = subdiv(&["eval", "--scheme", "loop", "--grid", "1"]);
     assert_eq!(output.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&output.stderr).contains("loop takes only 3-sided faces"));

@@ -494,9 +494,71 @@ fn sqrt3_evaluates_and_tessellates_closed_and_open_meshes() {
     }
 }
 
-/// `cage` tessellated under `scheme` at rate 8 (with `extra` arguments) into OBJ with its
-/// `--params`: every output vertex is the limit point `eval --samples` gives at its parameters,
-/// to 1e-12. Returns the tessellation.
+/// Doo-Sabin and mid-edge on open meshes (the Chaikin boundary rule): prisms of 3 to 8 sides
+/// without their top cap (a boundary of vertices of two faces, the bottom cap a face of 3 to 8
+/// sides, valence 3 around it) and a jittered grid (corners of one face): `eval --grid 4` gives
+/// every grid point, `tessellate --rate 8` (and 3, whose boundary points have periodic
+/// addresses) is watertight but for the cage's boundary loop, and its vertices are the
+/// evaluations at their parameters; `render` draws. A boundary vertex of three faces is
+/// refused by name.
+#[test]
+fn dual_schemes_evaluate_tessellate_and_render_open_meshes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
+    let mut meshes = Vec::new();
+    for n in 3..=8 {
+        let prism = subdiv::mesh::shapes::ngon_prism(n);
+        let mut open = subdiv::mesh::PolygonSoup::new();
+        for &p in prism.positions() {
+            open.push_vertex(p);
+        }
+        // The top cap is the face of n sides over the upper ring (z > 0).
+        for face in prism.faces() {
+            if !(face.len() == n && face.iter().all(|v| prism.positions()[v.index()].z > 0.0)) {
+                open.push_face(face.iter().copied());
+            }
+        }
+        meshes.push((format!("open prism {n}"), open, 1));
+    }
+    let grid = subdiv::mesh::shapes::jittered(subdiv::mesh::shapes::quad_grid(4, 3), 0.2);
+    meshes.push(("grid".to_string(), grid, 1));
+    for (name, soup, boundaries) in meshes {
+        let cage = dir.path().join("open.obj");
+        subdiv::io::write_obj(&cage, &soup).unwrap();
+        let faces: usize = soup.faces().map(|f| if f.len() == 4 { 25 } else { 25 * f.len() }).sum();
+        for scheme in ["doo-sabin", "midedge"] {
+            let what = format!("{scheme} {name}");
+            let out = subdiv(&["eval", &path(&cage), "--scheme", scheme, "--grid", "4"]);
+            assert!(out.status.success(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
+            assert_eq!(String::from_utf8(out.stdout).unwrap().lines().count(), 1 + faces, "{what}");
+            for rate in [&[][..], &["--rate", "3"][..]] {
+                let tess = tessellated_on_the_surface(dir.path(), &cage, scheme, rate);
+                assert_eq!(tess.boundary_loops().len(), boundaries, "{what} {rate:?}: the cage's boundary only");
+            }
+            if subdiv_testkit::gpu().is_some() {
+                let png = dir.path().join("open.png");
+                let out = subdiv(&["render", &path(&cage), "--scheme", scheme, "--size", "64,48", "-o", &path(&png)]);
+                assert!(out.status.success() && png.exists(), "{what}: {}", String::from_utf8_lossy(&out.stderr));
+            }
+        }
+    }
+    // A boundary vertex of three faces: the corner of an L of three quads.
+    let l_shape = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 0 1 0\nv 1 1 0\nv 2 1 0\nv 0 2 0\nv 1 2 0\n\
+                   f 1 2 5 4\nf 2 3 6 5\nf 4 5 8 7\n";
+    let cage = dir.path().join("l.obj");
+    std::fs::write(&cage, l_shape).unwrap();
+    let out = subdiv(&["eval", &path(&cage), "--scheme", "doo-sabin", "--grid", "2"]);
+    assert_eq!(out.status.code(), Some(2));
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("at vertex 4, a boundary vertex of 3 faces") && stderr.contains("subdiv refine"),
+        "{stderr}"
+    );
+}
+
+/// `cage` tessellated under `scheme` (with `extra` arguments; `--rate 8` unless they give
+/// one) into OBJ with its `--params`: every output vertex is the limit point `eval --samples`
+/// gives at its parameters, to 1e-12. Returns the tessellation.
 fn tessellated_on_the_surface(
     dir: &std::path::Path,
     cage: &std::path::Path,
@@ -505,9 +567,9 @@ fn tessellated_on_the_surface(
 ) -> subdiv::mesh::Mesh {
     let path = |p: &std::path::Path| p.to_str().unwrap().to_string();
     let (obj, csv, samples) = (dir.join("t.obj"), dir.join("p.csv"), dir.join("s.txt"));
-    let args =
-        ["tessellate", &path(cage), "--scheme", scheme, "--rate", "8", "--params", &path(&csv), "-o", &path(&obj)];
-    let out = subdiv(&[&args[..], extra].concat());
+    let args = ["tessellate", &path(cage), "--scheme", scheme, "--params", &path(&csv), "-o", &path(&obj)];
+    let rate: &[&str] = if extra.contains(&"--rate") { &[] } else { &["--rate", "8"] };
+    let out = subdiv(&[&args[..], rate, extra].concat());
     assert!(out.status.success(), "{scheme}: {}", String::from_utf8_lossy(&out.stderr));
     let tess = subdiv::io::load_mesh(&obj, &Default::default()).unwrap();
     let text = std::fs::read_to_string(&csv).unwrap();

@@ -11,7 +11,7 @@ use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme, Split};
 /// Why √3's faces take the exact stencils.
 const TERNARY: &str = "√3's patches split in nine (ternary), and eigenbases are made for the binary splits; \
                        its faces evaluate through exact stencils (--method stencil, or auto)";
-use subdiv_stencil::{Dyadic, FaceDomain, LimitEvaluator, LimitPoint, PatchLevels, Resolved, StencilError};
+use subdiv_stencil::{Dyadic, FaceDomain, Layout, LimitEvaluator, LimitPoint, PatchLevels, Resolved, StencilError};
 
 use crate::surface::{PatchPoint, PatchPoint2};
 use crate::{EigenBasis, EvalError, PatchSurface};
@@ -357,7 +357,11 @@ impl Tree {
         match levels.resolve(level, face) {
             None => Err(format!("level {level} face {face} was not prepared (internal)")),
             Some(Resolved::Hole) => Err("part of it is a hole".to_string()),
-            Some(Resolved::Children { children, domain }) => {
+            Some(Resolved::Children { layout: Layout::DualBoundaryQuad { .. }, .. }) => {
+                // Its pieces stretch one axis only: the stencils take it.
+                Err("a dual split's boundary face, whose pieces stretch across it".to_string())
+            }
+            Some(Resolved::Children { children, layout: Layout::Domain(domain) }) => {
                 let first = self.nodes.len() as u32;
                 let triangle = domain == FaceDomain::Triangle;
                 for _ in children.clone() {

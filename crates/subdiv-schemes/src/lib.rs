@@ -113,8 +113,8 @@ pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches};
 pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
     ChildDomain, MAX_PATCH_RADIUS, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces,
-    dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners, sub_patch_starts, ternary_child_starts,
-    ternary_refine,
+    derive_dual_configuration, dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners,
+    dual_signature_has_boundary, sub_patch_starts, ternary_child_starts, ternary_refine,
 };
 pub use patch_table::{DEFAULT_PATCH_TABLES, PATCH_TABLE_MAGIC, PATCH_TABLE_VERSION, PatchTableSpec, PatchTables};
 pub use refine::{

@@ -2,7 +2,6 @@
 //! demand) and the lookup from a face to its shape.
 
 use std::collections::HashMap;
-use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 
 use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
@@ -23,9 +22,6 @@ pub struct MeshPatches {
     /// Where faces at semi-sharp features find derived configurations (`None`: they descend).
     derived: Option<DerivedConfigurations>,
 }
-
-/// The number of the next [`PatchType::Derived`].
-static NEXT_DERIVED: AtomicU32 = AtomicU32::new(0);
 
 /// Shapes by signature: (table, shape).
 type ShapeLookup = hashbrown::HashMap<Vec<u32>, (usize, usize)>;
@@ -246,7 +242,7 @@ impl MeshPatches {
         };
         let start = mesh.face_half_edges(face).find(|&h| irregular(h)).or(mesh.face_half_edges(face).next())?;
         mesh.patch_into(start, 1, &mut patch);
-        let id = NEXT_DERIVED.fetch_add(1, Ordering::Relaxed);
+        let id = crate::patch::next_derived_id();
         let Derive { scheme, options, key } = &self.derive;
         let fixed_points_at_corner_0 =
             |m: &PatchMatrices| (0..m.shapes.len()).all(|s| m.keeping(s).is_none_or(|(child, _)| child == 0));

@@ -33,7 +33,10 @@ mod dual;
 mod ternary;
 
 use derivation::{Derivation, canonical_start};
-pub use dual::{dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners};
+pub use dual::{
+    derive_dual_configuration, dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners,
+    dual_signature_has_boundary,
+};
 pub use ternary::{ternary_child_starts, ternary_refine};
 
 /// The largest patch radius tried, in rings of faces: the smallest radius whose patches are
@@ -49,6 +52,14 @@ const MAX_INTERIOR_LOOKUP: usize = 16;
 
 /// Refinement levels after which the shapes must have closed up.
 const MAX_LEVELS: usize = 5;
+
+/// The number of the next [`PatchType::Derived`] in this process.
+static NEXT_DERIVED: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+
+/// A new [`PatchType::Derived`] number.
+pub(crate) fn next_derived_id() -> u32 {
+    NEXT_DERIVED.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+}
 
 /// A stencil weight at most this large counts as zero: the engine's rows sum weights, and a
 /// weight that is zero in exact arithmetic (a crease rule's, say) stays within this of it.

@@ -295,6 +295,84 @@ impl FaceDomain {
     }
 }
 
+/// How the descent splits a face into its children on the next level of
+/// [`PatchLevels`](crate::PatchLevels) ([`Resolved::Children`](crate::Resolved::Children)).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// As the face's domain lays its children out ([`FaceDomain::child_of`]): quarters,
+    /// triangles, an N-gon's sub-faces, √3's nine.
+    Domain(FaceDomain),
+    /// A quad of a dual split (Doo-Sabin, mid-edge) with boundary sides, whose parameter
+    /// domain is the unit square: a corner on a boundary side has no piece of surface (its
+    /// point on the first level is a boundary vertex, whose dual quad is empty), so the other
+    /// corners' pieces (the [`Quad`](FaceDomain::Quad) split's quarters, in their own frames)
+    /// stretch across the face. `sides` has bit `k` set for boundary side `k` (from corner `k`
+    /// to corner `k + 1`): one side, and the two corners across from it cover a half each,
+    /// stretched twice along the side's normal; or two sides meeting at a corner, and the
+    /// opposite corner's piece covers the face.
+    DualBoundaryQuad {
+        /// The boundary sides, bit `k` for side `k`.
+        sides: u8,
+    },
+}
+
+impl Layout {
+    /// The child that holds `p`, `p` in the child's parameters, and the factors `[f, g]` of
+    /// the step's derivatives (`∂/∂u = f · ∂/∂u_child`, `∂/∂v = g · ∂/∂v_child`): the domain's
+    /// [`child_of`](FaceDomain::child_of) on both axes, or a dual boundary quad's stretch. On a
+    /// border between children the first in the engine's order wins. `p` must be in the
+    /// face's domain.
+    ///
+    /// ```
+    /// use subdiv_stencil::{Dyadic, FaceDomain, Layout};
+    ///
+    /// assert_eq!(Layout::Domain(FaceDomain::Quad).child_of(Dyadic::new(3, 1, 4)), (1, Dyadic::new(2, 2, 4), [2.0, 2.0]));
+    /// // Side 0 (v = 0) on the boundary: corner 3's quarter covers the left half, stretched along v.
+    /// let boundary = Layout::DualBoundaryQuad { sides: 0b0001 };
+    /// assert_eq!(boundary.child_of(Dyadic::new(1, 1, 4)), (3, Dyadic::new(2, 1, 4), [2.0, 1.0]));
+    /// ```
+    pub fn child_of(self, p: Dyadic) -> (usize, Dyadic, [f64; 2]) {
+        match self {
+            Self::Domain(domain) => {
+                let (child, at, factor) = domain.child_of(p);
+                (child, at, [factor, factor])
+            }
+            Self::DualBoundaryQuad { sides } => {
+                let Dyadic { u, v, denominator: q } = p;
+                let (child, [a, b], factors) = dual_boundary_child(sides, [u, v], q);
+                (child, Dyadic::new(a, b, q), factors)
+            }
+        }
+    }
+}
+
+/// [`Layout::DualBoundaryQuad`]'s step: the quarter holding the point `[u, v] / q` and the
+/// point in its frame, and the derivative factors. One boundary side `k`: the corners `k + 2`
+/// and `k + 3` cover the halves across it, each the quarter of its corner stretched twice
+/// along the side's normal; two sides meeting at corner `k`: corner `k + 2`'s quarter covers
+/// the face.
+fn dual_boundary_child(sides: u8, [u, v]: [i64; 2], q: i64) -> (usize, [i64; 2], [f64; 2]) {
+    match sides {
+        // Side 0 (v = 0): corners 3 (u < ½) and 2, stretched along v.
+        0b0001 if 2 * u >= q => (2, [2 * u - q, v], [2.0, 1.0]),
+        0b0001 => (3, [2 * u, v], [2.0, 1.0]),
+        // Side 1 (u = 1): corners 0 (v ≤ ½) and 3, stretched along u.
+        0b0010 if 2 * v <= q => (0, [u, 2 * v], [1.0, 2.0]),
+        0b0010 => (3, [u, 2 * v - q], [1.0, 2.0]),
+        // Side 2 (v = 1): corners 0 (u ≤ ½) and 1.
+        0b0100 if 2 * u <= q => (0, [2 * u, v], [2.0, 1.0]),
+        0b0100 => (1, [2 * u - q, v], [2.0, 1.0]),
+        // Side 3 (u = 0): corners 1 (v ≤ ½) and 2.
+        0b1000 if 2 * v <= q => (1, [u, 2 * v], [1.0, 2.0]),
+        0b1000 => (2, [u, 2 * v - q], [1.0, 2.0]),
+        // Two sides at a corner: the opposite corner's quarter, unstretched.
+        0b0011 => (3, [u, v], [1.0, 1.0]),
+        0b0110 => (0, [u, v], [1.0, 1.0]),
+        0b1100 => (1, [u, v], [1.0, 1.0]),
+        _ => (2, [u, v], [1.0, 1.0]),
+    }
+}
+
 /// A face's frame in the frame of its patch, which starts at corner `rotation` of the face:
 /// the face's parameters are `origin + s·e1 + t·e2` in the patch's `(s, t)`, with integer
 /// vectors of determinant 1.

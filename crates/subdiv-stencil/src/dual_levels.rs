@@ -9,18 +9,34 @@
 //! of the face's own, the sides' middles at the limits of the edge faces. Neighbouring faces
 //! see the same points along a shared side, so the parameterization is continuous across
 //! faces, as the primal schemes' is, and tessellations of it are watertight.
+//!
+//! On an open mesh (the boundary rule moves a corner on a boundary edge along the edge only) a
+//! corner on a boundary side has no piece: its point is a boundary vertex of the first level,
+//! whose dual quad is empty, and the face's centre and the boundary vertices' edge faces limit
+//! onto the boundary curve. Such a quad lays the pieces of its other corners across it
+//! ([`Layout::DualBoundaryQuad`]: one boundary side, two halves stretched across it; two sides
+//! at a corner, the opposite corner's piece over the face), and the pieces with boundary faces
+//! among their four take matrices derived from their own neighbourhoods
+//! ([`derive_dual_configuration`]), one derivation per configuration. Next to a boundary
+//! vertex of three faces or more the dual split leaves a train of triangle faces along the
+//! boundary at every level, and boundary faces of other than four sides have no such layout:
+//! both are refused by name ([`StencilError::DualBoundary`]), as are faces whose boundary sides
+//! leave no interior corner (their limit is a curve).
+
+use std::collections::HashMap;
+use std::sync::Arc;
 
 use subdiv_mesh::{HalfEdgeId, Mesh};
 use subdiv_schemes::{
     FoundPatch, PatchMatrices, PatchType, RefineOptions, Refiner, Scheme, SchemeError, Split, Stencils,
-    dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners,
+    derive_dual_configuration, dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners,
 };
 
 use crate::StencilError;
 use crate::patch_levels::{Level, Resolution};
 
-/// The levels of `mesh` (closed: the dual split has no boundary rules) under the dual `scheme`,
-/// and each level's stencils over the one above.
+/// The levels of `mesh` under the dual `scheme`, and each level's stencils over the one
+/// above; `name` is the scheme the user asked for (mid-edge runs as its dual form).
 ///
 /// Level 0 is the input; each face's children are its corners (half-edges, in order), the
 /// faces of level 1. A corner's face on level 1 has the face's axes when the face is a quad
@@ -28,13 +44,17 @@ use crate::patch_levels::{Level, Resolution};
 /// otherwise; its patch is the corner point's dual quad, in the rotation that puts the quad's
 /// extraordinary face (if any) at corner 0. A corner whose quad has two extraordinary faces (a
 /// vertex of valence other than 4 at a face of other than 4 sides) is split once more: its
-/// children `4h..4h + 4` on level 2, each with one such face at most.
+/// children `4h..4h + 4` on level 2, each with one such face at most. A corner whose quad has a
+/// boundary face among its four takes its derived configuration's matrices (any number of
+/// extraordinary faces), from corner 0; a corner on a boundary side has none.
 ///
 /// # Errors
-/// As refinement ([`StencilError::Scheme`]), or [`SchemeError::ValenceNotSupported`] for a face
-/// or vertex past [`RefineOptions::max_patch_valence`].
+/// As refinement ([`StencilError::Scheme`]), [`SchemeError::ValenceNotSupported`] for a face
+/// or vertex past [`RefineOptions::max_patch_valence`], [`StencilError::DualBoundary`] for
+/// the boundary configurations above.
 pub(crate) fn dual_levels(
     scheme: &Scheme,
+    name: &str,
     mesh: &Mesh,
     options: &RefineOptions,
 ) -> Result<(Vec<Level>, Vec<Stencils>), StencilError> {
@@ -42,6 +62,7 @@ pub(crate) fn dual_levels(
     // The positions alone, as the primal levels.
     let mut base = Refiner::new(mesh, scheme, 0, options)?.into_mesh();
     base.clear_channels();
+    let sides = boundary_sides(name, &base)?;
     let refiner = Refiner::new(&base, scheme, 1, options)?;
     let mut stencils = refiner.levels().to_vec();
     let first = refiner.into_mesh();
@@ -53,15 +74,22 @@ pub(crate) fn dual_levels(
     };
     let sizes = |m: &Mesh, around: [HalfEdgeId; 4]| around.map(|h| m.face_size(m.face(h)));
     let extraordinary = |sizes: [usize; 4]| sizes.iter().filter(|&&n| n != 4).count();
-    // Per corner of the input, its dual quad on level 1.
-    let quads: Vec<[HalfEdgeId; 4]> = (0..base.half_edge_count() as u32)
+    let open = |m: &Mesh, around: [HalfEdgeId; 4]| {
+        around.iter().any(|&h| m.face_half_edges(m.face(h)).any(|k| m.twin(k).is_none()))
+    };
+    // Per corner of the input, its dual quad on level 1; none for a corner on a boundary side.
+    let quads: Vec<Option<[HalfEdgeId; 4]>> = (0..base.half_edge_count() as u32)
         .map(|h| {
-            let start = dual_corner_start(&first, HalfEdgeId::new(h)).ok_or_else(|| internal("an open corner"))?;
-            around(&first, start)
+            let h = HalfEdgeId::new(h);
+            if base.twin(h).is_none() || base.twin(base.prev(h)).is_none() {
+                return Ok(None);
+            }
+            let start = dual_corner_start(&first, h).ok_or_else(|| internal("an open corner"))?;
+            around(&first, start).map(Some)
         })
         .collect::<Result<_, _>>()?;
     let mut twice = false;
-    for &quad in &quads {
+    for &quad in quads.iter().flatten() {
         let sizes = sizes(&first, quad);
         if let Some(&n) = sizes.iter().find(|&&n| n > options.max_patch_valence) {
             return Err(StencilError::Scheme(SchemeError::ValenceNotSupported {
@@ -71,7 +99,7 @@ pub(crate) fn dual_levels(
                          (RefineOptions::max_patch_valence)",
             }));
         }
-        twice |= extraordinary(sizes) > 1;
+        twice |= extraordinary(sizes) > 1 && !open(&first, quad);
     }
     let second = if twice {
         let refiner = Refiner::new(&first, scheme, 1, options)?;
@@ -96,6 +124,23 @@ pub(crate) fn dual_levels(
         let found = FoundPatch { start: around[rotation], vertices: found.vertices, matrices, shape };
         Ok((Resolution::Patch(found), rotation as u8))
     };
+    // The patches of dual quads with boundary faces, by signature: every shape of each
+    // configuration derived so far.
+    let mut derived: HashMap<Vec<u32>, (Arc<PatchMatrices>, usize)> = HashMap::new();
+    let mut boundary_patch = |m: &Mesh, start: HalfEdgeId| -> Result<Resolution, StencilError> {
+        let found = dual_patch(m, start).ok_or_else(|| internal("a dual quad without four faces"))?;
+        if !derived.contains_key(&found.signature) {
+            let matrices = derive_dual_configuration(scheme, m, start)?
+                .ok_or_else(|| internal("a boundary configuration's shapes do not close up"))?;
+            let matrices = Arc::new(matrices);
+            for (s, shape) in matrices.shapes.iter().enumerate() {
+                derived.entry(shape.signature.clone()).or_insert_with(|| (matrices.clone(), s));
+            }
+        }
+        let (matrices, shape) =
+            derived.get(&found.signature).cloned().ok_or_else(|| internal("a derived configuration lost its shape"))?;
+        Ok(Resolution::Patch(FoundPatch { start, vertices: found.vertices, matrices, shape }))
+    };
     let mut level0 = Level::new(base, None);
     let mut level1 = Level::new(first, Some(quads.len()));
     let mut level2 = second.map(|m| Level::new(m, Some(4 * quads.len())));
@@ -103,11 +148,20 @@ pub(crate) fn dual_levels(
         let size = level0.mesh.face_size(f);
         // A face's corners are consecutive half-edges.
         let corner0 = level0.mesh.face_half_edges(f).next().ok_or_else(|| internal("a face without corners"))?;
-        level0.faces[f.index()] = Some(Resolution::Children(corner0.index()..corner0.index() + size));
+        let corners = corner0.index()..corner0.index() + size;
+        level0.faces[f.index()] = Some(match sides[f.index()] {
+            0 => Resolution::Children(corners),
+            sides => Resolution::DualBoundary(corners, sides),
+        });
         for (j, h) in level0.mesh.face_half_edges(f).enumerate() {
-            let quad = quads[h.index()];
+            let Some(quad) = quads[h.index()] else { continue };
             // The dual quad's frame starts at the corner's vertex: corner j of a quad's child.
             let rho = if size == 4 { j } else { 0 };
+            if open(&level1.mesh, quad) {
+                let resolution = boundary_patch(&level1.mesh, quad[0])?;
+                level1.set(h.index(), resolution, rho);
+                continue;
+            }
             if extraordinary(sizes(&level1.mesh, quad)) <= 1 {
                 let (resolution, r) = patch(&level1.mesh, quad)?;
                 level1.set(h.index(), resolution, (rho + usize::from(r)) % 4);
@@ -129,6 +183,44 @@ pub(crate) fn dual_levels(
     let mut levels = vec![level0, level1];
     levels.extend(level2);
     Ok((levels, stencils))
+}
+
+/// Per face of `mesh`, its sides on the boundary (bit `k` for side `k`, from corner `k`), after
+/// refusing (under the scheme `name`) what has no patches: a boundary vertex of three faces or
+/// more, a boundary face of other than four sides, a face without an interior corner.
+fn boundary_sides(name: &str, mesh: &Mesh) -> Result<Vec<u8>, StencilError> {
+    let refuse =
+        |place: String, reason: &'static str| StencilError::DualBoundary { scheme: name.to_string(), place, reason };
+    if let Some(v) = mesh.vertices().find(|&v| mesh.is_boundary_vertex(v) && mesh.vertex_faces(v).count() > 2) {
+        return Err(refuse(
+            format!("at {v}, a boundary vertex of {} faces", mesh.vertex_faces(v).count()),
+            "there the dual split leaves a train of triangle faces along the boundary at every level, which have no \
+             sub-patch matrices yet (boundary vertices of one or two faces have them)",
+        ));
+    }
+    let mut sides = vec![0u8; mesh.face_count()];
+    for f in mesh.face_ids() {
+        let open: u8 =
+            mesh.face_half_edges(f).enumerate().filter(|&(_, h)| mesh.twin(h).is_none()).map(|(k, _)| 1 << k).sum();
+        if open == 0 {
+            continue;
+        }
+        if mesh.face_size(f) != 4 {
+            return Err(refuse(
+                format!("over {f}, a face of {} sides on the boundary", mesh.face_size(f)),
+                "only a quad on the boundary has its corners' pieces laid across it",
+            ));
+        }
+        // One side, or two meeting at a corner.
+        if ![0b0001, 0b0010, 0b0100, 0b1000, 0b0011, 0b0110, 0b1100, 0b1001].contains(&open) {
+            return Err(refuse(
+                format!("over {f}, whose boundary sides leave no interior corner"),
+                "its limit under the boundary rule is a curve, not a surface",
+            ));
+        }
+        sides[f.index()] = open;
+    }
+    Ok(sides)
 }
 
 #[cfg(test)]

@@ -140,6 +140,17 @@ pub enum StencilError {
         /// Levels tried.
         levels: usize,
     },
+    /// A dual split (Doo-Sabin, mid-edge) on an open mesh, at a boundary configuration whose
+    /// limit surface has no patches (refinement takes the mesh).
+    #[error("{scheme}: the limit surface {place} has no patches: {reason}; `subdiv refine` takes the mesh")]
+    DualBoundary {
+        /// The scheme's name.
+        scheme: String,
+        /// Where, e.g. `at vertex 12, a boundary vertex of 3 faces`.
+        place: String,
+        /// Why.
+        reason: &'static str,
+    },
     /// A broken internal invariant: a bug, please report.
     #[error("internal error, please report: {0}")]
     Internal(String),

@@ -40,7 +40,9 @@ pub use rational::Rational;
 // ---- end of curve stencils ----------------------------------------------------------------
 
 pub use address::{Address, Dyadic, MAX_ADDRESS_STEPS, parse_fraction};
-pub use domain::{FaceDomain, GridParameter, MAX_DENOMINATOR_BITS, PatchFrame, TERNARY_DIGITS, dyadic_from_f64};
+pub use domain::{
+    FaceDomain, GridParameter, Layout, MAX_DENOMINATOR_BITS, PatchFrame, TERNARY_DIGITS, dyadic_from_f64,
+};
 pub use error::StencilError;
 pub use exact::{ExactSurfaceStencil, exact_surface_positions, exact_surface_stencil};
 pub use linear::LinearEvaluator;

@@ -151,11 +151,11 @@ impl LimitEvaluator {
                 self.patches.resolve(level, f).ok_or_else(|| internal(face, "a child face was not prepared"))?;
             match resolved {
                 Resolved::Hole => return Err(StencilError::NoSurface { face: face.index() }),
-                Resolved::Children { children, domain } => {
-                    let (child, at, factor) = domain.child_of(p);
+                Resolved::Children { children, layout } => {
+                    let (child, at, [fu, fv]) = layout.child_of(p);
                     f = FaceId::new((children.start + child) as u32);
                     p = at;
-                    j = [[j[0][0] * factor, j[0][1] * factor], [j[1][0] * factor, j[1][1] * factor]];
+                    j = [[j[0][0] * fu, j[0][1] * fv], [j[1][0] * fu, j[1][1] * fv]];
                 }
                 Resolved::Patch { mesh, patch: found, frame } => {
                     let apply = |w: &[f64]| -> DVec3 {

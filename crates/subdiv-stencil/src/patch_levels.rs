@@ -8,7 +8,7 @@ use subdiv_schemes::{
     Split, Stencils, child_faces, ternary_refine,
 };
 
-use crate::{Dyadic, FaceDomain, PatchFrame, StencilError};
+use crate::{Dyadic, FaceDomain, Layout, PatchFrame, StencilError};
 
 /// Refinement levels after which every face's patch must have a shape: semi-sharp features
 /// below sharpness 10 are spent after at most 10 levels (each level takes 1), and irregular
@@ -32,6 +32,9 @@ pub(crate) enum Resolution {
     Patch(FoundPatch),
     /// Through its children, these faces of the next level.
     Children(std::ops::Range<usize>),
+    /// A dual split's quad with boundary sides (bit `k` for side `k`), through the children
+    /// (its corners) of the pieces that stretch across it ([`Layout::DualBoundaryQuad`]).
+    DualBoundary(std::ops::Range<usize>, u8),
     /// Not at all: a hole (tagged, or made by the boundary rule `none`).
     Hole,
 }
@@ -80,12 +83,12 @@ pub enum Resolved<'a> {
         frame: PatchFrame,
     },
     /// Through its children on the next level: the face's point `p` lies in child
-    /// `domain.child_of(p).0`, which is face `children.start + that` of the next level.
+    /// `layout.child_of(p).0`, which is face `children.start + that` of the next level.
     Children {
         /// The children's face numbers on the next level.
         children: std::ops::Range<usize>,
-        /// The face's domain, which says how its points map to its children's.
-        domain: FaceDomain,
+        /// How its points map to its children's.
+        layout: Layout,
     },
     /// Not at all: the face is a hole.
     Hole,
@@ -203,14 +206,13 @@ impl PatchLevels {
         options: &RefineOptions,
         derived_from: Option<usize>,
     ) -> Result<Self, StencilError> {
-        refuse_open_non_primal(scheme, mesh)?;
         let patch_size = match scheme.split() {
             Split::Quad => 4,
             Split::Triangle | Split::Sqrt3 => 3,
             // Mid-edge's levels are those of its two steps as one (`Scheme::dual_form`).
             Split::Dual | Split::Midedge => {
                 let dual = scheme.dual_form().expect("dual and mid-edge schemes have a dual form");
-                let (levels, stencils) = crate::dual_levels::dual_levels(&dual, mesh, options)?;
+                let (levels, stencils) = crate::dual_levels::dual_levels(&dual, &scheme.name, mesh, options)?;
                 return Ok(Self { split: scheme.split(), levels, stencils });
             }
         };
@@ -322,7 +324,7 @@ impl PatchLevels {
             Resolution::Hole => Resolved::Hole,
             Resolution::Children(children) => Resolved::Children {
                 children: children.clone(),
-                domain: if level == 0 {
+                layout: Layout::Domain(if level == 0 {
                     FaceDomain::of(self.split, l.mesh.face_size(face)).unwrap_or(FaceDomain::Quad)
                 } else if self.split == Split::Triangle {
                     FaceDomain::Triangle
@@ -330,8 +332,11 @@ impl PatchLevels {
                     FaceDomain::Ternary
                 } else {
                     FaceDomain::Quad
-                },
+                }),
             },
+            &Resolution::DualBoundary(ref children, sides) => {
+                Resolved::Children { children: children.clone(), layout: Layout::DualBoundaryQuad { sides } }
+            }
             Resolution::Patch(found) => {
                 let frame = match l.rotations.get(face.index()) {
                     Some(&rotation) => PatchFrame::new(4, usize::from(rotation)),
@@ -402,28 +407,4 @@ pub(crate) fn internal(face: FaceId, detail: &str) -> StencilError {
 /// The child faces of `face` ([`child_faces`]; `split` is a primal one here).
 pub(crate) fn children(mesh: &Mesh, split: Split, face: FaceId) -> std::ops::Range<usize> {
     child_faces(split, mesh, face).unwrap_or(0..0)
-}
-
-/// The dual splits refine open meshes (their boundary rules), but their limit surfaces there
-/// have no patches: refused by name instead of failing deep in the levels.
-fn refuse_open_non_primal(scheme: &Scheme, mesh: &Mesh) -> Result<(), StencilError> {
-    let (split, reason) = match scheme.split() {
-        Split::Dual | Split::Midedge => (
-            "dual",
-            "next to a boundary the limit surface is made of partial dual quads (a boundary vertex's \
-             corner pieces, some of zero area), which have no sub-patch matrices yet; `refine` takes \
-             the mesh",
-        ),
-        Split::Quad | Split::Triangle | Split::Sqrt3 => return Ok(()),
-    };
-    // Without boundary rules the refinement refuses the mesh, naming the rule it lacks.
-    if scheme.has_boundary_rules() && mesh.edges().any(|e| mesh.is_boundary_edge(e)) {
-        return Err(StencilError::Scheme(subdiv_schemes::SchemeError::SplitNotSupported {
-            scheme: scheme.name.clone(),
-            what: "limit surfaces of open meshes",
-            split,
-            reason,
-        }));
-    }
-    Ok(())
 }

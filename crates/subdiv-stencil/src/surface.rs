@@ -337,9 +337,15 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
         let stencil = match derivatives {
             Some((du, dv)) => SurfaceStencil { position: widen(position), du, dv, exact_derivatives: true },
             None => {
-                let probes = face_probes(matrices, cycle[0].0.shape, &influence)?;
+                let (probes, [su, sv]) = face_probes(matrices, cycle[0].0.shape, &influence, cycle[0].0.point)?;
                 let (du, dv) = irregular_tangents(&m, &probes).map_err(fail)?;
-                SurfaceStencil { position: widen(position), du: widen(du), dv: widen(dv), exact_derivatives: false }
+                let signed = |w: Vec<f64>, s: f64| widen(w.into_iter().map(|x| s * x).collect());
+                SurfaceStencil {
+                    position: widen(position),
+                    du: signed(du, su),
+                    dv: signed(dv, sv),
+                    exact_derivatives: false,
+                }
             }
         };
         Ok(stencil)

@@ -178,24 +178,47 @@ const QUAD_PROBES: [(i64, i64); 7] = [(4, 0), (0, 4), (4, 4), (4, 2), (2, 4), (4
 const TRIANGLE_PROBES: [(i64, i64); 5] = [(4, 0), (0, 4), (2, 2), (3, 1), (1, 3)];
 
 /// The limit position stencils, on the control points `influence` lists, of the probe points
-/// of the face of `shape`: their values on an eigenvector are its limit function there, the
-/// characteristic map (which is 0 at the fixed point, whose position stencil is the left
-/// eigenvector for 1). Positions only: a probe's own fixed point may be irregular too (a
-/// corner on a ternary patch's boundary), and its tangents are not needed.
+/// of the face of `shape` around its fixed point `at`: their values on an eigenvector are its
+/// limit function there, the characteristic map (which is 0 at the fixed point, whose position
+/// stencil is the left eigenvector for 1). Positions only: a probe's own fixed point may be
+/// irregular too (a corner on a ternary patch's boundary), and its tangents are not needed.
+///
+/// At corner 0 the probes are [`QUAD_PROBES`] (or [`TRIANGLE_PROBES`]). A quad's fixed point
+/// elsewhere — on a dual boundary shape's boundary side, or at the corner of a derived
+/// configuration's child that keeps an extraordinary face — takes the same pattern in the
+/// frame of the two rays from it along `u` and `v` into the face (each toward the far side of
+/// the square), whose images the self-similarity keeps; the signs say which way each ray runs
+/// (`−1` against the axis), so that the directions read along them become `∂/∂u` and `∂/∂v`.
 pub(crate) fn face_probes(
     matrices: &PatchMatrices,
     shape: usize,
     influence: &[usize],
-) -> Result<Vec<Vec<f64>>, StencilError> {
-    let points: &[(i64, i64)] = if matrices.face_size == 3 { &TRIANGLE_PROBES } else { &QUAD_PROBES };
+    at: Dyadic,
+) -> Result<(Vec<Vec<f64>>, [f64; 2]), StencilError> {
+    let at = at.reduced();
+    let corner0 = at.u == 0 && at.v == 0;
+    let (points, signs): (Vec<Dyadic>, [f64; 2]) = if matrices.face_size == 3 {
+        (TRIANGLE_PROBES.iter().map(|&(u, v)| Dyadic::new(u, v, 4)).collect(), [1.0, 1.0])
+    } else if corner0 {
+        (QUAD_PROBES.iter().map(|&(u, v)| Dyadic::new(u, v, 4)).collect(), [1.0, 1.0])
+    } else {
+        let Dyadic { u: a, v: b, denominator: q } = at;
+        // Each ray runs to the far side: toward 1 unless the point is on side 1 already.
+        let (far_u, far_v) = (if a < q { q } else { 0 }, if b < q { q } else { 0 });
+        let sign = |far: i64, x: i64| if far > x { 1.0 } else { -1.0 };
+        let points =
+            QUAD_PROBES.iter().map(|&(i, j)| Dyadic::new(4 * a + i * (far_u - a), 4 * b + j * (far_v - b), 4 * q));
+        (points.collect(), [sign(far_u, a), sign(far_v, b)])
+    };
     let mut evaluator = StencilEvaluator::new(matrices).positions_only();
-    points
-        .iter()
-        .map(|&(u, v)| {
-            let s = evaluator.stencil(shape, Dyadic::new(u, v, 4))?;
+    let probes = points
+        .into_iter()
+        .map(|p| {
+            let s = evaluator.stencil(shape, p)?;
             Ok(influence.iter().map(|&k| s.position[k]).collect())
         })
-        .collect()
+        .collect::<Result<_, StencilError>>()?;
+    Ok((probes, signs))
 }
 
 /// One eigen-term of the surface near an irregular fixed point, as a face's sides see it.

@@ -19,6 +19,14 @@
 //! at the others — the dual mesh's vertex of valence `n` — whose child 0 keeps the shape. A dual
 //! quad with two such faces (the first level's, beside a vertex of valence `k` and a face of
 //! `n` sides) is split once more: each child has one at most.
+//!
+//! On an open mesh, a dual quad at an interior vertex may have boundary faces among its four
+//! (the boundary rule moves their corners on boundary edges along the edge alone); its
+//! signature marks the half-edges on the boundary, which is all its refinement depends on
+//! besides its points, and its matrices are derived from its own neighbourhood
+//! ([`derive_dual_configuration`]). Its children are again dual quads at interior vertices, so
+//! its domain splits in four as an interior one does; the children along a boundary side keep
+//! a boundary shape, whose fixed points lie on the boundary curve.
 
 use std::collections::HashMap;
 
@@ -30,6 +38,14 @@ use crate::{RefineOptions, Refiner, Scheme, SchemeError, Stencils};
 
 /// The first word of a dual patch's signature, which no primal signature starts with.
 const DUAL_SIGNATURE: u32 = u32::MAX;
+
+/// Set on a vertex's place in a dual patch's signature when the face's side from that vertex
+/// to the next lies on the boundary (no place reaches it: a patch has far fewer points).
+const DUAL_BOUNDARY_SIDE: u32 = 1 << 31;
+
+/// Levels after the first within which a boundary configuration's shapes must close up: the
+/// boundary shapes repeat after one or two, the extraordinary faces' after two more.
+const MAX_BOUNDARY_LEVELS: usize = 5;
 
 /// Levels after the first after which the shapes must have closed up (they close after two).
 const MAX_LEVELS: usize = 4;
@@ -60,7 +76,8 @@ pub fn dual_quad_corners(mesh: &Mesh, start: HalfEdgeId) -> Option<[HalfEdgeId; 
 /// The dual quad of `start`'s origin `p`, with corner 0 at the centre of `start`'s face: its
 /// control points (`p` first, then each face's vertices from `p` on, counter-clockwise from
 /// `start`'s face, each once) and its signature (the four faces, each as its size and its
-/// vertices' places in the list). `None` unless `p` is an interior vertex of four faces.
+/// vertices' places in the list, a place with its high bit set where the side from it is on
+/// the boundary). `None` unless `p` is an interior vertex of four faces.
 ///
 /// ```
 /// use subdiv_mesh::{shapes, Mesh, VertexId};
@@ -95,7 +112,8 @@ pub fn dual_patch(mesh: &Mesh, start: HalfEdgeId) -> Option<Patch> {
             if large {
                 places.entry(v).or_insert(place as u32);
             }
-            signature.push(place as u32);
+            let boundary = if mesh.twin(k).is_none() { DUAL_BOUNDARY_SIDE } else { 0 };
+            signature.push(place as u32 | boundary);
             k = mesh.next(k);
             if k == h {
                 break;
@@ -150,6 +168,11 @@ impl Levels<'_> {
     }
 }
 
+/// Whether a dual patch's signature has a side on the boundary.
+pub fn dual_signature_has_boundary(signature: &[u32]) -> bool {
+    signature.first() == Some(&DUAL_SIGNATURE) && signature.iter().skip(1).any(|&w| w & DUAL_BOUNDARY_SIDE != 0)
+}
+
 /// The matrices of the dual split's interior type of `valence`: from the canonical pillow of
 /// that valence refined once, where its centre's vertex face is a `valence`-gon, the dual quad
 /// of the first face's corner point at the centre, started at that face (shape 0), and every
@@ -160,16 +183,54 @@ pub(super) fn derive(scheme: &Scheme, valence: usize) -> Result<PatchMatrices, S
     let base = Mesh::build(pillow).map_err(|e| internal(e.to_string()))?;
     let corner = super::derivation::canonical_start(&base, PatchType::interior(valence));
     let first = Refiner::new(&base, scheme, 1, &RefineOptions::DEFAULT)?.into_mesh();
-    let mut levels = Levels { scheme, meshes: vec![first], stencils: Vec::new() };
-    let start = dual_corner_start(&levels.meshes[0], corner).ok_or_else(|| internal("the centre is open".into()))?;
+    let start = dual_corner_start(&first, corner).ok_or_else(|| internal("the centre is open".into()))?;
+    close_up(scheme, first, start, PatchType::interior(valence), MAX_LEVELS)?
+        .ok_or_else(|| internal(format!("the shapes do not close up within {MAX_LEVELS} levels")))
+}
 
+/// The matrices of the dual quad at `start` on `first` (a mesh refined once or more by the
+/// dual `scheme`, open), derived from its own neighbourhood as the interior types are from
+/// the pillow: the quad (shape 0) and every shape its children
+/// reach. The rows of its children read only its four faces' points, and their faces' sides on
+/// the boundary follow from its own, so the faces around it (one ring) are all the
+/// neighbourhood needs. `None` if the shapes do not close up within a few levels. Each call
+/// is a new [`PatchType::Derived`]: callers keep one per signature.
+///
+/// # Errors
+/// As refinement, of the neighbourhood; [`SchemeError::Internal`] if `start`'s origin is not
+/// an interior vertex of four faces.
+pub fn derive_dual_configuration(
+    scheme: &Scheme,
+    first: &Mesh,
+    start: HalfEdgeId,
+) -> Result<Option<PatchMatrices>, SchemeError> {
+    let internal = |e: String| SchemeError::Internal(format!("{}: dual configuration: {e}", scheme.name));
+    let around = dual_quad_corners(first, start).ok_or_else(|| internal("not a dual quad".into()))?;
+    let region = first.region(&around.map(|h| first.face(h)), 1).map_err(|e| internal(e.to_string()))?;
+    let inside = region.face_of(first.face(start)).ok_or_else(|| internal("a face outside its region".into()))?;
+    let start = region.mesh.face_half_edges(inside).nth(first.corner(start)).expect("the face keeps its corners");
+    close_up(scheme, region.mesh, start, PatchType::Derived { id: super::next_derived_id() }, MAX_BOUNDARY_LEVELS)
+}
+
+/// The shapes of the dual quad at `start` on `first` and of every dual quad its children
+/// reach, refining `first` as far as they need, with influence sets and (the regular
+/// biquadratic shape's) parameters. `None` if new shapes still appear after `max_levels`.
+fn close_up(
+    scheme: &Scheme,
+    first: Mesh,
+    start: HalfEdgeId,
+    patch_type: PatchType,
+    max_levels: usize,
+) -> Result<Option<PatchMatrices>, SchemeError> {
+    let internal = |e: String| SchemeError::Internal(format!("{}: dual patch derivation: {e}", scheme.name));
+    let mut levels = Levels { scheme, meshes: vec![first], stencils: Vec::new() };
     let mut queue = ShapeQueue::default();
     let patch =
         dual_patch(&levels.meshes[0], start).ok_or_else(|| internal("the corner point is not a dual quad".into()))?;
     queue.register(patch, 0, start);
     while let Some((shape, level, start, vertices)) = queue.next() {
-        if level == MAX_LEVELS {
-            return Err(internal(format!("the shapes do not close up within {MAX_LEVELS} levels")));
+        if level == max_levels {
+            return Ok(None);
         }
         if levels.meshes.len() == level + 1 {
             levels.refine()?;
@@ -205,14 +266,16 @@ pub(super) fn derive(scheme: &Scheme, valence: usize) -> Result<PatchMatrices, S
     for (shape, influence) in shapes.iter_mut().zip(influence) {
         shape.influence = influence;
     }
-    // Only a shape without an extraordinary face reproduces linear functions of parameters
-    // (at an n-gon the solve fails, after a least-squares system of 4n rows: most of a large
-    // n-gon's preparation).
+    // Only a shape without an extraordinary face or a boundary side reproduces linear
+    // functions of parameters (at an n-gon the solve fails, after a least-squares system of
+    // 4n rows: most of a large n-gon's preparation; across a boundary the parameterization
+    // shrinks by ¾ a level, not ½).
     for s in 0..shapes.len() {
-        let regular = shapes[s].signature.len() == 1 + 4 * 5 && shapes[s].size == 9;
+        let signature = &shapes[s].signature;
+        let regular = signature.len() == 1 + 4 * 5 && shapes[s].size == 9 && !dual_signature_has_boundary(signature);
         shapes[s].parameters = if regular { parameter_coordinates(&shapes, s) } else { None };
     }
-    Ok(PatchMatrices::from_shapes(scheme, PatchType::interior(valence), 1, 4, shapes))
+    Ok(Some(PatchMatrices::from_shapes(scheme, patch_type, 1, 4, shapes)))
 }
 
 #[cfg(test)]

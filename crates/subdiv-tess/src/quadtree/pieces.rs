@@ -474,8 +474,8 @@ impl QuadtreeTessellator {
             Piece::Regular(p) => Ok(Piece::Regular(Box::new(p.quarter(a as usize, b as usize)))),
             Piece::Quartic(q) => Ok(Piece::Quartic(Box::new(q.child(domain.offset, domain.flipped)))),
             Piece::Face { level, face } => match self.levels.resolve(*level, *face) {
-                Some(Resolved::Children { children, domain: face_domain }) => {
-                    let (child, ..) = face_domain.child_of(inside);
+                Some(Resolved::Children { children, layout }) => {
+                    let (child, ..) = layout.child_of(inside);
                     self.piece(level + 1, FaceId::new((children.start + child) as u32))
                 }
                 _ => Err(TessError::Internal(format!("level {level} {face} has no children"))),

@@ -54,7 +54,7 @@ use glam::DVec3;
 use hashbrown::HashMap;
 use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme, Split, Stencils};
-use subdiv_stencil::{Dyadic, FaceDomain, Grid, PatchLevels, Resolved, StencilEvaluator, StencilTable};
+use subdiv_stencil::{Dyadic, FaceDomain, Grid, Layout, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
 use super::topology::{Block, Topology};
 use crate::TessError;

@@ -266,11 +266,11 @@ impl Evaluator {
             let mut done = false;
             for (level, kept) in last.iter_mut().enumerate() {
                 match self.resolve_kept(level, f, kept) {
-                    Some(Resolved::Children { children, domain }) => {
-                        let (child, at, factor) = domain.child_of(p);
+                    Some(Resolved::Children { children, layout }) => {
+                        let (child, at, [fu, fv]) = layout.child_of(p);
                         f = FaceId::new((children.start + child) as u32);
                         p = at;
-                        j = j.map(|row| row.map(|x| x * factor));
+                        j = j.map(|[a, b]| [a * fu, b * fv]);
                     }
                     Some(Resolved::Patch { patch, frame, .. }) => {
                         let (ids, len) =

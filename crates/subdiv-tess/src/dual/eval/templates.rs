@@ -334,8 +334,8 @@ impl Evaluator {
             return false;
         }
         match self.levels.resolve(level, face) {
-            Some(Resolved::Children { children, domain }) => {
-                if domain != FaceDomain::Quad {
+            Some(Resolved::Children { children, layout }) => {
+                if layout != Layout::Domain(FaceDomain::Quad) {
                     return false;
                 }
                 signature.extend([1, children.len() as u64]);
