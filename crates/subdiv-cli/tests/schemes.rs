@@ -499,8 +499,8 @@ fn sqrt3_evaluates_and_tessellates_closed_and_open_meshes() {
 /// sides, valence 3 around it) and a jittered grid (corners of one face): `eval --grid 4` gives
 /// every grid point, `tessellate --rate 8` (and 3, whose boundary points have periodic
 /// addresses) is watertight but for the cage's boundary loop, and its vertices are the
-/// evaluations at their parameters; `render` draws. A boundary vertex of three faces is
-/// refused by name.
+/// evaluations at their parameters; `render` draws; `--tolerance` (whose error bounds take no
+/// stretched pieces) and a boundary vertex of three faces are refused by name.
 #[test]
 fn dual_schemes_evaluate_tessellate_and_render_open_meshes() {
     let dir = tempfile::tempdir().unwrap();
@@ -535,6 +535,19 @@ fn dual_schemes_evaluate_tessellate_and_render_open_meshes() {
                 let tess = tessellated_on_the_surface(dir.path(), &cage, scheme, rate);
                 assert_eq!(tess.boundary_loops().len(), boundaries, "{what} {rate:?}: the cage's boundary only");
             }
+            // No error bounds over the stretched pieces: `--tolerance` says so.
+            let out = subdiv(&[
+                "tessellate",
+                &path(&cage),
+                "--scheme",
+                scheme,
+                "--tolerance",
+                "1e-3",
+                "-o",
+                &path(&dir.path().join("tol.obj")),
+            ]);
+            assert_eq!(out.status.code(), Some(2), "{what}");
+            assert!(String::from_utf8_lossy(&out.stderr).contains("`--rate` takes it"), "{what}");
             if subdiv_testkit::gpu().is_some() {
                 let png = dir.path().join("open.png");
                 let out = subdiv(&["render", &path(&cage), "--scheme", scheme, "--size", "64,48", "-o", &path(&png)]);

@@ -176,6 +176,15 @@ fn procedural_meshes_match_the_cpu() {
     for rate in [1, 5, 16] {
         check_to(&gpu, "√3 open grid", Builtin::Sqrt3, &open, &vec![rate; open.face_count()], 1e-4);
     }
+    // The dual splits on an open mesh (Chaikin's boundary rule, boundary quads' pieces stretched
+    // across them): the boundary's points are irregular too (¾ across it, ½ along), their normals
+    // from the boundary curve's tangent and a direction across it.
+    let open = Mesh::build(shapes::jittered(shapes::quad_grid(4, 3), 0.3)).unwrap();
+    for (builtin, name) in [(Builtin::DooSabin, "Doo-Sabin open grid"), (Builtin::Midedge, "mid-edge open grid")] {
+        for rate in [1, 5, 16] {
+            check_to(&gpu, name, builtin, &open, &vec![rate; open.face_count()], 1e-4);
+        }
+    }
 }
 
 /// [`check_to`] on shared meshes, each at its three uniform rates.

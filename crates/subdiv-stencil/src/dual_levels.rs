@@ -382,6 +382,87 @@ mod tests {
         }
     }
 
+    /// The corner points of the unit square, and the point at `t` along side `k`.
+    const CORNERS: [(f64, f64); 4] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+    fn on_side(k: usize, t: f64) -> (f64, f64) {
+        let (a, b) = (CORNERS[k % 4], CORNERS[(k + 1) % 4]);
+        (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1))
+    }
+
+    /// On an open grid (boundary vertices of two faces, corners of one) both dual schemes'
+    /// boundary is Chaikin's limit of the boundary polygon: away from the corners, the uniform
+    /// quadratic B-spline `C(t) = Σ b(t − j) P_j` through the points `(P_{j−1} + 6 P_j + P_{j+1}) / 8`
+    /// at the vertices and the edges' middles, a boundary face's side from `P_j` to `P_{j+1}` at
+    /// `C(j + s)` — and its tangent there is the curve's. Neighbouring faces meet along every
+    /// side, boundary faces included, and inside the faces the derivatives are exact and the
+    /// positions' slopes.
+    #[test]
+    fn on_an_open_grid_the_boundary_is_the_quadratic_b_spline_and_faces_meet() {
+        let mesh = jittered(shapes::quad_grid(10, 8), 0.25);
+        let loops = mesh.boundary_loops();
+        assert_eq!(loops.len(), 1);
+        let polygon: Vec<DVec3> = loops[0].iter().map(|&h| mesh.position(mesh.origin(h))).collect();
+        let n = polygon.len() as i64;
+        let corner = |j: i64| mesh.vertex_faces(mesh.origin(loops[0][j.rem_euclid(n) as usize])).count() == 1;
+        let curve = |t: f64| -> (DVec3, DVec3) {
+            let mut c = (DVec3::ZERO, DVec3::ZERO);
+            for j in (t.floor() as i64 - 2)..=(t.floor() as i64 + 3) {
+                let (b, db) = quadratic(t - j as f64);
+                let p = polygon[j.rem_euclid(n) as usize];
+                c = (c.0 + b * p, c.1 + db * p);
+            }
+            c
+        };
+        for builtin in DUAL_SCHEMES {
+            let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
+            let mut checked = 0;
+            for (j, &h) in loops[0].iter().enumerate() {
+                let j = j as i64;
+                // The curve over [j, j + 1] reads P_{j−1}..P_{j+2}; the corners' rule one more.
+                if (j - 2..=j + 3).any(corner) {
+                    continue;
+                }
+                let (f, k) = (mesh.face(h), mesh.corner(h));
+                for s in [0.0, 0.125, 0.3, 0.5, 0.75, 1.0] {
+                    let (u, v) = on_side(k, s);
+                    let got = eval.eval(f, u, v).unwrap();
+                    let (want, tangent) = curve(j as f64 + s);
+                    let what = format!("{} face {f} side {k} at {s}", builtin.scheme());
+                    assert!((got.position - want).length() < 1e-13, "{what}: {} vs {want}", got.position);
+                    // Along side 0 or 2 the side runs along u, along 1 or 3 along v.
+                    let along = if k % 2 == 0 { got.du } else { got.dv };
+                    let sine = along.cross(tangent).length() / (along.length() * tangent.length());
+                    assert!(sine < 1e-9, "{what}: tangent {along} against the curve's {tangent}");
+                    checked += 1;
+                }
+            }
+            assert_eq!(checked, 6 * 12, "boundary points away from the corners");
+            // Every interior side, and the inside of every face.
+            for f in mesh.face_ids() {
+                for (k, h) in mesh.face_half_edges(f).enumerate() {
+                    let Some(t) = mesh.twin(h) else { continue };
+                    let g = mesh.face(t);
+                    for s in [0.0, 0.2, 0.5, 0.9] {
+                        let (u, v) = on_side(k, s);
+                        let (gu, gv) = on_side(mesh.corner(t), 1.0 - s);
+                        let a = eval.eval(f, u, v).unwrap().position;
+                        let b = eval.eval(g, gu, gv).unwrap().position;
+                        assert!((a - b).length() < 1e-13, "faces {f} and {g} at {s}: {a} vs {b}");
+                    }
+                }
+                let (u, v, e) = (0.3, 0.65, 1e-6);
+                let at = eval.eval(f, u, v).unwrap();
+                let du =
+                    (eval.eval(f, u + e, v).unwrap().position - eval.eval(f, u - e, v).unwrap().position) / (2.0 * e);
+                let dv =
+                    (eval.eval(f, u, v + e).unwrap().position - eval.eval(f, u, v - e).unwrap().position) / (2.0 * e);
+                assert!(at.exact_derivatives, "face {f}");
+                assert!((at.du - du).length() < 1e-6 * du.length().max(1.0), "face {f} du: {} vs {du}", at.du);
+                assert!((at.dv - dv).length() < 1e-6 * dv.length().max(1.0), "face {f} dv: {} vs {dv}", at.dv);
+            }
+        }
+    }
+
     #[test]
     fn neighbouring_faces_meet_along_their_sides_and_derivatives_are_the_positions_slopes() {
         for ((name, mesh), builtin) in meshes().into_iter().flat_map(|m| DUAL_SCHEMES.map(|b| (m.clone(), b))) {

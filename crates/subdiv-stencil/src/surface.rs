@@ -5,7 +5,7 @@ use std::borrow::Borrow;
 use std::collections::HashMap;
 
 use faer::Mat;
-use subdiv_schemes::{PatchMatrices, SubPatch};
+use subdiv_schemes::{PatchMatrices, SubPatch, dual_signature_has_boundary};
 
 use crate::address::{MAX_ADDRESS_STEPS, Walk, Walked, check_domain, step, too_long, walk};
 use crate::linalg::normalised_left_eigenvectors;
@@ -268,12 +268,17 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
     }
 
     /// The stencil over `shape`'s control points from the stencil over its child `child`'s:
-    /// `w ← w · A`; derivatives also times ±2, since `u' = ±(2u − o)`.
+    /// `w ← w · A`; derivatives also times ±2, since `u' = ±(2u − o)`. Tangent directions (at
+    /// an irregular fixed point, not derivatives) are carried the same way: a direction along
+    /// which the surface is parameterized regularly (along a dual boundary, below a fixed point
+    /// that an f64 parameter reaches after fifty levels) keeps its weights' size so, where
+    /// unscaled they would halve at every level, and the rounding that feeds the position
+    /// direction is taken out at each one, where it would double.
     fn back(&self, stencil: &SurfaceStencil, shape: usize, child: u8) -> SurfaceStencil {
         let parent = &self.matrices().shapes[shape];
         let sub = &parent.children[usize::from(child)];
         let derivative = |w: &[f64]| {
-            if stencil.exact_derivatives { derivative_back(w, sub, &parent.influence) } else { times(w, sub, 1.0) }
+            if stencil.exact_derivatives { derivative_back(w, sub, &parent.influence) } else { direction_back(w, sub) }
         };
         SurfaceStencil {
             position: times(&stencil.position, sub, 1.0),
@@ -338,7 +343,17 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
             Some((du, dv)) => SurfaceStencil { position: widen(position), du, dv, exact_derivatives: true },
             None => {
                 let (probes, [su, sv]) = face_probes(matrices, cycle[0].0.shape, &influence, cycle[0].0.point)?;
-                let (du, dv) = irregular_tangents(&m, &probes).map_err(fail)?;
+                let (mut du, mut dv) = irregular_tangents(&m, &probes).map_err(fail)?;
+                if dual_signature_has_boundary(&periodic.signature) {
+                    // Along a dual boundary the side's own direction, free of the
+                    // cross-boundary term (see `boundary_tangent`).
+                    let along = boundary_tangent(&m, &position, &probes).map_err(fail)?;
+                    for (side, direction) in [&mut du, &mut dv].into_iter().enumerate() {
+                        if let Some(tangent) = along[side].clone() {
+                            *direction = tangent;
+                        }
+                    }
+                }
                 let signed = |w: Vec<f64>, s: f64| widen(w.into_iter().map(|x| s * x).collect());
                 SurfaceStencil {
                     position: widen(position),
@@ -354,6 +369,60 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
 
 /// `(∂/∂u, ∂/∂v)` stencils.
 pub(crate) type Derivatives = (Vec<f64>, Vec<f64>);
+
+/// At a fixed point on the boundary side of a dual boundary shape, the tangent of the boundary
+/// curve toward each of the first two `probes` that lies on that curve (`None` for the
+/// other): the points that the position stencils of the fixed point (`position`) and of the
+/// probe read are the curve's, which the cycle's matrix `m` maps onto themselves (the curve's
+/// matrix); its left eigenvector for its largest eigenvalue below 1, pointed toward the probe.
+///
+/// The directions that the characteristic map gives mix in a little of the cross-boundary
+/// term (rounding, 1e-11), and carried up the levels of a deep point's address (an f64
+/// parameter's fifty) that term grows by 3/2 a level against the boundary's own (Doo-Sabin's
+/// ¾ across against ½ along) until it swamps it; this one lives on the boundary's points only,
+/// and so do its images on every level above.
+fn boundary_tangent(m: &Mat<f64>, position: &[f64], probes: &[Vec<f64>]) -> Result<[Option<Vec<f64>>; 2], String> {
+    let n = m.nrows();
+    let support = |w: &[f64]| {
+        let size = w.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        (0..n).map(|j| w[j].abs() > 1e-12 * size).collect::<Vec<bool>>()
+    };
+    let at = support(position);
+    let toward = |probe: &Vec<f64>| -> Result<Option<Vec<f64>>, String> {
+        let seen = support(probe);
+        let on: Vec<usize> = (0..n).filter(|&j| at[j] || seen[j]).collect();
+        // The curve's points map onto themselves; a probe inside the face reads others.
+        let closed = on.iter().all(|&i| (0..n).all(|j| on.contains(&j) || m[(i, j)].abs() <= 1e-12));
+        if on.len() < 2 || on.len() == n || !closed {
+            return Ok(None);
+        }
+        let curve = Mat::<f64>::from_fn(on.len(), on.len(), |i, j| m[(on[i], on[j])]);
+        let values = curve.eigenvalues().map_err(|e| format!("boundary curve eigenvalues: {e:?}"))?;
+        let lambda = values
+            .iter()
+            .filter(|z| z.im.abs() < TOLERANCE && (z.re - 1.0).abs() > TOLERANCE)
+            .map(|z| z.re)
+            .fold(f64::NEG_INFINITY, f64::max);
+        if !lambda.is_finite() {
+            return Err("the boundary curve's matrix has no real eigenvalue below 1".into());
+        }
+        let shifted = Mat::<f64>::from_fn(on.len(), on.len(), |i, j| curve[(i, j)] - if i == j { lambda } else { 0.0 });
+        let (Some(left), Some(right)) =
+            (crate::linalg::null_space(&shifted, true)?.pop(), crate::linalg::null_space(&shifted, false)?.pop())
+        else {
+            return Err("the boundary curve's tangent eigenvector is missing".into());
+        };
+        // The probe's coordinate on the term: positive where the curve runs toward it.
+        let view: f64 = on.iter().zip(&right).map(|(&i, r)| probe[i] * r).sum();
+        let sign = if view < 0.0 { -1.0 } else { 1.0 };
+        let mut out = vec![0.0; n];
+        on.iter().zip(&left).for_each(|(&i, l)| out[i] = sign * l);
+        Ok(Some(out))
+    };
+    let first = probes.first().map(&toward).transpose()?.flatten();
+    let second = probes.get(1).map(&toward).transpose()?.flatten();
+    Ok([first, second])
+}
 
 /// `scale · w · A`: a stencil over a sub-patch's control points carried to its parent's.
 fn times(w: &[f64], sub: &SubPatch, scale: f64) -> Vec<f64> {
@@ -379,6 +448,19 @@ fn derivative_back(w: &[f64], sub: &SubPatch, influence: &[u32]) -> Vec<f64> {
     influence.iter().for_each(|&k| out[k as usize] = full[k as usize]);
     let mean = out.iter().sum::<f64>() / influence.len() as f64;
     influence.iter().for_each(|&k| out[k as usize] -= mean);
+    out
+}
+
+/// A tangent direction carried to the parent as a derivative is ([`derivative_back`]), but
+/// put back on the vectors that sum to zero over its own points only: a direction along a
+/// dual boundary reads the boundary's points alone, and a share of the rounding spread over
+/// the face's other points would grow there, by the cross-boundary term's 3/2 a level.
+fn direction_back(w: &[f64], sub: &SubPatch) -> Vec<f64> {
+    let scale = f64::from(sub.domain.scale);
+    let mut out = times(w, sub, if sub.domain.flipped { -scale } else { scale });
+    let points = out.iter().filter(|x| **x != 0.0).count().max(1);
+    let mean = out.iter().sum::<f64>() / points as f64;
+    out.iter_mut().filter(|x| **x != 0.0).for_each(|x| *x -= mean);
     out
 }
 

@@ -20,6 +20,10 @@ const CLUSTER: f64 = 1e-6;
 /// that counts as spanning a plane.
 const SPAN: f64 = 1e-6;
 
+/// A term's value at a probe below this fraction of the probe's largest counts as zero (see
+/// `side_directions`).
+const NEGLIGIBLE_VIEW: f64 = 1e-7;
+
 /// Tangent directions at an irregular fixed point, from the cycle's matrix `m` on the control
 /// points that influence the face (so an eigenvector the face cannot see, such as one living
 /// across an infinitely sharp edge, is not among them) and the limit stencils of the face's
@@ -96,7 +100,15 @@ fn side_directions(terms: &[Term], classes: &[usize], n: usize) -> Result<Option
         let (aa, bb, ab) = (dot(a, a), dot(b, b), dot(a, b));
         aa.min(bb) > TOLERANCE * TOLERANCE && aa * bb - ab * ab > SPAN * SPAN * aa * bb
     };
-    let at = |probe: usize| -> Vec<f64> { terms.iter().map(|t| t.view[probe]).collect() };
+    // A term's value at a probe far below the probe's largest is rounding: the probe lies where
+    // the term vanishes (a probe on a dual boundary shape's boundary side, where no
+    // cross-boundary term reaches), and kept it would grow with every level the direction is
+    // carried up (by 3/2 a level across a Doo-Sabin boundary, whose parameter shrinks by 3/4).
+    let at = |probe: usize| -> Vec<f64> {
+        let row: Vec<f64> = terms.iter().map(|t| t.view[probe]).collect();
+        let largest = row.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        row.into_iter().map(|x| if x.abs() < NEGLIGIBLE_VIEW * largest { 0.0 } else { x }).collect()
+    };
     // The probes' values span a plane: some two probes are independent over the terms.
     if !(0..probes).any(|a| (a + 1..probes).any(|b| independent(&at(a), &at(b)))) {
         return Ok(None);

@@ -37,7 +37,7 @@ use glam::DVec3;
 use hashbrown::HashMap;
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh};
 use subdiv_schemes::{ChildDomain, PatchMatrices, Scheme, Split};
-use subdiv_stencil::{Dyadic, FaceDomain, PatchFrame, PatchLevels, Resolved, StencilEvaluator};
+use subdiv_stencil::{Dyadic, FaceDomain, Layout, PatchFrame, PatchLevels, Resolved, StencilEvaluator};
 
 use self::build::Budget;
 use self::channels::{ChannelEntries, Channels};
@@ -49,6 +49,12 @@ use crate::bezier::Bicubic;
 use crate::flatness::Tolerance;
 use crate::quartic::{self, Quartic};
 use crate::{SurfaceParameter, TessCounts, TessError, TessMesh, TessSink, TessTriangle, TessVertex};
+
+/// What the quadtree (and the error bounds of `--tolerance`, which are its) refuses on a dual
+/// split's boundary face: its pieces stretch across it, where the tree splits a node in
+/// quarters and bounds each quarter by one patch.
+pub(crate) const DUAL_BOUNDARY: &str =
+    "error bounds over a dual split's boundary face (its pieces stretch across it; `--rate` takes it)";
 
 /// Bits of the fixed denominator of root coordinates: a node of depth `d` has corners at
 /// multiples of `2^(FULL_BITS − d)`.
@@ -432,7 +438,8 @@ impl QuadtreeTessellator {
         self.diagonal
     }
 
-    /// Finds every patch shape the roots reach and checks the properties the bounds rest on.
+    /// Finds every patch shape the roots reach and checks the properties the bounds rest on
+    /// (refusing a dual split's boundary face, [`DUAL_BOUNDARY`]).
     fn classify_shapes(&mut self, scheme: &Scheme) -> Result<(), TessError> {
         let mut stack: Vec<(usize, FaceId)> = Vec::new();
         for root in &self.roots {
@@ -448,6 +455,9 @@ impl QuadtreeTessellator {
         let bad = |reason: String| TessError::Scheme { scheme: scheme.name().to_string(), reason };
         while let Some((level, face)) = stack.pop() {
             match self.levels.resolve(level, face) {
+                Some(Resolved::Children { layout: Layout::DualBoundaryQuad { .. }, .. }) => {
+                    return Err(TessError::Unsupported { feature: DUAL_BOUNDARY, element: format!("{face}") });
+                }
                 Some(Resolved::Children { children, .. }) => {
                     stack.extend(children.map(|c| (level + 1, FaceId::new(c as u32))));
                 }

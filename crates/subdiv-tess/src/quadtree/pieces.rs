@@ -434,6 +434,10 @@ impl QuadtreeTessellator {
     /// The piece of face `face` of `level`, in the face's coordinates.
     pub(super) fn piece(&self, level: usize, face: FaceId) -> Result<Piece, TessError> {
         match self.levels.resolve(level, face) {
+            // Its pieces stretch across it, where the tree's nodes split in quarters.
+            Some(Resolved::Children { layout: Layout::DualBoundaryQuad { .. }, .. }) => {
+                Err(TessError::Unsupported { feature: DUAL_BOUNDARY, element: format!("{face}") })
+            }
             Some(Resolved::Children { .. }) => Ok(Piece::Face { level, face }),
             Some(Resolved::Patch { mesh, patch, frame }) => {
                 let points: Vec<DVec3> = patch.vertices.iter().map(|&v| mesh.position(v)).collect();
