@@ -382,8 +382,10 @@ mod tests {
         }
     }
 
-    /// The corner points of the unit square, and the point at `t` along side `k`.
+    /// The corners of the unit square, in a quad's corner order.
     const CORNERS: [(f64, f64); 4] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
+
+    /// The point at `t` along side `k` of the unit square (from corner `k` to corner `k + 1`).
     fn on_side(k: usize, t: f64) -> (f64, f64) {
         let (a, b) = (CORNERS[k % 4], CORNERS[(k + 1) % 4]);
         (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1))
@@ -469,11 +471,6 @@ mod tests {
             let name = format!("{} {name}", builtin.scheme());
             let eval = LimitEvaluator::new(builtin.scheme(), &mesh, &RefineOptions::DEFAULT).unwrap();
             let quads: Vec<FaceId> = mesh.face_ids().filter(|&f| mesh.face_size(f) == 4).collect();
-            const CORNERS: [(f64, f64); 4] = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)];
-            let on_side = |k: usize, t: f64| {
-                let (a, b) = (CORNERS[k % 4], CORNERS[(k + 1) % 4]);
-                (a.0 + t * (b.0 - a.0), a.1 + t * (b.1 - a.1))
-            };
             for &f in &quads {
                 for (k, h) in mesh.face_half_edges(f).enumerate() {
                     let t = mesh.twin(h).unwrap();
