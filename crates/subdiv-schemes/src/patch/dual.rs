@@ -311,4 +311,43 @@ mod tests {
             }
         }
     }
+
+    /// On an open grid refined once, the dual quads at interior vertices next to the boundary
+    /// derive from their own neighbourhoods: their signatures mark boundary sides, their shapes
+    /// close up, every row sums to 1, and the regular boundary shape (quads, two of its faces
+    /// on the boundary) keeps itself in exactly two children, the two along the boundary.
+    #[test]
+    fn boundary_configurations_close_up_along_the_boundary() {
+        for builtin in [Builtin::DooSabin, Builtin::Midedge] {
+            let scheme = builtin.scheme().dual_form().unwrap();
+            let grid = Mesh::build(subdiv_mesh::shapes::quad_grid(6, 5)).unwrap();
+            let first = Refiner::new(&grid, &scheme, 1, &RefineOptions::DEFAULT).unwrap().into_mesh();
+            let mut derived = 0;
+            for v in first.vertices() {
+                let Some(start) = first.outgoing(v).next() else { continue };
+                let Some(patch) = dual_patch(&first, start) else { continue };
+                if !dual_signature_has_boundary(&patch.signature) {
+                    continue;
+                }
+                let m = derive_dual_configuration(&scheme, &first, start).unwrap().expect("the shapes close up");
+                derived += 1;
+                assert_eq!(m.find(&patch.signature), Some(0));
+                for shape in &m.shapes {
+                    for child in &shape.children {
+                        for r in 0..child.rows() {
+                            assert!((child.row(r).iter().sum::<f64>() - 1.0).abs() < 1e-13, "{builtin:?}");
+                        }
+                    }
+                }
+                let line = m.shapes.iter().enumerate().find(|(s, shape)| {
+                    dual_signature_has_boundary(&shape.signature)
+                        && shape.children.iter().filter(|c| c.shape == *s).count() == 2
+                });
+                assert!(line.is_some(), "{builtin:?}: no boundary shape that keeps itself along the boundary");
+            }
+            // The vertices of level 1 beside the boundary faces: around each boundary face's
+            // interior corners.
+            assert!(derived > 20, "{builtin:?}: {derived} boundary configurations");
+        }
+    }
 }
