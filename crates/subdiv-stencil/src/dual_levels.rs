@@ -395,9 +395,9 @@ mod tests {
     /// boundary is Chaikin's limit of the boundary polygon: away from the corners, the uniform
     /// quadratic B-spline `C(t) = Σ b(t − j) P_j` through the points `(P_{j−1} + 6 P_j + P_{j+1}) / 8`
     /// at the vertices and the edges' middles, a boundary face's side from `P_j` to `P_{j+1}` at
-    /// `C(j + s)` — and its tangent there is the curve's. Neighbouring faces meet along every
-    /// side, boundary faces included, and inside the faces the derivatives are exact and the
-    /// positions' slopes.
+    /// `C(j + s)` — and its tangent there is the curve's, oriented as the face's parameter.
+    /// Neighbouring faces meet along every side, boundary faces included, every normal faces
+    /// the grid's way, and inside the faces the derivatives are exact and the positions' slopes.
     #[test]
     fn on_an_open_grid_the_boundary_is_the_quadratic_b_spline_and_faces_meet() {
         let mesh = jittered(shapes::quad_grid(10, 8), 0.25);
@@ -431,10 +431,15 @@ mod tests {
                     let (want, tangent) = curve(j as f64 + s);
                     let what = format!("{} face {f} side {k} at {s}", builtin.scheme());
                     assert!((got.position - want).length() < 1e-13, "{what}: {} vs {want}", got.position);
-                    // Along side 0 or 2 the side runs along u, along 1 or 3 along v.
+                    // Along side 0 or 2 the side runs along u, along 1 or 3 along v; sides 0 and
+                    // 1 with the parameter, 2 and 3 against it.
                     let along = if k % 2 == 0 { got.du } else { got.dv };
+                    let along = if k < 2 { along } else { -along };
                     let sine = along.cross(tangent).length() / (along.length() * tangent.length());
-                    assert!(sine < 1e-9, "{what}: tangent {along} against the curve's {tangent}");
+                    assert!(
+                        sine < 1e-9 && along.dot(tangent) > 0.0,
+                        "{what}: tangent {along} against the curve's {tangent}"
+                    );
                     checked += 1;
                 }
             }
@@ -451,6 +456,13 @@ mod tests {
                         let b = eval.eval(g, gu, gv).unwrap().position;
                         assert!((a - b).length() < 1e-13, "faces {f} and {g} at {s}: {a} vs {b}");
                     }
+                }
+                // The grid faces up (+z, jittered by a quarter): so does every normal, at the
+                // corners and on the sides too, where the derivatives are directions.
+                for (u, v) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0), (0.5, 0.0), (0.3, 1.0), (1.0, 0.7)] {
+                    let p = eval.eval(f, u, v).unwrap();
+                    let normal = p.du.cross(p.dv).normalize();
+                    assert!(normal.z > 0.5, "face {f} at ({u}, {v}): normal {normal}");
                 }
                 let (u, v, e) = (0.3, 0.65, 1e-6);
                 let at = eval.eval(f, u, v).unwrap();

@@ -412,9 +412,11 @@ fn boundary_tangent(m: &Mat<f64>, position: &[f64], probes: &[Vec<f64>]) -> Resu
         else {
             return Err("the boundary curve's tangent eigenvector is missing".into());
         };
-        // The probe's coordinate on the term: positive where the curve runs toward it.
+        // The probe's coordinate on the term (the left vector dual to the right one): positive
+        // where the curve runs toward it.
+        let dual: f64 = left.iter().zip(&right).map(|(l, r)| l * r).sum();
         let view: f64 = on.iter().zip(&right).map(|(&i, r)| probe[i] * r).sum();
-        let sign = if view < 0.0 { -1.0 } else { 1.0 };
+        let sign = if view * dual < 0.0 { -1.0 } else { 1.0 };
         let mut out = vec![0.0; n];
         on.iter().zip(&left).for_each(|(&i, l)| out[i] = sign * l);
         Ok(Some(out))
