@@ -97,8 +97,14 @@ pub(super) fn ensure_table(
 }
 
 /// The table and index of `point` (in the patch's frame, as the face's grid gave it: not
-/// reduced) if it is a point of a held dual-grid table of the patch's shape.
-pub(super) fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch, point: Dyadic) -> Option<(u32, u32)> {
+/// reduced) if it is a point of its face's own dual grid (at `face_rate`) and that table of
+/// the patch's shape is held.
+pub(super) fn dual_table(
+    tables: &DualTables,
+    patch: &subdiv_schemes::FoundPatch,
+    point: Dyadic,
+    face_rate: u32,
+) -> Option<(u32, u32)> {
     let Dyadic { u: a, v: b, denominator: q } = point;
     let triangle = patch.matrices.face_size == 3;
     let (rate, index) = if triangle {
@@ -116,7 +122,10 @@ pub(super) fn dual_table(tables: &DualTables, patch: &subdiv_schemes::FoundPatch
         let n = q / 2;
         (n, (b - 1) / 2 * n + (a - 1) / 2)
     };
-    let rate = u32::try_from(rate).ok()?;
+    // Only the face's own grid: a point of another rate's grid (a triangle's primal point at a
+    // rate of 3n is a cell centroid at n) would read whichever table another face's rate made,
+    // and its bits would depend on the rates of faces far away (a face-range part's).
+    let rate = u32::try_from(rate).ok().filter(|&r| r == face_rate)?;
     let table = *tables.index.get(&(Arc::as_ptr(&patch.matrices) as usize, rate))?;
     let t = &tables.tables[table as usize];
     // The closed-form index, checked against the table's own order.
@@ -164,7 +173,7 @@ impl Evaluator {
             let mut evaluators =
                 pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
             let out = spare.lock().unwrap_or_else(std::sync::PoisonError::into_inner).pop().unwrap_or_default();
-            let chunk = this.chunk(topo, spans, &mut evaluators, out);
+            let chunk = this.chunk(topo, rates, spans, &mut evaluators, out);
             pool.lock().unwrap_or_else(std::sync::PoisonError::into_inner).push(evaluators);
             chunk
         };
@@ -236,6 +245,7 @@ impl Evaluator {
     pub(super) fn chunk(
         &self,
         topo: &Topology,
+        rates: &[u32],
         spans: &[std::ops::Range<usize>],
         evaluators: &mut Evaluators,
         mut out: Chunk,
@@ -279,7 +289,7 @@ impl Evaluator {
                         out.assigned.push((i as u32, out.records.len() as u32));
                         // A point of a level-0 patch's own dual grid reads the shared table.
                         let table = if level == 0 && reads_table(patch) {
-                            dual_table(&self.tables, patch, frame.to_patch(site.point))
+                            dual_table(&self.tables, patch, frame.to_patch(site.point), rates[site.face as usize])
                         } else {
                             None
                         };
