@@ -388,6 +388,27 @@ mod tests {
         }
     }
 
+    /// A face-range part's points are the whole tessellation's, bit for bit, under the
+    /// triangle schemes too: a triangle's primal point at a rate of 3n is a cell centroid at n,
+    /// which read the rate-n dual-grid table once a part's far faces at rate 1 had made it
+    /// (fuzz reproducer `pipeline/6b266055e3c25eed`; √3's parts used to keep every face's rate
+    /// for it).
+    #[test]
+    fn parts_are_the_whole_tessellations_points_under_the_triangle_schemes() {
+        for builtin in [Builtin::Loop, Builtin::Sqrt3] {
+            let mut s = Surface::build(shapes::jittered(shapes::triangle_torus(6, 5), 0.1), builtin.scheme()).unwrap();
+            let options = TessOptions::DEFAULT.with_rates(Rates::Uniform(3));
+            let whole = s.tessellate(&options).unwrap();
+            let bits = |p: &DVec3| p.to_array().map(f64::to_bits);
+            let points: std::collections::HashSet<[u64; 3]> = whole.mesh.positions.iter().map(bits).collect();
+            for start in (0..60).step_by(15) {
+                let part = s.tessellate_part(&options, start..start + 15).unwrap();
+                let off = part.mesh.positions.iter().filter(|p| !points.contains(&bits(p))).count();
+                assert_eq!(off, 0, "{builtin:?} part {start}..: points off the whole's");
+            }
+        }
+    }
+
     #[test]
     fn tessellations_past_the_vertex_budget_are_refused_before_the_work() {
         let mut s = surface(shapes::cube());

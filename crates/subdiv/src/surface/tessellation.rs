@@ -4,7 +4,7 @@
 use std::ops::Range;
 
 use subdiv_mesh::{FaceId, Mesh};
-use subdiv_schemes::{RefineOptions, Scheme, Split};
+use subdiv_schemes::{RefineOptions, Scheme};
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenError, ScreenSpace};
 use subdiv_tess::{
     DualOptions, DualTessellator, FlatMesh, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink,
@@ -99,8 +99,8 @@ impl Surface {
     /// joining the parts and welding equal points (`subdiv merge`) gives the whole tessellation.
     /// A part costs the whole mesh's patches, the rates of the faces around it and one point
     /// per other face (they are tessellated at rate 1 and left out), except under a tolerance,
-    /// whose rings around extraordinary points keep every face at its rate, and under √3, whose
-    /// shared stencils do (a part then saves only the writing).
+    /// whose rings around extraordinary points keep every face at its rate (a part then saves
+    /// only the writing).
     ///
     /// ```
     /// use subdiv::mesh::shapes;
@@ -139,12 +139,9 @@ impl Surface {
         let FaceRates { faces: rates, rings, epsilon } = self.policy_rates(options)?;
         // The faces around the part's vertices keep their rates: the part's strips and vertex
         // polygons are made with their points. The others take rate 1, unless rings (around
-        // extraordinary points, graded to the rates) need them as they are, or the scheme is
-        // √3: its points come from stencils that the evaluation shares across faces, whose last
-        // bits then depend on which points were asked for first (352 of spot_triangulated's
-        // 61,462 points at rate 3 differed with the others at rate 1; none with every face at
-        // its rate).
-        let keep_all = rings.is_some() || self.scheme.split() == Split::Sqrt3;
+        // extraordinary points, graded to the rates) need them as they are. (A point's bits do
+        // not depend on the far faces' rates: each reads only its own face's dual-grid table.)
+        let keep_all = rings.is_some();
         let mut near = vec![keep_all; count];
         for f in faces.clone() {
             for &v in self.mesh.face_vertices(FaceId::new(f as u32)) {
