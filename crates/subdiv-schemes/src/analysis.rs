@@ -133,9 +133,15 @@ impl LocalMatrix {
         crate::eigen::eigenvalues(self.size, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)
     }
 
+    /// The transpose, whose right eigenvectors are this matrix's left ones.
+    pub(crate) fn transposed(&self) -> Self {
+        let n = self.size;
+        Self { size: n, radius: self.radius, entries: (0..n * n).map(|k| self.entries[(k % n) * n + k / n]).collect() }
+    }
+
     /// A real basis of the eigenspace of the real eigenvalue `lambda`, `count` vectors: the
     /// right singular vectors of `self - lambda·I` with the smallest singular values.
-    fn eigenspace(&self, lambda: f64, count: usize) -> Result<Vec<Vec<f64>>, SchemeError> {
+    pub(crate) fn eigenspace(&self, lambda: f64, count: usize) -> Result<Vec<Vec<f64>>, SchemeError> {
         let shifted =
             Mat::<f64>::from_fn(self.size, self.size, |i, j| self.get(i, j) - if i == j { lambda } else { 0.0 });
         let svd = shifted.svd().map_err(|e| SchemeError::Eigen(format!("{e:?}")))?;

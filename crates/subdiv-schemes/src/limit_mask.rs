@@ -5,7 +5,6 @@
 
 use std::collections::{HashMap, HashSet};
 
-use faer::Mat;
 use subdiv_mesh::{DVec3, FaceId, HalfEdgeId, Mesh, VertexId};
 
 use crate::analysis::{Canonical, MAX_RADIUS, first_spoke};
@@ -65,15 +64,12 @@ impl LimitMask {
         let canonical = Canonical::new(scheme, centre, MAX_RADIUS)?;
         let matrix = canonical.closed()?;
         let neighbourhood = canonical.neighbourhood(matrix.radius());
-        let size = matrix.size();
-        // The left null vector of S − I: the right singular vector of (S − I)ᵀ with the least
-        // singular value.
-        let shifted = Mat::<f64>::from_fn(size, size, |i, j| matrix.get(j, i) - if i == j { 1.0 } else { 0.0 });
-        let svd = shifted.svd().map_err(|e| SchemeError::Eigen(format!("{e:?}")))?;
-        let least = (0..size)
-            .min_by(|&a, &b| svd.S().column_vector()[a].total_cmp(&svd.S().column_vector()[b]))
+        // The left eigenvector of 1: the right one of the transpose.
+        let vector = matrix
+            .transposed()
+            .eigenspace(1.0, 1)?
+            .pop()
             .ok_or_else(|| SchemeError::Internal("an empty local matrix".into()))?;
-        let vector: Vec<f64> = (0..size).map(|r| svd.V()[(r, least)]).collect();
         let sum: f64 = vector.iter().sum();
         if sum.abs() < 1e-9 {
             return Err(SchemeError::Eigen(format!(

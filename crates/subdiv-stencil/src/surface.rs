@@ -8,7 +8,7 @@ use faer::Mat;
 use subdiv_schemes::{PatchMatrices, SubPatch, dual_signature_has_boundary};
 
 use crate::address::{MAX_ADDRESS_STEPS, Walk, Walked, check_domain, step, too_long, walk};
-use crate::linalg::normalised_left_eigenvectors;
+use crate::linalg::{eigenspace, normalised_left_eigenvectors};
 use crate::tangents::{face_probes, irregular_tangents};
 use crate::{Dyadic, StencilError};
 
@@ -347,12 +347,9 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
                 if dual_signature_has_boundary(&periodic.signature) {
                     // Along a dual boundary the side's own direction, free of the
                     // cross-boundary term (see `boundary_tangent`).
-                    let along = boundary_tangent(&m, &position, &probes).map_err(fail)?;
-                    for (side, direction) in [&mut du, &mut dv].into_iter().enumerate() {
-                        if let Some(tangent) = along[side].clone() {
-                            *direction = tangent;
-                        }
-                    }
+                    let [along_u, along_v] = boundary_tangent(&m, &position, &probes).map_err(fail)?;
+                    du = along_u.unwrap_or(du);
+                    dv = along_v.unwrap_or(dv);
                 }
                 let signed = |w: Vec<f64>, s: f64| widen(w.into_iter().map(|x| s * x).collect());
                 SurfaceStencil {
@@ -389,10 +386,10 @@ fn boundary_tangent(m: &Mat<f64>, position: &[f64], probes: &[Vec<f64>]) -> Resu
     };
     let at = support(position);
     let toward = |probe: &Vec<f64>| -> Result<Option<Vec<f64>>, String> {
-        let seen = support(probe);
-        let on: Vec<usize> = (0..n).filter(|&j| at[j] || seen[j]).collect();
+        let member: Vec<bool> = at.iter().zip(support(probe)).map(|(&a, b)| a || b).collect();
+        let on: Vec<usize> = (0..n).filter(|&j| member[j]).collect();
         // The curve's points map onto themselves; a probe inside the face reads others.
-        let closed = on.iter().all(|&i| (0..n).all(|j| on.contains(&j) || m[(i, j)].abs() <= 1e-12));
+        let closed = on.iter().all(|&i| (0..n).all(|j| member[j] || m[(i, j)].abs() <= 1e-12));
         if on.len() < 2 || on.len() == n || !closed {
             return Ok(None);
         }
@@ -406,9 +403,8 @@ fn boundary_tangent(m: &Mat<f64>, position: &[f64], probes: &[Vec<f64>]) -> Resu
         if !lambda.is_finite() {
             return Err("the boundary curve's matrix has no real eigenvalue below 1".into());
         }
-        let shifted = Mat::<f64>::from_fn(on.len(), on.len(), |i, j| curve[(i, j)] - if i == j { lambda } else { 0.0 });
         let (Some(left), Some(right)) =
-            (crate::linalg::null_space(&shifted, true)?.pop(), crate::linalg::null_space(&shifted, false)?.pop())
+            (eigenspace(&curve, lambda, true)?.pop(), eigenspace(&curve, lambda, false)?.pop())
         else {
             return Err("the boundary curve's tangent eigenvector is missing".into());
         };
@@ -444,8 +440,7 @@ fn times(w: &[f64], sub: &SubPatch, scale: f64) -> Vec<f64> {
 /// grow `2^k`-fold; nor the points that do not influence the face, whose own eigenvalues the
 /// iteration would pick up.
 fn derivative_back(w: &[f64], sub: &SubPatch, influence: &[u32]) -> Vec<f64> {
-    let scale = f64::from(sub.domain.scale);
-    let full = times(w, sub, if sub.domain.flipped { -scale } else { scale });
+    let full = scaled_back(w, sub);
     let mut out = vec![0.0; full.len()];
     influence.iter().for_each(|&k| out[k as usize] = full[k as usize]);
     let mean = out.iter().sum::<f64>() / influence.len() as f64;
@@ -453,13 +448,18 @@ fn derivative_back(w: &[f64], sub: &SubPatch, influence: &[u32]) -> Vec<f64> {
     out
 }
 
+/// `±s w·A`: a derivative stencil carried to the parent by the step's scale `s` (`u' = ±(s u − o)`).
+fn scaled_back(w: &[f64], sub: &SubPatch) -> Vec<f64> {
+    let scale = f64::from(sub.domain.scale);
+    times(w, sub, if sub.domain.flipped { -scale } else { scale })
+}
+
 /// A tangent direction carried to the parent as a derivative is ([`derivative_back`]), but
 /// put back on the vectors that sum to zero over its own points only: a direction along a
 /// dual boundary reads the boundary's points alone, and a share of the rounding spread over
 /// the face's other points would grow there, by the cross-boundary term's 3/2 a level.
 fn direction_back(w: &[f64], sub: &SubPatch) -> Vec<f64> {
-    let scale = f64::from(sub.domain.scale);
-    let mut out = times(w, sub, if sub.domain.flipped { -scale } else { scale });
+    let mut out = scaled_back(w, sub);
     let points = out.iter().filter(|x| **x != 0.0).count().max(1);
     let mean = out.iter().sum::<f64>() / points as f64;
     out.iter_mut().filter(|x| **x != 0.0).for_each(|x| *x -= mean);

@@ -20,10 +20,6 @@ const CLUSTER: f64 = 1e-6;
 /// that counts as spanning a plane.
 const SPAN: f64 = 1e-6;
 
-/// A term's value at a probe below this fraction of the probe's largest counts as zero (see
-/// `side_directions`).
-const NEGLIGIBLE_VIEW: f64 = 1e-7;
-
 /// Tangent directions at an irregular fixed point, from the cycle's matrix `m` on the control
 /// points that influence the face (so an eigenvector the face cannot see, such as one living
 /// across an infinitely sharp edge, is not among them) and the limit stencils of the face's
@@ -100,15 +96,7 @@ fn side_directions(terms: &[Term], classes: &[usize], n: usize) -> Result<Option
         let (aa, bb, ab) = (dot(a, a), dot(b, b), dot(a, b));
         aa.min(bb) > TOLERANCE * TOLERANCE && aa * bb - ab * ab > SPAN * SPAN * aa * bb
     };
-    // A term's value at a probe far below the probe's largest is rounding: the probe lies where
-    // the term vanishes (a probe on a dual boundary shape's boundary side, where no
-    // cross-boundary term reaches), and kept it would grow with every level the direction is
-    // carried up (by 3/2 a level across a Doo-Sabin boundary, whose parameter shrinks by 3/4).
-    let at = |probe: usize| -> Vec<f64> {
-        let row: Vec<f64> = terms.iter().map(|t| t.view[probe]).collect();
-        let largest = row.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        row.into_iter().map(|x| if x.abs() < NEGLIGIBLE_VIEW * largest { 0.0 } else { x }).collect()
-    };
+    let at = |probe: usize| -> Vec<f64> { terms.iter().map(|t| t.view[probe]).collect() };
     // The probes' values span a plane: some two probes are independent over the terms.
     if !(0..probes).any(|a| (a + 1..probes).any(|b| independent(&at(a), &at(b)))) {
         return Ok(None);
@@ -195,8 +183,8 @@ const TRIANGLE_PROBES: [(i64, i64); 5] = [(4, 0), (0, 4), (2, 2), (3, 1), (1, 3)
 /// stencil is the left eigenvector for 1). Positions only: a probe's own fixed point may be
 /// irregular too (a corner on a ternary patch's boundary), and its tangents are not needed.
 ///
-/// At corner 0 the probes are [`QUAD_PROBES`] (or [`TRIANGLE_PROBES`]). A quad's fixed point
-/// elsewhere — on a dual boundary shape's boundary side, or at the corner of a derived
+/// At corner 0 the probes are [`QUAD_PROBES`] (a triangle's, [`TRIANGLE_PROBES`]); a quad's
+/// fixed point elsewhere — on a dual boundary shape's boundary side, or at the corner of a derived
 /// configuration's child that keeps an extraordinary face — takes the same pattern in the
 /// frame of the two rays from it along `u` and `v` into the face (each toward the far side of
 /// the square), whose images the self-similarity keeps; the signs say which way each ray runs
@@ -207,14 +195,11 @@ pub(crate) fn face_probes(
     influence: &[usize],
     at: Dyadic,
 ) -> Result<(Vec<Vec<f64>>, [f64; 2]), StencilError> {
-    let at = at.reduced();
-    let corner0 = at.u == 0 && at.v == 0;
     let (points, signs): (Vec<Dyadic>, [f64; 2]) = if matrices.face_size == 3 {
         (TRIANGLE_PROBES.iter().map(|&(u, v)| Dyadic::new(u, v, 4)).collect(), [1.0, 1.0])
-    } else if corner0 {
-        (QUAD_PROBES.iter().map(|&(u, v)| Dyadic::new(u, v, 4)).collect(), [1.0, 1.0])
     } else {
-        let Dyadic { u: a, v: b, denominator: q } = at;
+        // At corner 0 (reduced: (0, 0) / 1) these are QUAD_PROBES themselves.
+        let Dyadic { u: a, v: b, denominator: q } = at.reduced();
         // Each ray runs to the far side: toward 1 unless the point is on side 1 already.
         let (far_u, far_v) = (if a < q { q } else { 0 }, if b < q { q } else { 0 });
         let sign = |far: i64, x: i64| if far > x { 1.0 } else { -1.0 };
