@@ -112,7 +112,7 @@ pub(crate) fn run(args: &[String]) -> Result<(), String> {
                         .map_err(|e| format!("{name}: {e}"))?;
                     let n = ungraded.faces.iter().copied().max().unwrap_or(1);
                     let rates = vec![n; mesh.face_count()];
-                    let predicted = predicted_vertex_count(mesh, scheme == Builtin::Loop, &rates);
+                    let predicted = predicted_vertex_count(mesh, scheme.scheme().split(), &rates);
                     if predicted <= COUNTED_VERTICES {
                         let uniform =
                             TessOptions::DEFAULT.with_rates(Rates::Uniform(n)).with_max_vertices(usize::MAX / 4);

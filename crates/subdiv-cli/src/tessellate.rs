@@ -9,7 +9,7 @@ use std::time::Instant;
 use subdiv::mesh::{DVec3, Mesh};
 use subdiv::tess::rates::{Camera, DEFAULT_MAX_RATE};
 use subdiv::tess::{DualOptions, DualTessellator};
-use subdiv::{FaceRates, FlatMesh, Rates, Surface, TessInfo, TessOptions, Tessellation, Tolerance};
+use subdiv::{FaceRates, Rates, Surface, TessInfo, TessOptions, Tessellation, Tolerance};
 
 use crate::UserError;
 use crate::args::{parse_list, parse_size};
@@ -183,8 +183,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     let start = Instant::now();
     let bar = Spinner::new(surface.mesh().face_count());
     // GLB without --params needs neither the f64 output nor the parameters: the flat f32
-    // buffers go to the file as they are (a 1000 × 1000 grid at rate 2: 3.6 GB peak before,
-    // 1.1 GB after; docs/perf-log.md).
+    // buffers are streamed to the file chunk by chunk, never held whole (docs/perf-log.md).
     let lean = format == Format::Glb && args.params.is_none() && !args.gpu;
     let (result, gpu_detail) = if let Some(faces) = part {
         bar.say("dual-grid stitching, one part");
@@ -200,9 +199,12 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
             // longer tell a coordinate flushed to 0 from a 0.
             subdiv::io::check_glb_positions(surface.mesh().positions().iter().copied())
                 .map_err(|e| write_error(&input_name, &args.output, e))?;
-            let mut flat = FlatMesh::default();
-            let info = surface.tessellate_flat(&options, &mut flat).map_err(|e| located(&e))?;
-            (Output::Flat(flat, info), String::new())
+            let (info, vertices, triangles) =
+                surface.write_glb_stream(&options, &args.output).map_err(|e| match e {
+                    subdiv::Error::Io(e) => write_error(&input_name, &args.output, e),
+                    e => located(&e),
+                })?;
+            (Output::Streamed(info, vertices, triangles), String::new())
         } else {
             (Output::Mesh(Box::new(surface.tessellate(&options).map_err(|e| located(&e))?)), String::new())
         }
@@ -234,7 +236,7 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
     let seconds = start.elapsed().as_secs_f64();
     bar.say("writing");
     let written = match (&result, format) {
-        (Output::Flat(flat, _), _) => subdiv::write_flat_glb(&args.output, flat),
+        (Output::Streamed(..), _) => Ok(()),
         (Output::Mesh(result), Format::Glb) => result.write_glb(&args.output),
         (Output::Mesh(result), Format::Obj) => result.write_obj(&args.output, args.polygons),
     };
@@ -261,15 +263,15 @@ pub(crate) fn run(args: &TessellateArgs, _out: &mut impl Write) -> Result<(), Us
 enum Output {
     /// The whole f64 output with parameters (OBJ, --params, --gpu).
     Mesh(Box<Tessellation>),
-    /// Flat f32 buffers (GLB).
-    Flat(FlatMesh, TessInfo),
+    /// Written already, streamed as flat f32 buffers (GLB): flat vertices, triangles.
+    Streamed(TessInfo, usize, usize),
 }
 
 impl Output {
     fn info(&self) -> &TessInfo {
         match self {
             Self::Mesh(t) => &t.info,
-            Self::Flat(_, info) => info,
+            Self::Streamed(info, ..) => info,
         }
     }
 
@@ -277,7 +279,7 @@ impl Output {
     fn counts(&self) -> (usize, usize) {
         match self {
             Self::Mesh(t) => (t.mesh.positions.len(), t.mesh.triangles.len()),
-            Self::Flat(flat, _) => (flat.vertices.len() / 6, flat.indices.len() / 3),
+            Self::Streamed(_, vertices, triangles) => (*vertices, *triangles),
         }
     }
 }

@@ -16,7 +16,7 @@ fn an_applications_own_device_evaluates_like_the_cpu() {
     // The whole tessellation: 60 quads' 64 cells each and the vertex points.
     let mesh = subdiv_mesh::Mesh::build(subdiv_mesh::shapes::default_model()).unwrap();
     let rates = vec![8; mesh.face_count()];
-    assert_eq!(report.vertices, subdiv_tess::dual::predicted_vertex_count(&mesh, false, &rates));
+    assert_eq!(report.vertices, subdiv_tess::dual::predicted_vertex_count(&mesh, subdiv_schemes::Split::Quad, &rates));
     assert!(report.vertices > 60 * 64);
     assert!(report.position <= 1e-5 && report.normal <= 1e-5, "{report}");
     assert!(report.to_string().contains(&report.adapter));

@@ -61,7 +61,7 @@ fn create_temporary(path: &Path) -> io::Result<(PathBuf, File)> {
         // Registered before it exists, so a signal between creation and registration still
         // finds it.
         register(&tmp);
-        match OpenOptions::new().write(true).create_new(true).open(&tmp) {
+        match OpenOptions::new().read(true).write(true).create_new(true).open(&tmp) {
             Ok(file) => return Ok((tmp, file)),
             Err(e) if e.kind() == io::ErrorKind::AlreadyExists => unregister(&tmp),
             Err(e) => {
@@ -99,6 +99,44 @@ pub(crate) fn write_file(
         result
     });
     result.map_err(|source| IoError::Io { path: path.to_owned(), source })
+}
+
+/// A scratch file beside an output (`<name>.<16 hex>.tmp`, as [`write_file`]'s, so that
+/// [`remove_temporary_files`] removes it too): written through a buffer, then copied into the
+/// output; removed when dropped.
+pub(crate) struct Scratch {
+    path: PathBuf,
+    writer: BufWriter<File>,
+}
+
+impl Scratch {
+    /// A fresh scratch file beside `path`.
+    pub(crate) fn beside(path: &Path) -> io::Result<Self> {
+        let (tmp, file) = create_temporary(path)?;
+        Ok(Self { path: tmp, writer: BufWriter::with_capacity(1 << 16, file) })
+    }
+
+    pub(crate) fn writer(&mut self) -> &mut BufWriter<File> {
+        &mut self.writer
+    }
+
+    /// Everything written so far, appended to `w` (by the kernel where it can: `io::copy`
+    /// between files takes `copy_file_range` on Linux).
+    pub(crate) fn copy_into(&mut self, w: &mut BufWriter<File>) -> io::Result<()> {
+        use std::io::Seek;
+        self.writer.flush()?;
+        let file = self.writer.get_mut();
+        file.rewind()?;
+        io::copy(file, w)?;
+        Ok(())
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = fs::remove_file(&self.path);
+        unregister(&self.path);
+    }
 }
 
 #[cfg(test)]

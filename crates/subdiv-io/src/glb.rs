@@ -8,7 +8,10 @@ use glam::{Vec2, Vec3};
 use serde_json::{Value, json};
 
 use crate::gltf::{CHUNK_BIN, CHUNK_JSON, GLB_MAGIC};
-use crate::{IoError, atomic};
+use std::io::Write as _;
+
+use crate::IoError;
+use crate::atomic::{self, Scratch};
 
 const ARRAY_BUFFER: u32 = 34962;
 const ELEMENT_ARRAY_BUFFER: u32 = 34963;
@@ -52,35 +55,60 @@ pub const MIN_GLB_EXTENT: f64 = 1.0 / (1u128 << 102) as f64;
 /// # Errors
 /// [`IoError::Unwritable`] naming the vertex, the coordinate and what to do (scale the mesh).
 pub fn check_glb_positions(positions: impl IntoIterator<Item = glam::DVec3>) -> Result<(), IoError> {
-    let refuse = |i: usize, x: f64, rule: &str| {
-        Err(IoError::Unwritable { format: "GLB", rule: format!("vertex {i} coordinate {x:e} {rule}") })
-    };
-    // The largest magnitude, and the smallest non-zero one below the bound, with their places.
-    let (mut largest, mut tiny) = ((0usize, 0.0f64), None::<(usize, f64)>);
-    for (i, p) in positions.into_iter().enumerate() {
+    let mut check = PositionCheck::default();
+    for p in positions {
+        check.push(p)?;
+    }
+    check.finish()
+}
+
+/// [`check_glb_positions`] a position at a time: the largest magnitude, and the largest
+/// non-zero one below [`MIN_GLB_EXTENT`], with their places.
+#[derive(Clone, Copy, Debug, Default)]
+struct PositionCheck {
+    count: usize,
+    largest: (usize, f64),
+    tiny: Option<(usize, f64)>,
+}
+
+impl PositionCheck {
+    fn refuse(i: usize, x: f64, rule: &str) -> IoError {
+        IoError::Unwritable { format: "GLB", rule: format!("vertex {i} coordinate {x:e} {rule}") }
+    }
+
+    fn push(&mut self, p: glam::DVec3) -> Result<(), IoError> {
+        let i = self.count;
+        self.count += 1;
         for x in p.to_array() {
             if !x.is_finite() {
-                return refuse(i, x, "is not finite");
+                return Err(Self::refuse(i, x, "is not finite"));
             }
             if x.abs() > f64::from(f32::MAX) {
-                return refuse(i, x, "exceeds f32's range (3.4e38); scale the mesh down before writing GLB");
+                return Err(Self::refuse(i, x, "exceeds f32's range (3.4e38); scale the mesh down before writing GLB"));
             }
-            if x.abs() > largest.1.abs() {
-                largest = (i, x);
+            if x.abs() > self.largest.1.abs() {
+                self.largest = (i, x);
             }
-            if x != 0.0 && x.abs() < MIN_GLB_EXTENT && tiny.is_none_or(|(_, t)| x.abs() > t.abs()) {
-                tiny = (i, x).into();
+            if x != 0.0 && x.abs() < MIN_GLB_EXTENT && self.tiny.is_none_or(|(_, t)| x.abs() > t.abs()) {
+                self.tiny = (i, x).into();
             }
         }
+        Ok(())
     }
-    let too_small = "is too small for f32 (it would be written as 0 or a subnormal; the smallest \
-                     mesh extent accepted is 2^-102 ≈ 2.0e-31); scale the mesh up before writing GLB";
-    if largest.1 != 0.0 && largest.1.abs() < MIN_GLB_EXTENT {
-        return refuse(largest.0, largest.1, &format!("is the mesh's largest and {too_small}"));
-    }
-    match tiny {
-        Some((i, x)) if x.abs() > largest.1.abs() * f64::from(f32::EPSILON) / 2.0 => refuse(i, x, too_small),
-        _ => Ok(()),
+
+    fn finish(&self) -> Result<(), IoError> {
+        let too_small = "is too small for f32 (it would be written as 0 or a subnormal; the smallest \
+                         mesh extent accepted is 2^-102 ≈ 2.0e-31); scale the mesh up before writing GLB";
+        let largest = self.largest;
+        if largest.1 != 0.0 && largest.1.abs() < MIN_GLB_EXTENT {
+            return Err(Self::refuse(largest.0, largest.1, &format!("is the mesh's largest and {too_small}")));
+        }
+        match self.tiny {
+            Some((i, x)) if x.abs() > largest.1.abs() * f64::from(f32::EPSILON) / 2.0 => {
+                Err(Self::refuse(i, x, too_small))
+            }
+            _ => Ok(()),
+        }
     }
 }
 
@@ -133,6 +161,164 @@ pub fn write_glb_interleaved(
     let vertices = Vertices::Interleaved { vertices, texcoords };
     let header = GlbHeader::of(vertices, indices)?;
     atomic::write_file(path.as_ref(), |w| header.write(vertices, indices, w))
+}
+
+/// A GLB file written as its data comes, for outputs too large to hold: interleaved vertices
+/// (`px py pz nx ny nz`, as [`write_glb_interleaved`] takes them) with their texture
+/// coordinates, and triangle indices, each in chunks of any size, in order; each kind goes to
+/// a scratch file beside the output as it comes (checked on the way), and
+/// [`finish`](Self::finish) writes the file through a temporary file and a rename, the bytes
+/// of [`write_glb_interleaved`] of the whole. What it holds is a buffer per kind, not the
+/// output; the disk holds the output twice until `finish` (the scratch files are removed then,
+/// or when the writer is dropped).
+///
+/// ```
+/// use subdiv_io::GlbWriter;
+///
+/// let dir = tempfile::tempdir()?;
+/// let path = dir.path().join("triangle.glb");
+/// let mut glb = GlbWriter::create(&path, false)?;
+/// glb.push_vertices(&[[0.0, 0.0, 0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0, 0.0, 0.0, 1.0]], &[])?;
+/// glb.push_vertices(&[[0.0, 1.0, 0.0, 0.0, 0.0, 1.0]], &[])?;
+/// glb.push_indices(&[0, 1, 2])?;
+/// glb.finish()?;
+/// let whole = std::fs::read(&path)?;
+/// subdiv_io::write_glb_interleaved(&path, &[[0.0, 0.0, 0.0, 0.0, 0.0, 1.0], [1.0, 0.0, 0.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 0.0, 0.0, 1.0]], None, &[0, 1, 2])?;
+/// assert_eq!(std::fs::read(&path)?, whole);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub struct GlbWriter {
+    path: std::path::PathBuf,
+    positions: Scratch,
+    normals: Scratch,
+    texcoords: Option<Scratch>,
+    indices: Scratch,
+    vertices: usize,
+    index_count: usize,
+    check: PositionCheck,
+    bounds: [Vec3; 2],
+    /// The largest index so far and its place (checked against the vertex count at the end).
+    largest_index: Option<(usize, u32)>,
+}
+
+impl std::fmt::Debug for GlbWriter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("GlbWriter")
+            .field("path", &self.path)
+            .field("vertices", &self.vertices)
+            .field("indices", &self.index_count)
+            .finish_non_exhaustive()
+    }
+}
+
+impl GlbWriter {
+    /// A writer of the file at `path` (written by [`finish`](Self::finish); untouched until
+    /// then), with texture coordinates or without.
+    ///
+    /// # Errors
+    /// [`IoError::Io`] if the scratch files cannot be made beside `path`.
+    pub fn create(path: impl AsRef<Path>, texcoords: bool) -> Result<Self, IoError> {
+        let path = path.as_ref().to_owned();
+        let io = |source| IoError::Io { path: path.clone(), source };
+        let scratch = || Scratch::beside(&path);
+        Ok(Self {
+            positions: scratch().map_err(io)?,
+            normals: scratch().map_err(io)?,
+            texcoords: if texcoords { Some(scratch().map_err(io)?) } else { None },
+            indices: scratch().map_err(io)?,
+            path: path.clone(),
+            vertices: 0,
+            index_count: 0,
+            check: PositionCheck::default(),
+            bounds: [Vec3::INFINITY, Vec3::NEG_INFINITY],
+            largest_index: None,
+        })
+    }
+
+    /// The next vertices, with their texture coordinates (one each if the writer was made with
+    /// them, else none).
+    ///
+    /// # Errors
+    /// As [`write_glb_interleaved`]'s checks of these vertices; [`IoError::Io`] when writing
+    /// fails.
+    pub fn push_vertices(&mut self, vertices: &[[f32; 6]], texcoords: &[Vec2]) -> Result<(), IoError> {
+        let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
+        let expected = if self.texcoords.is_some() { vertices.len() } else { 0 };
+        if texcoords.len() != expected {
+            return Err(unwritable(format!("{} texture coordinates for {expected} vertices", texcoords.len())));
+        }
+        let io = |source| IoError::Io { path: self.path.clone(), source };
+        for (k, v) in vertices.iter().enumerate() {
+            let (p, n) = (Vec3::new(v[0], v[1], v[2]), Vec3::new(v[3], v[4], v[5]));
+            self.check.push(p.as_dvec3())?;
+            let Some(unit) = n.try_normalize() else {
+                return Err(unwritable(format!("normal {} = {n} has no direction", self.vertices + k)));
+            };
+            self.bounds = [self.bounds[0].min(p), self.bounds[1].max(p)];
+            vec3(self.positions.writer(), p).map_err(io)?;
+            // Normalised in f32 on the way, as the whole writer (`try_normalize` is `normalize`
+            // with the check).
+            vec3(self.normals.writer(), unit).map_err(io)?;
+        }
+        if let Some(scratch) = &mut self.texcoords {
+            for (k, t) in texcoords.iter().enumerate() {
+                if !t.is_finite() {
+                    return Err(unwritable(format!("texture coordinate {} = {t} is not finite", self.vertices + k)));
+                }
+                let w = scratch.writer();
+                w.write_all(&t.x.to_le_bytes()).and_then(|()| w.write_all(&t.y.to_le_bytes())).map_err(io)?;
+            }
+        }
+        self.vertices += vertices.len();
+        Ok(())
+    }
+
+    /// The next triangles' indices.
+    ///
+    /// # Errors
+    /// [`IoError::Io`] when writing fails.
+    pub fn push_indices(&mut self, indices: &[u32]) -> Result<(), IoError> {
+        let io = |source| IoError::Io { path: self.path.clone(), source };
+        let w = self.indices.writer();
+        for (k, &i) in indices.iter().enumerate() {
+            if self.largest_index.is_none_or(|(_, largest)| i > largest) {
+                self.largest_index = Some((self.index_count + k, i));
+            }
+            w.write_all(&i.to_le_bytes()).map_err(io)?;
+        }
+        self.index_count += indices.len();
+        Ok(())
+    }
+
+    /// Writes the file: the vertices and indices pushed, as [`write_glb_interleaved`] writes
+    /// them.
+    ///
+    /// # Errors
+    /// As [`write_glb_interleaved`]: no triangle, an index count not a multiple of 3, an index
+    /// past the vertices, coordinates too small for f32, more than 4 GiB; [`IoError::Io`].
+    pub fn finish(mut self) -> Result<(), IoError> {
+        let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
+        let (n, count) = (self.vertices, self.index_count);
+        if count == 0 || !count.is_multiple_of(3) {
+            return Err(unwritable(format!("{count} indices; a mesh needs whole triangles, at least one")));
+        }
+        self.check.finish()?;
+        if let Some((i, v)) = self.largest_index.filter(|&(_, v)| v as usize >= n) {
+            return Err(unwritable(format!("index {i} is {v}, but there are {n} vertices")));
+        }
+        let attributes = Attributes { normals: true, texcoords: self.texcoords.is_some() };
+        let header = GlbHeader::layout(n, attributes, self.bounds, count)?;
+        let Self { path, positions, normals, texcoords, indices, .. } = &mut self;
+        atomic::write_file(path, |w| {
+            header.write_prefix(w)?;
+            positions.copy_into(w)?;
+            normals.copy_into(w)?;
+            if let Some(texcoords) = texcoords {
+                texcoords.copy_into(w)?;
+            }
+            indices.copy_into(w)
+        })
+    }
 }
 
 /// The vertices the GLB writer takes.
@@ -213,6 +399,19 @@ impl GlbHeader {
                 return Err(unwritable(format!("texture coordinate {i} = {t} is not finite")));
             }
         }
+        let (min, max) =
+            vertices.positions().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+        let attributes =
+            Attributes { normals: vertices.normals().is_some(), texcoords: vertices.texcoords().is_some() };
+        Self::layout(n, attributes, [min, max], indices.len())
+    }
+
+    /// The file of `n` vertices with `attributes`, positions within `bounds` (min, max), and
+    /// `indices` indices.
+    fn layout(n: usize, attributes: Attributes, bounds: [Vec3; 2], indices: usize) -> Result<Self, IoError> {
+        let unwritable = |rule: String| IoError::Unwritable { format: "GLB", rule };
+        let [min, max] = bounds;
+        let Attributes { normals, texcoords } = attributes;
         let mut views = Vec::new();
         let mut accessors = Vec::new();
         let mut attributes = serde_json::Map::new();
@@ -224,26 +423,24 @@ impl GlbHeader {
         };
         // min/max as the exact f64 of each f32, so that they compare equal to the data in any reader.
         let exact = |v: Vec3| v.to_array().map(f64::from);
-        let (min, max) =
-            vertices.positions().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
         let view = push_view(12 * n, ARRAY_BUFFER);
         attributes.insert("POSITION".into(), accessors.len().into());
         accessors.push(json!({
             "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3", "min": exact(min), "max": exact(max)
         }));
-        if vertices.normals().is_some() {
+        if normals {
             let view = push_view(12 * n, ARRAY_BUFFER);
             attributes.insert("NORMAL".into(), accessors.len().into());
             accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC3" }));
         }
-        if vertices.texcoords().is_some() {
+        if texcoords {
             let view = push_view(8 * n, ARRAY_BUFFER);
             attributes.insert("TEXCOORD_0".into(), accessors.len().into());
             accessors.push(json!({ "bufferView": view, "componentType": 5126, "count": n, "type": "VEC2" }));
         }
-        let view = push_view(4 * indices.len(), ELEMENT_ARRAY_BUFFER);
+        let view = push_view(4 * indices, ELEMENT_ARRAY_BUFFER);
         let index_accessor = accessors.len();
-        accessors.push(json!({ "bufferView": view, "componentType": 5125, "count": indices.len(), "type": "SCALAR" }));
+        accessors.push(json!({ "bufferView": view, "componentType": 5125, "count": indices, "type": "SCALAR" }));
         let root = json!({
             "asset": { "version": "2.0", "generator": "subdiv" },
             "scene": 0,
@@ -266,21 +463,7 @@ impl GlbHeader {
     /// Writes the file: the header, the JSON chunk, then the binary chunk from `vertices` and
     /// `indices` (those [`of`](Self::of) checked), normals normalised on the way.
     fn write(&self, vertices: Vertices<'_>, indices: &[u32], w: &mut impl std::io::Write) -> std::io::Result<()> {
-        let vec3 = |w: &mut dyn std::io::Write, v: Vec3| {
-            let mut bytes = [0u8; 12];
-            for (chunk, x) in bytes.chunks_exact_mut(4).zip(v.to_array()) {
-                chunk.copy_from_slice(&x.to_le_bytes());
-            }
-            w.write_all(&bytes)
-        };
-        w.write_all(GLB_MAGIC)?;
-        w.write_all(&2u32.to_le_bytes())?;
-        w.write_all(&self.total.to_le_bytes())?;
-        w.write_all(&(self.json.len() as u32).to_le_bytes())?;
-        w.write_all(&CHUNK_JSON.to_le_bytes())?;
-        w.write_all(&self.json)?;
-        w.write_all(&(self.bin_len as u32).to_le_bytes())?;
-        w.write_all(&CHUNK_BIN.to_le_bytes())?;
+        self.write_prefix(w)?;
         for p in vertices.positions() {
             vec3(w, p)?;
         }
@@ -297,6 +480,35 @@ impl GlbHeader {
         }
         Ok(())
     }
+
+    /// The file up to the binary chunk's data: the header, the JSON chunk, the binary
+    /// chunk's header.
+    fn write_prefix(&self, w: &mut impl std::io::Write) -> std::io::Result<()> {
+        w.write_all(GLB_MAGIC)?;
+        w.write_all(&2u32.to_le_bytes())?;
+        w.write_all(&self.total.to_le_bytes())?;
+        w.write_all(&(self.json.len() as u32).to_le_bytes())?;
+        w.write_all(&CHUNK_JSON.to_le_bytes())?;
+        w.write_all(&self.json)?;
+        w.write_all(&(self.bin_len as u32).to_le_bytes())?;
+        w.write_all(&CHUNK_BIN.to_le_bytes())
+    }
+}
+
+/// `v` as three little-endian f32s.
+fn vec3(w: &mut dyn std::io::Write, v: Vec3) -> std::io::Result<()> {
+    let mut bytes = [0u8; 12];
+    for (chunk, x) in bytes.chunks_exact_mut(4).zip(v.to_array()) {
+        chunk.copy_from_slice(&x.to_le_bytes());
+    }
+    w.write_all(&bytes)
+}
+
+/// The vertex attributes a file has besides positions.
+#[derive(Clone, Copy, Debug)]
+struct Attributes {
+    normals: bool,
+    texcoords: bool,
 }
 
 #[cfg(test)]

@@ -58,7 +58,9 @@ use subdiv_mesh::{BuildOptions, Mesh, PolygonSoup};
 
 pub use crate::atomic::remove_temporary_files;
 pub use crate::error::IoError;
-pub use crate::glb::{GlbMesh, MIN_GLB_EXTENT, check_glb_positions, encode_glb, write_glb, write_glb_interleaved};
+pub use crate::glb::{
+    GlbMesh, GlbWriter, MIN_GLB_EXTENT, check_glb_positions, encode_glb, write_glb, write_glb_interleaved,
+};
 pub use crate::gltf::{GltfOptions, load_gltf, load_gltf_with, parse_gltf, parse_gltf_with};
 pub use crate::obj::{ObjFile, ObjLines, load_obj, read_obj, write_obj, write_obj_to};
 

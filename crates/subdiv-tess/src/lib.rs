@@ -74,5 +74,5 @@ pub use flatness::Tolerance;
 pub use mesh::{SurfaceParameter, TessChannels, TessMesh};
 pub use normal::unit_normal;
 pub use quadtree::{FaceCurvature, QuadtreeOptions, QuadtreeStats, QuadtreeTessellator};
-pub use sink::{BuffersBuilder, TessCounts, TessSink, TessTriangle, TessVertex, VertexBuffers};
+pub use sink::{BuffersBuilder, FlatStream, TessCounts, TessSink, TessTriangle, TessVertex, VertexBuffers};
 pub use subdiv_mesh::Parallelism;

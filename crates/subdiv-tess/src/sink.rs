@@ -280,6 +280,95 @@ impl TessSink for FlatMesh {
     }
 }
 
+/// Receives a flat tessellation in chunks, as [`DualTessellator::tessellate_stream`] makes
+/// it: [`begin`](Self::begin) with the number of flat vertices, then chunks of vertices and of
+/// triangles (each kind in increasing order, without gaps; the two kinds interleaved), then
+/// [`end`](Self::end) with the counts. The bytes are those of a [`FlatMesh`]: `px py pz nx ny
+/// nz` in f32 per flat vertex (the vertices, then one per extra normal), `s t` per vertex if
+/// the tessellation has texture coordinates, three `u32` indices per triangle. A sink that
+/// writes a file keeps its first error and ignores the rest (as `std::fmt::Write`'s adapter
+/// over `std::io::Write` does); its caller asks it after the call.
+///
+/// ```
+/// use subdiv_mesh::{shapes, Mesh};
+/// use subdiv_schemes::Builtin;
+/// use subdiv_tess::{DualOptions, DualTessellator, FlatMesh};
+///
+/// let mesh = Mesh::build(shapes::ngon_prism(5))?;
+/// let options = DualOptions::DEFAULT.with_chunk(64); // tiny chunks, for the example
+/// let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &options)?;
+/// let rates = vec![4; mesh.face_count()];
+/// let (mut streamed, mut whole) = (FlatMesh::default(), FlatMesh::default());
+/// tess.tessellate_stream(&rates, &mut streamed)?;
+/// tess.tessellate_flat(&rates, &mut whole)?;
+/// assert_eq!(streamed, whole);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+///
+/// [`DualTessellator::tessellate_stream`]: crate::DualTessellator::tessellate_stream
+pub trait FlatStream {
+    /// Called first, once: the number of flat vertices to come, and whether they have
+    /// texture coordinates.
+    fn begin(&mut self, vertices: usize, texcoords: bool);
+
+    /// Flat vertices `first..first + vertices.len() / 6`, six values each, with their texture
+    /// coordinates (two each; empty without).
+    fn vertices(&mut self, first: usize, vertices: &[f32], texcoords: &[f32]);
+
+    /// Triangles `first..first + indices.len() / 3`: three indices into the flat vertices
+    /// each, counter-clockwise.
+    fn triangles(&mut self, first: usize, indices: &[u32]);
+
+    /// Called last, once, with the numbers of flat vertices and triangles.
+    fn end(&mut self, vertices: usize, triangles: usize);
+}
+
+/// The chunks appended: the same buffers as [`DualTessellator::tessellate_flat`]'s.
+///
+/// [`DualTessellator::tessellate_flat`]: crate::DualTessellator::tessellate_flat
+impl FlatStream for FlatMesh {
+    fn begin(&mut self, vertices: usize, texcoords: bool) {
+        self.vertices.clear();
+        self.vertices.reserve(6 * vertices);
+        self.texcoords.clear();
+        if texcoords {
+            self.texcoords.reserve(2 * vertices);
+        }
+        self.indices.clear();
+    }
+
+    fn vertices(&mut self, first: usize, vertices: &[f32], texcoords: &[f32]) {
+        debug_assert_eq!(6 * first, self.vertices.len(), "vertex chunks in order");
+        self.vertices.extend_from_slice(vertices);
+        self.texcoords.extend_from_slice(texcoords);
+    }
+
+    fn triangles(&mut self, first: usize, indices: &[u32]) {
+        debug_assert_eq!(3 * first, self.indices.len(), "triangle chunks in order");
+        self.indices.extend_from_slice(indices);
+    }
+
+    fn end(&mut self, _: usize, _: usize) {}
+}
+
+impl<S: FlatStream + ?Sized> FlatStream for &mut S {
+    fn begin(&mut self, vertices: usize, texcoords: bool) {
+        (**self).begin(vertices, texcoords);
+    }
+
+    fn vertices(&mut self, first: usize, vertices: &[f32], texcoords: &[f32]) {
+        (**self).vertices(first, vertices, texcoords);
+    }
+
+    fn triangles(&mut self, first: usize, indices: &[u32]) {
+        (**self).triangles(first, indices);
+    }
+
+    fn end(&mut self, vertices: usize, triangles: usize) {
+        (**self).end(vertices, triangles);
+    }
+}
+
 /// Vertices of the caller's type and `u32` triangle indices (three per triangle), filled by
 /// a [`BuffersBuilder`]: lyon's `VertexBuffers`.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]

@@ -12,7 +12,7 @@ use std::collections::HashMap;
 use glam::DVec3;
 use proptest::prelude::*;
 use subdiv_mesh::{FaceId, Mesh, PolygonSoup, shapes};
-use subdiv_schemes::{Builtin, RefineOptions};
+use subdiv_schemes::{Builtin, RefineOptions, Split};
 use subdiv_stencil::LimitEvaluator;
 use subdiv_tess::check::MeshDistance;
 use subdiv_tess::dual::{MAX_DUAL_RING_DEPTH, predicted_vertex_count_with_rings};
@@ -161,7 +161,7 @@ fn ring_checks(mesh: &Mesh, rates: &[u32], rings: &RingDepths, deep: bool) -> Te
     };
     assert!(border.is_empty(), "{} border edges on a closed mesh", border.len());
     assert_eq!(euler(&out), input_euler(mesh));
-    assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(mesh, false, rates, rings));
+    assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(mesh, Split::Quad, rates, rings));
     let evaluator = LimitEvaluator::new(Builtin::CatmullClark.scheme(), mesh, &RefineOptions::DEFAULT).unwrap();
     let d = diagonal(mesh);
     let mut worst: f64 = 0.0;
@@ -320,7 +320,7 @@ fn rings_keep_borders_on_the_border() {
             let out = tessellate_rings(&mesh, &rates, &rings);
             let border = check(&out);
             assert_eq!(euler(&out), input_euler(&mesh));
-            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, false, &rates, &rings));
+            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, Split::Quad, &rates, &rings));
             let plain = tessellate(Builtin::CatmullClark, &mesh, &rates);
             let key = |m: &TessMesh, v: u32| m.positions[v as usize].to_array().map(f64::to_bits);
             let with: std::collections::HashSet<_> = border.iter().flat_map(|&(a, b)| [a, b]).collect();
@@ -450,7 +450,7 @@ fn loop_rings_are_watertight_and_on_the_surface() {
             let border = check(&out);
             assert_eq!(border.is_empty(), closed, "{name}: {} border edges", border.len());
             assert_eq!(euler(&out), input_euler(&mesh));
-            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, true, &rates, &rings));
+            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, Split::Triangle, &rates, &rings));
             let regular = name == "torus";
             assert_eq!(out.positions.len() == plain.positions.len(), regular, "{name}: rings only where irregular");
             let d = diagonal(&mesh);
@@ -606,7 +606,7 @@ fn graded_grids_are_watertight_smaller_and_within_tolerance() {
             assert_eq!(graded.rings.graded[f.index()].is_some(), ringed, "{name}: face {f:?}");
         }
         let count = |rates: &subdiv_tess::rates::DualRates| {
-            predicted_vertex_count_with_rings(&mesh, false, &rates.faces, &rates.rings)
+            predicted_vertex_count_with_rings(&mesh, Split::Quad, &rates.faces, &rates.rings)
         };
         let (graded_points, uniform_points) = (count(&graded), count(&uniform));
         eprintln!(
@@ -719,7 +719,10 @@ fn rings_on_cut_edges_share_their_points() {
             let out = tess.tessellate_with_rings(&rates, &rings).unwrap().clone();
             assert!(check(&out).is_empty(), "{name}: border edges on a closed mesh");
             assert_eq!(euler(&out), input_euler(&mesh), "{name}");
-            assert_eq!(out.positions.len(), predicted_vertex_count_with_rings(&mesh, triangle, &rates, &rings));
+            assert_eq!(
+                out.positions.len(),
+                predicted_vertex_count_with_rings(&mesh, builtin.scheme().split(), &rates, &rings)
+            );
             let on_surface = |p: &subdiv_tess::SurfaceParameter| {
                 let sum = p.u + p.v;
                 let (u, v) = if triangle && sum > 1.0 - 1e-15 {

@@ -413,7 +413,7 @@ mod tests {
     fn tessellations_past_the_vertex_budget_are_refused_before_the_work() {
         let mut s = surface(shapes::cube());
         // 6 faces at rate 128: the count is predicted, not made.
-        let count = subdiv_tess::dual::predicted_vertex_count(s.mesh(), false, &[128; 6]);
+        let count = subdiv_tess::dual::predicted_vertex_count(s.mesh(), subdiv_schemes::Split::Quad, &[128; 6]);
         let options = TessOptions::DEFAULT.with_rates(Rates::Uniform(128)).with_max_vertices(count - 1);
         let Err(error) = s.tessellate(&options) else { panic!("over the budget") };
         let (requested, limit) = (count as u64, count as u64 - 1);

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use subdiv_io::write_atomic;
 use subdiv_mesh::Mesh;
-use subdiv_schemes::{Scheme, Split};
+use subdiv_schemes::Scheme;
 use subdiv_tess::rates::{Camera, DEFAULT_MAX_RATE, RingDepths};
 use subdiv_tess::{FlatMesh, MAX_DUAL_RATE, Parallelism, QuadtreeStats, TessMesh, Tolerance};
 
@@ -325,10 +325,9 @@ pub fn check_vertex_budget(
     if rates.len() != mesh.face_count() || !rates.iter().all(|r| (1..=MAX_DUAL_RATE).contains(r)) {
         return Ok(());
     }
-    let triangle = scheme.split() == Split::Triangle;
     let vertices = match rings {
-        Some(rings) => subdiv_tess::dual::predicted_vertex_count_with_rings(mesh, triangle, rates, rings),
-        None => subdiv_tess::dual::predicted_vertex_count(mesh, triangle, rates),
+        Some(rings) => subdiv_tess::dual::predicted_vertex_count_with_rings(mesh, scheme.split(), rates, rings),
+        None => subdiv_tess::dual::predicted_vertex_count(mesh, scheme.split(), rates),
     };
     Error::check_budget(
         vertices as u64,

@@ -277,7 +277,11 @@ fn tessellations_carry_exact_texture_coordinates_split_at_seams() {
         let mut split = 0;
         for rates in [Rates::Uniform(3), Rates::Uniform(8), screen] {
             let tessellation = surface.tessellate(&TessOptions { rates, ..TessOptions::DEFAULT }).unwrap();
-            let predicted = subdiv::tess::dual::predicted_vertex_count(&mesh, false, &tessellation.info.rates);
+            let predicted = subdiv::tess::dual::predicted_vertex_count(
+                &mesh,
+                subdiv::schemes::Split::Quad,
+                &tessellation.info.rates,
+            );
             let out = tessellation.into_mesh();
             assert_eq!(out.positions.len(), predicted, "{name}: the budget's count, seams included");
             let coords = out.channels.find(Channel::UV).expect("the texture coordinates are carried");

@@ -131,6 +131,11 @@ impl Channels {
         Ok(())
     }
 
+    /// Whether the evaluated points get texture coordinates (see [`TessChannels::texcoords`]).
+    pub(crate) fn has_texcoords(&self) -> bool {
+        self.names.iter().zip(&self.dimensions).any(|(n, &d)| n == subdiv_mesh::Channel::UV && d >= 2)
+    }
+
     /// The names of the channels, in order.
     pub(crate) fn names(&self) -> &[String] {
         &self.names

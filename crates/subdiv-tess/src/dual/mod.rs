@@ -75,13 +75,13 @@ use subdiv_stencil::FaceDomain;
 
 use self::channels::Channels;
 use self::eval::Evaluator;
-use self::topology::{Builder, BuilderBuffers, Site, Topology};
+use self::topology::{Builder, BuilderBuffers, PackedDomain, Site, Topology};
 use crate::par::{self, Parallelism};
 pub use crate::plan::{
     EvaluationPlan, PlanBicubic, PlanBlock, PlanEntry, PlanError, PlanGeneral, PlanItem, PlanParts, PlanRecord,
 };
 use crate::rates::RingDepths;
-use crate::{SurfaceParameter, TessChannels, TessError, TessMesh, TessSink};
+use crate::{FlatStream, SurfaceParameter, TessChannels, TessError, TessMesh, TessSink};
 
 /// The largest rate [`DualTessellator::tessellate`] takes: a face of `1024²` points, past
 /// which a request is one nobody means (the vertex budgets of the callers, predicted from the
@@ -119,12 +119,27 @@ pub struct DualOptions {
     /// Whether the evaluation and the index writing may use rayon's threads (the output is the
     /// same, bit for bit, either way). Default: [`Parallelism::Rayon`].
     pub parallelism: Parallelism,
+    /// How much [`DualTessellator::tessellate_stream`] builds, evaluates and hands on at a
+    /// time: a chunk closes once it holds this many vertices and triangles together (the
+    /// output is the same, bit for bit, at any size). Default: [`DEFAULT_STREAM_CHUNK`].
+    pub chunk: u32,
 }
 
+/// [`DualOptions::chunk`]'s default: 2^20 vertices and triangles, about 20 MB of flat output
+/// and its topology per chunk, large enough that the threads share every chunk's evaluation
+/// (measured in docs/perf-log.md, 2026-12-06: streaming costs the 1000 × 1000 grid no time at
+/// this size).
+pub const DEFAULT_STREAM_CHUNK: u32 = 1 << 16;
+
 impl DualOptions {
-    /// The defaults: quads listed, [`Parallelism::Rayon`].
-    pub const DEFAULT: Self =
-        Self { quads: true, channels: true, face_varying: None, parallelism: Parallelism::DEFAULT };
+    /// The defaults: quads listed, [`Parallelism::Rayon`], chunks of [`DEFAULT_STREAM_CHUNK`].
+    pub const DEFAULT: Self = Self {
+        quads: true,
+        channels: true,
+        face_varying: None,
+        parallelism: Parallelism::DEFAULT,
+        chunk: DEFAULT_STREAM_CHUNK,
+    };
 
     /// These options with [`quads`](Self::quads) set.
     #[must_use]
@@ -148,6 +163,12 @@ impl DualOptions {
     #[must_use]
     pub const fn with_parallelism(self, parallelism: Parallelism) -> Self {
         Self { parallelism, ..self }
+    }
+
+    /// These options with [`chunk`](Self::chunk) set (at least 1).
+    #[must_use]
+    pub const fn with_chunk(self, chunk: u32) -> Self {
+        Self { chunk: if chunk == 0 { 1 } else { chunk }, ..self }
     }
 }
 
@@ -411,7 +432,7 @@ impl DualTessellator {
         }
         for (face, grid) in rings.graded.iter().enumerate().filter_map(|(f, g)| Some(f).zip(g.as_ref())) {
             let rate = rates.get(face).copied().unwrap_or(0);
-            let reason = match self.evaluator.domains()[face] {
+            let reason = match self.evaluator.domains()[face].get() {
                 Some(FaceDomain::Quad) => grid.fault(rate),
                 // Every sub-face's grid, the same on both axes (the spokes are ladders).
                 Some(FaceDomain::SubFaces { .. }) if grid.axes[0] != grid.axes[1] => {
@@ -581,6 +602,67 @@ impl DualTessellator {
         Ok(())
     }
 
+    /// [`tessellate_flat`](Self::tessellate_flat) in chunks: the topology is built, evaluated
+    /// and handed to `sink` a chunk at a time ([`DualOptions::chunk`]), so that what the call
+    /// holds is the mesh's preparation and one chunk, not the whole output (a file writer
+    /// such as `subdiv-io`'s GLB stream then holds none of it). The sink gets the same bytes as
+    /// [`tessellate_flat`](Self::tessellate_flat)'s buffers: the chunks follow the output's own
+    /// order (the faces' cells, the edges' strips, the vertices' polygons), each point is made
+    /// once and evaluated as in one call (an extra normal's position is its vertex's, bit for
+    /// bit), and the extra normals come last. Returns the numbers of flat vertices and
+    /// triangles.
+    ///
+    /// Afterwards the tessellator holds no tessellation: [`mesh`](Self::mesh) and
+    /// [`rates`](Self::rates) are empty and the animation paths evaluate nothing until the next
+    /// [`tessellate`](Self::tessellate) (a streamed output is not kept).
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate). The sink may then have had some chunks, and gets
+    /// no [`end`](FlatStream::end).
+    pub fn tessellate_stream<S: FlatStream + ?Sized>(
+        &mut self,
+        rates: &[u32],
+        sink: &mut S,
+    ) -> Result<(usize, usize), TessError> {
+        self.check_rates(rates)?;
+        self.rates.clear();
+        self.topology = Topology::default();
+        self.output.clear();
+        let Self { evaluator, builder, channels, channel_values, options, .. } = self;
+        let parallel = options.parallelism.forks();
+        let (levels, domains) = evaluator.shared();
+        let mesh = levels.mesh(0);
+        let vertices = topology::predicted_vertices_cut(mesh, levels.split(), rates, None, Some(&builder.seams)) as u32;
+        let texcoords = channels.has_texcoords();
+        sink.begin(vertices as usize, texcoords);
+        let mut buffers = FlatMesh::default();
+        let mut emit = |t: &mut Topology, first: u32, first_triangle: u32| -> Result<(), TessError> {
+            evaluator.prepare(t, rates, parallel)?;
+            buffers.vertices.resize(6 * t.point_count() as usize, 0.0);
+            evaluator.evaluate_flat(t, parallel, &mut buffers.vertices);
+            channels.evaluate(t, rates, parallel, channel_values)?;
+            channels::write_texcoords(channel_values, &mut buffers.texcoords);
+            write_indices(t, parallel, &mut buffers.indices);
+            // The extra normals' chunk: its vertices were handed on with their chunks.
+            let (skip, at) = if t.triangle_count() == 0 && !t.extra.is_empty() {
+                (t.vertex_count as usize, vertices)
+            } else {
+                (0, first)
+            };
+            let texcoords = buffers.texcoords.get(2 * skip..).unwrap_or_default();
+            sink.vertices(at as usize, &buffers.vertices[6 * skip..], texcoords);
+            sink.triangles(first_triangle as usize, &buffers.indices);
+            Ok(())
+        };
+        let (made, extras, triangles) = builder.stream(mesh, &domains, rates, vertices, options.chunk, &mut emit)?;
+        if made != vertices {
+            return Err(TessError::Internal(format!("{made} vertices made where {vertices} were predicted")));
+        }
+        let flat = (made + extras) as usize;
+        sink.end(flat, triangles as usize);
+        Ok((flat, triangles as usize))
+    }
+
     /// [`tessellate_flat`](Self::tessellate_flat) after its rates' check: the topology, then
     /// its indices beside (on a second thread, for large calls) the preparation and evaluation.
     fn build_flat(&mut self, rates: &[u32], out: &mut FlatMesh) -> Result<(), TessError> {
@@ -717,11 +799,11 @@ pub fn check_cage(expected: usize, positions: &[DVec3]) -> Result<(), TessError>
     Ok(())
 }
 
-/// The number of output vertices the construction makes for `mesh` under a quad (or, with
-/// `triangle`, a triangle) split at `rates`: cells, triangle interiors, N-gon centres, border
-/// points and vertex points (see the module docs). For checks.
-pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usize {
-    topology::predicted_vertices(mesh, triangle, rates, None)
+/// The number of output vertices the construction makes for `mesh` under a scheme of `split` at
+/// `rates`: cells, triangle interiors, N-gon centres, border points and vertex points (see the
+/// module docs). For budgets and checks.
+pub fn predicted_vertex_count(mesh: &Mesh, split: Split, rates: &[u32]) -> usize {
+    topology::predicted_vertices(mesh, split, rates, None)
 }
 
 /// [`predicted_vertex_count`] with `rings` (one depth per vertex and per face, as
@@ -731,9 +813,9 @@ pub fn predicted_vertex_count(mesh: &Mesh, triangle: bool, rates: &[u32]) -> usi
 ///
 /// # Panics
 /// If `rings` does not have one depth per vertex and one per face.
-pub fn predicted_vertex_count_with_rings(mesh: &Mesh, triangle: bool, rates: &[u32], rings: &RingDepths) -> usize {
+pub fn predicted_vertex_count_with_rings(mesh: &Mesh, split: Split, rates: &[u32], rings: &RingDepths) -> usize {
     assert!(rings.vertices.len() == mesh.vertex_count() && rings.centres.len() == mesh.face_count(), "ring depths");
-    topology::predicted_vertices(mesh, triangle, rates, Some(rings))
+    topology::predicted_vertices(mesh, split, rates, Some(rings))
 }
 
 /// A vertex of [`FlatMesh::vertices`]: `px py pz nx ny nz` in f32.
@@ -768,7 +850,7 @@ impl TopologyBuilder {
     fn build(
         &mut self,
         mesh: &Mesh,
-        domains: &[Option<FaceDomain>],
+        domains: &[PackedDomain],
         rates: &[u32],
         rings: Option<&RingDepths>,
         out: &mut Topology,
@@ -777,6 +859,37 @@ impl TopologyBuilder {
         let mut builder = Builder::with_buffers(mesh, &self.seams, self.triangle, self.quads, buffers);
         builder.build(domains, rates, rings, out);
         self.buffers = builder.into_buffers();
+    }
+}
+
+impl TopologyBuilder {
+    /// The topology of `mesh` (level 0) at `rates` (checked) in chunks of at least `chunk`
+    /// vertices and triangles, each to `emit` with its first vertex and triangle in the whole
+    /// output; then, if there are extra normals, their own topology (their vertices, then
+    /// them, no triangles; the first extra normal numbered `vertices`, the predicted vertex
+    /// count). Returns the vertices made, the extra normals and the triangles. No polygons.
+    fn stream<E>(
+        &mut self,
+        mesh: &Mesh,
+        domains: &[PackedDomain],
+        rates: &[u32],
+        vertices: u32,
+        chunk: u32,
+        emit: &mut impl FnMut(&mut Topology, u32, u32) -> Result<(), E>,
+    ) -> Result<(u32, u32, u32), E> {
+        let buffers = std::mem::take(&mut self.buffers);
+        let mut builder = Builder::with_buffers(mesh, &self.seams, self.triangle, false, buffers);
+        let streamed = builder.build_chunks(domains, rates, None, Some(chunk), vertices, &mut *emit).and_then(|()| {
+            let (made, extras, triangles) = builder.finish_chunks(&mut *emit)?;
+            if extras > 0 {
+                let mut t = Topology::default();
+                builder.extra_topology(&mut t);
+                emit(&mut t, made, triangles)?;
+            }
+            Ok((made, extras, triangles))
+        });
+        self.buffers = builder.into_buffers();
+        streamed
     }
 }
 

@@ -115,8 +115,7 @@ pub(crate) fn closed_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) -> Tes
     let border = check(&out);
     assert!(border.is_empty(), "{} border edges on a closed mesh", border.len());
     assert_eq!(euler(&out), input_euler(mesh));
-    let triangle = builtin == Builtin::Loop || builtin == Builtin::Butterfly;
-    assert_eq!(out.positions.len(), predicted_vertex_count(&without_channels(mesh), triangle, rates));
+    assert_eq!(out.positions.len(), predicted_vertex_count(&without_channels(mesh), builtin.scheme().split(), rates));
     out
 }
 
@@ -155,8 +154,7 @@ pub(crate) fn open_checks(builtin: Builtin, mesh: &Mesh, rates: &[u32]) {
     let out = tessellate(builtin, mesh, rates);
     let border = check(&out);
     assert_eq!(euler(&out), input_euler(mesh));
-    let triangle = builtin == Builtin::Loop || builtin == Builtin::Butterfly;
-    assert_eq!(out.positions.len(), predicted_vertex_count(&without_channels(mesh), triangle, rates));
+    assert_eq!(out.positions.len(), predicted_vertex_count(&without_channels(mesh), builtin.scheme().split(), rates));
     let output_loops = loops(&border);
     // The input's border: boundary half-edges and the half-edges of faces next to holes.
     let mut next: HashMap<VertexId, VertexId> = HashMap::new();

@@ -7,8 +7,8 @@ use subdiv_mesh::{FaceId, Mesh};
 use subdiv_schemes::{RefineOptions, Scheme};
 use subdiv_tess::rates::{DualRates, ErrorRates, RingDepths, ScreenError, ScreenSpace};
 use subdiv_tess::{
-    DualOptions, DualTessellator, FlatMesh, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessMesh, TessSink,
-    TessTriangle, TessVertex,
+    DualOptions, DualTessellator, FlatMesh, FlatStream, QuadtreeOptions, QuadtreeTessellator, TessCounts, TessError,
+    TessMesh, TessSink, TessTriangle, TessVertex,
 };
 
 use super::Surface;
@@ -195,6 +195,102 @@ impl Surface {
         self.tessellate_into(options, out)
     }
 
+    /// [`tessellate_flat`](Self::tessellate_flat) into a [`FlatStream`], in chunks where the
+    /// dual tessellator streams (uniform, per-face and screen-space rates: see
+    /// [`DualTessellator::tessellate_stream`]), so that what is held at a time is one chunk of
+    /// the output, not all of it; otherwise (a tolerance's rings, the quadtree) made whole and
+    /// handed on as one chunk. The same bytes either way as
+    /// [`tessellate_flat`](Self::tessellate_flat)'s buffers.
+    /// [`write_glb_stream`](Self::write_glb_stream) puts it in a file.
+    ///
+    /// ```
+    /// use subdiv::mesh::shapes;
+    /// use subdiv::schemes::Builtin;
+    /// use subdiv::{FlatMesh, Surface, TessOptions};
+    ///
+    /// let mut surface = Surface::build(shapes::ngon_prism(5), Builtin::CatmullClark.scheme())?;
+    /// let (mut streamed, mut whole) = (FlatMesh::default(), FlatMesh::default());
+    /// surface.tessellate_stream(&TessOptions::DEFAULT, &mut streamed)?;
+    /// surface.tessellate_flat(&TessOptions::DEFAULT, &mut whole)?;
+    /// assert_eq!(streamed, whole);
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate); the sink may then have had some chunks.
+    pub fn tessellate_stream<S: FlatStream + ?Sized>(
+        &mut self,
+        options: &TessOptions,
+        sink: &mut S,
+    ) -> Result<TessInfo, Error> {
+        let mut flat = FlatMesh::default();
+        let info = if options.method == Method::Dual {
+            let (info, rings, tess) = self.prepared_dual(options)?;
+            match &rings {
+                None => {
+                    tess.tessellate_stream(&info.rates, sink)?;
+                    return Ok(info);
+                }
+                Some(rings) => tess.tessellate_with_rings_into(&info.rates, rings, &mut flat)?,
+            }
+            info
+        } else {
+            self.tessellate_into(options, &mut flat)?
+        };
+        let (vertices, triangles) = (flat.vertices.len() / 6, flat.indices.len() / 3);
+        sink.begin(vertices, !flat.texcoords.is_empty());
+        sink.vertices(0, &flat.vertices, &flat.texcoords);
+        sink.triangles(0, &flat.indices);
+        sink.end(vertices, triangles);
+        Ok(info)
+    }
+
+    /// [`tessellate_stream`](Self::tessellate_stream) into a GLB file at `path`, through
+    /// [`GlbWriter`](subdiv_io::GlbWriter): the file of [`write_flat_glb`](crate::write_flat_glb)
+    /// of [`tessellate_flat`](Self::tessellate_flat)'s buffers, without holding them (a
+    /// 1000 × 1000 grid at rate 2: docs/perf-log.md). Returns how the tessellation was made
+    /// and the numbers of flat vertices and triangles written. The cage's coordinates are the
+    /// caller's to check first ([`check_glb_positions`](subdiv_io::check_glb_positions)): f32
+    /// output can no longer tell a coordinate flushed to 0 from a 0.
+    ///
+    /// ```
+    /// use subdiv::mesh::shapes;
+    /// use subdiv::schemes::Builtin;
+    /// use subdiv::{FlatMesh, Surface, TessOptions};
+    ///
+    /// let mut surface = Surface::build(shapes::cube(), Builtin::CatmullClark.scheme())?;
+    /// let dir = tempfile::tempdir().unwrap();
+    /// let (streamed, whole) = (dir.path().join("streamed.glb"), dir.path().join("whole.glb"));
+    /// let (_, vertices, triangles) = surface.write_glb_stream(&TessOptions::DEFAULT, &streamed)?;
+    /// let mut flat = FlatMesh::default();
+    /// surface.tessellate_flat(&TessOptions::DEFAULT, &mut flat)?;
+    /// subdiv::write_flat_glb(&whole, &flat)?;
+    /// assert_eq!(std::fs::read(streamed).unwrap(), std::fs::read(whole).unwrap());
+    /// assert_eq!((vertices, triangles), (flat.vertices.len() / 6, flat.indices.len() / 3));
+    /// # Ok::<(), subdiv::Error>(())
+    /// ```
+    ///
+    /// # Errors
+    /// As [`tessellate`](Self::tessellate) and [`write_flat_glb`](crate::write_flat_glb);
+    /// `path` is then left as it was.
+    pub fn write_glb_stream(
+        &mut self,
+        options: &TessOptions,
+        path: impl AsRef<std::path::Path>,
+    ) -> Result<(TessInfo, usize, usize), Error> {
+        let mut sink =
+            GlbSink { path: path.as_ref(), writer: None, texcoords: Vec::new(), error: None, counts: (0, 0) };
+        let info = self.tessellate_stream(options, &mut sink)?;
+        if let Some(e) = sink.error {
+            return Err(e.into());
+        }
+        let (vertices, triangles) = sink.counts;
+        // Both routes of `tessellate_stream` begin the stream before they succeed.
+        let writer = sink.writer.ok_or_else(|| TessError::Internal("the stream never began".into()))?;
+        writer.finish()?;
+        Ok((info, vertices, triangles))
+    }
+
     /// [`tessellate`](Self::tessellate) into `sink` (the caller's buffers and vertex type, see
     /// [`TessSink`]); polygons go to sinks that want them when [`TessOptions::polygons`] is set.
     /// Returns how the tessellation was made.
@@ -294,6 +390,7 @@ impl Surface {
             parallelism: options.parallelism,
             channels: self.takes_channels(),
             face_varying: self.refine_options.face_varying,
+            ..DualOptions::DEFAULT
         };
         let tess = match self.dual.take() {
             Some(tess) => tess,
@@ -362,5 +459,53 @@ impl<S: TessSink + ?Sized> TessSink for WithoutPolygons<'_, S> {
 
     fn end(&mut self) {
         self.0.end();
+    }
+}
+
+/// A [`FlatStream`] into a [`GlbWriter`](subdiv_io::GlbWriter), made when the stream begins
+/// (it then knows whether there are texture coordinates), keeping the first error.
+struct GlbSink<'a> {
+    path: &'a std::path::Path,
+    writer: Option<subdiv_io::GlbWriter>,
+    /// A chunk's texture coordinates as pairs (the writer's type).
+    texcoords: Vec<glam::Vec2>,
+    error: Option<subdiv_io::IoError>,
+    counts: (usize, usize),
+}
+
+impl GlbSink<'_> {
+    fn write(&mut self, push: impl FnOnce(&mut subdiv_io::GlbWriter, &[glam::Vec2]) -> Result<(), subdiv_io::IoError>) {
+        if self.error.is_some() {
+            return;
+        }
+        if let Some(writer) = &mut self.writer
+            && let Err(e) = push(writer, &self.texcoords)
+        {
+            self.error = Some(e);
+        }
+    }
+}
+
+impl FlatStream for GlbSink<'_> {
+    fn begin(&mut self, _: usize, texcoords: bool) {
+        match subdiv_io::GlbWriter::create(self.path, texcoords) {
+            Ok(writer) => self.writer = Some(writer),
+            Err(e) => self.error = Some(e),
+        }
+    }
+
+    fn vertices(&mut self, _: usize, vertices: &[f32], texcoords: &[f32]) {
+        self.texcoords.clear();
+        self.texcoords.extend(texcoords.chunks_exact(2).map(glam::Vec2::from_slice));
+        let (vertices, _) = vertices.as_chunks::<6>();
+        self.write(|w, texcoords| w.push_vertices(vertices, texcoords));
+    }
+
+    fn triangles(&mut self, _: usize, indices: &[u32]) {
+        self.write(|w, _| w.push_indices(indices));
+    }
+
+    fn end(&mut self, vertices: usize, triangles: usize) {
+        self.counts = (vertices, triangles);
     }
 }

@@ -56,7 +56,7 @@ use subdiv_mesh::{BoundaryInterpolation, FaceId, Mesh};
 use subdiv_schemes::{PatchMatrices, PatchType, RefineOptions, Scheme, Split, Stencils};
 use subdiv_stencil::{Dyadic, FaceDomain, Grid, Layout, PatchLevels, Resolved, StencilEvaluator, StencilTable};
 
-use super::topology::{Block, Topology};
+use super::topology::{Block, PackedDomain, Topology};
 use crate::TessError;
 use crate::plan::{EvaluationPlan, PLAN_BICUBIC, PLAN_BLOCK, PLAN_GENERAL, PlanBicubic, PlanBlock, PlanGeneral};
 use crate::quadtree::{check_bicubic, regular_grid};
@@ -82,10 +82,15 @@ use self::templates::*;
 /// Evaluates the output vertices of a [`Topology`] on one mesh's limit surface.
 #[derive(Debug)]
 pub(crate) struct Evaluator {
-    levels: PatchLevels,
+    /// Shared with a streamed tessellation's topology builder, which reads level 0 while the
+    /// evaluator prepares its chunks.
+    levels: Arc<PatchLevels>,
     faces: Vec<FacePlan>,
-    /// Per input face, its domain (`None`: a hole).
-    domains: Vec<Option<FaceDomain>>,
+    /// The orders of [`FacePlan::Bicubic`] faces' control points: per (shape, frame), the
+    /// patch's points at `(i − 1, j − 1)` in the face's frame, `j * 4 + i`.
+    bicubic_orders: Vec<[u32; 16]>,
+    /// Per input face, its domain (`None`: a hole), packed.
+    domains: Arc<[PackedDomain]>,
     /// The [`Route::BicubicPoint`] vertices in vertex order, with their face and parameter (made once per
     /// tessellation: no site lookups per frame).
     pointwise: Vec<(u32, u32, [f64; 2])>,
@@ -107,7 +112,7 @@ pub(crate) struct Evaluator {
     block_grids: Vec<(u32, u32)>,
     /// Per input face, its type if it has one ([`Self::find_face_types`]), fixed by the mesh;
     /// the types' patches, and each typed face's cage points in its type's order.
-    face_types: Vec<Option<FaceType>>,
+    face_types: FaceTypes,
     face_patches: Vec<FacePatch>,
     face_cage: Vec<u32>,
     /// The templates of (face type, rate), kept across calls (as `OpenSubdiv`'s `Bfr` keeps
@@ -156,19 +161,21 @@ pub(crate) struct Evaluator {
 
 impl Evaluator {
     pub(crate) fn new(scheme: &Scheme, mesh: &Mesh) -> Result<Self, TessError> {
-        let levels = PatchLevels::new(scheme, mesh, &RefineOptions::DEFAULT)?;
+        let levels = Arc::new(PatchLevels::new(scheme, mesh, &RefineOptions::DEFAULT)?);
         let count = levels.level_count();
-        let faces = face_plans(mesh, &levels)?;
+        let (faces, bicubic_orders) = face_plans(mesh, &levels)?;
         let domains = mesh
             .face_ids()
             .map(|f| match faces[f.index()] {
-                FacePlan::Hole => Ok(None),
-                _ => Ok(Some(levels.domain(f)?)),
+                FacePlan::Hole => Ok(PackedDomain::pack(None)),
+                _ => Ok(PackedDomain::pack(Some(levels.domain(f)?))),
             })
-            .collect::<Result<_, TessError>>()?;
+            .collect::<Result<Vec<_>, TessError>>()?
+            .into();
         let mut evaluator = Self {
             levels,
             faces,
+            bicubic_orders,
             domains,
             pointwise: Vec::new(),
             positions: vec![Vec::new(); count],
@@ -180,7 +187,7 @@ impl Evaluator {
             places: Vec::new(),
             patch_grids: Vec::new(),
             block_grids: Vec::new(),
-            face_types: Vec::new(),
+            face_types: FaceTypes::default(),
             face_patches: Vec::new(),
             face_cage: Vec::new(),
             templates: Vec::new(),
@@ -255,8 +262,13 @@ impl Evaluator {
     }
 
     /// The faces' domains, `None` for holes.
-    pub(crate) fn domains(&self) -> &[Option<FaceDomain>] {
+    pub(crate) fn domains(&self) -> &[PackedDomain] {
         &self.domains
+    }
+
+    /// The patch levels and the faces' domains, shared (for a reader beside a mutable borrow).
+    pub(crate) fn shared(&self) -> (Arc<PatchLevels>, Arc<[PackedDomain]>) {
+        (Arc::clone(&self.levels), Arc::clone(&self.domains))
     }
 
     /// Takes a new cage (checked by the caller) and refines it to every level.
@@ -327,10 +339,24 @@ impl Evaluator {
     }
 }
 
+impl Evaluator {
+    /// Face `face`'s bicubic control points in its own frame (cage vertex `cv[j * 4 + i]` at
+    /// `(i − 1, j − 1)`), if it is a [`FacePlan::Bicubic`] face.
+    #[inline]
+    pub(super) fn cv(&self, face: u32) -> Option<[u32; 16]> {
+        let FacePlan::Bicubic { order } = self.faces[face as usize] else { return None };
+        let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(0, FaceId::new(face)) else { return None };
+        let order = &self.bicubic_orders[order as usize];
+        Some(std::array::from_fn(|k| patch.vertices[order[k] as usize].index() as u32))
+    }
+}
+
 /// How each input face is evaluated: holes, bicubic faces (a level-0 patch whose matrices are
-/// a bicubic B-spline's, with its control points in the face's frame) and the others.
-fn face_plans(mesh: &Mesh, levels: &PatchLevels) -> Result<Vec<FacePlan>, TessError> {
+/// a bicubic B-spline's, with its control points in the face's frame) and the others; and the
+/// bicubic faces' orders of control points.
+fn face_plans(mesh: &Mesh, levels: &PatchLevels) -> Result<(Vec<FacePlan>, Vec<[u32; 16]>), TessError> {
     let mut shapes: HashMap<(usize, usize), Option<[usize; 16]>> = HashMap::new();
+    let mut orders: HashMap<[u32; 16], u32> = HashMap::new();
     let mut faces = Vec::with_capacity(mesh.face_count());
     for f in mesh.face_ids() {
         let plan = match levels.resolve(0, f) {
@@ -339,13 +365,15 @@ fn face_plans(mesh: &Mesh, levels: &PatchLevels) -> Result<Vec<FacePlan>, TessEr
                 let key = (Arc::as_ptr(&patch.matrices) as usize, patch.shape);
                 let grid = *shapes.entry(key).or_insert_with(|| bicubic_grid(&patch.matrices, patch.shape));
                 match grid {
-                    Some(grid) => FacePlan::Bicubic {
-                        cv: std::array::from_fn(|k| {
+                    Some(grid) => {
+                        let order: [u32; 16] = std::array::from_fn(|k| {
                             let (i, j) = ((k % 4) as i64, (k / 4) as i64);
                             let p = frame.to_patch(Dyadic::new(i - 1, j - 1, 1));
-                            patch.vertices[grid[(p.v + 1) as usize * 4 + (p.u + 1) as usize]].index() as u32
-                        }),
-                    },
+                            grid[(p.v + 1) as usize * 4 + (p.u + 1) as usize] as u32
+                        });
+                        let next = orders.len() as u32;
+                        FacePlan::Bicubic { order: *orders.entry(order).or_insert(next) }
+                    }
                     None => FacePlan::General,
                 }
             }
@@ -354,5 +382,9 @@ fn face_plans(mesh: &Mesh, levels: &PatchLevels) -> Result<Vec<FacePlan>, TessEr
         };
         faces.push(plan);
     }
-    Ok(faces)
+    let mut list = vec![[0; 16]; orders.len()];
+    for (order, k) in orders {
+        list[k as usize] = order;
+    }
+    Ok((faces, list))
 }

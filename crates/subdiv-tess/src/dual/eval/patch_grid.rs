@@ -76,7 +76,7 @@ impl Evaluator {
             }
             if template == TemplateUse::Make {
                 let template = self.make_template(block, (first, self.patch_grids.len() as u32));
-                let ty = self.face_types[block.face as usize].expect("a typed face");
+                let ty = self.face_types.get(block.face as usize).expect("a typed face");
                 self.template_index.insert(self.template_key(block.face, block.rate, ty), self.templates.len() as u32);
                 self.template_weights += template.weights.len();
                 self.templates.push(template);
@@ -90,7 +90,7 @@ impl Evaluator {
                 self.routes[block.base as usize..(block.base + block.len()) as usize].fill(Route::Template.into());
             }
             if template != TemplateUse::Own {
-                let ty = self.face_types[block.face as usize].expect("a typed face");
+                let ty = self.face_types.get(block.face as usize).expect("a typed face");
                 let t = self.template_index[&self.template_key(block.face, block.rate, ty)];
                 self.block_templates[b] =
                     if template == TemplateUse::Make { TemplateUse::Made(t) } else { TemplateUse::Copied(t) };

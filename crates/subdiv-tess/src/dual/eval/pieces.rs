@@ -206,7 +206,7 @@ impl Evaluator {
             let (start, out) = cut.take(len);
             pieces.push(match template {
                 Some(template) => {
-                    let ty = self.face_types[block.face as usize].expect("a typed face");
+                    let ty = self.face_types.get(block.face as usize).expect("a typed face");
                     let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
                     Piece::Typed { template: &self.templates[template as usize], cage, out }
                 }
@@ -253,11 +253,9 @@ impl Evaluator {
                 for block in blocks {
                     let (mut piece, tail) = out.split(block.len() as usize);
                     out = tail;
-                    let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] else {
-                        unreachable!("a group of bicubic blocks")
-                    };
+                    let Some(cv) = self.cv(block.face) else { unreachable!("a group of bicubic blocks") };
                     let basis = self.bases[block.rate as usize].as_deref().expect("prepared");
-                    grid_block(cv, cage, basis, &mut piece, &mut scratch.pending);
+                    grid_block(&cv, cage, basis, &mut piece, &mut scratch.pending);
                 }
             }
             Piece::Typed { template, cage: ids, mut out } => {
@@ -286,10 +284,8 @@ impl Evaluator {
                                 let (vertex, face, [u, v]) = self.pointwise[next];
                                 debug_assert_eq!(vertex as usize, start + b * BATCH + k);
                                 next += 1;
-                                let FacePlan::Bicubic { cv } = &self.faces[face as usize] else {
-                                    unreachable!("bicubic face")
-                                };
-                                bicubic(cv, cage, u, v)
+                                let Some(cv) = self.cv(face) else { unreachable!("bicubic face") };
+                                bicubic(&cv, cage, u, v)
                             }
                             Route::Record(r) => self.general(&self.records[r as usize]),
                             Route::BlockCell | Route::Template => unreachable!("blocks are pieces of their own"),

@@ -98,9 +98,13 @@ impl TemplateUse {
 /// How an input face is evaluated.
 #[derive(Clone, Copy, Debug)]
 pub(super) enum FacePlan {
-    /// A bicubic B-spline patch: cage vertex `cv[j * 4 + i]` is the control point at
-    /// `(i − 1, j − 1)` in the face's own frame.
-    Bicubic { cv: [u32; 16] },
+    /// A bicubic B-spline patch: its control points in the face's own frame are its level-0
+    /// patch's points in [`Evaluator::bicubic_orders`]`[order]`'s order (see
+    /// [`Evaluator::cv`]; sixteen indices per face were 64 MB of a million-face grid's peak).
+    ///
+    /// [`Evaluator::bicubic_orders`]: super::Evaluator
+    /// [`Evaluator::cv`]: super::Evaluator::cv
+    Bicubic { order: u32 },
     /// Through exact stencils of the patch (on any level) holding each point.
     General,
     /// No surface.

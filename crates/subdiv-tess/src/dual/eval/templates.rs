@@ -31,6 +31,34 @@ pub(super) struct FaceType {
     pub(super) cage: (u32, u32),
 }
 
+/// The typed faces' [`FaceType`]s: per input face an index into them (4 bytes a face, made
+/// only once a face has a type: a mesh of bicubic faces has none; an `Option<FaceType>` per
+/// face was 28 MB of a million-face grid's peak).
+#[derive(Debug, Default)]
+pub(super) struct FaceTypes {
+    index: Vec<u32>,
+    types: Vec<FaceType>,
+}
+
+impl FaceTypes {
+    const NONE: u32 = u32::MAX;
+
+    /// Face `f`'s type, if it has one.
+    #[inline]
+    pub(super) fn get(&self, f: usize) -> Option<FaceType> {
+        self.index.get(f).filter(|&&k| k != Self::NONE).map(|&k| self.types[k as usize])
+    }
+
+    /// Gives face `f` of the mesh's `faces` the type `ty`.
+    fn set(&mut self, faces: usize, f: usize, ty: FaceType) {
+        if self.index.is_empty() {
+            self.index = vec![Self::NONE; faces];
+        }
+        self.index[f] = self.types.len() as u32;
+        self.types.push(ty);
+    }
+}
+
 /// The cell points of one face type at one rate as combinations of the face's cage points:
 /// made by the first face of the type that descends (its records and patch grids, composed
 /// down the refinement levels to the cage, with the chain-rule rows folded in), kept across
@@ -79,7 +107,7 @@ impl Evaluator {
     /// combinations of their own cage points.
     pub(super) fn find_face_types(&mut self) {
         let mesh = self.levels.mesh(0);
-        self.face_types = vec![None; mesh.face_count()];
+        self.face_types = FaceTypes::default();
         if self.levels.split() != Split::Quad {
             return;
         }
@@ -150,11 +178,12 @@ impl Evaluator {
             self.face_patches.extend_from_slice(&patches);
             let cage = self.face_cage.len() as u32;
             self.face_cage.extend(order.iter().map(|&(_, _, x)| x));
-            self.face_types[f.index()] = Some(FaceType {
+            let ty = FaceType {
                 id,
                 patches: (first, self.face_patches.len() as u32),
                 cage: (cage, self.face_cage.len() as u32),
-            });
+            };
+            self.face_types.set(mesh.face_count(), f.index(), ty);
         }
     }
 
@@ -277,7 +306,7 @@ impl Evaluator {
         made.clear();
         let mut budget = MAX_TEMPLATE_WEIGHTS;
         for &(face, rate) in &self.planned {
-            let Some(ty) = self.face_types[face as usize] else { continue };
+            let Some(ty) = self.face_types.get(face as usize) else { continue };
             fits.entry((ty.id, rate)).or_insert_with(|| {
                 let size = template_size(rate, ty.cage.1 - ty.cage.0);
                 let fit = size <= budget;
@@ -288,7 +317,7 @@ impl Evaluator {
             });
         }
         for (b, &(face, rate)) in self.planned.iter().enumerate() {
-            let Some(ty) = self.face_types[face as usize] else { continue };
+            let Some(ty) = self.face_types.get(face as usize) else { continue };
             if !fits[&(ty.id, rate)] {
                 continue;
             }
@@ -371,7 +400,7 @@ impl Evaluator {
     /// each sum in the order of the patch's points, so a face of the same type makes the same
     /// bits.
     pub(super) fn make_template(&self, block: &crate::dual::topology::Block, (first, last): (u32, u32)) -> Template {
-        let ty = self.face_types[block.face as usize].expect("a typed face");
+        let ty = self.face_types.get(block.face as usize).expect("a typed face");
         let patches = &self.face_patches[ty.patches.0 as usize..ty.patches.1 as usize];
         let cage = &self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize];
         let len = cage.len();

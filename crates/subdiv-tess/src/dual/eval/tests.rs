@@ -17,7 +17,7 @@ fn separable_blocks_equal_the_table_route() {
         let count = (n * n) as usize;
         let (mut ps, mut ns) = (vec![DVec3::ZERO; count], vec![DVec3::ZERO; count]);
         for f in mesh.face_ids() {
-            let FacePlan::Bicubic { cv } = ev.faces[f.index()] else { panic!("{f} of a torus is regular") };
+            let Some(cv) = ev.cv(f.index() as u32) else { panic!("{f} of a torus is regular") };
             let Some(Resolved::Patch { patch, frame, .. }) = ev.levels.resolve(0, f) else { panic!("{f}") };
             let table =
                 StencilTable::compute_rates(&patch.matrices, BoundaryInterpolation::EdgeOnly, n..=n).unwrap().remove(0);

@@ -44,9 +44,9 @@ impl Evaluator {
     fn plan_bicubic(&self, topo: &Topology, starts: &[u32], plan: &mut EvaluationPlan) {
         let mut face_patches: HashMap<u32, u32> = HashMap::new();
         for block in &topo.blocks {
-            if let FacePlan::Bicubic { cv } = &self.faces[block.face as usize] {
+            if let Some(cv) = self.cv(block.face) {
                 let at = plan.points.len() as u32;
-                plan.points.extend_from_slice(cv);
+                plan.points.extend_from_slice(&cv);
                 face_patches.insert(block.face, at);
                 let base = block.base as usize;
                 let end = base + (block.rate * block.rate) as usize;
@@ -68,9 +68,9 @@ impl Evaluator {
             }
         }
         for &(v, face, [s, t]) in &self.pointwise {
-            let FacePlan::Bicubic { cv } = &self.faces[face as usize] else { unreachable!("bicubic face") };
+            let Some(cv) = self.cv(face) else { unreachable!("bicubic face") };
             let at = *face_patches.entry(face).or_insert_with(|| {
-                plan.points.extend_from_slice(cv);
+                plan.points.extend_from_slice(&cv);
                 plan.points.len() as u32 - 16
             });
             plan.vertices[v as usize] = crate::plan::pack(PLAN_BICUBIC, plan.bicubic.len());
@@ -86,7 +86,7 @@ impl Evaluator {
         for (block, &t) in topo.blocks.iter().zip(&self.block_templates) {
             let Some(t) = t.template() else { continue };
             let template = &self.templates[t as usize];
-            let ty = self.face_types[block.face as usize].expect("a typed face");
+            let ty = self.face_types.get(block.face as usize).expect("a typed face");
             let points = plan.points.len() as u32;
             plan.points.extend_from_slice(&self.face_cage[ty.cage.0 as usize..ty.cage.1 as usize]);
             let len = (ty.cage.1 - ty.cage.0) as usize;

@@ -64,10 +64,18 @@ pub(super) struct FaceCells {
     base: u32,
     /// Points per side of a cell: `n` for quads and triangles, `⌈n/2⌉` for sub-faces.
     m: u32,
-    /// The face's domain.
-    domain: FaceDomain,
+    /// The face's domain ([`domain`](Self::domain)).
+    domain: PackedDomain,
     /// Whether its grid is graded (a quad's, [`BuilderBuffers::graded`]): explicit sites, no block.
     graded: bool,
+}
+
+impl FaceCells {
+    /// The face's domain.
+    #[inline]
+    fn domain(&self) -> FaceDomain {
+        self.domain.get().unwrap_or(FaceDomain::Quad)
+    }
 }
 
 /// Builds the topology of `mesh` (level 0 of the patch levels, holes tagged) at `rates`.
@@ -79,6 +87,9 @@ pub(crate) struct Builder<'a> {
     quads: bool,
     pub(super) out: Topology,
     buf: BuilderBuffers,
+    /// The whole output's numbers of `out`'s first vertex and first triangle (`out` is one
+    /// chunk of it: [`build_chunks`](Self::build_chunks)).
+    first: (u32, u32),
 }
 
 /// A border half-edge's border points nearest its origin and nearest its destination (an
@@ -99,8 +110,11 @@ pub(crate) struct BuilderBuffers {
     /// half-edge, since most half-edges are on no border (the arrays were 80 MB of a
     /// million-face grid's peak).
     border: HashMap<u32, Border>,
-    /// The extra normals' sites, in order (appended to the topology's sites at the end).
+    /// The extra normals' sites, in order (appended to the topology's sites at the end), their
+    /// vertices, and those vertices' own sites.
     extra_sites: Vec<Site>,
+    extra_vertices: Vec<u32>,
+    extra_vertex_sites: Vec<Site>,
     row: Vec<RowPoint>,
     other: Vec<RowPoint>,
     ring: Vec<u32>,
@@ -134,7 +148,7 @@ impl<'a> Builder<'a> {
         quads: bool,
         buf: BuilderBuffers,
     ) -> Self {
-        Self { mesh, seams, triangle, quads, out: Topology::default(), buf }
+        Self { mesh, seams, triangle, quads, out: Topology::default(), buf, first: (0, 0) }
     }
 
     /// The buffers, for the next builder of the same mesh.
@@ -146,11 +160,42 @@ impl<'a> Builder<'a> {
     /// caller; rings only under a quad split), reusing `out`'s allocations.
     pub(crate) fn build(
         &mut self,
-        domains: &[Option<FaceDomain>],
+        domains: &[PackedDomain],
         rates: &[u32],
         rings: Option<&RingDepths>,
         out: &mut Topology,
     ) {
+        std::mem::swap(&mut self.out, out);
+        let whole: Result<(), std::convert::Infallible> =
+            self.build_chunks(domains, rates, rings, None, 0, |_, _, _| unreachable!("one chunk"));
+        let Ok(()) = whole;
+        let o = &mut self.out;
+        // The extra normals after every vertex: points `vertex_count..`, their sites after
+        // every vertex's.
+        o.extra_base = o.vertex_count;
+        o.extra.clone_from(&self.buf.extra_vertices);
+        o.sites.extend_from_slice(&self.buf.extra_sites);
+        std::mem::swap(&mut self.out, out);
+    }
+
+    /// [`build`](Self::build) by chunks: whenever the topology being built holds at least
+    /// `chunk` vertices and triangles (`None`: never), it goes to `emit` with the number of its
+    /// first vertex and first triangle in the whole output, and the next chunk starts empty. A
+    /// chunk's vertices are numbered from 0 in its blocks and sites (what the evaluation
+    /// reads), its triangles' corners in the whole output's numbering. The last chunk stays in
+    /// the builder (`build` takes it; [`finish_chunks`](Self::finish_chunks) emits it). The
+    /// extra normals are numbered from `extra_base` on (in chunks: the whole vertex count,
+    /// predicted by the caller) and are not in any chunk: see
+    /// [`extra_topology`](Self::extra_topology).
+    pub(crate) fn build_chunks<E>(
+        &mut self,
+        domains: &[PackedDomain],
+        rates: &[u32],
+        rings: Option<&RingDepths>,
+        chunk: Option<u32>,
+        extra_base: u32,
+        mut emit: impl FnMut(&mut Topology, u32, u32) -> Result<(), E>,
+    ) -> Result<(), E> {
         self.buf.rates.clear();
         self.buf.rates.extend_from_slice(rates);
         match rings {
@@ -162,25 +207,20 @@ impl<'a> Builder<'a> {
                 graded.clear();
             }
         }
-        std::mem::swap(&mut self.out, out);
-        let o = &mut self.out;
-        o.vertex_count = 0;
-        o.sites.clear();
-        o.extra.clear();
-        o.normal_corners.clear();
-        o.blocks.clear();
-        o.runs.clear();
-        o.triangles.clear();
-        o.triangle_faces.clear();
-        o.polygon_offsets.clear();
-        o.polygon_offsets.push(0);
-        o.polygon_vertices.clear();
-        o.polygon_faces.clear();
+        self.first = (0, 0);
+        self.out.extra_base = extra_base;
+        self.clear_chunk();
         self.buf.faces.clear();
         self.buf.border.clear();
         self.buf.extra_sites.clear();
+        self.buf.extra_vertices.clear();
+        self.buf.extra_vertex_sites.clear();
+        let full = |b: &Self| chunk.is_some_and(|c| b.out.vertex_count + b.out.triangle_count() >= c);
         for f in 0..domains.len() {
-            self.face(f, domains[f], rates[f]);
+            self.face(f, domains[f].get(), rates[f]);
+            if full(self) {
+                self.emit_chunk(&mut emit)?;
+            }
         }
         for f in self.mesh.face_ids() {
             if self.buf.faces[f.index()].is_none() {
@@ -189,28 +229,86 @@ impl<'a> Builder<'a> {
             for h in self.mesh.face_half_edges(f) {
                 self.edge(h);
             }
+            if full(self) {
+                self.emit_chunk(&mut emit)?;
+            }
         }
         for v in self.mesh.vertices() {
             self.vertex(v);
+            if full(self) {
+                self.emit_chunk(&mut emit)?;
+            }
         }
-        // The extra normals' sites after every vertex's: they are points `vertex_count..`.
-        self.out.sites.extend_from_slice(&self.buf.extra_sites);
-        std::mem::swap(&mut self.out, out);
+        Ok(())
+    }
+
+    /// Emits the last chunk of [`build_chunks`](Self::build_chunks) (if it holds anything)
+    /// and returns the whole output's vertex count, its extra normals' count and its triangle
+    /// count.
+    pub(crate) fn finish_chunks<E>(
+        &mut self,
+        mut emit: impl FnMut(&mut Topology, u32, u32) -> Result<(), E>,
+    ) -> Result<(u32, u32, u32), E> {
+        if self.out.vertex_count + self.out.triangle_count() > 0 {
+            self.emit_chunk(&mut emit)?;
+        }
+        Ok((self.first.0, self.buf.extra_vertices.len() as u32, self.first.1))
+    }
+
+    /// The extra normals of the last [`build_chunks`](Self::build_chunks) as a topology of
+    /// their own, into `out`: first their vertices (at those vertices' own sites, evaluated as
+    /// the chunks evaluated them, so that each extra normal's position is its vertex's, bit
+    /// for bit), then the extra normals, no triangles.
+    pub(crate) fn extra_topology(&self, out: &mut Topology) {
+        let extras = self.buf.extra_vertices.len() as u32;
+        out.clear();
+        out.vertex_count = extras;
+        out.extra_base = extras;
+        out.sites.extend_from_slice(&self.buf.extra_vertex_sites);
+        out.sites.extend_from_slice(&self.buf.extra_sites);
+        out.extra.extend(0..extras);
+    }
+
+    /// Hands the chunk built so far to `emit` and starts the next one.
+    fn emit_chunk<E>(&mut self, emit: &mut impl FnMut(&mut Topology, u32, u32) -> Result<(), E>) -> Result<(), E> {
+        let (vertices, triangles) = (self.out.vertex_count, self.out.triangle_count());
+        emit(&mut self.out, self.first.0, self.first.1)?;
+        self.first = (self.first.0 + vertices, self.first.1 + triangles);
+        self.clear_chunk();
+        Ok(())
+    }
+
+    /// Empties the topology being built (its allocations kept), but for its extra base.
+    fn clear_chunk(&mut self) {
+        let extra_base = self.out.extra_base;
+        self.out.clear();
+        self.out.extra_base = extra_base;
+    }
+
+    /// The whole output's number of the next vertex made.
+    pub(super) fn next_vertex(&self) -> u32 {
+        self.first.0 + self.out.vertex_count
     }
 
     pub(super) fn push_site(&mut self, face: usize, point: Dyadic) -> u32 {
-        let id = self.out.vertex_count;
+        let id = self.next_vertex();
         self.out.sites.push(Site { face: face as u32, point });
         self.out.vertex_count += 1;
         id
     }
 
     /// A further normal of `vertex` (a crease point seen from another smooth sector around
-    /// it), evaluated at `point` of `face` (a face of that sector); returns its number.
-    pub(super) fn push_extra(&mut self, vertex: u32, face: usize, point: Dyadic) -> u32 {
-        let id = self.out.extra.len() as u32;
+    /// it), evaluated at `point` of `face` (a face of that sector); returns its number. The
+    /// vertex is one of the chunk being built, or (`earlier`) one made before it at that site.
+    pub(super) fn push_extra(&mut self, vertex: u32, face: usize, point: Dyadic, earlier: Option<Site>) -> u32 {
+        let id = self.buf.extra_vertices.len() as u32;
+        let site = match vertex.checked_sub(self.first.0) {
+            Some(local) => self.out.site(local),
+            None => earlier.expect("an earlier chunk's vertex comes with its site"),
+        };
+        self.buf.extra_vertex_sites.push(site);
         self.buf.extra_sites.push(Site { face: face as u32, point });
-        self.out.extra.push(vertex);
+        self.buf.extra_vertices.push(vertex);
         id
     }
 
@@ -289,17 +387,19 @@ impl<'a> Builder<'a> {
             self.buf.faces.push(None);
             return;
         };
-        let base = self.out.vertex_count;
+        let base = self.next_vertex();
         match domain {
             FaceDomain::Quad => {
-                // A graded grid's sites are explicit; a uniform one is a block.
+                // A graded grid's sites are explicit; a uniform one is a block (numbered in
+                // its chunk).
                 let graded = self.graded_grid(f).is_some();
                 if !graded {
                     let sites = self.out.sites.len() as u32;
-                    self.out.blocks.push(Block { face: f as u32, rate: n, base, sites });
+                    let local = self.out.vertex_count;
+                    self.out.blocks.push(Block { face: f as u32, rate: n, base: local, sites });
                 }
                 self.quad_cell(f, domain, None, n);
-                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded }));
+                self.buf.faces.push(Some(FaceCells { base, m: n, domain: PackedDomain::pack(Some(domain)), graded }));
             }
             FaceDomain::SubFaces { size, .. } => {
                 // Graded: the grid's cells per side, `⌈n/2⌉` (checked by the tessellator).
@@ -307,7 +407,12 @@ impl<'a> Builder<'a> {
                 for s in 0..size {
                     self.quad_cell(f, domain, Some(s), m);
                 }
-                self.buf.faces.push(Some(FaceCells { base, m, domain, graded: false }));
+                self.buf.faces.push(Some(FaceCells {
+                    base,
+                    m,
+                    domain: PackedDomain::pack(Some(domain)),
+                    graded: false,
+                }));
                 let cell = |s: usize, i: u32, j: u32| base + (s as u32) * m * m + j * m + i;
                 // Spoke s: sub-face s's side 1 (from the middle of side s to the centre) against
                 // sub-face s + 1's side 2, reversed: equal rates, so quads.
@@ -346,7 +451,12 @@ impl<'a> Builder<'a> {
                         }
                     }
                 }
-                self.buf.faces.push(Some(FaceCells { base, m: n, domain, graded: false }));
+                self.buf.faces.push(Some(FaceCells {
+                    base,
+                    m: n,
+                    domain: PackedDomain::pack(Some(domain)),
+                    graded: false,
+                }));
                 let up = |i: u32, j: u32| base + 2 * n * j - j * j + 2 * i;
                 for j in 1..n {
                     for i in 1..n - j {
@@ -370,7 +480,7 @@ impl<'a> Builder<'a> {
     /// The `m × m` dual points of a quad cell (a whole quad face, or sub-face `sub`) and the
     /// quads between them.
     pub(super) fn quad_cell(&mut self, f: usize, domain: FaceDomain, sub: Option<usize>, m: u32) {
-        let base = self.out.vertex_count;
+        let base = self.next_vertex();
         let q = 2 * i64::from(m);
         // A graded grid (a whole quad's, or every sub-face's of an N-gon), out of the buffers
         // while the sites are pushed.
@@ -399,7 +509,7 @@ impl<'a> Builder<'a> {
     /// [`side_row`](Self::side_row) lists it), if `f` is a whole quad (a block).
     pub(super) fn block_side(&self, f: usize, c: usize) -> Option<(u32, u32, u32)> {
         let cells = self.buf.faces[f].filter(|cells| !cells.graded)?;
-        let FaceDomain::Quad = cells.domain else { return None };
+        let FaceDomain::Quad = cells.domain() else { return None };
         let (start, step) = quad_side(cells.base, cells.m, c);
         Some((start, step, cells.m))
     }
@@ -411,7 +521,7 @@ impl<'a> Builder<'a> {
         let Some(cells) = self.buf.faces[f] else { return };
         let (base, m) = (cells.base, cells.m);
         let m64 = u64::from(m);
-        match cells.domain {
+        match cells.domain() {
             FaceDomain::Quad => {
                 let (start, step) = quad_side(base, m, c);
                 let grid = self.graded_grid(f).filter(|_| cells.graded);
@@ -482,7 +592,7 @@ impl<'a> Builder<'a> {
     pub(super) fn on_side(&self, f: usize, c: usize, num: u64, den: u64) -> Dyadic {
         let (t, d) = (num as i64, den as i64);
         let cells = self.buf.faces[f].expect("a face with a surface");
-        match cells.domain {
+        match cells.domain() {
             FaceDomain::Quad => match c {
                 0 => Dyadic::new(t, 0, d),
                 1 => Dyadic::new(d, t, d),
@@ -496,9 +606,9 @@ impl<'a> Builder<'a> {
             },
             FaceDomain::SubFaces { size, .. } => {
                 if 2 * t < d {
-                    cells.domain.from_sub_face(c, Dyadic::new(2 * t, 0, d))
+                    cells.domain().from_sub_face(c, Dyadic::new(2 * t, 0, d))
                 } else {
-                    cells.domain.from_sub_face((c + 1) % size, Dyadic::new(0, 2 * (d - t), d))
+                    cells.domain().from_sub_face((c + 1) % size, Dyadic::new(0, 2 * (d - t), d))
                 }
             }
         }
@@ -508,14 +618,14 @@ impl<'a> Builder<'a> {
     /// The parameter of face `f`'s corner `c`.
     pub(super) fn corner_point(&self, f: usize, c: usize) -> Dyadic {
         let cells = self.buf.faces[f].expect("a face with a surface");
-        match cells.domain {
+        match cells.domain() {
             FaceDomain::Quad => {
                 [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(1, 1, 1), Dyadic::new(0, 1, 1)][c]
             }
             FaceDomain::Triangle | FaceDomain::Ternary => {
                 [Dyadic::new(0, 0, 1), Dyadic::new(1, 0, 1), Dyadic::new(0, 1, 1)][c]
             }
-            FaceDomain::SubFaces { .. } => cells.domain.from_sub_face(c, Dyadic::new(0, 0, 1)).reduced(),
+            FaceDomain::SubFaces { .. } => cells.domain().from_sub_face(c, Dyadic::new(0, 0, 1)).reduced(),
         }
     }
 
@@ -523,7 +633,7 @@ impl<'a> Builder<'a> {
     pub(super) fn corner_vertex(&self, f: usize, c: usize) -> u32 {
         let cells = self.buf.faces[f].expect("a face with a surface");
         let (base, m) = (cells.base, cells.m);
-        match cells.domain {
+        match cells.domain() {
             FaceDomain::Quad => quad_side(base, m, c).0,
             FaceDomain::SubFaces { .. } => base + (c as u32) * m * m,
             FaceDomain::Triangle | FaceDomain::Ternary => {
@@ -607,11 +717,14 @@ impl<'a> Builder<'a> {
                 p.vertex = first + k as u32;
             }
             other.reverse();
+            let tc = self.mesh.corner(t);
             for p in &mut other {
+                // The first side's point, where its vertex was made (perhaps in an earlier chunk).
+                let made = Site { face: g as u32, point: self.on_side(g, tc, p.num, p.den) };
                 p.num = p.den - p.num;
                 // This side's normal there: evaluated in this face, at the same point of the edge.
                 let point = self.on_side(f, c, p.num, p.den);
-                p.extra = Some(self.push_extra(p.vertex, f, point));
+                p.extra = Some(self.push_extra(p.vertex, f, point, Some(made)));
             }
             let (near_dest, near_origin) = self.border(t).points;
             let extra = other.first().zip(other.last()).and_then(|(a, b)| a.extra.zip(b.extra));
@@ -619,7 +732,7 @@ impl<'a> Builder<'a> {
             self.strip(&row, &other, f as u32);
         } else {
             other.clear();
-            let first = self.out.vertex_count;
+            let first = self.next_vertex();
             for p in row.iter().filter(|p| p.near) {
                 let point = self.on_side(f, c, p.num, p.den);
                 let vertex = self.push_site(f, point);
@@ -760,7 +873,7 @@ impl<'a> Builder<'a> {
                     centre = Some(c);
                     Some(Corner::from(c))
                 }
-                Some(c) if !closed => Some(Corner { vertex: c, extra: Some(self.push_extra(c, f0, point)) }),
+                Some(c) if !closed => Some(Corner { vertex: c, extra: Some(self.push_extra(c, f0, point, None)) }),
                 _ => None,
             };
             if closed {

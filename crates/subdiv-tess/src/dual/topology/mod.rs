@@ -29,6 +29,7 @@
 //! [`Topology::write_triangles`]; the others are stored, in the order they are made.
 
 use subdiv_mesh::{FaceId, HalfEdgeId, Mesh, VertexId};
+use subdiv_schemes::Split;
 use subdiv_stencil::{Dyadic, FaceDomain};
 
 use crate::rates::{GRID_DENOMINATOR, GradedGrid, RingDepths, first_ring_depth};
@@ -39,6 +40,50 @@ mod tests;
 
 use self::builder::*;
 pub(crate) use self::builder::{Builder, BuilderBuffers};
+
+/// A face's [`FaceDomain`], or none (a hole), in four bytes: the domains follow from the split
+/// and the face's size ([`FaceDomain::of`]), so an N-gon's is its size (an
+/// `Option<FaceDomain>` per face was 24 bytes, the builder's copy in each face's cells 40 with
+/// them: 64 MB of a million-face grid's peak).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct PackedDomain(u32);
+
+impl PackedDomain {
+    const HOLE: u32 = u32::MAX;
+    const QUAD: u32 = 0;
+    const TRIANGLE: u32 = 1;
+    const TERNARY: u32 = 2;
+
+    /// `domain` packed; an N-gon of `u32::MAX` sides or more (no mesh has one) packs as a hole.
+    pub(crate) fn pack(domain: Option<FaceDomain>) -> Self {
+        Self(match domain {
+            None => Self::HOLE,
+            Some(FaceDomain::Quad) => Self::QUAD,
+            Some(FaceDomain::Triangle) => Self::TRIANGLE,
+            Some(FaceDomain::Ternary) => Self::TERNARY,
+            Some(FaceDomain::SubFaces { size, columns }) => {
+                debug_assert_eq!(
+                    Some(FaceDomain::SubFaces { size, columns }),
+                    FaceDomain::of(subdiv_schemes::Split::Quad, size)
+                );
+                u32::try_from(size).ok().filter(|&s| s != Self::HOLE).unwrap_or(Self::HOLE)
+            }
+        })
+    }
+
+    /// The domain (`None`: a hole).
+    #[inline]
+    pub(crate) fn get(self) -> Option<FaceDomain> {
+        match self.0 {
+            Self::HOLE => None,
+            Self::QUAD => Some(FaceDomain::Quad),
+            Self::TRIANGLE => Some(FaceDomain::Triangle),
+            Self::TERNARY => Some(FaceDomain::Ternary),
+            // Sizes 3 and up (N-gons under a quad split, triangles included): never 0..=2.
+            size => FaceDomain::of(subdiv_schemes::Split::Quad, size as usize),
+        }
+    }
+}
 
 /// An output vertex's place on the surface: the input face that evaluates it and the exact
 /// `Bfr` parameter there.
@@ -188,6 +233,9 @@ pub(crate) struct Topology {
     /// point of an infinitely sharp crease seen from a further smooth sector around it, whose
     /// normal is evaluated at its own site (in a face of that sector).
     pub extra: Vec<u32>,
+    /// The number the triangles' corners give extra normal 0: `vertex_count`, but in a chunk
+    /// of a streamed output, whose extra normals come after the whole output's vertices.
+    pub extra_base: u32,
     /// The explicit triangles' corners that take an extra normal instead of their vertex's.
     pub normal_corners: Vec<NormalCorner>,
     pub blocks: Vec<Block>,
@@ -242,6 +290,23 @@ enum RingCorner {
 }
 
 impl Topology {
+    /// Empties it, keeping its allocations.
+    pub(crate) fn clear(&mut self) {
+        self.vertex_count = 0;
+        self.extra_base = 0;
+        self.sites.clear();
+        self.extra.clear();
+        self.normal_corners.clear();
+        self.blocks.clear();
+        self.runs.clear();
+        self.triangles.clear();
+        self.triangle_faces.clear();
+        self.polygon_offsets.clear();
+        self.polygon_offsets.push(0);
+        self.polygon_vertices.clear();
+        self.polygon_faces.clear();
+    }
+
     /// The number of evaluated points: the vertices, then the extra normals (each evaluated at
     /// its own site; its position is its vertex's up to rounding).
     pub(crate) fn point_count(&self) -> u32 {
@@ -306,7 +371,7 @@ impl Topology {
                 let r = &self.runs[k];
                 r.first + r.triangles() - r.explicit
             });
-            out[3 * (before + c.triangle) as usize + c.corner as usize] = self.vertex_count + c.extra;
+            out[3 * (before + c.triangle) as usize + c.corner as usize] = self.extra_base + c.extra;
         }
     }
 
@@ -386,7 +451,23 @@ fn write_runs<T: Copy + Send + Sync>(
 /// The number of output vertices at `rates`, from the construction's counts (for tests and for
 /// sizing): cells, triangle interiors, N-gon centres, border points (boundaries, holes,
 /// infinitely sharp edges and the seams of the mesh's channels), vertex points.
-pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rings: Option<&RingDepths>) -> usize {
+pub(crate) fn predicted_vertices(mesh: &Mesh, split: Split, rates: &[u32], rings: Option<&RingDepths>) -> usize {
+    predicted_vertices_cut(mesh, split, rates, rings, None)
+}
+
+/// [`predicted_vertices`] with the channel seams the builder cuts (per edge, as
+/// [`Builder::with_buffers`] takes them), or (`None`) those of every channel of the mesh.
+pub(crate) fn predicted_vertices_cut(
+    mesh: &Mesh,
+    split: Split,
+    rates: &[u32],
+    rings: Option<&RingDepths>,
+    seams: Option<&[bool]>,
+) -> usize {
+    // The vertex rules are a triangle split's under Loop's split alone (the builder's
+    // `triangle`); √3's faces are triangle cells too (`FaceDomain::Ternary`).
+    let triangle = split == Split::Triangle;
+    let triangle_cells = matches!(split, Split::Triangle | Split::Sqrt3);
     let hole = |f: FaceId| mesh.is_hole(f);
     let rate_of = |f: FaceId| rates[f.index()] as usize;
     let no_rings = RingDepths::default();
@@ -395,13 +476,16 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
     // the mesh's channels (carried by default).
     let cut = |h: HalfEdgeId| {
         let e = mesh.edge(h);
-        mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP
-            || mesh.channels().iter().any(|c| mesh.is_seam(c, e))
+        let seam = match seams {
+            Some(seams) => seams.get(e.index()).copied().unwrap_or(false),
+            None => mesh.channels().iter().any(|c| mesh.is_seam(c, e)),
+        };
+        mesh.edge_sharpness(e) >= subdiv_mesh::Tags::INFINITELY_SHARP || seam
     };
     let mut count = 0;
     for f in mesh.face_ids().filter(|&f| !hole(f)) {
         let (n, size) = (rate_of(f), mesh.face_size(f));
-        count += if triangle {
+        count += if triangle_cells {
             n * n + (n.saturating_sub(1) * n.saturating_sub(2)) / 2
         } else if size == 4 {
             n * n
@@ -424,7 +508,7 @@ pub(crate) fn predicted_vertices(mesh: &Mesh, triangle: bool, rates: &[u32], rin
                 Some(t) => hole(mesh.face(t)) || (cut(h) && h.index() < t.index()),
             };
             if first {
-                count += if triangle || size == 4 { n } else { 2 * n.div_ceil(2) };
+                count += if triangle_cells || size == 4 { n } else { 2 * n.div_ceil(2) };
             }
         }
     }

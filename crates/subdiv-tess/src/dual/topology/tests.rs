@@ -40,12 +40,12 @@ fn block_sites_are_implicit() {
         let mesh = Mesh::build(soup).unwrap();
         let domains: Vec<_> = mesh
             .face_ids()
-            .map(|f| Some(FaceDomain::of(subdiv_schemes::Split::Quad, mesh.face_size(f)).unwrap()))
+            .map(|f| PackedDomain::pack(FaceDomain::of(subdiv_schemes::Split::Quad, mesh.face_size(f))))
             .collect();
         let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 1 + f % 4).collect();
         let mut out = Topology::default();
         Builder::new(&mesh, false, false).build(&domains, &rates, None, &mut out);
-        assert_eq!(out.vertex_count as usize, predicted_vertices(&mesh, false, &rates, None));
+        assert_eq!(out.vertex_count as usize, predicted_vertices(&mesh, Split::Quad, &rates, None));
         let mut walked = Vec::new();
         out.for_each_site(|s| walked.push(s));
         assert_eq!(walked.len(), out.vertex_count as usize);
@@ -82,7 +82,7 @@ fn runs_are_written_in_place() {
         let mesh = Mesh::build(soup).unwrap();
         let domains: Vec<_> = mesh
             .face_ids()
-            .map(|f| Some(FaceDomain::of(subdiv_schemes::Split::Quad, mesh.face_size(f)).unwrap()))
+            .map(|f| PackedDomain::pack(FaceDomain::of(subdiv_schemes::Split::Quad, mesh.face_size(f))))
             .collect();
         let rates: Vec<u32> = (0..mesh.face_count() as u32).map(|f| 60 + 9 * (f % 5)).collect();
         let mut out = Topology::default();
@@ -122,13 +122,27 @@ fn runs_are_written_in_place() {
 #[test]
 fn triangle_cells_follow_the_dual_grid_order() {
     let mesh = Mesh::build(shapes::icosahedron()).unwrap();
-    let domains = vec![Some(FaceDomain::Triangle); mesh.face_count()];
+    let domains = vec![PackedDomain::pack(Some(FaceDomain::Triangle)); mesh.face_count()];
     for n in [1, 2, 3, 7] {
         let mut out = Topology::default();
         Builder::new(&mesh, true, false).build(&domains, &vec![n; mesh.face_count()], None, &mut out);
         let dual = Grid::Dual.points(3, n);
         let face0: Vec<Dyadic> = out.sites.iter().take(dual.len()).map(|s| s.point).collect();
         assert_eq!(face0, dual, "rate {n}");
-        assert_eq!(out.vertex_count as usize, predicted_vertices(&mesh, true, &vec![n; mesh.face_count()], None));
+        assert_eq!(
+            out.vertex_count as usize,
+            predicted_vertices(&mesh, Split::Triangle, &vec![n; mesh.face_count()], None)
+        );
     }
+}
+
+/// Every domain packs into four bytes and back, holes too.
+#[test]
+fn domains_pack_and_unpack() {
+    let mut domains = vec![None, Some(FaceDomain::Quad), Some(FaceDomain::Triangle), Some(FaceDomain::Ternary)];
+    domains.extend([3, 5, 8, 9, 10, 1000].map(|n| FaceDomain::of(subdiv_schemes::Split::Quad, n)));
+    for d in domains {
+        assert_eq!(PackedDomain::pack(d).get(), d);
+    }
+    assert_eq!(std::mem::size_of::<PackedDomain>(), 4);
 }

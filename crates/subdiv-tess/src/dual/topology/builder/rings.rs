@@ -35,7 +35,7 @@ impl Builder<'_> {
     /// coordinates, which are twice the face units (a sub-face is a quarter of the face); a
     /// triangle's turned to the corner (`s` along side `c`, `t` along side `c − 1` reversed).
     pub(in crate::dual::topology) fn ring_point(&self, corner: RingCorner, a: i64, b: i64, e: u32) -> Dyadic {
-        let domain = self.buf.faces[corner.face()].expect("a face with a surface").domain;
+        let domain = self.buf.faces[corner.face()].expect("a face with a surface").domain();
         match corner {
             RingCorner::Vertex { corner: c, .. } => match domain {
                 FaceDomain::SubFaces { .. } => domain.from_sub_face(c as usize, Dyadic::new(a, b, 1 << (e - 1))),
@@ -93,7 +93,7 @@ impl Builder<'_> {
         let n = corners.len() as u32;
         let first = first_ring_depth(self.triangle, finest);
         let count = ring_count(first, depth);
-        let base = self.out.vertex_count;
+        let base = self.next_vertex();
         let RingFrame { edge, inner, shift, .. } = self.ring_frame();
         for j in 0..count {
             for &c in corners {
@@ -184,7 +184,7 @@ impl Builder<'_> {
             points.push(self.run_point(last.face(), on_last, ends[1].shared, j));
         }
         let p = match *centre {
-            Some(c) => Corner { vertex: c, extra: Some(self.push_extra(c, point.0, point.1)) },
+            Some(c) => Corner { vertex: c, extra: Some(self.push_extra(c, point.0, point.1, None)) },
             None => {
                 let c = self.push_site(point.0, point.1);
                 *centre = Some(c);
@@ -217,7 +217,7 @@ impl Builder<'_> {
     fn run_point(&mut self, face: usize, site: Dyadic, shared: Option<u32>, j: u32) -> Corner {
         let Some(edge) = shared else { return Corner::from(self.push_site(face, site)) };
         match self.buf.cut_ring_points.get(&edge).and_then(|made| made.get(j as usize)).copied() {
-            Some(vertex) => Corner { vertex, extra: Some(self.push_extra(vertex, face, site)) },
+            Some(vertex) => Corner { vertex, extra: Some(self.push_extra(vertex, face, site, None)) },
             None => {
                 let vertex = self.push_site(face, site);
                 self.buf.cut_ring_points.entry(edge).or_default().push(vertex);
