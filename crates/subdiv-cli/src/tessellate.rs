@@ -74,7 +74,7 @@ pub(crate) struct TessellateArgs {
     #[arg(long, value_name = "N", default_value_t = DEFAULT_MAX_RATE)]
     max_rate: u32,
     /// The most vertices the output may have (the dual method's count is known from the rates
-    /// before any work; the quadtree stops at half this many polygons).
+    /// before any work; the quadtree, with twice the memory per vertex, stops at a quarter this many polygons).
     #[arg(long, value_name = "N", default_value_t = subdiv::DEFAULT_MAX_TESS_VERTICES)]
     max_vertices: usize,
     /// OBJ only: write polygons — the dual tessellation's quads (triangles where there are

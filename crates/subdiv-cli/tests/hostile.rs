@@ -54,14 +54,14 @@ fn eval_grids_past_the_point_budget_are_refused() {
 
 #[test]
 fn tessellations_past_the_vertex_budget_are_refused() {
-    // 900 quads at rate 128 (an allowed rate): 14.9 million vertices, aborted on memory
-    // (a 300 × 300 grid at that rate used 6 GB before the abort).
+    // 900 quads at rate 256 (an allowed rate): 59 million vertices, aborted on memory (a
+    // 300 × 300 grid at rate 128 used 6 GB before the abort, when the budget was new).
     let (dir, grid) = grid_obj(30);
     let out = dir.path().join("out.glb");
     let out = out.to_str().unwrap();
     refused(
-        &["tessellate", &grid, "--rate", "128", "-o", out],
-        &["grid.obj", "vertices", "limit of 8388608", "--max-vertices"],
+        &["tessellate", &grid, "--rate", "256", "-o", out],
+        &["grid.obj", "vertices", "limit of 16777216", "--max-vertices"],
     );
     refused(
         &["tessellate", &grid, "--rate", "2", "--max-vertices", "100", "-o", out],

@@ -316,6 +316,22 @@ fn pipeline_from(u: &mut Unstructured<'_>) -> arbitrary::Result<String> {
             assert!(part.mesh.triangles.len() <= whole.mesh.triangles.len());
         }
         outcome += &format!("; {}", label("part", &part));
+        // Streamed in chunks of a drawn size: the flat tessellation's bytes (no rings: a
+        // tolerance's tessellation is handed on whole).
+        if whole.info.epsilon.is_none() {
+            let chunk = u.int_in_range(1..=4096)?;
+            let options = subdiv::tess::DualOptions::DEFAULT.with_chunk(chunk).with_channels(surface.takes_channels());
+            if let Ok(mut tess) = subdiv::tess::DualTessellator::new(surface.scheme(), surface.mesh(), &options) {
+                let (mut flat, mut streamed) = (subdiv::FlatMesh::default(), subdiv::FlatMesh::default());
+                let made = tess.tessellate_flat(&whole.info.rates, &mut flat);
+                let stream = tess.tessellate_stream(&whole.info.rates, &mut streamed);
+                assert_eq!(made.is_ok(), stream.is_ok(), "the stream fails where the flat tessellation does not");
+                assert!(
+                    made.is_err() || flat == streamed,
+                    "the stream in chunks of {chunk} is not the flat tessellation"
+                );
+            }
+        }
     }
     outcome += &format!("; {}", label("grid", &surface.evaluate_grid(u.int_in_range(1..=4)?)));
     Ok(outcome)
@@ -325,7 +341,7 @@ fn pipeline_from(u: &mut Unstructured<'_>) -> arbitrary::Result<String> {
 const PART_CHECK_VERTICES: usize = 20_000;
 
 /// The most vertices a pipeline input's tessellation may have: past it the budget refuses. A
-/// quadtree whose prediction stays under it may grow to half as many polygons before it
+/// quadtree whose prediction stays under it may grow to a quarter as many polygons before it
 /// refuses, each node bounded from samples: 200 000 let a mid-edge cage run past the debug
 /// pass's 10 s (0.49 s in release; reproducer `pipeline/1e59d5ccef79792d`).
 const PIPELINE_MAX_VERTICES: usize = 50_000;

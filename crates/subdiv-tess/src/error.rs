@@ -68,7 +68,7 @@ pub enum TessError {
     #[error(
         "at least {needed} polygons (about twice as many vertices) needed for {bound}, more than the limit \
          {limit}; raise the tolerance or the limit (QuadtreeOptions::max_polygons; TessOptions::max_vertices, \
-         `subdiv tessellate --max-vertices`, allow half as many polygons as vertices)"
+         `subdiv tessellate --max-vertices`, allow a quarter as many polygons as vertices)"
     )]
     TooManyPolygons {
         /// A lower bound on the polygons needed: predicted before the work (usually), or the

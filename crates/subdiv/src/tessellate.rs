@@ -111,19 +111,21 @@ pub struct TessOptions {
     pub parallelism: Parallelism,
     /// The most output vertices a tessellation may make: the dual method's count is predicted
     /// from the rates before anything is allocated ([`Error::Budget`]); the quadtree, whose
-    /// count shows only as it refines, stops at half this many polygons (a leaf brings about
-    /// two vertices with the hanging ones:
+    /// count shows only as it refines and which holds twice the memory per vertex, stops at a
+    /// quarter this many polygons (a leaf brings about two vertices with the hanging ones:
     /// [`TessError::TooManyPolygons`](subdiv_tess::TessError::TooManyPolygons)). Default:
     /// [`DEFAULT_MAX_TESS_VERTICES`].
     pub max_vertices: usize,
 }
 
-/// [`TessOptions::max_vertices`]' default: 2^23 ≈ 8.4 million vertices, about 17 million
-/// triangles (a 1400 × 1400 quad grid at rate 2): 0.4 GB of flat f32 output (48 bytes per
-/// vertex with its two triangles), and a few GB of work on the way, so that a request of a
-/// size nobody means (a rate of 128 on a large mesh, a tolerance of 1e-6 for the quadtree) is
-/// refused instead of exhausting memory. Raise it for larger outputs.
-pub const DEFAULT_MAX_TESS_VERTICES: usize = 1 << 23;
+/// [`TessOptions::max_vertices`]' default: 2^24 ≈ 16.8 million vertices, about 34 million
+/// triangles (a 2000 × 2000 quad grid at rate 2): 0.8 GB of flat f32 output (48 bytes per
+/// vertex with its two triangles), which a GLB file takes streamed
+/// ([`Surface::write_glb_stream`](crate::Surface::write_glb_stream): 1.5 GB peak for that grid)
+/// and a whole [`TessMesh`] in f64 holds at about 200 bytes per vertex (3–4 GB), so that a
+/// request of a size nobody means (a rate of 256 on a large mesh, a tolerance of 1e-6 for the
+/// quadtree) is refused instead of exhausting memory. Raise it for larger outputs.
+pub const DEFAULT_MAX_TESS_VERTICES: usize = 1 << 24;
 
 impl TessOptions {
     /// The defaults: every face at rate 8 by the dual method, triangles only, on rayon's

@@ -338,7 +338,7 @@ impl Surface {
                     .with_tolerance(tolerance)
                     .with_screen(screen)
                     .with_parallelism(options.parallelism)
-                    .with_max_polygons(options.max_vertices / QUADTREE_VERTICES_PER_POLYGON);
+                    .with_max_polygons(options.max_vertices / (QUADTREE_VERTICES_PER_POLYGON * QUADTREE_VERTEX_WEIGHT));
                 let stats = if options.polygons {
                     tess.tessellate_into(&quadtree_options, sink)?
                 } else {
@@ -411,6 +411,13 @@ impl Surface {
 /// vertices it shares (measured: 821,426 vertices for 410,352 leaves on `catmark_cube` at ε =
 /// 1e-5). [`TessOptions::max_vertices`] allows the quadtree this many times fewer polygons.
 const QUADTREE_VERTICES_PER_POLYGON: usize = 2;
+
+/// How many of [`TessOptions::max_vertices`] a quadtree vertex counts for: the quadtree holds
+/// its leaves, its hanging vertices and its whole f64 output, about 420 bytes a vertex
+/// (`catmark_cube` at ε = 1e-6: 12.6 million vertices, 5.3 GB), twice the dual method's whole
+/// f64 output and four times its streamed GLB, so the budget that lets the dual method make
+/// a 2000 × 2000 grid at rate 2 lets the quadtree make half as many vertices.
+const QUADTREE_VERTEX_WEIGHT: usize = 2;
 
 /// The quadtree tessellator in `slot`, made there on first use, carrying the mesh's channels in
 /// face-varying mode `mode` where the scheme has rules for them (as the dual tessellator does).

@@ -146,9 +146,9 @@ pub(crate) struct Evaluator {
     spare: Vec<Chunk>,
     /// [`record_spans`](Self::record_spans)'s buffer.
     spans: Vec<std::ops::Range<usize>>,
-    /// The faces whose cell points may read a dual-grid table (on the general route, resolved
-    /// on level 0 by a patch that [`reads_table`]), fixed by the mesh.
-    table_faces: Vec<FaceId>,
+    /// Per input face, whether its cell points may read a dual-grid table (on the general
+    /// route, resolved on level 0 by a patch that [`reads_table`]), fixed by the mesh.
+    table_faces: Vec<bool>,
     /// Per input face, whether its block reads its type's template in this call (its cell
     /// points then need no table).
     copied: Vec<bool>,
@@ -207,14 +207,14 @@ impl Evaluator {
             spare: Vec::new(),
             spans: Vec::new(),
             table_faces: Vec::new(),
-            copied: Vec::new(),
+            copied: vec![false; mesh.face_count()],
             fits: HashMap::new(),
             made: hashbrown::HashSet::new(),
             planned: Vec::new(),
         };
         evaluator.table_faces = mesh
             .face_ids()
-            .filter(|&f| {
+            .map(|f| {
                 matches!(evaluator.faces[f.index()], FacePlan::General)
                     && matches!(evaluator.levels.resolve(0, f), Some(Resolved::Patch { patch, .. }) if reads_table(patch))
             })
@@ -292,6 +292,11 @@ impl Evaluator {
     /// bicubic faces' rates, and which typed faces read their type's template
     /// ([`plan_copies`](Self::plan_copies)).
     fn plan_blocks(&mut self, topo: &Topology) {
+        // The last call's marks off (a chunk of a streamed tessellation resets its own faces,
+        // not the mesh's).
+        for &(f, _) in &self.planned {
+            self.copied[f as usize] = false;
+        }
         self.planned.clear();
         self.planned.extend(topo.blocks.iter().map(|b| (b.face, b.rate)));
         for &(f, rate) in &self.planned {

@@ -151,13 +151,16 @@ impl Evaluator {
             }
         }
         // The dual-grid tables the level-0 patches' cell points read (but those of faces that
-        // copy a template), first: the chunks below only read them.
-        for &f in &self.table_faces {
-            if self.copied[f.index()] {
+        // copy a template), first: the chunks below only read them. The faces of this topology
+        // only (a chunk of a streamed tessellation is not the mesh), each once per run of its
+        // points.
+        let mut last = None;
+        for f in topo.blocks.iter().map(|b| b.face).chain(topo.sites.iter().map(|s| s.face)) {
+            if last.replace(f) == Some(f) || !self.table_faces[f as usize] || self.copied[f as usize] {
                 continue;
             }
-            if let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(0, f) {
-                ensure_table(&mut self.tables, patch, rates[f.index()])?;
+            if let Some(Resolved::Patch { patch, .. }) = self.levels.resolve(0, FaceId::new(f)) {
+                ensure_table(&mut self.tables, patch, rates[f as usize])?;
             }
         }
         // Stencil records by chunks of vertices, in parallel; each chunk borrows a set of

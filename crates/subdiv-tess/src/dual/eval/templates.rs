@@ -290,8 +290,6 @@ impl Evaluator {
     /// rates only (not on the templates kept), so a face's bits do too.
     pub(super) fn plan_copies(&mut self) {
         let blocks = self.planned.len();
-        self.copied.clear();
-        self.copied.resize(self.faces.len(), false);
         self.block_templates.clear();
         self.block_templates.resize(blocks, TemplateUse::Own);
         if !self.typed_faces {
