@@ -78,7 +78,7 @@ fn tessellations_past_the_vertex_budget_are_refused() {
     let cube = cube.to_str().unwrap();
     refused(
         &["tessellate", cube, "--method", "quadtree", "--tolerance", "1e-6", "--max-vertices", "20000", "-o", out],
-        &["cube.obj", "at least", "more than the limit 10000", "--max-vertices"],
+        &["cube.obj", "at least", "more than the limit 5000", "--max-vertices"],
     );
 }
 
