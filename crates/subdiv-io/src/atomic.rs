@@ -140,7 +140,7 @@ impl Drop for Scratch {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     /// Held by every test that writes a file, as `remove_temporary_files` removes every writer's.

@@ -549,4 +549,45 @@ mod tests {
         let error = check_glb_positions([extent, glam::DVec3::Y * 2f64.powi(-105)]).unwrap_err().to_string();
         assert!(error.contains("vertex 1") && error.contains("scale the mesh up"), "{error}");
     }
+
+    /// The streaming writer refuses what the whole writer refuses, names it, and leaves neither
+    /// the target nor a scratch file behind.
+    #[test]
+    fn a_glb_written_in_chunks_is_refused_as_a_whole_one_and_leaves_nothing() {
+        let _writing = crate::atomic::tests::WRITING.lock().unwrap_or_else(std::sync::PoisonError::into_inner);
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.glb");
+        let v = |x: f32| [x, 0.0, 0.0, 0.0, 0.0, 1.0];
+        let refused = |push: &dyn Fn(&mut GlbWriter) -> Result<(), IoError>| {
+            let mut glb = GlbWriter::create(&path, false).unwrap();
+            let error = push(&mut glb).and_then(|()| glb.finish()).unwrap_err().to_string();
+            let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+            assert!(left.is_empty(), "{error}: {left:?} left behind");
+            error
+        };
+        let error =
+            refused(&|w| w.push_vertices(&[v(0.0), v(1.0), v(2.0)], &[]).and_then(|()| w.push_indices(&[0, 1, 3])));
+        assert!(error.contains("index 2 is 3, but there are 3 vertices"), "{error}");
+        let error = refused(&|w| w.push_vertices(&[v(0.0)], &[]));
+        assert!(error.contains("0 indices"), "{error}");
+        let error = refused(&|w| w.push_vertices(&[[0.0, 0.0, 0.0, 0.0, 0.0, 0.0]], &[]));
+        assert!(error.contains("normal 0") && error.contains("no direction"), "{error}");
+        let error = refused(&|w| w.push_vertices(&[v(f32::NAN)], &[]));
+        assert!(error.contains("vertex 0") && error.contains("not finite"), "{error}");
+        let error = refused(&|w| w.push_vertices(&[v(0.0)], &[Vec2::ZERO]));
+        assert!(error.contains("1 texture coordinates for 0 vertices"), "{error}");
+        // Written in chunks, the bytes of the whole writer's file, texture coordinates included.
+        let vertices = [v(0.0), v(1.0), [0.0, 1.0, 0.5, 0.0, 0.0, 2.0]];
+        let texcoords = [Vec2::ZERO, Vec2::X, Vec2::Y];
+        let mut glb = GlbWriter::create(&path, true).unwrap();
+        glb.push_vertices(&vertices[..1], &texcoords[..1]).unwrap();
+        glb.push_indices(&[0]).unwrap();
+        glb.push_vertices(&vertices[1..], &texcoords[1..]).unwrap();
+        glb.push_indices(&[1, 2]).unwrap();
+        glb.finish().unwrap();
+        let streamed = std::fs::read(&path).unwrap();
+        write_glb_interleaved(&path, &vertices, Some(&texcoords), &[0, 1, 2]).unwrap();
+        assert_eq!(streamed, std::fs::read(&path).unwrap());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "the scratch files are gone");
+    }
 }

@@ -109,7 +109,7 @@ pub use error::SchemeError;
 pub use expr::{Expr, ExprError, MAX_FORMULA_DEPTH, MAX_FORMULA_LENGTH};
 pub use limit_mask::LimitMask;
 pub use local_curve::{LocalCurveScheme, LocalRow, MatrixEntry};
-pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches};
+pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches, PatchVertices};
 pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
     ChildDomain, MAX_PATCH_RADIUS, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces,

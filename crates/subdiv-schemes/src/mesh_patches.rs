@@ -71,6 +71,12 @@ impl DerivedConfigurations {
     }
 }
 
+/// A patch's control points: sixteen (a bicubic patch's) held inline, more (an extraordinary
+/// vertex's ring) on the heap. A mesh's patches are mostly of sixteen points or fewer, and a
+/// heap allocation per face was 80 bytes of a million-face grid's patches, each read through a
+/// pointer.
+pub type PatchVertices = smallvec::SmallVec<[VertexId; 16]>;
+
 /// A face's patch, found by [`MeshPatches::find`]: the rotation it starts at, its control
 /// points and its matrices.
 #[derive(Clone, Debug)]
@@ -78,7 +84,7 @@ pub struct FoundPatch {
     /// The half-edge the patch starts at (corner 0 of its domain).
     pub start: HalfEdgeId,
     /// The control points, in [`Mesh::patch`] order.
-    pub vertices: Vec<VertexId>,
+    pub vertices: PatchVertices,
     /// The matrices holding the shape.
     pub matrices: Arc<PatchMatrices>,
     /// The shape, an index into the matrices' shapes.
@@ -226,7 +232,7 @@ impl MeshPatches {
             mesh.patch_into(start, 1, &mut patch);
             if let Some(found) = known(&patch.signature) {
                 let (matrices, shape) = found?;
-                return Some(FoundPatch { start, vertices: patch.vertices, matrices, shape });
+                return Some(FoundPatch { start, vertices: PatchVertices::from_vec(patch.vertices), matrices, shape });
             }
         }
         // From the corner most likely irregular: a shape's irregular fixed point (an
@@ -257,7 +263,7 @@ impl MeshPatches {
                 for (s, shape) in matrices.shapes.iter().enumerate() {
                     shapes.entry((*key, shape.signature.clone())).or_insert_with(|| Some((matrices.clone(), s)));
                 }
-                Some(FoundPatch { start, vertices: patch.vertices, matrices, shape: 0 })
+                Some(FoundPatch { start, vertices: PatchVertices::from_vec(patch.vertices), matrices, shape: 0 })
             }
             None => {
                 shapes.insert((*key, patch.signature), None);
@@ -278,7 +284,7 @@ impl MeshPatches {
             let &(table, shape) = shapes.get(&patch.signature)?;
             Some(FoundPatch {
                 start,
-                vertices: std::mem::take(&mut patch.vertices),
+                vertices: PatchVertices::from_slice(&patch.vertices),
                 matrices: self.tables[table].clone(),
                 shape,
             })

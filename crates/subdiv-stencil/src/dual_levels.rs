@@ -121,7 +121,7 @@ pub(crate) fn dual_levels(
         let shape = matrices
             .find(&found.signature)
             .ok_or_else(|| internal(&format!("a dual quad at a {}-gon has no derived shape", sizes[rotation])))?;
-        let found = FoundPatch { start: around[rotation], vertices: found.vertices, matrices, shape };
+        let found = FoundPatch { start: around[rotation], vertices: found.vertices.into(), matrices, shape };
         Ok((Resolution::Patch(found), rotation as u8))
     };
     // The patches of dual quads with boundary faces, by signature: every shape of each
@@ -139,7 +139,7 @@ pub(crate) fn dual_levels(
         }
         let (matrices, shape) =
             derived.get(&found.signature).cloned().ok_or_else(|| internal("a derived configuration lost its shape"))?;
-        Ok(Resolution::Patch(FoundPatch { start, vertices: found.vertices, matrices, shape }))
+        Ok(Resolution::Patch(FoundPatch { start, vertices: found.vertices.into(), matrices, shape }))
     };
     let mut level0 = Level::new(base, None);
     let mut level1 = Level::new(first, Some(quads.len()));
