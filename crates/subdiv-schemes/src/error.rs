@@ -18,12 +18,14 @@ pub enum SchemeError {
         /// The size the scheme takes.
         expected: usize,
     },
-    /// The scheme has no rules for boundaries, creases, corners or holes, and the mesh has one.
+    /// The scheme has no rules for boundaries, creases, corners or holes (a dual split: interior
+    /// vertices of two faces), and the mesh has one.
     #[error("{scheme} has no rules for {feature}, but the mesh has them ({element})")]
     FeatureNotSupported {
         /// The scheme's name.
         scheme: String,
-        /// `boundaries`, `creases`, `corners` or `holes`.
+        /// `boundaries`, `creases`, `corners`, `holes`, or (the dual splits) interior vertices of
+        /// two faces.
         feature: &'static str,
         /// The first element that has it, e.g. `edge 3-7`.
         element: String,

@@ -441,14 +441,26 @@ fn check_input(mesh: &Mesh, scheme: &Scheme) -> Result<(), SchemeError> {
             expected,
         });
     }
-    if scheme.has_crease_rules() {
-        return Ok(());
-    }
     let unsupported = |feature: &'static str, element: String| SchemeError::FeatureNotSupported {
         scheme: scheme.name.clone(),
         feature,
         element,
     };
+    // The dual splits make a face of each vertex's corners: an interior vertex of two faces
+    // would make a face of two sides (OpenSubdiv's `catmark_val2_back2back`).
+    if matches!(scheme.split(), Split::Dual | Split::Midedge)
+        && let Some(v) = mesh
+            .vertices()
+            .find(|&v| !mesh.is_isolated(v) && !mesh.is_boundary_vertex(v) && mesh.outgoing(v).nth(2).is_none())
+    {
+        return Err(unsupported(
+            "interior vertices of two faces (their vertex face would have two sides)",
+            v.to_string(),
+        ));
+    }
+    if scheme.has_crease_rules() {
+        return Ok(());
+    }
     if !scheme.has_boundary_rules()
         && let Some(e) = mesh.edges().find(|&e| mesh.is_boundary_edge(e))
     {

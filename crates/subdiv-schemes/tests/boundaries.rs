@@ -208,3 +208,28 @@ fn a_sqrt3_variant_without_boundary_rule_refuses_open_meshes() {
     let e = refine_uniform(&open_triangles(), &scheme, 1, &RefineOptions::DEFAULT).unwrap_err();
     assert!(matches!(e, SchemeError::FeatureNotSupported { feature: "boundaries", .. }), "{e}");
 }
+
+/// The dual splits make a face of each vertex's corners: an interior vertex of two faces (two
+/// quads folded back to back, OpenSubdiv's `catmark_val2_back2back`) is refused by name, not
+/// turned into a two-sided face that the refined mesh's validation reports as an internal
+/// error.
+#[test]
+fn the_dual_splits_refuse_interior_vertices_of_two_faces() {
+    let mut soup = PolygonSoup::default();
+    for p in [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]] {
+        soup.push_vertex(DVec3::from(p));
+    }
+    soup.push_face([0, 1, 2, 3].map(VertexId::new));
+    soup.push_face([3, 2, 1, 0].map(VertexId::new));
+    let pillow = Mesh::build(soup).unwrap();
+    for builtin in [Builtin::DooSabin, Builtin::Midedge] {
+        let e = refine_uniform(&pillow, builtin.scheme(), 1, &RefineOptions::DEFAULT).unwrap_err();
+        assert!(
+            matches!(&e, SchemeError::FeatureNotSupported { element, .. } if element == "vertex 0"),
+            "{builtin:?}: {e}"
+        );
+        assert!(e.to_string().contains("two faces"), "{e}");
+    }
+    // Catmull-Clark takes it (a valence-2 vertex is an extraordinary vertex like any other).
+    refine_uniform(&pillow, Builtin::CatmullClark.scheme(), 1, &RefineOptions::DEFAULT).unwrap();
+}
