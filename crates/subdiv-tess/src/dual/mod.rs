@@ -125,10 +125,11 @@ pub struct DualOptions {
     pub chunk: u32,
 }
 
-/// [`DualOptions::chunk`]'s default: 2^20 vertices and triangles, about 20 MB of flat output
-/// and its topology per chunk, large enough that the threads share every chunk's evaluation
-/// (measured in docs/perf-log.md, 2026-12-06: streaming costs the 1000 × 1000 grid no time at
-/// this size).
+/// [`DualOptions::chunk`]'s default: 2^16 vertices and triangles, a megabyte or two of flat
+/// output and topology per chunk, which still has tens of thousands of vertices for the
+/// threads to share (the evaluation shares from 1024). Measured on a 1000 × 1000 grid at rate 2
+/// (docs/perf-log.md, 2026-12-06): 2^20 → 2^18 → 2^16 took the peak from 513 to 448 to 431 MB
+/// at the same time.
 pub const DEFAULT_STREAM_CHUNK: u32 = 1 << 16;
 
 impl DualOptions {
