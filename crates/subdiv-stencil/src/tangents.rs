@@ -7,7 +7,7 @@ use faer::c64;
 use faer::linalg::solvers::DenseSolveCore;
 use subdiv_schemes::PatchMatrices;
 
-use crate::linalg::null_space;
+use crate::linalg::{null_space, null_spaces};
 use crate::surface::{Derivatives, TOLERANCE};
 use crate::{Dyadic, StencilError, StencilEvaluator};
 
@@ -274,8 +274,7 @@ fn eigen_terms(m: &Mat<f64>, lambda: c64, count: usize, probes: &[Vec<f64>]) -> 
     } else {
         Mat::<f64>::from_fn(n, n, |i, j| m[(i, j)] - if i == j { lambda.re } else { 0.0 })
     };
-    let right = null_space(&shifted, false)?;
-    let left = null_space(&shifted, true)?;
+    let (right, left) = null_spaces(&shifted)?;
     let dimension = if complex { 2 * count } else { count };
     let d = right.len();
     if d != left.len() || d == 0 {
