@@ -9,12 +9,15 @@ pub(crate) const NULL_TOLERANCE: f64 = 1e-9;
 /// The residual the normalisations may leave.
 const RESIDUAL_TOLERANCE: f64 = 1e-8;
 
+/// Vectors spanning a space, each as long as the matrix is wide.
+pub(crate) type Basis = Vec<Vec<f64>>;
+
 /// Orthonormal bases of the null space of the square matrix `a` (`a x = 0`) and of its left
 /// null space (`w a = 0`), from one SVD: the right and the left singular vectors whose singular
 /// values are below [`NULL_TOLERANCE`] (as many of each). Half the work of two
 /// [`null_space`] calls, which an eigenvalue's terms need both of (an SVD of a matrix of the
 /// ring at valence 500 was 15 % of a tessellation).
-pub(crate) fn null_spaces(a: &Mat<f64>) -> Result<(Vec<Vec<f64>>, Vec<Vec<f64>>), String> {
+pub(crate) fn null_spaces(a: &Mat<f64>) -> Result<(Basis, Basis), String> {
     let n = a.nrows();
     let columns = |sigma: faer::ColRef<'_, f64>, vectors: faer::MatRef<'_, f64>| -> Vec<Vec<f64>> {
         (0..n).filter(|&c| sigma[c] < NULL_TOLERANCE).map(|c| (0..n).map(|r| vectors[(r, c)]).collect()).collect()
