@@ -131,6 +131,15 @@ impl Channels {
         Ok(())
     }
 
+    /// [`Evaluator::fix_fits`] of every channel surface evaluated as the positions are.
+    pub(crate) fn fix_fits(&mut self, rates: Option<&[u32]>) {
+        for s in &mut self.surfaces {
+            if let Route::Evaluated(evaluator) = &mut s.route {
+                evaluator.fix_fits(rates);
+            }
+        }
+    }
+
     /// Whether the evaluated points get texture coordinates (see [`TessChannels::texcoords`]).
     pub(crate) fn has_texcoords(&self) -> bool {
         self.names.iter().zip(&self.dimensions).any(|(n, &d)| n == subdiv_mesh::Channel::UV && d >= 2)

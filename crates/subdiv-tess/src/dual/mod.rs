@@ -635,6 +635,9 @@ impl DualTessellator {
         let mesh = levels.mesh(0);
         let vertices = topology::predicted_vertices_cut(mesh, levels.split(), rates, None, Some(&builder.seams)) as u32;
         let texcoords = channels.has_texcoords();
+        // Each chunk routes its faces to templates as one call would (the budget is the call's).
+        evaluator.fix_fits(Some(rates));
+        channels.fix_fits(Some(rates));
         sink.begin(vertices as usize, texcoords);
         let mut buffers = FlatMesh::default();
         let mut emit = |t: &mut Topology, first: u32, first_triangle: u32| -> Result<(), TessError> {
@@ -655,7 +658,10 @@ impl DualTessellator {
             sink.triangles(first_triangle as usize, &buffers.indices);
             Ok(())
         };
-        let (made, extras, triangles) = builder.stream(mesh, &domains, rates, vertices, options.chunk, &mut emit)?;
+        let streamed = builder.stream(mesh, &domains, rates, vertices, options.chunk, &mut emit);
+        evaluator.fix_fits(None);
+        channels.fix_fits(None);
+        let (made, extras, triangles) = streamed?;
         if made != vertices {
             return Err(TessError::Internal(format!("{made} vertices made where {vertices} were predicted")));
         }

@@ -155,6 +155,11 @@ pub(crate) struct Evaluator {
     /// [`plan_copies`](Self::plan_copies)'s maps, kept for their allocations.
     fits: HashMap<(u32, u32), bool>,
     made: hashbrown::HashSet<TemplateKey>,
+    /// The fits of a streamed call, decided over all its blocks before its chunks
+    /// ([`fix_fits`](Self::fix_fits)): each chunk then routes its faces as the whole call would.
+    fixed_fits: Option<HashMap<(u32, u32), bool>>,
+    /// The template weights a call may use ([`MAX_TEMPLATE_WEIGHTS`]; smaller in tests).
+    template_budget: usize,
     /// The blocks of the last [`prepare`](Self::prepare)'s topology: face and rate.
     planned: Vec<(u32, u32)>,
 }
@@ -210,6 +215,8 @@ impl Evaluator {
             copied: vec![false; mesh.face_count()],
             fits: HashMap::new(),
             made: hashbrown::HashSet::new(),
+            fixed_fits: None,
+            template_budget: MAX_TEMPLATE_WEIGHTS,
             planned: Vec::new(),
         };
         evaluator.table_faces = mesh

@@ -295,24 +295,19 @@ impl Evaluator {
         if !self.typed_faces {
             return;
         }
-        if self.template_weights > MAX_TEMPLATE_WEIGHTS {
+        if self.template_weights > self.template_budget {
             self.drop_templates();
         }
-        // Per (type, rate) of the call, in block order: whether it fits the budget.
+        // Per (type, rate) of the call, in block order: whether it fits the budget (decided
+        // for the whole call before a streamed one's chunks).
         let (mut fits, mut made) = (std::mem::take(&mut self.fits), std::mem::take(&mut self.made));
-        fits.clear();
         made.clear();
-        let mut budget = MAX_TEMPLATE_WEIGHTS;
-        for &(face, rate) in &self.planned {
-            let Some(ty) = self.face_types.get(face as usize) else { continue };
-            fits.entry((ty.id, rate)).or_insert_with(|| {
-                let size = template_size(rate, ty.cage.1 - ty.cage.0);
-                let fit = size <= budget;
-                if fit {
-                    budget -= size;
-                }
-                fit
-            });
+        match &self.fixed_fits {
+            Some(fixed) => fits.clone_from(fixed),
+            None => {
+                fits.clear();
+                self.count_fits(self.planned.iter().copied(), &mut fits);
+            }
         }
         for (b, &(face, rate)) in self.planned.iter().enumerate() {
             let Some(ty) = self.face_types.get(face as usize) else { continue };
@@ -331,6 +326,37 @@ impl Evaluator {
             self.copied[face as usize] = true;
         }
         (self.fits, self.made) = (fits, made);
+    }
+
+    /// Whether each (type, rate) of `blocks` (face and rate, in block order) fits the budget,
+    /// into `fits`.
+    fn count_fits(&self, blocks: impl Iterator<Item = (u32, u32)>, fits: &mut HashMap<(u32, u32), bool>) {
+        let mut budget = self.template_budget;
+        for (face, rate) in blocks {
+            let Some(ty) = self.face_types.get(face as usize) else { continue };
+            fits.entry((ty.id, rate)).or_insert_with(|| {
+                let size = template_size(rate, ty.cage.1 - ty.cage.0);
+                let fit = size <= budget;
+                if fit {
+                    budget -= size;
+                }
+                fit
+            });
+        }
+    }
+
+    /// Decides the template fits of a streamed call at `rates` over all its blocks (the whole
+    /// quad faces, in order: the blocks of the whole topology), for its chunks to use; `None`
+    /// (after the call) goes back to deciding per call.
+    pub(crate) fn fix_fits(&mut self, rates: Option<&[u32]>) {
+        self.fixed_fits = rates.map(|rates| {
+            let blocks = (0..self.faces.len())
+                .filter(|&f| self.domains[f].get() == Some(subdiv_stencil::FaceDomain::Quad))
+                .map(|f| (f as u32, rates[f]));
+            let mut fits = HashMap::new();
+            self.count_fits(blocks, &mut fits);
+            fits
+        });
     }
 
     /// The key of the template of `face` (of type `ty`) at `rate`.

@@ -249,3 +249,23 @@ fn cage_support_is_what_the_cage_rows_name() {
     }
     assert!(levels_seen[1] > 0 && levels_seen[2] > 0, "faces resolved on levels 1 and 2: {levels_seen:?}");
 }
+
+/// A streamed tessellation routes each typed face as one call would, past the template budget
+/// too: the budget is the call's, decided over all its blocks before the chunks (a chunk's own
+/// budget would let a chunk of rate-3 faces take templates that the whole call has no room
+/// for, and their points would differ in the last bits).
+#[test]
+fn chunks_share_the_calls_template_budget() {
+    use crate::{DualOptions, DualTessellator, FlatMesh};
+    let mesh = Mesh::build(shapes::cube()).unwrap();
+    let options = DualOptions::DEFAULT.with_chunk(1);
+    let mut tess = DualTessellator::new(Builtin::CatmullClark.scheme(), &mesh, &options).unwrap();
+    let ty = tess.evaluator.face_types.get(0).expect("the cube's faces are typed");
+    // Room for the first face's template at rate 5, none for the others' at rate 3.
+    tess.evaluator.template_budget = template_size(5, ty.cage.1 - ty.cage.0);
+    let rates = [5, 3, 3, 3, 3, 3];
+    let (mut whole, mut streamed) = (FlatMesh::default(), FlatMesh::default());
+    tess.tessellate_flat(&rates, &mut whole).unwrap();
+    tess.tessellate_stream(&rates, &mut streamed).unwrap();
+    assert!(whole == streamed, "the chunks routed a face otherwise than the call");
+}
