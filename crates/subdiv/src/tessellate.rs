@@ -121,7 +121,7 @@ pub struct TessOptions {
 /// [`TessOptions::max_vertices`]' default: 2^24 ≈ 16.8 million vertices, about 34 million
 /// triangles (a 2000 × 2000 quad grid at rate 2): 0.8 GB of flat f32 output (48 bytes per
 /// vertex with its two triangles), which a GLB file takes streamed
-/// ([`Surface::write_glb_stream`](crate::Surface::write_glb_stream): 1.5 GB peak for that grid)
+/// ([`Surface::write_glb_stream`](crate::Surface::write_glb_stream): 1.4 GB peak for that grid)
 /// and a whole [`TessMesh`] in f64 holds at about 200 bytes per vertex (3–4 GB), so that a
 /// request of a size nobody means (a rate of 256 on a large mesh, a tolerance of 1e-6 for the
 /// quadtree) is refused instead of exhausting memory. Raise it for larger outputs.
