@@ -18,18 +18,8 @@ pub(crate) type Basis = Vec<Vec<f64>>;
 /// [`null_space`] calls, which an eigenvalue's terms need both of (an SVD of a matrix of the
 /// ring at valence 500 was 15 % of a tessellation).
 pub(crate) fn null_spaces(a: &Mat<f64>) -> Result<(Basis, Basis), String> {
-    let n = a.nrows();
-    let columns = |sigma: faer::ColRef<'_, f64>, vectors: faer::MatRef<'_, f64>| -> Vec<Vec<f64>> {
-        (0..n).filter(|&c| sigma[c] < NULL_TOLERANCE).map(|c| (0..n).map(|r| vectors[(r, c)]).collect()).collect()
-    };
-    match a.svd() {
-        Ok(svd) => Ok((columns(svd.S().column_vector(), svd.V()), columns(svd.S().column_vector(), svd.U()))),
-        // As `null_space`: the transpose's SVD, its singular vectors swapped.
-        Err(first) => {
-            let svd = a.transpose().to_owned().svd().map_err(|e| format!("SVD failed: {first:?}, then {e:?}"))?;
-            Ok((columns(svd.S().column_vector(), svd.U()), columns(svd.S().column_vector(), svd.V())))
-        }
-    }
+    let null = singular_null_vectors(a)?;
+    Ok((null.right, null.left))
 }
 
 /// A basis of the eigenspace of `m` for the real eigenvalue `lambda`: right eigenvectors
@@ -41,22 +31,37 @@ pub(crate) fn eigenspace(m: &Mat<f64>, lambda: f64, left: bool) -> Result<Vec<Ve
 }
 
 /// An orthonormal basis of the null space of the square matrix `a` (`a x = 0`), or of its left
-/// null space (`w a = 0`) if `left`: the right singular vectors whose singular values are below
-/// [`NULL_TOLERANCE`].
+/// null space (`w a = 0`) if `left`: the right singular vectors (of `a`, or of its transpose)
+/// whose singular values are below [`NULL_TOLERANCE`].
 pub(crate) fn null_space(a: &Mat<f64>, left: bool) -> Result<Vec<Vec<f64>>, String> {
-    let n = a.nrows();
     let a = if left { a.transpose().to_owned() } else { a.clone() };
-    let null = |sigma: faer::ColRef<'_, f64>, vectors: faer::MatRef<'_, f64>| -> Vec<Vec<f64>> {
+    Ok(singular_null_vectors(&a)?.right)
+}
+
+/// The right and left singular vectors of the square matrix `a` whose singular values are below
+/// [`NULL_TOLERANCE`].
+struct NullVectors {
+    right: Basis,
+    left: Basis,
+}
+
+/// [`NullVectors`] of `a` from its SVD. The iteration does not converge on a few matrices (a
+/// Loop period of 28 steps at a parameter of denominator 645); that of the transpose takes
+/// another path, and its singular vectors are these with their sides swapped.
+fn singular_null_vectors(a: &Mat<f64>) -> Result<NullVectors, String> {
+    let n = a.nrows();
+    let columns = |sigma: faer::ColRef<'_, f64>, vectors: faer::MatRef<'_, f64>| -> Basis {
         (0..n).filter(|&c| sigma[c] < NULL_TOLERANCE).map(|c| (0..n).map(|r| vectors[(r, c)]).collect()).collect()
     };
     match a.svd() {
-        Ok(svd) => Ok(null(svd.S().column_vector(), svd.V())),
-        // The iteration does not converge on a few matrices (a Loop period of 28 steps at a
-        // parameter of denominator 645); that of the transpose takes another path, and its
-        // left singular vectors are these right ones.
+        Ok(svd) => {
+            let sigma = svd.S().column_vector();
+            Ok(NullVectors { right: columns(sigma, svd.V()), left: columns(sigma, svd.U()) })
+        }
         Err(first) => {
             let svd = a.transpose().to_owned().svd().map_err(|e| format!("SVD failed: {first:?}, then {e:?}"))?;
-            Ok(null(svd.S().column_vector(), svd.U()))
+            let sigma = svd.S().column_vector();
+            Ok(NullVectors { right: columns(sigma, svd.U()), left: columns(sigma, svd.V()) })
         }
     }
 }
