@@ -219,7 +219,9 @@ fn compare_patches(committed: &[u8], fresh: &PatchTables, scheme: &Scheme, path:
                 if (c.shape, c.domain, c.rows(), c.columns()) != (d.shape, d.domain, d.rows(), d.columns()) {
                     return Some(format!("{what}: a child differs"));
                 }
-                widen(c.entries(), d.entries());
+                for r in 0..c.rows() {
+                    widen(&c.dense_row(r), &d.dense_row(r));
+                }
             }
             if let (Some([u, v]), Some([p, q])) = (&x.parameters, &y.parameters) {
                 widen(u, p);

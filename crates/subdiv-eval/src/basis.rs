@@ -293,7 +293,7 @@ impl EigenBasis {
             return Err(unsupported("the patch has more control points than Catmull-Clark's at valence 64"));
         }
         // The spectrum first: it refuses some schemes (bilinear), and costs less than the fits.
-        let a_entries: Vec<f64> = (0..size).flat_map(|r| a.row(r).to_vec()).collect();
+        let a_entries: Vec<f64> = (0..size).flat_map(|r| a.dense_row(r)).collect();
         let eigen_error = |detail: String| EvalError::Eigen { scheme: matrices.scheme.clone(), valence, detail };
         let decomposition = Decomposition::new(&a_entries, size).map_err(&eigen_error)?;
         // Each other child is a polynomial patch (its own shape: its control points hold the
@@ -306,7 +306,7 @@ impl EigenBasis {
             .iter()
             .zip(&powers)
             .map(|(c, child_power)| {
-                let m: Vec<f64> = (0..c.rows()).flat_map(|r| c.row(r).to_vec()).collect();
+                let m: Vec<f64> = (0..c.rows()).flat_map(|r| c.dense_row(r)).collect();
                 let to_power = child_power.compose(&m, size);
                 let r = decomposition.eigenvalues.len();
                 let mut modes = vec![Complex { re: 0.0, im: 0.0 }; n * r];

@@ -279,7 +279,7 @@ fn decode(bytes: &[u8], matrices: Arc<PatchMatrices>, shape: usize) -> Result<Ei
             if a.rows() != size {
                 return Err(bad(&r));
             }
-            let a: Vec<f64> = (0..size).flat_map(|row| a.row(row).to_vec()).collect();
+            let a: Vec<f64> = (0..size).flat_map(|row| a.dense_row(row)).collect();
             let children = (0..r.len(3)?)
                 .map(|_| {
                     let d = r.take(3)?;

@@ -148,7 +148,7 @@ impl FitKey {
                         | u64::from(flipped) << 16
                         | u64::from(scale) << 24,
                 );
-                words.extend((0..child.rows()).flat_map(|r| child.row(r).iter().map(|x| x.to_bits())));
+                words.extend((0..child.rows()).flat_map(|r| child.dense_row(r)).map(f64::to_bits));
             }
         }
         Self { face_size: matrices.face_size, words }

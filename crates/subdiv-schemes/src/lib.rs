@@ -112,9 +112,9 @@ pub use local_curve::{LocalCurveScheme, LocalRow, MatrixEntry};
 pub use mesh_patches::{DerivedConfigurations, FoundPatch, MeshPatches, PatchVertices};
 pub use nonuniform::NonUniformCubicBSpline;
 pub use patch::{
-    ChildDomain, MAX_PATCH_RADIUS, PatchMatrices, PatchShape, PatchType, SharpFeatures, SubPatch, child_faces,
-    derive_dual_configuration, dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners,
-    dual_signature_has_boundary, sub_patch_starts, ternary_child_starts, ternary_refine,
+    ChildDomain, Frequency, MAX_PATCH_RADIUS, PatchMatrices, PatchShape, PatchType, RingSpectrum, SharpFeatures,
+    SubPatch, child_faces, derive_dual_configuration, dual_child_starts, dual_corner_start, dual_patch,
+    dual_quad_corners, dual_signature_has_boundary, sub_patch_starts, ternary_child_starts, ternary_refine,
 };
 pub use patch_table::{DEFAULT_PATCH_TABLES, PATCH_TABLE_MAGIC, PATCH_TABLE_VERSION, PatchTableSpec, PatchTables};
 pub use refine::{

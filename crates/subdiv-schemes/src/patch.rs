@@ -30,6 +30,7 @@ use crate::{RefineOptions, Refiner, Scheme, SchemeError, Split};
 
 mod derivation;
 mod dual;
+mod ring;
 mod ternary;
 
 use derivation::{Derivation, canonical_start};
@@ -37,6 +38,7 @@ pub use dual::{
     derive_dual_configuration, dual_child_starts, dual_corner_start, dual_patch, dual_quad_corners,
     dual_signature_has_boundary,
 };
+pub use ring::{Frequency, RingSpectrum};
 pub use ternary::{ternary_child_starts, ternary_refine};
 
 /// The largest patch radius tried, in rings of faces: the smallest radius whose patches are
@@ -244,22 +246,31 @@ impl ChildDomain {
 
 /// One child of a [`PatchShape`]: its shape, where its domain lies, and the matrix taking the
 /// parent patch's control points to its own.
+///
+/// The matrix is stored by rows of its nonzero entries: a child point's rule reads a few parent
+/// points, except at an extraordinary vertex, whose own point reads its whole ring, so a row
+/// holds `O(1)` entries and the matrix `O(N)` at valence `N` (dense, the child at the vertex of
+/// valence 10 000 was 3.2 GB).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SubPatch {
     /// The child's shape, an index into [`PatchMatrices::shapes`].
     pub shape: usize,
     /// Where the child lies in the parent's domain.
     pub domain: ChildDomain,
-    rows: usize,
     columns: usize,
-    /// Row-major.
-    entries: Vec<f64>,
+    /// Row `r`'s entries are `starts[r]..starts[r + 1]` of `places` and `weights`.
+    starts: Vec<u32>,
+    /// Each entry's column, ascending within a row.
+    places: Vec<u32>,
+    /// Each entry's weight: every entry whose bits are not those of `+0.0` (so `-0.0` too: the
+    /// dense matrix's bits, all of them, are those of the stored entries and zeros).
+    weights: Vec<f64>,
 }
 
 impl SubPatch {
     /// Rows: the child patch's size.
     pub fn rows(&self) -> usize {
-        self.rows
+        self.starts.len() - 1
     }
 
     /// Columns: the parent patch's size.
@@ -269,23 +280,56 @@ impl SubPatch {
 
     /// The weight of parent control point `column` in child control point `row`.
     pub fn get(&self, row: usize, column: usize) -> f64 {
-        self.entries[row * self.columns + column]
-    }
-
-    /// The entries, row-major.
-    pub fn entries(&self) -> &[f64] {
-        &self.entries
+        let range = self.starts[row] as usize..self.starts[row + 1] as usize;
+        let places = &self.places[range.clone()];
+        places.binary_search(&(column as u32)).map_or(0.0, |at| self.weights[range.start + at])
     }
 
     /// A child of `shape` at `domain` with `rows` rows of `entries` (row-major).
     pub(crate) fn from_entries(shape: usize, domain: ChildDomain, rows: usize, entries: Vec<f64>) -> Self {
         let columns = entries.len().checked_div(rows).unwrap_or(0);
-        Self { shape, domain, rows, columns, entries }
+        Self::from_rows(
+            shape,
+            domain,
+            columns,
+            (0..rows).map(|r| entries[r * columns..(r + 1) * columns].iter().copied().enumerate()),
+        )
     }
 
-    /// Row `row`, over the parent's control points.
-    pub fn row(&self, row: usize) -> &[f64] {
-        &self.entries[row * self.columns..(row + 1) * self.columns]
+    /// A child of `shape` at `domain` over `columns` parent points from its rows' entries
+    /// (column, weight), each row's columns ascending; entries of weight `+0.0` are dropped.
+    pub(crate) fn from_rows<R: IntoIterator<Item = (usize, f64)>>(
+        shape: usize,
+        domain: ChildDomain,
+        columns: usize,
+        rows: impl IntoIterator<Item = R>,
+    ) -> Self {
+        let (mut starts, mut places, mut weights) = (vec![0u32], Vec::new(), Vec::new());
+        for row in rows {
+            for (c, w) in row {
+                debug_assert!(c < columns, "a column past the parent's points");
+                if w.to_bits() != 0 {
+                    places.push(c as u32);
+                    weights.push(w);
+                }
+            }
+            starts.push(places.len() as u32);
+        }
+        Self { shape, domain, columns, starts, places, weights }
+    }
+
+    /// Row `row`'s entries over the parent's control points, (column, weight), columns
+    /// ascending; the columns not listed have weight 0.
+    pub fn row(&self, row: usize) -> impl ExactSizeIterator<Item = (usize, f64)> + '_ {
+        let range = self.starts[row] as usize..self.starts[row + 1] as usize;
+        self.places[range.clone()].iter().zip(&self.weights[range]).map(|(&c, &w)| (c as usize, w))
+    }
+
+    /// Row `row` over all the parent's control points.
+    pub fn dense_row(&self, row: usize) -> Vec<f64> {
+        let mut out = vec![0.0; self.columns];
+        self.row(row).for_each(|(c, w)| out[c] = w);
+        out
     }
 
     /// The eigenvalues of a square sub-patch matrix (one that keeps its shape), largest
@@ -294,13 +338,14 @@ impl SubPatch {
     /// # Errors
     /// [`SchemeError::Eigen`] when the matrix is not square or the solver does not converge.
     pub fn eigenvalues(&self) -> Result<Vec<(f64, f64)>, SchemeError> {
-        if self.rows != self.columns {
+        if self.rows() != self.columns {
             return Err(SchemeError::Eigen(format!(
                 "a {}×{} sub-patch matrix has no eigenvalues",
-                self.rows, self.columns
+                self.rows(),
+                self.columns
             )));
         }
-        crate::eigen::eigenvalues(self.rows, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)
+        crate::eigen::eigenvalues(self.columns, |i, j| self.get(i, j)).map_err(SchemeError::Eigen)
     }
 
     /// The child's control points from the parent's.
@@ -309,7 +354,7 @@ impl SubPatch {
     /// If `parent` does not have [`columns`](Self::columns) points.
     pub fn apply(&self, parent: &[DVec3]) -> Vec<DVec3> {
         assert_eq!(parent.len(), self.columns, "the parent patch has {} control points", self.columns);
-        (0..self.rows).map(|r| self.row(r).iter().zip(parent).map(|(&w, &p)| w * p).sum()).collect()
+        (0..self.rows()).map(|r| self.row(r).map(|(c, w)| w * parent[c]).sum()).collect()
     }
 }
 
@@ -361,6 +406,9 @@ pub struct PatchMatrices {
     pub(crate) by_signature: HashMap<Vec<u32>, usize>,
     /// The scheme's [`Scheme::identity`].
     identity: u64,
+    /// Shape 0's rotation about corner 0, where the canonical patch has one (a smooth interior
+    /// type): per control point, the place of the same vertex in the next face's patch.
+    rotation: Option<Vec<Option<u32>>>,
 }
 
 type CacheKey = (String, PatchType, BoundaryInterpolation);
@@ -460,18 +508,7 @@ impl PatchMatrices {
             return Err(SchemeError::ValenceNotSupported { scheme: scheme.name.clone(), valence, reason });
         }
         for radius in 1..=MAX_PATCH_RADIUS {
-            let rings = radius + 3;
-            let mut soup = match patch_type {
-                PatchType::Interior { valence, sharp } => crate::canonical::pillow(valence, rings, triangles, sharp),
-                PatchType::Boundary { faces, sharp, .. } => crate::canonical::open_fan(faces, rings, triangles, sharp),
-                PatchType::Derived { .. } => unreachable!("refused above"),
-            };
-            soup.tags.boundary_interpolation = Some(boundary);
-            let mesh = Mesh::build(soup).map_err(|e| SchemeError::Internal(e.to_string()))?;
-            // With the boundary rule applied, as refinement (and `PatchLevels`) sees a mesh:
-            // the corners edge-and-corner makes are in the signatures.
-            let mesh = Refiner::new(&mesh, scheme, 0, &RefineOptions::DEFAULT)?.into_mesh();
-            let start = canonical_start(&mesh, patch_type);
+            let (mesh, start) = canonical_mesh(scheme, patch_type, radius, boundary)?;
             let derivation = Derivation::new(scheme, mesh, radius, MAX_LEVELS, RefineOptions::DEFAULT);
             if let Some(found) = derivation.run(start, patch_type)? {
                 return Ok(found);
@@ -616,7 +653,48 @@ impl PatchMatrices {
             shapes,
             by_signature,
             identity: scheme.identity(),
+            rotation: canonical_rotation(scheme, patch_type, radius),
         }
+    }
+
+    /// The Fourier structure of the matrix of `shape`'s child that keeps its shape and corner 0
+    /// (the extraordinary vertex's matrix of a smooth interior type's shape 0), on the control
+    /// points that influence the face ([`PatchShape::influence`]): its spectrum from one small
+    /// block per frequency ([`RingSpectrum`]). `None` for other shapes and types, and where the
+    /// matrix does not commute with the patch's rotation.
+    ///
+    /// ```
+    /// use subdiv_mesh::BoundaryInterpolation;
+    /// use subdiv_schemes::{Builtin, PatchMatrices, PatchType};
+    ///
+    /// let cc = Builtin::CatmullClark.scheme();
+    /// let m = PatchMatrices::of(cc, PatchType::interior(7), BoundaryInterpolation::EdgeOnly)?;
+    /// let ring = m.ring_spectrum(0).expect("a smooth vertex's ring");
+    /// // 1 is an eigenvalue (of frequency 0: the limit position's).
+    /// assert!(ring.eigenvalues().any(|(_, z)| (z.re - 1.0).abs() < 1e-12 && z.im.abs() < 1e-12));
+    /// # Ok::<(), subdiv_schemes::SchemeError>(())
+    /// ```
+    pub fn ring_spectrum(&self, shape: usize) -> Option<RingSpectrum> {
+        let rotation = self.rotation.as_ref().filter(|_| shape == 0)?;
+        let PatchType::Interior { valence, .. } = self.patch_type else { return None };
+        let parent = self.shapes.get(shape)?;
+        let child =
+            parent.children.iter().find(|c| c.shape == shape && c.domain.offset == [0, 0] && !c.domain.flipped)?;
+        let mut position = vec![None; parent.size];
+        parent.influence.iter().enumerate().for_each(|(i, &k)| position[k as usize] = Some(i));
+        let rows: Vec<Vec<(usize, f64)>> = parent
+            .influence
+            .iter()
+            .map(|&k| {
+                child.row(k as usize).filter(|e| e.1 != 0.0).filter_map(|(c, w)| Some((position[c]?, w))).collect()
+            })
+            .collect();
+        let turned: Vec<Option<usize>> = parent
+            .influence
+            .iter()
+            .map(|&k| rotation.get(k as usize).copied().flatten().and_then(|r| position[r as usize]))
+            .collect();
+        RingSpectrum::new(&rows, &turned, valence)
     }
 
     /// How many children fit along a side of a face: 2 for the binary splits, 3 for √3's
@@ -642,6 +720,49 @@ impl PatchMatrices {
     pub fn keeping(&self, shape: usize) -> Option<(usize, &SubPatch)> {
         self.shapes[shape].children.iter().enumerate().find(|(_, c)| c.shape == shape)
     }
+}
+
+/// The canonical mesh of `patch_type` for patches of `radius` rings (a pillow around an
+/// interior vertex, an open fan around a boundary one, of `radius + 3` rings), with the boundary
+/// rule applied as refinement (and `PatchLevels`) sees a mesh (the corners edge-and-corner
+/// makes are in the signatures), and the start of its face at the centre. Binary splits only.
+fn canonical_mesh(
+    scheme: &Scheme,
+    patch_type: PatchType,
+    radius: usize,
+    boundary: BoundaryInterpolation,
+) -> Result<(Mesh, HalfEdgeId), SchemeError> {
+    let triangles = scheme.split() == Split::Triangle;
+    let rings = radius + 3;
+    let mut soup = match patch_type {
+        PatchType::Interior { valence, sharp } => crate::canonical::pillow(valence, rings, triangles, sharp),
+        PatchType::Boundary { faces, sharp, .. } => crate::canonical::open_fan(faces, rings, triangles, sharp),
+        PatchType::Derived { .. } => {
+            return Err(SchemeError::Internal("a derived patch type has no canonical mesh".to_string()));
+        }
+    };
+    soup.tags.boundary_interpolation = Some(boundary);
+    let mesh = Mesh::build(soup).map_err(|e| SchemeError::Internal(e.to_string()))?;
+    let mesh = Refiner::new(&mesh, scheme, 0, &RefineOptions::DEFAULT)?.into_mesh();
+    let start = canonical_start(&mesh, patch_type);
+    Ok((mesh, start))
+}
+
+/// Whether `patch_type`'s canonical patch may have a rotation: a smooth interior type of a
+/// binary split.
+fn has_rotation(scheme: &Scheme, patch_type: PatchType) -> bool {
+    matches!(patch_type, PatchType::Interior { sharp, .. } if sharp.is_smooth())
+        && matches!(scheme.split(), Split::Quad | Split::Triangle)
+}
+
+/// The rotation of a smooth interior type's canonical patch about its vertex (see
+/// [`PatchMatrices::ring_spectrum`]); `None` for other types and splits.
+fn canonical_rotation(scheme: &Scheme, patch_type: PatchType, radius: usize) -> Option<Vec<Option<u32>>> {
+    if !has_rotation(scheme, patch_type) {
+        return None;
+    }
+    let (mesh, start) = canonical_mesh(scheme, patch_type, radius, BoundaryInterpolation::EdgeOnly).ok()?;
+    ring::patch_rotation(&mesh, start, radius)
 }
 
 fn split_not_supported(scheme: &Scheme, split: Split) -> SchemeError {
@@ -781,14 +902,14 @@ mod tests {
         for shape in &mut shapes {
             shape.size += 1;
             for (c, child) in shape.children.iter_mut().enumerate() {
-                let (rows, columns) = (child.rows + 1, child.columns + 1);
+                let (rows, columns) = (child.rows() + 1, child.columns + 1);
                 let mut entries = vec![0.0; rows * columns];
-                for r in 0..child.rows {
-                    entries[r * columns..r * columns + child.columns].copy_from_slice(child.row(r));
+                for r in 0..child.rows() {
+                    entries[r * columns..r * columns + child.columns].copy_from_slice(&child.dense_row(r));
                 }
-                entries[child.rows * columns + child.columns] = 0.5;
-                entries[child.rows * columns + c] = 0.5;
-                *child = SubPatch { rows, columns, entries, ..child.clone() };
+                entries[child.rows() * columns + child.columns] = 0.5;
+                entries[child.rows() * columns + c] = 0.5;
+                *child = SubPatch::from_entries(child.shape, child.domain, rows, entries);
             }
         }
         let influence = influence_sets(&shapes, 4);

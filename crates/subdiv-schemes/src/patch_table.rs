@@ -253,7 +253,7 @@ fn payload(m: &PatchMatrices) -> Vec<u8> {
     let mut values: Vec<u64> = m
         .shapes
         .iter()
-        .flat_map(|s| s.children.iter().flat_map(|c| c.entries().iter().map(|x| x.to_bits())))
+        .flat_map(|s| s.children.iter().flat_map(|c| (0..c.rows()).flat_map(|r| c.row(r).map(|(_, x)| x.to_bits()))))
         .filter(|&bits| bits != 0)
         .collect();
     values.sort_unstable();
@@ -274,8 +274,10 @@ fn payload(m: &PatchMatrices) -> Vec<u8> {
             w.len(c.columns());
             // Sparse: most of a row's weights are 0 (a point's rule reaches a few neighbours),
             // each nonzero as its distance from the last one and its value's place.
-            let nonzero: Vec<(usize, u64)> =
-                c.entries().iter().enumerate().map(|(at, x)| (at, x.to_bits())).filter(|&(_, x)| x != 0).collect();
+            let nonzero: Vec<(usize, u64)> = (0..c.rows())
+                .flat_map(|r| c.row(r).map(move |(column, x)| (r * c.columns() + column, x.to_bits())))
+                .filter(|&(_, x)| x != 0)
+                .collect();
             w.len(nonzero.len());
             let mut last = 0;
             for (at, bits) in nonzero {

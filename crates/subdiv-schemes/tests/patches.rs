@@ -63,7 +63,7 @@ fn every_sub_patch_row_is_affine() {
                 for child in &shape.children {
                     assert_eq!((child.rows(), child.columns()), (m.shapes[child.shape].size, shape.size));
                     for r in 0..child.rows() {
-                        let sum: f64 = child.row(r).iter().sum();
+                        let sum: f64 = child.row(r).map(|e| e.1).sum();
                         assert!((sum - 1.0).abs() < 1e-13, "{builtin} {patch_type:?}: row {r} sums to {sum}");
                     }
                 }

@@ -192,7 +192,7 @@ fn exact_matrix(matrices: &PatchMatrices, child: &SubPatch) -> Result<Vec<Vec<Ra
     (0..child.rows())
         .map(|r| {
             // The engine's arithmetic leaves the entries within an ulp or two of their fractions.
-            let row = exact_vector(matrices, child.row(r), 1e-15)?;
+            let row = exact_vector(matrices, &child.dense_row(r), 1e-15)?;
             if row.iter().sum::<Rational>() != Rational::one() {
                 return Err(StencilError::NotRational {
                     scheme: matrices.scheme.clone(),

@@ -29,6 +29,7 @@ mod linear;
 mod mesh_eval;
 mod parallel;
 mod patch_levels;
+mod ring;
 mod surface;
 pub mod surface_basis;
 mod table;

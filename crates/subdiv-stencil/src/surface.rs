@@ -9,6 +9,7 @@ use subdiv_schemes::{PatchMatrices, SubPatch, dual_signature_has_boundary};
 
 use crate::address::{MAX_ADDRESS_STEPS, Walk, Walked, check_domain, step, too_long, walk};
 use crate::linalg::{eigenspace, normalised_left_eigenvectors};
+use crate::ring::{ring_position, ring_tangents};
 use crate::tangents::{face_probes, irregular_tangents};
 use crate::{Dyadic, StencilError};
 
@@ -110,6 +111,10 @@ pub struct StencilEvaluator<M: Borrow<PatchMatrices>> {
     /// Whether only the position stencils are wanted (their derivatives left zero): the
     /// characteristic map's probes, whose own fixed points may be irregular too.
     positions_only: bool,
+    /// Whether an extraordinary vertex's own cycle is solved on its ring's frequency blocks
+    /// ([`RingSpectrum`]) where they hold its terms; `false` solves every cycle densely (the
+    /// tests' reference).
+    ring_blocks: bool,
 }
 
 /// What a [`StencilEvaluator`] has solved so far: the sizes of the systems behind its stencils.
@@ -181,7 +186,16 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
             stats: EvaluatorStats::default(),
             max_address_steps: MAX_ADDRESS_STEPS,
             positions_only: false,
+            ring_blocks: true,
         }
+    }
+
+    /// The same evaluator solving every cycle on its dense matrix: the reference that the
+    /// ring's frequency blocks are tested against.
+    #[cfg(test)]
+    pub(crate) fn dense(mut self) -> Self {
+        self.ring_blocks = false;
+        self
     }
 
     /// The same evaluator computing positions only: the derivative stencils are left zero and
@@ -294,6 +308,9 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
     /// only add eigenvalues of their own (a bilinear face's points beyond its corners repeat ½,
     /// which made its eigenvectors not unique), and get weight 0.
     fn periodic(&self, cycle: &[(State, u8)], point: Dyadic) -> Result<SurfaceStencil, StencilError> {
+        if let Some(stencil) = self.ring_periodic(cycle, point)? {
+            return Ok(stencil);
+        }
         let matrices = self.matrices();
         let periodic = &matrices.shapes[cycle[0].0.shape];
         let size = periodic.size;
@@ -303,7 +320,8 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
         for &(state, c) in cycle {
             let parent = &matrices.shapes[state.shape];
             let child = &parent.children[usize::from(c)];
-            let a = Mat::<f64>::from_fn(child.rows(), child.columns(), |i, j| child.get(i, j));
+            let mut a = Mat::<f64>::zeros(child.rows(), child.columns());
+            (0..child.rows()).for_each(|i| child.row(i).for_each(|(j, w)| a[(i, j)] = w));
             m_tau = &a * &m_tau;
             steps.push((child, parent.influence.as_slice()));
         }
@@ -361,6 +379,62 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
             }
         };
         Ok(stencil)
+    }
+}
+
+impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
+    /// The stencil at an extraordinary vertex whose cycle is its own child's (one step that
+    /// keeps the shape and corner 0), from the ring's frequency blocks
+    /// ([`PatchMatrices::ring_spectrum`]): the position and the tangent directions that
+    /// [`periodic`](Self::periodic) finds on the dense matrix, in `O(N)`. `None` where the blocks
+    /// do not hold the answer (no ring; 1 not simple; a leading eigenvalue that is defective or
+    /// the rest's), for the dense route.
+    fn ring_periodic(&self, cycle: &[(State, u8)], point: Dyadic) -> Result<Option<SurfaceStencil>, StencilError> {
+        let matrices = self.matrices();
+        let &[(state, child)] = cycle else { return Ok(None) };
+        let periodic = &matrices.shapes[state.shape];
+        let sub = &periodic.children[usize::from(child)];
+        if !self.ring_blocks || sub.domain.offset != [0, 0] || sub.domain.flipped {
+            return Ok(None);
+        }
+        let Some(ring) = matrices.ring_spectrum(state.shape) else { return Ok(None) };
+        let Some(position) = ring_position(&ring) else { return Ok(None) };
+        let influence: Vec<usize> = periodic.influence.iter().map(|&k| k as usize).collect();
+        let widen = |w: Vec<f64>| {
+            let mut out = vec![0.0; periodic.size];
+            influence.iter().zip(w).for_each(|(&k, x)| out[k] = x);
+            out
+        };
+        if self.positions_only {
+            let zero = vec![0.0; periodic.size];
+            return Ok(Some(SurfaceStencil {
+                position: widen(position),
+                du: zero.clone(),
+                dv: zero,
+                exact_derivatives: false,
+            }));
+        }
+        let fail = |detail: String| {
+            eigen_error(matrices, format!("{detail} at {point:?} of a {:?} patch", matrices.patch_type))
+        };
+        // The derivative pair first, as on the dense route (its iteration reads the sparse rows).
+        if let Some([u, v]) = &periodic.parameters {
+            let steps = [(sub, periodic.influence.as_slice())];
+            if let Some((du, dv)) =
+                periodic_derivatives(&steps, u, v).map_err(|detail| fail(format!("derivatives: {detail}")))?
+            {
+                return Ok(Some(SurfaceStencil { position: widen(position), du, dv, exact_derivatives: true }));
+            }
+        }
+        let (probes, [su, sv]) = face_probes(matrices, state.shape, &influence, state.point)?;
+        let Some((du, dv)) = ring_tangents(&ring, &probes).map_err(fail)? else { return Ok(None) };
+        let signed = |w: Vec<f64>, s: f64| widen(w.into_iter().map(|x| s * x).collect());
+        Ok(Some(SurfaceStencil {
+            position: widen(position),
+            du: signed(du, su),
+            dv: signed(dv, sv),
+            exact_derivatives: false,
+        }))
     }
 }
 
@@ -427,8 +501,9 @@ fn times(w: &[f64], sub: &SubPatch, scale: f64) -> Vec<f64> {
     let mut out = vec![0.0; sub.columns()];
     for (r, &x) in w.iter().enumerate() {
         let x = x * scale;
-        for (o, &a) in out.iter_mut().zip(sub.row(r)) {
-            *o += x * a;
+        // The dense product's terms but its zeros (`x · 0` adds nothing but a zero's sign).
+        for (c, a) in sub.row(r) {
+            out[c] += x * a;
         }
     }
     out
@@ -541,4 +616,60 @@ pub(crate) fn periodic_derivatives(
 
 fn eigen_error(matrices: &PatchMatrices, detail: String) -> StencilError {
     StencilError::Eigen { scheme: matrices.scheme.clone(), detail }
+}
+
+#[cfg(test)]
+mod tests {
+    use subdiv_mesh::BoundaryInterpolation;
+    use subdiv_schemes::{Builtin, PatchType, Split};
+
+    use super::*;
+
+    /// The largest difference of two stencils' weights, relative to the largest weight.
+    fn apart(a: &[f64], b: &[f64]) -> f64 {
+        let size = a.iter().chain(b).fold(0.0f64, |m, x| m.max(x.abs()));
+        a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max) / size
+    }
+
+    /// At the extraordinary vertex of every smooth interior type of the binary splits
+    /// (Catmull-Clark and Loop at valences 2 to 64, the others to 12), the ring's frequency
+    /// blocks give the dense eigenproblems' stencil: the position, and the tangent directions
+    /// (whose scale is the dense route's too: the same dual vectors, made of other bases).
+    #[test]
+    fn the_ring_blocks_give_the_dense_stencils() {
+        let vertex = Dyadic::new(0, 0, 1);
+        for builtin in Builtin::ALL {
+            let scheme = builtin.scheme();
+            if !matches!(scheme.split(), Split::Quad | Split::Triangle) {
+                continue;
+            }
+            let top = if matches!(builtin, Builtin::CatmullClark | Builtin::Loop) { 64 } else { 12 };
+            let mut solved = 0;
+            for valence in (2..=top).filter(|&v| v != scheme.regular_valence()) {
+                let Ok(m) = PatchMatrices::of(scheme, PatchType::interior(valence), BoundaryInterpolation::EdgeOnly)
+                else {
+                    continue;
+                };
+                let what = format!("{builtin} at valence {valence}");
+                let ring = StencilEvaluator::new(&*m);
+                let by_blocks = ring.ring_periodic(&[(State::new(0, vertex), 0)], vertex).unwrap();
+                let Some(by_blocks) = by_blocks else {
+                    // The smooth schemes' blocks answer at every valence but 2.
+                    let smooth = matches!(builtin, Builtin::CatmullClark | Builtin::Loop);
+                    assert!(!smooth || valence == 2, "{what}: the blocks gave no answer");
+                    continue;
+                };
+                solved += 1;
+                let dense = StencilEvaluator::new(&*m).dense().stencil(0, vertex).unwrap().clone();
+                assert_eq!(by_blocks.exact_derivatives, dense.exact_derivatives, "{what}");
+                assert!(apart(&by_blocks.position, &dense.position) < 1e-12, "{what}: position");
+                assert!(apart(&by_blocks.du, &dense.du) < 1e-9, "{what}: du {:e}", apart(&by_blocks.du, &dense.du));
+                assert!(apart(&by_blocks.dv, &dense.dv) < 1e-9, "{what}: dv {:e}", apart(&by_blocks.dv, &dense.dv));
+                // The evaluator takes the blocks' answer.
+                assert_eq!(StencilEvaluator::new(&*m).stencil(0, vertex).unwrap(), &by_blocks, "{what}");
+            }
+            // Bilinear's influence is the face's corners: a ring at valence 2 only.
+            assert!(solved > 0, "{builtin}: the blocks solved no valence");
+        }
+    }
 }

@@ -750,7 +750,7 @@ fn matrices_fingerprint(m: &PatchMatrices) -> u64 {
             bytes.extend_from_slice(&child.domain.offset);
             bytes.push(u8::from(child.domain.flipped));
             for r in 0..child.rows() {
-                child.row(r).iter().for_each(|x| bytes.extend_from_slice(&x.to_bits().to_le_bytes()));
+                child.dense_row(r).iter().for_each(|x| bytes.extend_from_slice(&x.to_bits().to_le_bytes()));
             }
         }
     }

@@ -14,7 +14,7 @@ use crate::{Dyadic, StencilError, StencilEvaluator};
 /// How far apart eigenvalues may be and count as one: a defective eigenvalue comes out of the
 /// solver split by about the square root of the rounding (Catmull-Clark's ½ at a boundary
 /// vertex of four faces, a 2 × 2 Jordan block, as ½ ± 1e-8 i).
-const CLUSTER: f64 = 1e-6;
+pub(crate) const CLUSTER: f64 = 1e-6;
 
 /// The smallest sine of the angle between the two side directions, in the characteristic map,
 /// that counts as spanning a plane.
@@ -61,14 +61,23 @@ const SPAN: f64 = 1e-6;
 /// other side's own ½, which the faces of that side see at level 0 with the crease's tangent.
 pub(crate) fn irregular_tangents(m: &Mat<f64>, probes: &[Vec<f64>]) -> Result<Derivatives, String> {
     let values = m.eigenvalues().map_err(|e| format!("eigen solver: {e:?}"))?;
+    let after_one = clusters(&values).into_iter().filter(|(lambda, _)| (lambda - c64::new(1.0, 0.0)).norm() >= CLUSTER);
+    tangents_from_terms(after_one.map(|(lambda, count)| eigen_terms(m, lambda, count, probes)), m.nrows())
+}
+
+/// The tangent pair of [`irregular_tangents`] from the terms of the spectrum's clusters after 1,
+/// by decreasing modulus, over `n` points: the terms of each cluster level by level until they
+/// span a plane. `E` is the error of a cluster's terms (a message, or a reason to solve
+/// otherwise).
+pub(crate) fn tangents_from_terms<E: From<String>>(
+    clusters: impl IntoIterator<Item = Result<Vec<Term>, E>>,
+    n: usize,
+) -> Result<Derivatives, E> {
     let mut terms: Vec<Term> = Vec::new();
     // Each term's order of growth, counted from the fastest: one per level of a cluster.
     let mut classes: Vec<usize> = Vec::new();
-    for (lambda, count) in clusters(&values) {
-        if (lambda - c64::new(1.0, 0.0)).norm() < CLUSTER {
-            continue;
-        }
-        let mut cluster = eigen_terms(m, lambda, count, probes)?;
+    for cluster in clusters {
+        let mut cluster = cluster?;
         while let Some(level) = cluster.iter().map(|t| t.level).max() {
             let (top, rest): (Vec<Term>, Vec<Term>) = cluster.into_iter().partition(|t| t.level == level);
             cluster = rest;
@@ -77,12 +86,12 @@ pub(crate) fn irregular_tangents(m: &Mat<f64>, probes: &[Vec<f64>]) -> Result<De
             }
             classes.extend(std::iter::repeat_n(classes.last().map_or(0, |c| c + 1), top.len()));
             terms.extend(top);
-            if let Some(pair) = side_directions(&terms, &classes, m.nrows())? {
+            if let Some(pair) = side_directions(&terms, &classes, n)? {
                 return Ok(pair);
             }
         }
     }
-    Err("the leading eigenvectors that the face sees do not span a plane over it".into())
+    Err(String::from("the leading eigenvectors that the face sees do not span a plane over it").into())
 }
 
 /// The tangent pair of [`irregular_tangents`] from `terms` (of the orders of growth `classes`,
@@ -219,7 +228,7 @@ pub(crate) fn face_probes(
 }
 
 /// One eigen-term of the surface near an irregular fixed point, as a face's sides see it.
-struct Term {
+pub(crate) struct Term {
     /// The right vector at each probe: the term's coordinate of the probes' points in the
     /// characteristic map.
     view: Vec<f64>,
@@ -233,7 +242,7 @@ struct Term {
 /// The eigenvalues of `values` grouped into clusters (within [`CLUSTER`] of each other), with
 /// their sizes, by decreasing modulus; a complex pair as its member with positive imaginary
 /// part, counted once.
-fn clusters(values: &[c64]) -> Vec<(c64, usize)> {
+pub(crate) fn clusters(values: &[c64]) -> Vec<(c64, usize)> {
     let mut out: Vec<(c64, usize)> = Vec::new();
     for &z in values {
         let z = if z.im < 0.0 { z.conj() } else { z };
@@ -263,8 +272,6 @@ fn clusters(values: &[c64]) -> Vec<(c64, usize)> {
 /// one term per vector of its Jordan chains instead (see [`jordan_terms`]).
 fn eigen_terms(m: &Mat<f64>, lambda: c64, count: usize, probes: &[Vec<f64>]) -> Result<Vec<Term>, String> {
     let n = m.nrows();
-    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let view = |r: &[f64]| -> Vec<f64> { probes.iter().map(|p| dot(p, r)).collect() };
     let complex = lambda.im != 0.0;
     // A pair's real invariant plane is the null space of M² − 2 Re λ M + |λ|².
     let shifted = if complex {
@@ -280,22 +287,46 @@ fn eigen_terms(m: &Mat<f64>, lambda: c64, count: usize, probes: &[Vec<f64>]) -> 
     if d != left.len() || d == 0 {
         return Err(format!("the eigenspaces of {lambda} have dimensions {d} and {}", left.len()));
     }
-    let gram = Mat::<f64>::from_fn(d, d, |a, b| dot(&left[a], &right[b]));
-    let smallest =
-        gram.singular_values().map_err(|e| format!("SVD failed: {e:?}"))?.into_iter().fold(f64::MAX, f64::min);
-    if d == dimension && smallest > CLUSTER {
-        // Semisimple: l'_a = Σ_c H[a][c] l_c with H = (L R)⁻¹, so that l'_a · r_b = δ_ab.
-        let h = gram.partial_piv_lu().inverse();
-        return Ok((0..d)
-            .map(|a| Term {
-                view: view(&right[a]),
-                left: (0..n).map(|i| (0..d).map(|c| h[(a, c)] * left[c][i]).sum()).collect(),
-                level: 0,
-            })
-            .collect());
+    if let Some(terms) = semisimple_terms(&right, &left, dimension, probes)? {
+        return Ok(terms);
     }
     jordan_terms(&shifted, dimension, probes)
         .map_err(|detail| format!("the eigenvalue {lambda} ({dimension}-fold, {d} eigenvectors): {detail}"))
+}
+
+/// The terms of a semisimple cluster of `dimension` (real) dimensions whose right eigenvectors
+/// are the orthonormal `right` and left ones span `left`, as the face's `probes` see them: per
+/// right vector the left vector dual to it, at level 0. `None` where the cluster is not
+/// semisimple: its eigenspaces have other dimensions, or their vectors do not pair.
+pub(crate) fn semisimple_terms(
+    right: &[Vec<f64>],
+    left: &[Vec<f64>],
+    dimension: usize,
+    probes: &[Vec<f64>],
+) -> Result<Option<Vec<Term>>, String> {
+    let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
+    let d = right.len();
+    if d != dimension || left.len() != d {
+        return Ok(None);
+    }
+    let n = right.first().map_or(0, Vec::len);
+    let gram = Mat::<f64>::from_fn(d, d, |a, b| dot(&left[a], &right[b]));
+    let smallest =
+        gram.singular_values().map_err(|e| format!("SVD failed: {e:?}"))?.into_iter().fold(f64::MAX, f64::min);
+    if smallest <= CLUSTER {
+        return Ok(None);
+    }
+    // l'_a = Σ_c H[a][c] l_c with H = (L R)⁻¹, so that l'_a · r_b = δ_ab.
+    let h = gram.partial_piv_lu().inverse();
+    Ok(Some(
+        (0..d)
+            .map(|a| Term {
+                view: probes.iter().map(|p| dot(p, &right[a])).collect(),
+                left: (0..n).map(|i| (0..d).map(|c| h[(a, c)] * left[c][i]).sum()).collect(),
+                level: 0,
+            })
+            .collect(),
+    ))
 }
 
 /// The terms of a defective cluster from the Jordan chains of `s` (`M − λ`, or a pair's
@@ -411,7 +442,7 @@ const INDEPENDENT: f64 = 1e-6;
 /// `count` orthonormal vectors in the span of `candidates` and orthogonal to the orthonormal
 /// `basis`: Gram–Schmidt (twice, for orthogonality to the last bits), each time on the
 /// candidate with the largest part left relative to its length.
-fn complete(basis: &[Vec<f64>], candidates: &[Vec<f64>], count: usize) -> Result<Vec<Vec<f64>>, String> {
+pub(crate) fn complete(basis: &[Vec<f64>], candidates: &[Vec<f64>], count: usize) -> Result<Vec<Vec<f64>>, String> {
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
     let mut chosen: Vec<Vec<f64>> = Vec::with_capacity(count);
     let mut rest: Vec<&Vec<f64>> = candidates.iter().collect();

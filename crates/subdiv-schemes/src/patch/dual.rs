@@ -305,7 +305,7 @@ mod tests {
             for shape in &m.shapes {
                 for child in &shape.children {
                     for r in 0..child.rows() {
-                        assert!((child.row(r).iter().sum::<f64>() - 1.0).abs() < 1e-13);
+                        assert!((child.row(r).map(|e| e.1).sum::<f64>() - 1.0).abs() < 1e-13);
                     }
                 }
             }
@@ -335,7 +335,7 @@ mod tests {
                 for shape in &m.shapes {
                     for child in &shape.children {
                         for r in 0..child.rows() {
-                            assert!((child.row(r).iter().sum::<f64>() - 1.0).abs() < 1e-13, "{builtin:?}");
+                            assert!((child.row(r).map(|e| e.1).sum::<f64>() - 1.0).abs() < 1e-13, "{builtin:?}");
                         }
                     }
                 }

@@ -289,7 +289,7 @@ pub(super) fn classify(matrices: &Arc<PatchMatrices>, out: &mut HashMap<ShapeKey
         shapes[s]
             .children
             .iter()
-            .all(|child| (0..child.rows()).all(|r| is_convex_combination(child.row(r).iter().copied())))
+            .all(|child| (0..child.rows()).all(|r| is_convex_combination(child.row(r).map(|e| e.1))))
     };
     let mut linear: Vec<bool> =
         (0..shapes.len()).map(|s| !polynomial[s] && shapes[s].parameters.is_some() && convex(s)).collect();
