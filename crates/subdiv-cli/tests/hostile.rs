@@ -85,7 +85,9 @@ fn tessellations_past_the_vertex_budget_are_refused() {
 #[test]
 fn valences_past_the_patch_limit_are_refused_at_once() {
     // A 5000-gon aborted on an 845 MB allocation (its refined centre has valence 5000, whose
-    // dense sub-patch matrices take time cubic in it); a fan of 5000 triangles the same.
+    // dense sub-patch matrices took time cubic in it); a fan of 5000 triangles the same. Their
+    // smooth centres now cost the square of the valence, past the smooth limit (4096); the
+    // centre of an open fan of 1500 triangles, on the boundary, is solved densely, past 1024.
     let dir = tempfile::tempdir().unwrap();
     let n = 5000;
     let ring = |i: usize| {
@@ -100,9 +102,15 @@ fn valences_past_the_patch_limit_are_refused_at_once() {
     std::fs::write(&fan, "v 0 0 1\n".to_string() + &(0..n).map(ring).collect::<String>() + &triangles).unwrap();
     let out = dir.path().join("out.glb");
     let out = out.to_str().unwrap();
-    for mesh in [&ngon, &fan] {
+    let open = dir.path().join("open.obj");
+    let m: u32 = 1500;
+    let points: String = (0..=m).map(|i| format!("v {} {} 0\n", f64::from(i), f64::from(i * i) / 1e4)).collect();
+    let triangles: String = (0..m).map(|i| format!("f 1 {} {}\n", i + 2, i + 3)).collect();
+    std::fs::write(&open, "v 0 -10 0\n".to_string() + &points + &triangles).unwrap();
+    let smooth = ["valence 5000", "limit of 4096", "RefineOptions::max_patch_valence"];
+    let dense = ["valence 1501", "limit of 1024", "max_dense_patch_valence"];
+    for (mesh, expect) in [(&ngon, smooth), (&fan, smooth), (&open, dense)] {
         let mesh = mesh.to_str().unwrap();
-        let expect = ["valence 5000", "limit of 1024", "max_patch_valence"];
         refused(&["eval", mesh, "--grid", "2"], &expect);
         refused(&["tessellate", mesh, "--rate", "2", "-o", out], &expect);
     }

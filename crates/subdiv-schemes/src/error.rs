@@ -70,14 +70,13 @@ pub enum SchemeError {
         /// What is wrong, with the valence.
         detail: String,
     },
-    /// A vertex whose valence is past [`RefineOptions::max_patch_valence`](crate::RefineOptions),
-    /// refused before its sub-patch matrices are derived (their size grows with the valence and
-    /// their derivation with its cube).
+    /// A vertex whose valence is past its limit ([`ValenceLimit`](crate::ValenceLimit):
+    /// [`RefineOptions::max_patch_valence`](crate::RefineOptions) for a smooth one,
+    /// `max_dense_patch_valence` for the others), refused before its sub-patch matrices are
+    /// derived.
     #[error(
         "{vertex} has valence {valence} (an N-gon of as many sides has such a centre once refined), more than \
-         the limit of {limit} for sub-patch matrices: their derivation grows with the cube of the valence \
-         (valence 1000 takes about 20 s and 1.3 GB); split the face or vertex, or raise the limit \
-         (RefineOptions::max_patch_valence)"
+         the limit of {limit} for {kind}"
     )]
     ValenceTooLarge {
         /// The vertex.
@@ -86,6 +85,8 @@ pub enum SchemeError {
         valence: usize,
         /// The limit in force.
         limit: usize,
+        /// Which limit.
+        kind: crate::ValenceLimit,
     },
     /// The eigen solver did not converge.
     #[error("the eigen solver did not converge: {0}")]

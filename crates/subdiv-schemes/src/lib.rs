@@ -118,7 +118,8 @@ pub use patch::{
 };
 pub use patch_table::{DEFAULT_PATCH_TABLES, PATCH_TABLE_MAGIC, PATCH_TABLE_VERSION, PatchTableSpec, PatchTables};
 pub use refine::{
-    LocalRefinement, MAX_PATCH_VALENCE, RefineOptions, Refiner, refine, refine_uniform, refine_uniform_with_progress,
+    LocalRefinement, MAX_DENSE_PATCH_VALENCE, MAX_PATCH_VALENCE, RefineOptions, Refiner, ValenceLimit, refine,
+    refine_uniform, refine_uniform_with_progress,
 };
 pub use scheme::{
     Builtin, CreaseMask, DualBoundary, ExtraordinaryEdgeMask, FaceMask, FourPointBoundary, MAX_NAME_LENGTH,

@@ -6,8 +6,8 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use subdiv_mesh::{BoundaryInterpolation, CreaseMethod, FaceId, HalfEdgeId, Mesh, Patch, Sharpness, VertexId};
 
-use crate::patch::{MAX_PATCH_RADIUS, PatchMatrices, PatchType, SharpFeatures};
-use crate::{RefineOptions, Scheme, SchemeError};
+use crate::patch::{MAX_PATCH_RADIUS, PatchMatrices, PatchType, SharpFeatures, has_rotation};
+use crate::{RefineOptions, Scheme, SchemeError, ValenceLimit};
 
 /// The sub-patch matrices a mesh's faces need — one [`PatchMatrices`] per patch type at its
 /// vertices (interior valences, and every place in every boundary fan) — and the lookup from a
@@ -149,10 +149,15 @@ impl MeshPatches {
         let mut types = Vec::new();
         for v in vertices.into_iter().filter(|&v| !mesh.is_isolated(v)) {
             let valence = mesh.valence(v);
-            if valence > options.max_patch_valence {
-                return Err(SchemeError::ValenceTooLarge { vertex: v, valence, limit: options.max_patch_valence });
-            }
+            let before = types.len();
             vertex_types(scheme, mesh, v, &mut types)?;
+            // Semi-sharp vertices have no types here: their configurations are derived, densely.
+            let smooth = types.len() > before && types[before..].iter().all(|&t| has_rotation(scheme, t));
+            let kind = if smooth { ValenceLimit::Smooth } else { ValenceLimit::Dense };
+            let limit = kind.of(options);
+            if valence > limit {
+                return Err(SchemeError::ValenceTooLarge { vertex: v, valence, limit, kind });
+            }
         }
         let mut seen = std::collections::HashSet::new();
         types.retain(|t| seen.insert(*t));
@@ -363,9 +368,20 @@ mod tests {
         let cc = Builtin::CatmullClark.scheme();
         let options = RefineOptions { max_patch_valence: 6, ..RefineOptions::DEFAULT };
         let Err(error) = MeshPatches::new(cc, &mesh, &options) else { panic!("valence 7 is past 6") };
-        assert!(matches!(error, SchemeError::ValenceTooLarge { valence: 7, limit: 6, .. }), "{error}");
+        assert!(
+            matches!(error, SchemeError::ValenceTooLarge { valence: 7, limit: 6, kind: ValenceLimit::Smooth, .. }),
+            "{error}"
+        );
         assert!(error.to_string().contains("max_patch_valence"), "{error}");
         let options = RefineOptions { max_patch_valence: 7, ..options };
         assert!(MeshPatches::new(cc, &mesh, &options).is_ok());
+        // With a sharp spoke the vertex's matrices are dense, under the other limit.
+        let mut sharp = mesh.clone();
+        let spoke = sharp.edge(sharp.outgoing(VertexId::new(0)).next().unwrap());
+        sharp.set_edge_sharpness(spoke, subdiv_mesh::Tags::INFINITELY_SHARP);
+        let options = RefineOptions { max_dense_patch_valence: 6, ..options };
+        let Err(error) = MeshPatches::new(cc, &sharp, &options) else { panic!("valence 7 is past 6") };
+        assert!(matches!(error, SchemeError::ValenceTooLarge { kind: ValenceLimit::Dense, .. }), "{error}");
+        assert!(error.to_string().contains("max_dense_patch_valence"), "{error}");
     }
 }

@@ -750,7 +750,7 @@ fn canonical_mesh(
 
 /// Whether `patch_type`'s canonical patch may have a rotation: a smooth interior type of a
 /// binary split.
-fn has_rotation(scheme: &Scheme, patch_type: PatchType) -> bool {
+pub(crate) fn has_rotation(scheme: &Scheme, patch_type: PatchType) -> bool {
     matches!(patch_type, PatchType::Interior { sharp, .. } if sharp.is_smooth())
         && matches!(scheme.split(), Split::Quad | Split::Triangle)
 }

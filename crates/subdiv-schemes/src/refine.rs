@@ -39,22 +39,73 @@ pub struct RefineOptions {
     /// bilinear, and scheme files with crease masks); the other schemes' refined meshes have no
     /// channels.
     pub face_varying: Option<FaceVaryingInterpolation>,
-    /// The largest valence whose sub-patch matrices the exact pipeline derives (refinement
-    /// itself takes any valence): past it [`MeshPatches`](crate::MeshPatches) refuses the mesh
-    /// with [`SchemeError::ValenceTooLarge`](crate::SchemeError::ValenceTooLarge) before any
-    /// matrix is made. Default: [`MAX_PATCH_VALENCE`].
+    /// The largest valence of a smooth interior vertex of a quad or triangle split whose
+    /// sub-patch matrices the exact pipeline derives (refinement itself takes any valence):
+    /// past it [`MeshPatches`](crate::MeshPatches) refuses the mesh with
+    /// [`SchemeError::ValenceTooLarge`](crate::SchemeError::ValenceTooLarge) before any matrix
+    /// is made ([`ValenceLimit::Smooth`]). Default: [`MAX_PATCH_VALENCE`].
     pub max_patch_valence: usize,
+    /// The same for every other vertex, whose matrices are solved densely
+    /// ([`ValenceLimit::Dense`]): one with sharp features, on a boundary or semi-sharp, and
+    /// the dual and ternary splits' faces and vertices. Default: [`MAX_DENSE_PATCH_VALENCE`].
+    pub max_dense_patch_valence: usize,
     /// Whether a level's passes (the split, face, edge and vertex points) may run on rayon's
     /// threads; the result is the same either way, bit for bit. Default:
     /// [`Parallelism::Rayon`].
     pub parallelism: Parallelism,
 }
 
-/// [`RefineOptions::max_patch_valence`]' default: 1024. The sub-patch matrices of valence `n`
-/// are dense, of size about `2n`, and their derivation and eigen analysis take time cubic in
-/// `n` (measured, `subdiv eval --grid 2` of one vertex of valence `n`: 300 takes 1.7 s and 0.38
-/// GB, 1000 takes 21 s and 1.3 GB), so a 5000-gon would take most of an hour and 30 GB.
-pub const MAX_PATCH_VALENCE: usize = 1024;
+/// [`RefineOptions::max_patch_valence`]' default: 4096. A smooth vertex's spectrum comes from
+/// its ring's frequency blocks in `O(n)`, but each of its `n` faces carries a patch of about
+/// `2n` points through the pipeline (walked, supported, evaluated), so the cost grows with the
+/// square of `n` (measured, `subdiv tessellate --rate 2` of an open fan of `n` quads: 1000
+/// takes 1.0 s and 36 MB, 3000 takes 10 s and 126 MB, 10 000 takes 115 s and 0.9 GB).
+pub const MAX_PATCH_VALENCE: usize = 4096;
+
+/// [`RefineOptions::max_dense_patch_valence`]' default: 1024. Dense sub-patch matrices of
+/// valence `n` are of size about `2n`, and their eigen analysis takes time cubic in `n`
+/// (measured, `subdiv eval --grid 2` of one smooth vertex of valence `n` before the ring's
+/// blocks: 300 took 1.7 s and 0.38 GB, 1000 took 21 s and 1.3 GB), so a 5000-gon would take
+/// most of an hour and 30 GB.
+pub const MAX_DENSE_PATCH_VALENCE: usize = 1024;
+
+/// Which valence limit of [`RefineOptions`] a vertex falls under.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ValenceLimit {
+    /// A smooth interior vertex of a quad or triangle split, whose spectrum the ring's
+    /// frequency blocks give ([`PatchMatrices::ring_spectrum`](crate::PatchMatrices::ring_spectrum)):
+    /// [`RefineOptions::max_patch_valence`].
+    Smooth,
+    /// Any other vertex, solved densely: [`RefineOptions::max_dense_patch_valence`].
+    Dense,
+}
+
+impl ValenceLimit {
+    /// The limit `options` set.
+    pub fn of(self, options: &RefineOptions) -> usize {
+        match self {
+            Self::Smooth => options.max_patch_valence,
+            Self::Dense => options.max_dense_patch_valence,
+        }
+    }
+}
+
+impl std::fmt::Display for ValenceLimit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Smooth => {
+                "a smooth vertex's sub-patch matrices: their cost grows with the square of the valence (3000 \
+                 takes about 10 s, 10 000 two minutes); split the face or vertex, or raise the limit \
+                 (RefineOptions::max_patch_valence)"
+            }
+            Self::Dense => {
+                "sub-patch matrices solved densely (a vertex with sharp features or on a boundary, a dual or \
+                 ternary split): their cost grows with the cube of the valence (1000 takes about 20 s and 1.3 \
+                 GB); split the face or vertex, or raise the limit (RefineOptions::max_dense_patch_valence)"
+            }
+        })
+    }
+}
 
 impl RefineOptions {
     /// The defaults: everything from the mesh's tags, valences up to [`MAX_PATCH_VALENCE`].
@@ -64,6 +115,7 @@ impl RefineOptions {
         triangle_subdivision: None,
         face_varying: None,
         max_patch_valence: MAX_PATCH_VALENCE,
+        max_dense_patch_valence: MAX_DENSE_PATCH_VALENCE,
         parallelism: Parallelism::Rayon,
     };
 

@@ -50,7 +50,7 @@ use crate::patch_levels::{Level, Resolution};
 ///
 /// # Errors
 /// As refinement ([`StencilError::Scheme`]), [`SchemeError::ValenceNotSupported`] for a face
-/// or vertex past [`RefineOptions::max_patch_valence`], [`StencilError::DualBoundary`] for
+/// or vertex past [`RefineOptions::max_dense_patch_valence`], [`StencilError::DualBoundary`] for
 /// the boundary configurations above.
 pub(crate) fn dual_levels(
     scheme: &Scheme,
@@ -91,12 +91,12 @@ pub(crate) fn dual_levels(
     let mut twice = false;
     for &quad in quads.iter().flatten() {
         let sizes = sizes(&first, quad);
-        if let Some(&n) = sizes.iter().find(|&&n| n > options.max_patch_valence) {
+        if let Some(&n) = sizes.iter().find(|&&n| n > options.max_dense_patch_valence) {
             return Err(StencilError::Scheme(SchemeError::ValenceNotSupported {
                 scheme: scheme.name.clone(),
                 valence: n,
                 reason: "a face or vertex past the largest valence the refinement options allow \
-                         (RefineOptions::max_patch_valence)",
+                         (RefineOptions::max_dense_patch_valence)",
             }));
         }
         twice |= extraordinary(sizes) > 1 && !open(&first, quad);
