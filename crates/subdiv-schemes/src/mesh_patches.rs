@@ -24,7 +24,27 @@ pub struct MeshPatches {
 }
 
 /// Shapes by signature: (table, shape).
-type ShapeLookup = hashbrown::HashMap<Vec<u32>, (usize, usize)>;
+/// One radius's shapes by signature (table and shape), and the corners their faces have, each
+/// `(valence, boundary)` from corner 0 (a signature's first vertices): a rotation whose face has
+/// corners no shape has is passed over without walking its patch (at a vertex of valence N each
+/// walk visits 2N + 8 points, and all but one rotation of a face there match nothing).
+#[derive(Clone, Debug, Default)]
+struct ShapeLookup {
+    shapes: hashbrown::HashMap<Vec<u32>, (usize, usize)>,
+    corners: hashbrown::HashSet<Vec<(u32, bool)>>,
+}
+
+/// The corners of `start`'s face from `start`'s origin, as a signature lists them.
+fn face_corners(mesh: &Mesh, start: HalfEdgeId) -> Vec<(u32, bool)> {
+    let size = mesh.face_size(mesh.face(start));
+    std::iter::successors(Some(start), |&h| Some(mesh.next(h)))
+        .take(size)
+        .map(|h| {
+            let v = mesh.origin(h);
+            (mesh.valence(v) as u32, mesh.is_boundary_vertex(v))
+        })
+        .collect()
+}
 
 /// The scheme and rules a configuration at semi-sharp features is derived under.
 #[derive(Clone, Debug)]
@@ -170,12 +190,17 @@ impl MeshPatches {
             let at = match lookup.iter().position(|(r, _)| *r == table.radius) {
                 Some(at) => at,
                 None => {
-                    lookup.push((table.radius, ShapeLookup::new()));
+                    lookup.push((table.radius, ShapeLookup::default()));
                     lookup.len() - 1
                 }
             };
             for (signature, &shape) in &table.by_signature {
-                lookup[at].1.entry(signature.clone()).or_insert((t, shape));
+                let found = &mut lookup[at].1;
+                found.shapes.entry(signature.clone()).or_insert((t, shape));
+                let corners = signature.first().map_or(0, |&size| size as usize);
+                found
+                    .corners
+                    .insert(Patch::signature_vertices(signature, table.shapes[shape].size).take(corners).collect());
             }
         }
         let rules = options.rules_for(mesh);
@@ -284,9 +309,13 @@ impl MeshPatches {
 
     /// [`at`](Self::at), walking into `patch` (a buffer).
     fn at_with(&self, mesh: &Mesh, start: HalfEdgeId, patch: &mut Patch) -> Option<FoundPatch> {
-        self.lookup.iter().find_map(|(radius, shapes)| {
+        let corners = face_corners(mesh, start);
+        self.lookup.iter().find_map(|(radius, lookup)| {
+            if !lookup.corners.contains(&corners) {
+                return None;
+            }
             mesh.patch_into(start, *radius, patch);
-            let &(table, shape) = shapes.get(&patch.signature)?;
+            let &(table, shape) = lookup.shapes.get(&patch.signature)?;
             Some(FoundPatch {
                 start,
                 vertices: PatchVertices::from_slice(&patch.vertices),

@@ -57,9 +57,10 @@ pub struct RefineOptions {
 
 /// [`RefineOptions::max_patch_valence`]' default: 4096. A smooth vertex's spectrum comes from
 /// its ring's frequency blocks in `O(n)`, but each of its `n` faces carries a patch of about
-/// `2n` points through the pipeline (walked, supported, evaluated), so the cost grows with the
-/// square of `n` (measured, `subdiv tessellate --rate 2` of an open fan of `n` quads: 1000
-/// takes 1.0 s and 36 MB, 3000 takes 10 s and 126 MB, 10 000 takes 115 s and 0.9 GB).
+/// `2n` points through the pipeline (walked and evaluated), so the cost grows with the square
+/// of `n` (measured, `subdiv tessellate --rate 2` of an open fan of `n` quads: 1000 takes 0.3 s
+/// and 36 MB, 4096 takes 4.2 s and 0.2 GB, 10 000 takes 29 s and 0.9 GB; one 10 000-gon at
+/// `--rate 4` 58 s and 2.5 GB).
 pub const MAX_PATCH_VALENCE: usize = 4096;
 
 /// [`RefineOptions::max_dense_patch_valence`]' default: 1024. Dense sub-patch matrices of
@@ -94,8 +95,8 @@ impl std::fmt::Display for ValenceLimit {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.write_str(match self {
             Self::Smooth => {
-                "a smooth vertex's sub-patch matrices: their cost grows with the square of the valence (3000 \
-                 takes about 10 s, 10 000 two minutes); split the face or vertex, or raise the limit \
+                "a smooth vertex's sub-patch matrices: their cost grows with the square of the valence (4000 \
+                 takes about 4 s, 10 000 half a minute and 1 GB); split the face or vertex, or raise the limit \
                  (RefineOptions::max_patch_valence)"
             }
             Self::Dense => {

@@ -29,6 +29,15 @@ pub struct SurfaceStencil {
     pub exact_derivatives: bool,
 }
 
+impl SurfaceStencil {
+    /// A position stencil with zero derivatives, marked inexact ([`StencilEvaluator`]'s
+    /// positions-only stencils).
+    fn position_only(position: Vec<f64>) -> Self {
+        let zero = vec![0.0; position.len()];
+        Self { position, du: zero.clone(), dv: zero, exact_derivatives: false }
+    }
+}
+
 /// How close two eigenvalues, or an imaginary part or a determinant and zero, must be to count
 /// as equal.
 pub(crate) const TOLERANCE: f64 = 1e-9;
@@ -112,7 +121,7 @@ pub struct StencilEvaluator<M: Borrow<PatchMatrices>> {
     /// characteristic map's probes, whose own fixed points may be irregular too.
     positions_only: bool,
     /// Whether an extraordinary vertex's own cycle is solved on its ring's frequency blocks
-    /// ([`RingSpectrum`]) where they hold its terms; `false` solves every cycle densely (the
+    /// ([`RingSpectrum`](subdiv_schemes::RingSpectrum)) where they hold its terms; `false` solves every cycle densely (the
     /// tests' reference).
     ring_blocks: bool,
 }
@@ -343,13 +352,7 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
             .vectors
             .remove(0);
         if self.positions_only {
-            let zero = vec![0.0; size];
-            return Ok(SurfaceStencil {
-                position: widen(position),
-                du: zero.clone(),
-                dv: zero,
-                exact_derivatives: false,
-            });
+            return Ok(SurfaceStencil::position_only(widen(position)));
         }
         let derivatives = match &periodic.parameters {
             Some([u, v]) => {
@@ -406,13 +409,7 @@ impl<M: Borrow<PatchMatrices>> StencilEvaluator<M> {
             out
         };
         if self.positions_only {
-            let zero = vec![0.0; periodic.size];
-            return Ok(Some(SurfaceStencil {
-                position: widen(position),
-                du: zero.clone(),
-                dv: zero,
-                exact_derivatives: false,
-            }));
+            return Ok(Some(SurfaceStencil::position_only(widen(position))));
         }
         let fail = |detail: String| {
             eigen_error(matrices, format!("{detail} at {point:?} of a {:?} patch", matrices.patch_type))

@@ -120,6 +120,7 @@ impl Evaluator {
         let mut places = vec![u32::MAX; mesh.vertex_count()];
         let mut support = Vec::new();
         let mut memo = CageRowMemo::default();
+        let mut wide = HashMap::new();
         for f in mesh.face_ids() {
             if !matches!(self.faces[f.index()], FacePlan::General) {
                 continue;
@@ -127,6 +128,7 @@ impl Evaluator {
             signature.clear();
             patches.clear();
             if !self.face_type(0, f, &mut signature, &mut patches)
+                || self.reads_a_wide_point(&patches, &mut wide)
                 || self.cage_support(&patches, &mut support) > MAX_TYPED_POINTS
             {
                 continue;
@@ -185,6 +187,43 @@ impl Evaluator {
             };
             self.face_types.set(mesh.face_count(), f.index(), ty);
         }
+    }
+
+    /// Whether a control point of `patches` alone depends on more cage points than a type
+    /// holds: a point whose refinement row reads more than [`MAX_TYPED_POINTS`] points (an
+    /// extraordinary vertex's own, and its ring's) has its support counted once, in `wide`, by
+    /// (level, vertex). The faces around a vertex of valence `N` each hold it, and gathering each
+    /// one's support took `O(N)` (a third of a tessellation at valence 3000); the first point of
+    /// an extraordinary patch is its vertex, so the test is `O(1)` a face there.
+    fn reads_a_wide_point(&self, patches: &[FacePatch], wide: &mut HashMap<(usize, u32), usize>) -> bool {
+        let stencils = self.levels.stencils();
+        patches.iter().any(|p| {
+            let level = p.patch.0 as usize;
+            level > 0
+                && self.listed_patch(p).vertices.iter().any(|v| {
+                    let v = v.index() as u32;
+                    let count = match wide.get(&(level, v)) {
+                        Some(&count) => count,
+                        None if stencils[level - 1].row(v as usize).nth(MAX_TYPED_POINTS).is_none() => return false,
+                        None => *wide.entry((level, v)).or_insert_with(|| self.point_support(level, v)),
+                    };
+                    count > MAX_TYPED_POINTS
+                })
+        })
+    }
+
+    /// The number of cage points vertex `v` of `level` depends on.
+    fn point_support(&self, level: usize, v: u32) -> usize {
+        let stencils = self.levels.stencils();
+        let mut points = vec![v];
+        for l in (1..=level).rev() {
+            let mut parents: Vec<u32> =
+                points.iter().flat_map(|&p| stencils[l - 1].row(p as usize).map(|(parent, _)| parent as u32)).collect();
+            parents.sort_unstable();
+            parents.dedup();
+            points = parents;
+        }
+        points.len()
     }
 
     /// The patch of a [`FacePatch`] that [`Self::face_type`] listed.
