@@ -24,14 +24,27 @@ pub struct MeshPatches {
 }
 
 /// Shapes by signature: (table, shape).
-/// One radius's shapes by signature (table and shape), and the corners their faces have, each
-/// `(valence, boundary)` from corner 0 (a signature's first vertices): a rotation whose face has
-/// corners no shape has is passed over without walking its patch (at a vertex of valence N each
-/// walk visits 2N + 8 points, and all but one rotation of a face there match nothing).
+/// One radius's shapes by signature (table and shape), and what their faces have: the corners,
+/// each `(valence, boundary)` from corner 0 (a signature's first vertices), and whether a point
+/// of the patch is on a boundary. A rotation whose face has corners no shape has, or (radius 1)
+/// a boundary point where no shape with its corners has one, is passed over without walking its
+/// patch: at a vertex of valence N each walk visits 2N + 8 points, all but one rotation of a face
+/// there match nothing, and a face whose patch reaches a boundary at its far side matches nothing
+/// until a finer level.
 #[derive(Clone, Debug, Default)]
 struct ShapeLookup {
     shapes: hashbrown::HashMap<Vec<u32>, (usize, usize)>,
-    corners: hashbrown::HashSet<Vec<(u32, bool)>>,
+    /// Per corners, whether shapes with them have patches without a boundary point, and with.
+    corners: hashbrown::HashMap<Vec<(u32, bool)>, [bool; 2]>,
+}
+
+/// Whether a point of the radius-1 patch of `face` (the vertices of the faces at its corners) is
+/// on a boundary.
+fn reaches_a_boundary(mesh: &Mesh, face: FaceId) -> bool {
+    mesh.face_vertices(face).iter().any(|&corner| {
+        mesh.is_boundary_vertex(corner)
+            || mesh.vertex_faces(corner).any(|f| mesh.face_vertices(f).iter().any(|&v| mesh.is_boundary_vertex(v)))
+    })
 }
 
 /// The corners of `start`'s face from `start`'s origin, as a signature lists them.
@@ -198,9 +211,9 @@ impl MeshPatches {
                 let found = &mut lookup[at].1;
                 found.shapes.entry(signature.clone()).or_insert((t, shape));
                 let corners = signature.first().map_or(0, |&size| size as usize);
-                found
-                    .corners
-                    .insert(Patch::signature_vertices(signature, table.shapes[shape].size).take(corners).collect());
+                let vertices = || Patch::signature_vertices(signature, table.shapes[shape].size);
+                let flags = found.corners.entry(vertices().take(corners).collect()).or_default();
+                flags[usize::from(vertices().any(|(_, boundary)| boundary))] = true;
             }
         }
         let rules = options.rules_for(mesh);
@@ -240,8 +253,8 @@ impl MeshPatches {
             return self.derived.as_ref().and_then(|derived| self.derived(derived, mesh, face));
         }
         // One buffer for every rotation and radius tried: most walks are looked up and dropped.
-        let mut patch = Patch::default();
-        mesh.face_half_edges(face).find_map(|start| self.at_with(mesh, start, &mut patch))
+        let (mut patch, mut boundary) = (Patch::default(), None);
+        mesh.face_half_edges(face).find_map(|start| self.at_with(mesh, start, &mut patch, &mut boundary))
     }
 
     /// The patch of `face`, which has semi-sharp features at its corners, from the derived
@@ -304,15 +317,26 @@ impl MeshPatches {
 
     /// The patch starting at `start`, if its shape is known.
     pub fn at(&self, mesh: &Mesh, start: HalfEdgeId) -> Option<FoundPatch> {
-        self.at_with(mesh, start, &mut Patch::default())
+        self.at_with(mesh, start, &mut Patch::default(), &mut None)
     }
 
-    /// [`at`](Self::at), walking into `patch` (a buffer).
-    fn at_with(&self, mesh: &Mesh, start: HalfEdgeId, patch: &mut Patch) -> Option<FoundPatch> {
+    /// [`at`](Self::at), walking into `patch` (a buffer); `boundary` is [`reaches_a_boundary`]
+    /// of the face once known (the same for every rotation).
+    fn at_with(
+        &self,
+        mesh: &Mesh,
+        start: HalfEdgeId,
+        patch: &mut Patch,
+        boundary: &mut Option<bool>,
+    ) -> Option<FoundPatch> {
         let corners = face_corners(mesh, start);
         self.lookup.iter().find_map(|(radius, lookup)| {
-            if !lookup.corners.contains(&corners) {
-                return None;
+            let &flags = lookup.corners.get(&corners)?;
+            if *radius == 1 && flags != [true, true] {
+                let reaches = *boundary.get_or_insert_with(|| reaches_a_boundary(mesh, mesh.face(start)));
+                if !flags[usize::from(reaches)] {
+                    return None;
+                }
             }
             mesh.patch_into(start, *radius, patch);
             let &(table, shape) = lookup.shapes.get(&patch.signature)?;
