@@ -59,7 +59,7 @@ pub struct RefineOptions {
 /// its ring's frequency blocks in `O(n)`, but each of its `n` faces carries a patch of about
 /// `2n` points through the pipeline (walked and evaluated), so the cost grows with the square
 /// of `n` (measured, `subdiv tessellate --rate 2` of an open fan of `n` quads: 1000 takes 0.3 s
-/// and 36 MB, 4096 takes 4.2 s and 0.2 GB, 10 000 takes 29 s and 0.9 GB; one 10 000-gon at
+/// and 36 MB, 4096 takes 4.2 s and 0.2 GB, 10 000 takes 24 s and 0.9 GB; one 10 000-gon at
 /// `--rate 4` 58 s and 2.5 GB).
 pub const MAX_PATCH_VALENCE: usize = 4096;
 
