@@ -89,8 +89,8 @@ pub struct RingSpectrum {
 
 impl RingSpectrum {
     /// The spectrum of the `rows.len()`-square matrix whose row `i` holds the weights `rows[i]`
-    /// (column, weight), under `rotation` (per point, its image, see [`patch_rotation`]) of
-    /// `valence` steps. `None` unless the ring is invariant and the matrix commutes with the
+    /// (column, weight), under `rotation` (per point, its image: its vertex's place in the next
+    /// face's patch) of `valence` steps. `None` unless the ring is invariant and the matrix commutes with the
     /// rotation on it, every orbit of `valence` points.
     pub fn new(rows: &[Vec<(usize, f64)>], rotation: &[Option<usize>], valence: usize) -> Option<Self> {
         let size = rows.len();
